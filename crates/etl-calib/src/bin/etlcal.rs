@@ -1,0 +1,3 @@
+fn main() {
+    etl_calib::cli::main();
+}

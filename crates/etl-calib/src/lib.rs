@@ -1,0 +1,3 @@
+//! etl-calib: images, detection, Zhang's method, the calibration pipeline, studies,
+//! reports and the `etlcal` command line.
+pub mod cli;

@@ -1,0 +1,117 @@
+//! The one error type of etl-core.
+//!
+//! Every variant names the unmet precondition, so that a caller (and the user reading the
+//! message) knows what to change. `what` strings are static: etl-core never allocates.
+
+use core::fmt;
+
+/// Result with the core's [`Error`].
+pub type Result<T> = core::result::Result<T, Error>;
+
+/// Why an etl-core operation refused its input or could not finish.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Error {
+    /// An input was NaN or infinite.
+    NotFinite {
+        /// Which input.
+        what: &'static str,
+    },
+    /// An input lies outside the range where it is meaningful or calibrated.
+    OutOfRange {
+        /// Which input.
+        what: &'static str,
+        /// The value given.
+        value: f64,
+        /// Smallest accepted value.
+        min: f64,
+        /// Largest accepted value.
+        max: f64,
+    },
+    /// Fewer samples, points, views or distinct values than the method needs.
+    TooFew {
+        /// What is counted (e.g. "distinct currents").
+        what: &'static str,
+        /// How many the method needs at least.
+        needed: usize,
+        /// How many were given.
+        got: usize,
+    },
+    /// The data do not determine the unknowns (e.g. all points on one plane where the
+    /// method needs depth, all samples at one temperature, a singular system).
+    Degenerate {
+        /// Which condition failed.
+        what: &'static str,
+    },
+    /// A point lies at or behind the camera's centre of projection (Z_C <= 0).
+    BehindCamera,
+    /// An iterative method did not reach its tolerance.
+    NotConverged {
+        /// Which method.
+        what: &'static str,
+        /// Iterations spent.
+        iterations: usize,
+    },
+    /// Caller-provided storage is smaller than the `*_scratch` function asked for.
+    BufferTooSmall {
+        /// Which buffer.
+        what: &'static str,
+        /// Length needed.
+        needed: usize,
+        /// Length given.
+        got: usize,
+    },
+    /// An argument is invalid for a reason not covered above.
+    InvalidArgument {
+        /// What is wrong with it.
+        what: &'static str,
+    },
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Error::NotFinite { what } => write!(f, "{what} is NaN or infinite; pass finite numbers"),
+            Error::OutOfRange { what, value, min, max } => {
+                write!(f, "{what} = {value} is outside [{min}, {max}]")
+            }
+            Error::TooFew { what, needed, got } => {
+                write!(f, "too few {what}: the method needs at least {needed}, got {got}")
+            }
+            Error::Degenerate { what } => write!(f, "degenerate input: {what}"),
+            Error::BehindCamera => {
+                write!(f, "point is at or behind the camera (Z_C <= 0); check the pose and units (mm)")
+            }
+            Error::NotConverged { what, iterations } => {
+                write!(f, "{what} did not converge in {iterations} iterations")
+            }
+            Error::BufferTooSmall { what, needed, got } => write!(
+                f,
+                "buffer {what} too small: needs {needed} elements, got {got} (see its *_scratch function)"
+            ),
+            Error::InvalidArgument { what } => write!(f, "invalid argument: {what}"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}
+
+/// `Ok(x)` if `x` is finite, else [`Error::NotFinite`] naming it.
+#[inline]
+pub fn finite(x: f64, what: &'static str) -> Result<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::NotFinite { what })
+    }
+}
+
+/// Checks that every element of `xs` is finite.
+#[inline]
+pub fn all_finite(xs: &[f64], what: &'static str) -> Result<()> {
+    if xs.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::NotFinite { what })
+    }
+}

@@ -1,0 +1,31 @@
+//! # etl-core
+//!
+//! The allocation-free, panic-free core of etlcal: the camera model of a camera focused by
+//! an electrically tunable lens (ETL), real-time temperature compensation, the lens physics
+//! model, polynomial and surface fits, the linear initialisers of the calibration, a
+//! hand-written Levenberg-Marquardt solver, bundle adjustment and plane-based PnP.
+//!
+//! Equation numbers refer to the paper in `shared/paper/` as read by its NOTES.md:
+//! lengths in mm, currents in mA, temperatures in degC, pixels with (0, 0) at the centre
+//! of the top-left pixel.
+//!
+//! Rules this crate keeps (and CI checks): `#![no_std]` without `alloc`; no `unsafe`; no
+//! panics on any input (every fallible function returns [`Result`]); everything `f64`;
+//! memory that grows with the problem size is provided by the caller (see the
+//! `*_scratch` functions).
+//!
+//! ```
+//! use etl_core::model::CameraModel;
+//! let cam = CameraModel::paper_rig();
+//! let px = cam.project([3.0, 4.5, 48.0], 100.0).unwrap();
+//! let back = cam.undistort(px, 100.0).unwrap();
+//! assert!(px[0] > 0.0 && px[0] < 1936.0 && back[1] > 0.0);
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod model;
+
+pub use error::{Error, Result};

@@ -1,0 +1,233 @@
+//! [`CameraModel`]: the parameters of an ETL camera and the projection (Eq. 13-18).
+
+use serde::{Deserialize, Serialize};
+
+use super::distortion::Distortion;
+use super::rotation::{mat_vec, rodrigues_to_matrix, Mat3};
+use crate::error::{all_finite, finite, Error, Result};
+
+/// The 25 numbers of the paper's camera model, exactly as the paper defines them.
+///
+/// Invariants a *usable* model satisfies (checked where they matter, never assumed):
+/// all numbers finite; fx(E), fy(E) > 0 over the currents it is used at.
+/// Field names are those of the `etlcal.calibration/1` file format.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CameraModel {
+    /// Rodrigues vector of R (world -> camera), radians.
+    pub rotation_rodrigues: [f64; 3],
+    /// T (world -> camera), mm.
+    pub translation_mm: [f64; 3],
+    /// fx(E) = kf_x[0] + kf_x[1] E + kf_x[2] E^2 + kf_x[3] E^3 (px; E in mA), Eq. 16.
+    pub kf_x: [f64; 4],
+    /// fy(E), as `kf_x`.
+    pub kf_y: [f64; 4],
+    /// (u0, v0), px.
+    pub principal_point: [f64; 2],
+    /// a1..a9 of Eq. 18.
+    pub distortion_a: [f64; 9],
+}
+
+/// Pinhole intrinsics at one current.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Intrinsics {
+    /// Focal length along u, px.
+    pub fx: f64,
+    /// Focal length along v, px.
+    pub fy: f64,
+    /// Principal point u0, px.
+    pub u0: f64,
+    /// Principal point v0, px.
+    pub v0: f64,
+}
+
+impl Intrinsics {
+    /// The 3 x 3 matrix A of Eq. 15, row-major.
+    pub fn matrix(&self) -> Mat3 {
+        [[self.fx, 0.0, self.u0], [0.0, self.fy, self.v0], [0.0, 0.0, 1.0]]
+    }
+}
+
+/// Evaluates c0 + c1 x + c2 x^2 + c3 x^3 (Horner).
+#[inline]
+pub fn cubic(c: &[f64; 4], x: f64) -> f64 {
+    ((c[3] * x + c[2]) * x + c[1]) * x + c[0]
+}
+
+impl CameraModel {
+    /// The simulated rig of the paper's section 5.1.2 (NOTES.md, "the paper rig").
+    pub const fn paper_rig() -> Self {
+        CameraModel {
+            rotation_rodrigues: [0.2, 0.2, 0.2],
+            translation_mm: [-11.0, -4.0, 48.0],
+            kf_x: [5380.0, -7.0, 0.02, -3e-5],
+            kf_y: [5430.0, -7.0, 0.02, -3e-5],
+            principal_point: [900.0, 550.0],
+            distortion_a: [-0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6],
+        }
+    }
+
+    /// Image size of the paper rig's camera, px (width, height).
+    pub const PAPER_IMAGE_SIZE: [u32; 2] = [1936, 1458];
+
+    /// Checks that every number of the model is finite.
+    pub fn validate(&self) -> Result<()> {
+        all_finite(&self.rotation_rodrigues, "rotation_rodrigues")?;
+        all_finite(&self.translation_mm, "translation_mm")?;
+        all_finite(&self.kf_x, "kf_x")?;
+        all_finite(&self.kf_y, "kf_y")?;
+        all_finite(&self.principal_point, "principal_point")?;
+        all_finite(&self.distortion_a, "distortion_a")
+    }
+
+    /// Rotation matrix R (world -> camera).
+    #[inline]
+    pub fn rotation_matrix(&self) -> Mat3 {
+        rodrigues_to_matrix(self.rotation_rodrigues)
+    }
+
+    /// Focal lengths (fx, fy) in px at compensated current `e_com_ma` (Eq. 16), unchecked.
+    #[inline]
+    pub fn focal_lengths(&self, e_com_ma: f64) -> (f64, f64) {
+        (cubic(&self.kf_x, e_com_ma), cubic(&self.kf_y, e_com_ma))
+    }
+
+    /// Intrinsics at compensated current `e_com_ma` (Eq. 16).
+    ///
+    /// Errors: a non-finite current; a focal length that is not positive there (the cubic
+    /// is used far outside its range).
+    pub fn intrinsics(&self, e_com_ma: f64) -> Result<Intrinsics> {
+        finite(e_com_ma, "e_com_ma")?;
+        let (fx, fy) = self.focal_lengths(e_com_ma);
+        let [u0, v0] = self.principal_point;
+        if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
+            return Err(Error::Degenerate { what: "focal length is not positive at this current" });
+        }
+        if !(u0.is_finite() && v0.is_finite()) {
+            return Err(Error::NotFinite { what: "principal_point" });
+        }
+        Ok(Intrinsics { fx, fy, u0, v0 })
+    }
+
+    /// Distortion (k1, p1, p2) at compensated current `e_com_ma` (Eq. 18).
+    pub fn distortion(&self, e_com_ma: f64) -> Result<Distortion> {
+        let k = self.intrinsics(e_com_ma)?;
+        Ok(Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy)))
+    }
+
+    /// World point (mm) -> camera coordinates (mm), Eq. 13.
+    #[inline]
+    pub fn world_to_camera(&self, world_mm: [f64; 3]) -> [f64; 3] {
+        let c = mat_vec(&self.rotation_matrix(), world_mm);
+        let t = self.translation_mm;
+        [c[0] + t[0], c[1] + t[1], c[2] + t[2]]
+    }
+
+    /// Projects a world point (mm) to the observed pixel at compensated current `e_com_ma`
+    /// (Eq. 13-18).
+    ///
+    /// Errors: non-finite input; the point at or behind the camera; a non-positive focal
+    /// length at that current.
+    pub fn project(&self, world_mm: [f64; 3], e_com_ma: f64) -> Result<[f64; 2]> {
+        all_finite(&world_mm, "world_mm")?;
+        let k = self.intrinsics(e_com_ma)?;
+        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
+        let pc = self.world_to_camera(world_mm);
+        project_camera_point(pc, &k, &d)
+    }
+
+    /// Projects many world points at one current into `out` (same length as `world_mm`).
+    ///
+    /// The intrinsics, distortion and rotation are computed once. On error `out` holds the
+    /// points before the failing one.
+    pub fn project_many(&self, world_mm: &[[f64; 3]], e_com_ma: f64, out: &mut [[f64; 2]]) -> Result<()> {
+        if out.len() < world_mm.len() {
+            return Err(Error::BufferTooSmall { what: "out", needed: world_mm.len(), got: out.len() });
+        }
+        let k = self.intrinsics(e_com_ma)?;
+        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
+        let r = self.rotation_matrix();
+        let t = self.translation_mm;
+        for (w, o) in world_mm.iter().zip(out.iter_mut()) {
+            all_finite(w, "world_mm")?;
+            let c = mat_vec(&r, *w);
+            *o = project_camera_point([c[0] + t[0], c[1] + t[1], c[2] + t[2]], &k, &d)?;
+        }
+        Ok(())
+    }
+}
+
+/// Camera point (mm) -> observed pixel under intrinsics `k` and distortion `d`
+/// (Eq. 15, 17).
+#[inline]
+pub fn project_camera_point(pc: [f64; 3], k: &Intrinsics, d: &Distortion) -> Result<[f64; 2]> {
+    if !(pc[2] > 0.0) {
+        return Err(Error::BehindCamera);
+    }
+    let u = k.fx * pc[0] / pc[2];
+    let v = k.fy * pc[1] / pc[2];
+    let [ud, vd] = d.distort(u, v);
+    let px = [ud + k.u0, vd + k.v0];
+    if px[0].is_finite() && px[1].is_finite() {
+        Ok(px)
+    } else {
+        Err(Error::NotFinite { what: "projected pixel" })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One point of the paper rig, computed by hand (each step written out).
+    #[test]
+    fn paper_rig_point_by_hand() {
+        let cam = CameraModel::paper_rig();
+        // Corner (i, j) = (4, 6) of the board at Z_W = 48 mm: X_W = 6.0, Y_W = 9.0.
+        let pw = [6.0, 9.0, 48.0];
+        let e = 100.0;
+        // Rodrigues om = (0.2, 0.2, 0.2): t = sqrt(0.12) = 0.346410161513775,
+        // a = sin t / t = 0.980119657713663, b = (1 - cos t) / t^2 = 0.495019957199948.
+        let t = 0.12f64.sqrt();
+        let a = t.sin() / t;
+        let b = (1.0 - t.cos()) / 0.12;
+        assert!((a - 0.980119657713663).abs() < 1e-14 && (b - 0.495019957199948).abs() < 1e-12);
+        // R = I + a [om]x + b (om om^T - t^2 I): diagonal 1 + b (0.04 - 0.12),
+        // off-diagonal b 0.04 -+ a 0.2.
+        let d = 1.0 + b * (0.04 - 0.12);
+        let p = b * 0.04 + a * 0.2;
+        let m = b * 0.04 - a * 0.2;
+        let r = [[d, m, p], [p, d, m], [m, p, d]];
+        let pc = [
+            r[0][0] * 6.0 + r[0][1] * 9.0 + r[0][2] * 48.0 - 11.0,
+            r[1][0] * 6.0 + r[1][1] * 9.0 + r[1][2] * 48.0 - 4.0,
+            r[2][0] * 6.0 + r[2][1] * 9.0 + r[2][2] * 48.0 + 48.0,
+        ];
+        // fx = 5380 - 700 + 200 - 30 = 4850, fy = 5430 - 700 + 200 - 30 = 4900.
+        let (fx, fy) = (4850.0, 4900.0);
+        let u = fx * pc[0] / pc[2];
+        let v = fy * pc[1] / pc[2];
+        // w = 1 / 4875.
+        let w = 1.0 / 4875.0;
+        let k1 = -0.067 * w * w - 5.19e-5 * w + 1.09e-8;
+        let p1 = -0.0077 * w * w + 0.103 * w - 1.93e-5;
+        let p2 = 0.11 * w * w - 0.0257 * w + 5.6e-6;
+        let r2 = u * u + v * v;
+        let ud = u + k1 * u * r2 + p1 * (3.0 * u * u + v * v) + 2.0 * p2 * u * v;
+        let vd = v + k1 * v * r2 + 2.0 * p1 * u * v + p2 * (u * u + 3.0 * v * v);
+        let expect = [ud + 900.0, vd + 550.0];
+        let got = cam.project(pw, e).unwrap();
+        assert!((got[0] - expect[0]).abs() < 1e-9 && (got[1] - expect[1]).abs() < 1e-9, "{got:?} {expect:?}");
+        // And it is inside the image.
+        assert!(got[0] > 0.0 && got[0] < 1935.0 && got[1] > 0.0 && got[1] < 1457.0);
+    }
+
+    #[test]
+    fn behind_camera_and_nan_are_errors() {
+        let cam = CameraModel::paper_rig();
+        assert_eq!(cam.project([0.0, 0.0, -1000.0], 100.0), Err(Error::BehindCamera));
+        assert!(matches!(cam.project([f64::NAN, 0.0, 0.0], 100.0), Err(Error::NotFinite { .. })));
+        assert!(matches!(cam.project([0.0, 0.0, 10.0], f64::INFINITY), Err(Error::NotFinite { .. })));
+        // fx(E) of the paper's cubic turns negative far above its range.
+        assert!(matches!(cam.intrinsics(2000.0), Err(Error::Degenerate { .. })));
+    }
+}

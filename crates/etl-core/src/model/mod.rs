@@ -1,0 +1,15 @@
+//! The ETL camera model (paper section 3, Eq. 12-18).
+//!
+//! World point P_W (mm) -> camera P_C = R P_W + T (Eq. 13) -> ideal centred pixel
+//! u = fx(E) X_C / Z_C, v = fy(E) Y_C / Z_C (Eq. 15-16) -> distorted centred pixel (Eq. 17,
+//! with Weng's decentering term, see [`distortion`]) -> observed pixel (u_d + u0, v_d + v0).
+
+pub mod camera;
+pub mod distortion;
+pub mod ray;
+pub mod rotation;
+pub mod undistort;
+
+pub use camera::{CameraModel, Intrinsics};
+pub use distortion::Distortion;
+pub use ray::Ray;

@@ -1,0 +1,28 @@
+//! Links etl-core into a `#![no_std]` artefact without a global allocator (see Cargo.toml).
+//! Each exported function calls one part of the core so the linker keeps it.
+#![no_std]
+
+use etl_core::model::CameraModel;
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    loop {}
+}
+
+/// Projects a world point of the paper rig; returns u + v, or NaN on error.
+#[no_mangle]
+pub extern "C" fn etl_gate_project(x: f64, y: f64, z: f64, e_ma: f64) -> f64 {
+    match CameraModel::paper_rig().project([x, y, z], e_ma) {
+        Ok([u, v]) => u + v,
+        Err(_) => f64::NAN,
+    }
+}
+
+/// Undistorts a pixel of the paper rig; returns u + v, or NaN on error.
+#[no_mangle]
+pub extern "C" fn etl_gate_undistort(u: f64, v: f64, e_ma: f64) -> f64 {
+    match CameraModel::paper_rig().undistort([u, v], e_ma) {
+        Ok([a, b]) => a + b,
+        Err(_) => f64::NAN,
+    }
+}
