@@ -85,10 +85,9 @@ impl fmt::Display for Error {
             Error::NotConverged { what, iterations } => {
                 write!(f, "{what} did not converge in {iterations} iterations")
             }
-            Error::BufferTooSmall { what, needed, got } => write!(
-                f,
-                "buffer {what} too small: needs {needed} elements, got {got} (see its *_scratch function)"
-            ),
+            Error::BufferTooSmall { what, needed, got } => {
+                write!(f, "buffer {what} too small: needs {needed} elements, got {got} (see its *_scratch function)")
+            }
             Error::InvalidArgument { what } => write!(f, "invalid argument: {what}"),
         }
     }

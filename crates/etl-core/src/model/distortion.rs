@@ -34,11 +34,7 @@ impl Distortion {
     pub fn from_a(a: &[f64; 9], f_mean_px: f64) -> Self {
         let w = 1.0 / f_mean_px;
         let w2 = w * w;
-        Distortion {
-            k1: a[0] * w2 + a[1] * w + a[2],
-            p1: a[3] * w2 + a[4] * w + a[5],
-            p2: a[6] * w2 + a[7] * w + a[8],
-        }
+        Distortion { k1: a[0] * w2 + a[1] * w + a[2], p1: a[3] * w2 + a[4] * w + a[5], p2: a[6] * w2 + a[7] * w + a[8] }
     }
 
     /// Eq. 17: ideal centred (u, v) -> distorted centred (u_d, v_d).

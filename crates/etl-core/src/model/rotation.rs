@@ -10,11 +10,8 @@ pub type Mat3 = [[f64; 3]; 3];
 pub fn rodrigues_to_matrix(om: [f64; 3]) -> Mat3 {
     let t2 = om[0] * om[0] + om[1] * om[1] + om[2] * om[2];
     let t = libm::sqrt(t2);
-    let (a, b) = if t < 1e-8 {
-        (1.0 - t2 / 6.0, 0.5 - t2 / 24.0)
-    } else {
-        (libm::sin(t) / t, (1.0 - libm::cos(t)) / t2)
-    };
+    let (a, b) =
+        if t < 1e-8 { (1.0 - t2 / 6.0, 0.5 - t2 / 24.0) } else { (libm::sin(t) / t, (1.0 - libm::cos(t)) / t2) };
     let [x, y, z] = om;
     // [om]x^2 = om om^T - t^2 I
     [
@@ -49,11 +46,8 @@ pub fn matrix_to_rodrigues(r: &Mat3) -> [f64; 3] {
     let s01 = (r[0][1] + r[1][0]) * 0.5 / c1;
     let s02 = (r[0][2] + r[2][0]) * 0.5 / c1;
     let s12 = (r[1][2] + r[2][1]) * 0.5 / c1;
-    let b = [
-        [(r[0][0] - cos_t) / c1, s01, s02],
-        [s01, (r[1][1] - cos_t) / c1, s12],
-        [s02, s12, (r[2][2] - cos_t) / c1],
-    ];
+    let b =
+        [[(r[0][0] - cos_t) / c1, s01, s02], [s01, (r[1][1] - cos_t) / c1, s12], [s02, s12, (r[2][2] - cos_t) / c1]];
     let mut i = 0;
     if b[1][1] > b[i][i] {
         i = 1;

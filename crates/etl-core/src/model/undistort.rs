@@ -34,7 +34,9 @@ impl Distortion {
             let j = self.distort_jacobian(u, v);
             let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
             if !(det.abs() > 1e-12) || !det.is_finite() {
-                return Err(Error::Degenerate { what: "distortion Jacobian is singular (the model folds the image here)" });
+                return Err(Error::Degenerate {
+                    what: "distortion Jacobian is singular (the model folds the image here)",
+                });
             }
             let du = (j[1][1] * r[0] - j[0][1] * r[1]) / det;
             let dv = (-j[1][0] * r[0] + j[0][0] * r[1]) / det;
