@@ -1,3 +1,8 @@
 //! etl-calib: images, detection, Zhang's method, the calibration pipeline, studies,
 //! reports and the `etlcal` command line.
+
 pub mod cli;
+pub mod error;
+pub mod formats;
+
+pub use error::{Error, Result};

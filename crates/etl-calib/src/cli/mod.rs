@@ -1,19 +1,36 @@
-//! The `etlcal` command line. Each verb lives in its own file; `main` dispatches.
+//! The `etlcal` command line. Each verb lives in its own file with an `Args` struct (clap)
+//! and a `run(args) -> Result<()>`; `main` dispatches, prints a failure as one line on
+//! stderr and exits with status 1. `--json` output is one JSON object on stdout.
 use clap::{Parser, Subcommand};
+
+use crate::error::Result;
 
 /// Calibrate and run cameras focused by an electrically tunable lens.
 #[derive(Parser)]
-#[command(name = "etlcal", version, about)]
+#[command(name = "etlcal", version, about, propagate_version = true)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
+// Verbs: one variant per verb, one file per verb (add yours here and in `run` below).
 #[derive(Subcommand)]
 enum Command {}
+
+/// Prints `value` as one JSON object on stdout.
+pub fn print_json(value: &serde_json::Value) {
+    println!("{value}");
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {}
+}
 
 /// Entry point of the `etlcal` binary.
 pub fn main() {
     let cli = Cli::parse();
-    match cli.command {}
+    if let Err(e) = run(cli) {
+        eprintln!("etlcal: error: {e}");
+        std::process::exit(1);
+    }
 }
