@@ -9,7 +9,7 @@ export CARGO_TERM_COLOR=never
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked
 
-echo "== no-alloc gate (etl-core linked into a #![no_std] artefact without an allocator)"
+echo "== no-alloc, no-panic gate (etl-core linked into a #![no_std] cdylib: no allocator, panics unresolvable)"
 cargo build --release --locked --manifest-path tests/no-alloc-gate/Cargo.toml
 
 echo "== Python package"

@@ -4,9 +4,18 @@
 
 use etl_core::model::CameraModel;
 
+// The panic handler calls a function that exists nowhere. If any panic path in etl-core is
+// reachable from the exported functions after optimisation, the final link (a cdylib
+// linked with --no-undefined, see build.rs) fails naming `etl_core_can_panic`.
+extern "C" {
+    fn etl_core_can_panic() -> !;
+}
+
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    loop {}
+    // SAFETY: never executed: the symbol is undefined, so a build in which this handler is
+    // reachable does not link.
+    unsafe { etl_core_can_panic() }
 }
 
 /// Projects a world point of the paper rig; returns u + v, or NaN on error.
