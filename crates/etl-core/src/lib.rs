@@ -26,6 +26,9 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod fit;
 pub mod model;
+pub mod physics;
+pub mod thermal;
 
 pub use error::{Error, Result};

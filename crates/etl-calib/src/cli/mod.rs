@@ -5,6 +5,9 @@ use clap::{Parser, Subcommand};
 
 use crate::error::Result;
 
+pub mod model;
+pub mod thermal;
+
 /// Calibrate and run cameras focused by an electrically tunable lens.
 #[derive(Parser)]
 #[command(name = "etlcal", version, about, propagate_version = true)]
@@ -15,7 +18,13 @@ pub struct Cli {
 
 // Verbs: one variant per verb, one file per verb (add yours here and in `run` below).
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// The paper rig's camera model and lens physics over a range of currents (Fig. 5 fits
+    /// with --fit-degrees).
+    Model(model::Args),
+    /// Temperature compensation: evaluate or fit the E_T(T, E_in) surface.
+    Thermal(thermal::Args),
+}
 
 /// Prints `value` as one JSON object on stdout.
 pub fn print_json(value: &serde_json::Value) {
@@ -23,7 +32,10 @@ pub fn print_json(value: &serde_json::Value) {
 }
 
 fn run(cli: Cli) -> Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Model(a) => model::run(a),
+        Command::Thermal(a) => thermal::run(a),
+    }
 }
 
 /// Entry point of the `etlcal` binary.

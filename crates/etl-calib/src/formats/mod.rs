@@ -15,6 +15,8 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 
+pub mod thermal;
+
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
 ///
 /// The `"format"` field is checked before the rest is parsed, so a file of another

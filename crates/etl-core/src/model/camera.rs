@@ -109,9 +109,14 @@ impl CameraModel {
     }
 
     /// Distortion (k1, p1, p2) at compensated current `e_com_ma` (Eq. 18).
+    ///
+    /// Errors: as [`Self::intrinsics`]; non-finite coefficients (NaN or infinite a_i, or
+    /// an overflow) ([`Error::NotFinite`]).
     pub fn distortion(&self, e_com_ma: f64) -> Result<Distortion> {
         let k = self.intrinsics(e_com_ma)?;
-        Ok(Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy)))
+        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
+        all_finite(&[d.k1, d.p1, d.p2], "distortion coefficients (check distortion_a)")?;
+        Ok(d)
     }
 
     /// World point (mm) -> camera coordinates (mm), Eq. 13.

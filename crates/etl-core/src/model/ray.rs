@@ -2,7 +2,7 @@
 
 use super::camera::CameraModel;
 use super::rotation::mat_t_vec;
-use crate::error::Result;
+use crate::error::{all_finite, Result};
 
 /// A ray in world coordinates: the points `origin_mm + s * direction`, s > 0.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -28,7 +28,8 @@ impl CameraModel {
     /// The ray of world points that project to `pixel` at current `e_com_ma`.
     ///
     /// Undistorts the pixel (Eq. 17 inverted), back-projects through A(E) (Eq. 15) and
-    /// rotates into the world frame. Errors as [`CameraModel::undistort`].
+    /// rotates into the world frame. Errors as [`CameraModel::undistort`], and
+    /// [`crate::Error::NotFinite`] when the pose holds NaN or overflows.
     pub fn ray(&self, pixel: [f64; 2], e_com_ma: f64) -> Result<Ray> {
         let k = self.intrinsics(e_com_ma)?;
         let [x, y] = self.undistort(pixel, e_com_ma)?;
@@ -38,6 +39,9 @@ impl CameraModel {
         let dir = mat_t_vec(&r, [dc[0] / n, dc[1] / n, dc[2] / n]);
         let t = self.translation_mm;
         let o = mat_t_vec(&r, [-t[0], -t[1], -t[2]]);
+        // A NaN rotation or translation (or an overflow) must not come back as a ray.
+        all_finite(&o, "ray origin (check rotation_rodrigues and translation_mm)")?;
+        all_finite(&dir, "ray direction (check rotation_rodrigues)")?;
         Ok(Ray { origin_mm: o, direction: dir })
     }
 }

@@ -1,0 +1,18 @@
+//! The physical model of an ETL group (paper section 2, Eq. 1-10): actuator pressure,
+//! membrane deflection and curvature, the focal length of the liquid lens f_liq, the
+//! gravity error, and the compound focal length f_com of the ETL behind a prime lens.
+//!
+//! The camera model does not use it (the paper replaces Eq. 8 and 10 by the cubic of
+//! Eq. 12); it is the ground truth of Fig. 5 (how well polynomials of each degree follow
+//! f_com) and drives the virtual lens. [`LensPhysics::paper`] holds the section 5.1.1
+//! values: f_liq goes from 120.5 mm at 0 mA to 50.5 mm at 250 mA.
+//!
+//! Units: pressures in Pa, lengths in mm, currents in mA (the paper's E_com: apply the
+//! temperature compensation first, Eq. 8).
+
+pub mod compound;
+pub mod gravity;
+pub mod lens;
+pub mod membrane;
+
+pub use lens::LensPhysics;
