@@ -2,7 +2,10 @@
 //! Each exported function calls one part of the core so the linker keeps it.
 #![no_std]
 
+use etl_core::fit::{GivensQr, PolyFit};
 use etl_core::model::CameraModel;
+use etl_core::physics::LensPhysics;
+use etl_core::thermal::{ThermalCalibration, ThermalFit, ThermalSurface};
 
 // The panic handler calls a function that exists nowhere. If any panic path in etl-core is
 // reachable from the exported functions after optimisation, the final link (a cdylib
@@ -34,4 +37,78 @@ pub extern "C" fn etl_gate_undistort(u: f64, v: f64, e_ma: f64) -> f64 {
         Ok([a, b]) => a + b,
         Err(_) => f64::NAN,
     }
+}
+
+/// Temperature compensation with the paper's surface: E_com, or NaN on error.
+#[no_mangle]
+pub extern "C" fn etl_gate_e_com(t_c: f64, e_in_ma: f64) -> f64 {
+    ThermalSurface::PAPER.e_com_ma(t_c, e_in_ma).unwrap_or(f64::NAN)
+}
+
+/// The inverse of the compensation on a perturbed surface (exercises the root search).
+#[no_mangle]
+pub extern "C" fn etl_gate_e_in_for_e_com(e_com_ma: f64, t_c: f64, c9: f64) -> f64 {
+    let mut s = ThermalSurface::PAPER;
+    s.coefficients[9] = c9;
+    s.e_in_for_e_com(e_com_ma, t_c).unwrap_or(f64::NAN)
+}
+
+/// Flagged compensation over a calibration with a caller-chosen lower temperature bound.
+#[no_mangle]
+pub extern "C" fn etl_gate_compensate(t_c: f64, e_in_ma: f64, t_lo_c: f64) -> f64 {
+    let mut c = ThermalCalibration::PAPER;
+    c.t_range_c[0] = t_lo_c;
+    match c.compensate(t_c, e_in_ma) {
+        Ok(r) => r.e_com_ma + if r.extrapolated { 1.0 } else { 0.0 },
+        Err(_) => f64::NAN,
+    }
+}
+
+/// The streamed surface fit over `n` synthetic samples.
+#[no_mangle]
+pub extern "C" fn etl_gate_thermal_fit(x0: f64, dx: f64, n: usize) -> f64 {
+    let mut f = ThermalFit::new();
+    for i in 0..n {
+        let x = x0 + dx * i as f64;
+        let _ = f.add_weighted(x, x * 2.0, x * 3.0, x);
+    }
+    match f.solve() {
+        Ok((s, rms)) => s.coefficients[3] + rms,
+        Err(_) => f64::NAN,
+    }
+}
+
+/// The streamed polynomial fit of degree `d` over `n` samples.
+#[no_mangle]
+pub extern "C" fn etl_gate_poly_fit(x0: f64, dx: f64, n: usize, d: usize, lo: f64, hi: f64) -> f64 {
+    let Ok(mut f) = PolyFit::new(d, [lo, hi]) else { return f64::NAN };
+    for i in 0..n {
+        let x = x0 + dx * i as f64;
+        let _ = f.add_weighted(x, x * 2.0, x);
+    }
+    match f.solve() {
+        Ok((p, rms)) => {
+            let c = p.monomial_coefficients().map(|c| c.get(d).copied().unwrap_or(0.0)).unwrap_or(0.0);
+            p.eval(lo).unwrap_or(0.0) + rms + c
+        }
+        Err(_) => f64::NAN,
+    }
+}
+
+/// A Givens QR accumulator of caller-chosen size.
+#[no_mangle]
+pub extern "C" fn etl_gate_givens(n: usize, a: f64, b: f64) -> f64 {
+    let Ok(mut q) = GivensQr::<5>::new(n) else { return f64::NAN };
+    let _ = q.add_row(&[a, b, a, b, a], b, a);
+    q.solve().map(|s| s[4]).unwrap_or(f64::NAN)
+}
+
+/// The lens physics (Eq. 1-10) with a caller-chosen Poisson ratio.
+#[no_mangle]
+pub extern "C" fn etl_gate_physics(e_ma: f64, dp: f64, nu: f64) -> f64 {
+    let mut l = LensPhysics::paper();
+    l.poisson_ratio = nu;
+    l.f_com_mm(e_ma).unwrap_or(0.0)
+        + l.gravity_error_mm(e_ma, dp).unwrap_or(0.0)
+        + l.gravity_coefficient(e_ma, dp, nu).unwrap_or(0.0)
 }
