@@ -27,6 +27,7 @@
 
 pub mod error;
 pub mod fit;
+pub mod lm;
 pub mod model;
 pub mod physics;
 pub mod thermal;

@@ -68,6 +68,16 @@ impl<const N: usize> GivensQr<N> {
         self.n
     }
 
+    /// The upper-triangular factor R (rows and columns beyond [`Self::unknowns`] are zero).
+    pub fn r_factor(&self) -> &[[f64; N]; N] {
+        &self.r
+    }
+
+    /// Q^T y: the right-hand side rotated with the rows (R x = Q^T y solves the fit).
+    pub fn qty(&self) -> &[f64; N] {
+        &self.qty
+    }
+
     /// Rows added with a positive weight.
     pub fn rows(&self) -> usize {
         self.rows

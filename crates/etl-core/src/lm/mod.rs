@@ -1,0 +1,64 @@
+//! A hand-written Levenberg-Marquardt solver for a fixed number of parameters.
+//!
+//! Two front ends share one set of options and stop reasons:
+//!
+//! - [`solve`]: dense problems with `N` parameters. Residual rows are *streamed* through a
+//!   [`RowSink`], folded into the triangular factor R of the Jacobian by Givens rotations
+//!   as they arrive (MINPACK's `lmstr` idea), so memory is O(N^2) whatever the number of
+//!   residuals. The step is Moré's (1978) trust-region Levenberg-Marquardt step with
+//!   MINPACK's adaptive column scaling, computed from the SVD of the scaled factor, which
+//!   also gives an honest numerical rank.
+//! - [`solve_blocks`]: problems with `N` shared parameters and `M` private parameters per
+//!   block (a view's pose in Zhang's method; a view's stage/current corrections in the
+//!   errors-in-variables bundle adjustment). The private parameters are eliminated by the
+//!   Schur complement in caller-provided storage ([`solve_blocks_scratch`]); damping is
+//!   Marquardt's diagonal scaling with Nielsen's (1999) update.
+//!
+//! Cost convention: `cost` = sum of squared residuals (no factor 1/2).
+//!
+//! ```
+//! use etl_core::lm::{solve, Options, Problem, RowSink};
+//! // Fit y = a exp(b x) to exact data with a = 2, b = -0.5.
+//! struct Exp;
+//! impl Problem<2> for Exp {
+//!     fn eval(&mut self, x: &[f64; 2], _jac: bool, sink: &mut dyn RowSink<2>) -> etl_core::Result<()> {
+//!         for i in 0..10 {
+//!             let t = i as f64;
+//!             let e = libm::exp(x[1] * t);
+//!             sink.push(x[0] * e - 2.0 * libm::exp(-0.5 * t), &[e, x[0] * t * e]);
+//!         }
+//!         Ok(())
+//!     }
+//! }
+//! let report = solve(&mut Exp, [1.0, 0.0], &Options::default()).unwrap();
+//! assert!((report.x[0] - 2.0).abs() < 1e-10 && (report.x[1] + 0.5).abs() < 1e-10);
+//! ```
+
+mod blocks;
+mod dense;
+mod options;
+mod report;
+pub mod svd;
+
+pub use blocks::{solve_blocks, solve_blocks_scratch, BlockProblem, BlockRowSink, BlockScratch};
+pub use dense::solve;
+pub use options::{Options, StopReason};
+pub use report::{BlockReport, Report};
+
+use crate::error::Result;
+
+/// Receives residual rows: the residual value and its gradient with respect to the
+/// parameters (zeros when the solver asked for no Jacobian).
+pub trait RowSink<const N: usize> {
+    /// One residual `r` and its gradient row `jac` = dr/dx.
+    fn push(&mut self, r: f64, jac: &[f64; N]);
+}
+
+/// A least-squares problem with `N` parameters: minimise sum_i r_i(x)^2.
+pub trait Problem<const N: usize> {
+    /// Streams every residual r_i(x) into `sink`, with its gradient row when `jacobian` is
+    /// true (otherwise the row content is ignored). The residuals must come in the same
+    /// number on every call. Returning an error at the starting point aborts the solve; at
+    /// a trial point it rejects the step (e.g. a point that went behind the camera).
+    fn eval(&mut self, x: &[f64; N], jacobian: bool, sink: &mut dyn RowSink<N>) -> Result<()>;
+}

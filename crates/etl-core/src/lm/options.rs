@@ -1,0 +1,76 @@
+//! Solver options and stop reasons.
+
+/// Options of [`super::solve`] and [`super::solve_blocks`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// Cap on the number of iterations (Jacobian evaluations).
+    pub max_iterations: usize,
+    /// Cap on the number of cost evaluations (trial steps included).
+    pub max_evaluations: usize,
+    /// Stop when both the actual and the predicted relative reduction of the cost are
+    /// below `ftol` (MINPACK's ftol).
+    pub ftol: f64,
+    /// Stop when the (scaled) step is below `xtol` times the (scaled) parameter norm.
+    pub xtol: f64,
+    /// Stop when the largest cosine between the residual vector and a Jacobian column is
+    /// below `gtol` (MINPACK's gtol).
+    pub gtol: f64,
+    /// Initial trust radius as a multiple of the scaled norm of the start (MINPACK's
+    /// `factor`; dense solver), or the initial relative damping (block solver uses
+    /// `initial_damping`).
+    pub step_factor: f64,
+    /// Initial relative (Marquardt) damping of the block solver.
+    pub initial_damping: f64,
+    /// Relative singular-value threshold below which a direction counts as unidentified
+    /// (rank deficiency), relative to the largest singular value of the scaled Jacobian.
+    pub rank_tolerance: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            max_iterations: 200,
+            max_evaluations: 2000,
+            ftol: 1e-15,
+            xtol: 1e-15,
+            gtol: 1e-15,
+            step_factor: 1.0,
+            initial_damping: 1e-3,
+            rank_tolerance: 1e-13,
+        }
+    }
+}
+
+/// Why the solver stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// The relative cost reduction (actual and predicted) fell below `ftol`, or the cost
+    /// reached zero.
+    CostTolerance,
+    /// The scaled step fell below `xtol` times the scaled parameter norm.
+    StepTolerance,
+    /// The residual vector is orthogonal to the Jacobian columns within `gtol`.
+    GradientTolerance,
+    /// `max_iterations` or `max_evaluations` reached.
+    MaxIterations,
+    /// The Jacobian lost rank: some parameter combination is not determined by the data.
+    /// The report's `rank` says how many directions are; the estimate is the
+    /// minimum-norm one in the scaled parameters and its covariance is not meaningful.
+    RankDeficient,
+    /// No trial step reduces the cost although none of the tolerances is met (the
+    /// trust region collapsed): the cost is at a minimum to machine precision.
+    NoProgress,
+}
+
+impl StopReason {
+    /// True for the reasons that mean "converged".
+    pub fn converged(&self) -> bool {
+        matches!(
+            self,
+            StopReason::CostTolerance
+                | StopReason::StepTolerance
+                | StopReason::GradientTolerance
+                | StopReason::NoProgress
+        )
+    }
+}
