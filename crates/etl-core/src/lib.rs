@@ -26,6 +26,7 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod calib;
 pub mod fit;
 pub mod lm;
 pub mod model;

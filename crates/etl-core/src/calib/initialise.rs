@@ -1,0 +1,43 @@
+//! The linear initialisation chain: RAC -> focal polynomial -> distortion.
+
+use super::distortion_init::distortion_a;
+use super::focal_poly::focal_poly;
+use super::observations::View;
+use super::rac::rac;
+use crate::error::{all_finite, Result};
+use crate::model::CameraModel;
+
+/// The lens-off intrinsics A0 (section 4.2): focal lengths at E = 0 and principal point.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct A0 {
+    /// fx at E = 0, px.
+    pub kf0x: f64,
+    /// fy at E = 0, px.
+    pub kf0y: f64,
+    /// Principal point u0, px.
+    pub u0: f64,
+    /// Principal point v0, px.
+    pub v0: f64,
+}
+
+/// The initial camera model from the views and A0: RAC (R, tx, ty), the focal
+/// polynomial (kf1..3, tz), then the distortion coefficients a1..a9.
+///
+/// Errors: those of [`rac`], [`focal_poly`] and [`distortion_a`] (each names its unmet
+/// precondition).
+pub fn initialise(views: &[View<'_>], a0: &A0) -> Result<CameraModel> {
+    all_finite(&[a0.kf0x, a0.kf0y, a0.u0, a0.v0], "A0 (kf0x, kf0y, u0, v0)")?;
+    let pp = [a0.u0, a0.v0];
+    let r = rac(views, pp)?;
+    let f = focal_poly(views, &r, [a0.kf0x, a0.kf0y], pp)?;
+    let mut model = CameraModel {
+        rotation_rodrigues: r.rotation_rodrigues,
+        translation_mm: [r.tx_mm, r.ty_mm, f.tz_mm],
+        kf_x: f.kf_x,
+        kf_y: f.kf_y,
+        principal_point: pp,
+        distortion_a: [0.0; 9],
+    };
+    model.distortion_a = distortion_a(&model, views)?;
+    Ok(model)
+}

@@ -1,0 +1,23 @@
+//! The calibration of an ETL camera (paper section 4.3-4.6) over borrowed observations.
+//!
+//! [`initialise`] chains the linear initialisers, [`bundle_adjust()`] refines all 25 numbers:
+//!
+//! 1. [`rac`]: R, tx, ty from the radial alignment constraint over all views (Eq. 19-20);
+//! 2. [`focal_poly`]: kf1..kf3 for x and y and tz (Eq. 21-22), given A0;
+//! 3. [`distortion_init`]: k1, p1, p2 per view (Eq. 23), then a1..a9 (Eq. 18);
+//! 4. [`bundle_adjust()`]: Eq. 24 by Levenberg-Marquardt, optionally errors-in-variables.
+
+pub mod bundle_adjust;
+pub mod distortion_init;
+pub mod focal_poly;
+mod initialise;
+pub mod jacobian;
+pub mod observations;
+pub mod rac;
+
+pub use bundle_adjust::{
+    bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
+    ViewCorrection,
+};
+pub use initialise::{initialise, A0};
+pub use observations::{Point, View};

@@ -1,0 +1,169 @@
+//! The radial alignment constraint (RAC, Eq. 19-20): R, tx, ty and the aspect ratio from
+//! all views together.
+//!
+//! All ETL views share one R and T (the world frame is the displacement stage), so the
+//! points of all views form one non-coplanar 3D target and Tsai's non-coplanar method
+//! applies. With centred pixels u, v (from the principal point of A0) and s = fx / fy,
+//! u / v = s X_C / Y_C gives, per point, the linear equation (Eq. 20 with NOTES.md's
+//! erratum: the third entry is v Z_W)
+//!
+//! ```text
+//! [v X, v Y, v Z, v, -u X, -u Y, -u Z] . L = u,   L = [s r1, s r2, s r3, s tx, r4, r5, r6] / ty
+//! ```
+//!
+//! then |ty| = 1 / |L5..7|, s = |ty| |L1..3|, the sign of ty from the point farthest from
+//! the centre (X_C must have the sign of u), r7..9 = r1..3 x r4..6, and R is replaced by
+//! the nearest rotation. Distortion and the slight change of s with E are ignored: RAC is
+//! an initialiser; bundle adjustment removes what it leaves.
+
+#![allow(clippy::needless_range_loop)]
+
+use super::observations::{point_count, validate, View};
+use crate::error::{Error, Result};
+use crate::fit::GivensQr;
+use crate::lm::svd::Svd;
+use crate::model::rotation::{matrix_to_rodrigues, Mat3};
+
+/// What RAC determines.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RacSolution {
+    /// R (world -> camera) as a Rodrigues vector.
+    pub rotation_rodrigues: [f64; 3],
+    /// R as a matrix.
+    pub rotation: Mat3,
+    /// tx, mm.
+    pub tx_mm: f64,
+    /// ty, mm.
+    pub ty_mm: f64,
+    /// The aspect ratio s = fx / fy seen by the data.
+    pub aspect: f64,
+}
+
+/// Solves Eq. 20 over every point of every view.
+///
+/// Preconditions (typed errors): at least 7 points; finite input; no empty view; the
+/// points not all on one plane of constant Z_W and not all on the optical axis
+/// ([`Error::Degenerate`]: RAC needs depth, i.e. views at several stage positions).
+///
+/// ```
+/// use etl_core::calib::{rac::rac, Point, View};
+/// use etl_core::model::CameraModel;
+/// let cam = CameraModel::paper_rig();
+/// let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 12]; 3];
+/// for (k, (z, e)) in [(60.0, 90.0), (31.0, 130.0), (8.0, 200.0)].into_iter().enumerate() {
+///     for i in 0..12 {
+///         let w = [1.5 * (i % 4) as f64, 1.5 * (i / 4) as f64, z];
+///         pts[k][i] = Point { world_mm: w, pixel: cam.project(w, e).unwrap() };
+///     }
+/// }
+/// let views = [View { e_com_ma: 90.0, points: &pts[0] }, View { e_com_ma: 130.0, points: &pts[1] },
+///              View { e_com_ma: 200.0, points: &pts[2] }];
+/// let sol = rac(&views, cam.principal_point).unwrap();
+/// assert!((sol.rotation_rodrigues[0] - 0.2).abs() < 0.01); // distortion makes it approximate
+/// ```
+pub fn rac(views: &[View<'_>], principal_point: [f64; 2]) -> Result<RacSolution> {
+    validate(views)?;
+    let n = point_count(views);
+    if n < 7 {
+        return Err(Error::TooFew { what: "points for RAC", needed: 7, got: n });
+    }
+    let [u0, v0] = principal_point;
+    if !(u0.is_finite() && v0.is_finite()) {
+        return Err(Error::NotFinite { what: "principal_point" });
+    }
+    // Scale world coordinates and pixels to O(1) for the conditioning of the solve.
+    let (mut ws, mut ps) = (0.0f64, 0.0f64);
+    for v in views {
+        for p in v.points {
+            ws = ws.max(p.world_mm[0].abs()).max(p.world_mm[1].abs()).max(p.world_mm[2].abs());
+            ps = ps.max((p.pixel[0] - u0).abs()).max((p.pixel[1] - v0).abs());
+        }
+    }
+    if !(ws > 0.0 && ps > 0.0) {
+        return Err(Error::Degenerate { what: "all points at the world origin or at the principal point" });
+    }
+    let mut qr = GivensQr::<7>::full();
+    for view in views {
+        for p in view.points {
+            let [x, y, z] = [p.world_mm[0] / ws, p.world_mm[1] / ws, p.world_mm[2] / ws];
+            let (u, v) = ((p.pixel[0] - u0) / ps, (p.pixel[1] - v0) / ps);
+            qr.add_row(&[v * x, v * y, v * z, v, -u * x, -u * y, -u * z], u, 1.0)?;
+        }
+    }
+    // Rank check before solving: a plane of constant Z makes column 3 a multiple of 4.
+    let r = *qr.r_factor();
+    let svd = Svd::of_rows(&r);
+    if svd.rank(1e-9) < 7 {
+        return Err(Error::Degenerate {
+            what: "RAC needs depth: the points lie on one plane (views at several stage positions Z_W are needed)",
+        });
+    }
+    let l = qr.solve()?;
+    // Undo the scaling: L1..3 and L5..7 multiply world coordinates (in units of ws).
+    let l13 = [l[0] / ws, l[1] / ws, l[2] / ws];
+    let l4 = l[3];
+    let l57 = [l[4] / ws, l[5] / ws, l[6] / ws];
+    let n57 = libm::sqrt(l57[0] * l57[0] + l57[1] * l57[1] + l57[2] * l57[2]);
+    let n13 = libm::sqrt(l13[0] * l13[0] + l13[1] * l13[1] + l13[2] * l13[2]);
+    if !(n57 > 0.0 && n13 > 0.0) {
+        return Err(Error::Degenerate { what: "RAC solution has a zero row of R" });
+    }
+    let mut ty = 1.0 / n57;
+    let s = ty * n13;
+    // Sign of ty: the point farthest from the centre must have X_C with the sign of u
+    // and Y_C with the sign of v.
+    let mut best = (0.0, [0.0; 3], [0.0; 2]);
+    for view in views {
+        for p in view.points {
+            let (u, v) = (p.pixel[0] - u0, p.pixel[1] - v0);
+            let d = u * u + v * v;
+            if d > best.0 {
+                best = (d, p.world_mm, [u, v]);
+            }
+        }
+    }
+    let (w, uv) = (best.1, best.2);
+    let xc = (l13[0] * w[0] + l13[1] * w[1] + l13[2] * w[2] + l4) * ty / s;
+    let yc = (l57[0] * w[0] + l57[1] * w[1] + l57[2] * w[2] + 1.0) * ty;
+    if xc * uv[0] + yc * uv[1] < 0.0 {
+        ty = -ty;
+    }
+    let r1 = [l13[0] * ty / s, l13[1] * ty / s, l13[2] * ty / s];
+    let r2 = [l57[0] * ty, l57[1] * ty, l57[2] * ty];
+    let tx = l4 * ty / s;
+    let r3 = [r1[1] * r2[2] - r1[2] * r2[1], r1[2] * r2[0] - r1[0] * r2[2], r1[0] * r2[1] - r1[1] * r2[0]];
+    let rot = nearest_rotation(&[r1, r2, r3]);
+    Ok(RacSolution { rotation_rodrigues: matrix_to_rodrigues(&rot), rotation: rot, tx_mm: tx, ty_mm: ty, aspect: s })
+}
+
+/// The rotation nearest to `m` in the Frobenius norm: U V^T of its SVD (with the sign
+/// fixed so the determinant is +1).
+pub fn nearest_rotation(m: &Mat3) -> Mat3 {
+    let svd = Svd::of_rows(m);
+    // m = sum_k s_k u_k v_k^T; the nearest rotation is sum_k u_k v_k^T (det +1).
+    let mut r = [[0.0; 3]; 3];
+    for k in 0..3 {
+        for i in 0..3 {
+            for j in 0..3 {
+                r[i][j] += svd.u[k][i] * svd.v[k][j];
+            }
+        }
+    }
+    let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+        + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+    if det < 0.0 {
+        // Flip the direction of the smallest singular value.
+        let mut kmin = 0;
+        for k in 1..3 {
+            if svd.s[k] < svd.s[kmin] {
+                kmin = k;
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                r[i][j] -= 2.0 * svd.u[kmin][i] * svd.v[kmin][j];
+            }
+        }
+    }
+    r
+}

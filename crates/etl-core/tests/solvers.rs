@@ -1,0 +1,165 @@
+//! The calibration solvers on the paper rig (NOTES.md): noise-free recovery, the
+//! paper's noise model with the plain and the errors-in-variables bundle adjustment, and
+//! bad inputs.
+
+use etl_core::calib::{
+    bundle_adjust, initialise, rac::rac, BundleAdjustOptions, Estimator, Point, View, ViewCorrection, A0,
+};
+use etl_core::lm::BlockScratch;
+use etl_core::model::CameraModel;
+use etl_core::Error;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+const Z_W: [f64; 15] = [75.0, 60.0, 48.0, 43.0, 35.0, 31.0, 28.0, 22.0, 19.0, 16.0, 13.0, 10.0, 8.0, 4.0, 2.0];
+const E_COM: [f64; 15] =
+    [80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0, 180.0, 190.0, 200.0, 210.0, 225.0];
+
+struct Noise {
+    xy_mm: f64,
+    z_mm: f64,
+    e_ma: f64,
+    px: f64,
+    kf0_rel: f64,
+    pp_px: f64,
+}
+
+const NO_NOISE: Noise = Noise { xy_mm: 0.0, z_mm: 0.0, e_ma: 0.0, px: 0.0, kf0_rel: 0.0, pp_px: 0.0 };
+const PAPER_NOISE: Noise = Noise { xy_mm: 0.001, z_mm: 0.010, e_ma: 0.4, px: 0.2, kf0_rel: 0.003, pp_px: 1.0 };
+
+/// The paper rig's views: recorded (noisy) world points, currents and observed pixels, and
+/// the A0 a lens-off calibration would give.
+fn paper_rig(noise: &Noise, seed: u64) -> (Vec<Vec<Point>>, Vec<f64>, A0) {
+    let cam = CameraModel::paper_rig();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let g = |s: f64, rng: &mut ChaCha8Rng| if s > 0.0 { Normal::new(0.0, s).unwrap().sample(rng) } else { 0.0 };
+    let mut views = vec![];
+    let mut currents = vec![];
+    for (&z, &e) in Z_W.iter().zip(&E_COM) {
+        // The true stage position and current differ from the recorded ones.
+        let (dz, de) = (g(noise.z_mm, &mut rng), g(noise.e_ma, &mut rng));
+        let mut pts = vec![];
+        for j in 0..12 {
+            for i in 0..14 {
+                let recorded = [1.5 * i as f64, 1.5 * j as f64, z];
+                let truth = [recorded[0] + g(noise.xy_mm, &mut rng), recorded[1] + g(noise.xy_mm, &mut rng), z + dz];
+                let clean = cam.project(recorded, e).unwrap();
+                if !(0.0..=1935.0).contains(&clean[0]) || !(0.0..=1457.0).contains(&clean[1]) {
+                    continue;
+                }
+                let px = cam.project(truth, e + de).unwrap();
+                pts.push(Point {
+                    world_mm: recorded,
+                    pixel: [px[0] + g(noise.px, &mut rng), px[1] + g(noise.px, &mut rng)],
+                });
+            }
+        }
+        views.push(pts);
+        currents.push(e);
+    }
+    let a0 = A0 {
+        kf0x: cam.kf_x[0] * (1.0 + g(noise.kf0_rel, &mut rng)),
+        kf0y: cam.kf_y[0] * (1.0 + g(noise.kf0_rel, &mut rng)),
+        u0: cam.principal_point[0] + g(noise.pp_px, &mut rng),
+        v0: cam.principal_point[1] + g(noise.pp_px, &mut rng),
+    };
+    (views, currents, a0)
+}
+
+fn as_views<'a>(pts: &'a [Vec<Point>], e: &[f64]) -> Vec<View<'a>> {
+    pts.iter().zip(e).map(|(p, &e)| View { e_com_ma: e, points: p }).collect()
+}
+
+/// Max relative error of fx(E) and fy(E) over 80..225 mA.
+fn curve_error(est: &CameraModel) -> (f64, f64) {
+    let truth = CameraModel::paper_rig();
+    let (mut ex, mut ey) = (0.0f64, 0.0f64);
+    for k in 0..=145 {
+        let e = 80.0 + k as f64;
+        let (fx, fy) = truth.focal_lengths(e);
+        let (gx, gy) = est.focal_lengths(e);
+        ex = ex.max(((gx - fx) / fx).abs());
+        ey = ey.max(((gy - fy) / fy).abs());
+    }
+    (ex, ey)
+}
+
+fn calibrate(pts: &[Vec<Point>], e: &[f64], a0: &A0, estimator: Estimator) -> etl_core::calib::BundleAdjustReport {
+    let views = as_views(pts, e);
+    let init = initialise(&views, a0).unwrap();
+    let opts = BundleAdjustOptions { estimator, ..BundleAdjustOptions::default() };
+    let mut corr = vec![ViewCorrection::default(); views.len()];
+    let mut scratch = vec![BlockScratch::ZERO; views.len()];
+    bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch).unwrap()
+}
+
+#[test]
+fn noise_free_paper_rig_is_recovered_exactly() {
+    let (pts, e, a0) = paper_rig(&NO_NOISE, 1);
+    assert_eq!(pts.iter().map(Vec::len).sum::<usize>(), 2311, "NOTES.md: 2311 of 2520 corners remain");
+    let r = calibrate(&pts, &e, &a0, Estimator::Paper);
+    let truth = etl_core::calib::jacobian::to_params(&CameraModel::paper_rig());
+    let got = etl_core::calib::jacobian::to_params(&r.model);
+    for i in 0..25 {
+        let tol = if i >= 16 { 1e-6 } else { 1e-8 };
+        let rel = ((got[i] - truth[i]) / truth[i]).abs();
+        assert!(rel < tol, "{}: {} vs {} (rel {rel:e})", etl_core::calib::jacobian::PARAM_NAMES[i], got[i], truth[i]);
+    }
+    assert!(r.iterations <= 10, "{} iterations", r.iterations);
+    assert!(r.rms_px < 1e-6);
+}
+
+#[test]
+fn errors_in_variables_beats_the_plain_estimator_under_the_paper_noise() {
+    let trials = 12;
+    let (mut plain, mut eiv) = (0.0, 0.0);
+    let (mut pp_plain, mut pp_eiv) = (0.0, 0.0);
+    for seed in 0..trials {
+        let (pts, e, a0) = paper_rig(&PAPER_NOISE, 100 + seed);
+        let rp = calibrate(&pts, &e, &a0, Estimator::Paper);
+        let re = calibrate(&pts, &e, &a0, Estimator::EIV_PAPER);
+        plain += curve_error(&rp.model).0;
+        eiv += curve_error(&re.model).0;
+        let pp = |m: &CameraModel| (m.principal_point[0] - 900.0).hypot(m.principal_point[1] - 550.0);
+        pp_plain += pp(&rp.model);
+        pp_eiv += pp(&re.model);
+        assert!((rp.rms_px - 0.2 * 2f64.sqrt()).abs() < 0.2, "plain rms {}", rp.rms_px);
+    }
+    let n = trials as f64;
+    println!(
+        "mean max rel fx(E) error: plain {:.3} %, eiv {:.3} %; principal point: plain {:.2} px, eiv {:.2} px",
+        100.0 * plain / n,
+        100.0 * eiv / n,
+        pp_plain / n,
+        pp_eiv / n
+    );
+    assert!(eiv < 0.5 * plain, "EIV must lower the fx(E) curve error clearly: {eiv} vs {plain}");
+}
+
+#[test]
+fn bad_inputs_name_the_problem() {
+    let (pts, e, a0) = paper_rig(&NO_NOISE, 2);
+    // Fewer than 3 distinct currents.
+    let two: Vec<f64> = e.iter().enumerate().map(|(i, _)| if i % 2 == 0 { 80.0 } else { 90.0 }).collect();
+    let err = initialise(&as_views(&pts, &two), &a0).unwrap_err();
+    assert!(matches!(err, Error::TooFew { needed: 3, .. }), "{err}");
+    // Fewer than 7 points for RAC.
+    let few = [pts[0][..5].to_vec()];
+    let err = rac(&as_views(&few, &e[..1]), [900.0, 550.0]).unwrap_err();
+    assert!(matches!(err, Error::TooFew { needed: 7, got: 5, .. }), "{err}");
+    // All points on one plane (a single stage position) where RAC needs depth.
+    let flat = [pts[2].clone()];
+    let err = rac(&as_views(&flat, &e[2..3]), [900.0, 550.0]).unwrap_err();
+    assert!(matches!(err, Error::Degenerate { .. }), "{err}");
+    // NaN in a point, and an empty view.
+    let mut nan = pts.clone();
+    nan[3][4].pixel[0] = f64::NAN;
+    assert!(matches!(initialise(&as_views(&nan, &e), &a0).unwrap_err(), Error::NotFinite { .. }));
+    let mut empty = pts.clone();
+    empty[5].clear();
+    assert!(matches!(initialise(&as_views(&empty, &e), &a0).unwrap_err(), Error::InvalidArgument { .. }));
+    // NaN in A0.
+    let bad_a0 = A0 { u0: f64::NAN, ..a0 };
+    assert!(matches!(initialise(&as_views(&pts, &e), &bad_a0).unwrap_err(), Error::NotFinite { .. }));
+}
