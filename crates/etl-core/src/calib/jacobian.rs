@@ -220,7 +220,8 @@ mod tests {
         for &(pw, e) in &[([3.0, 4.5, 48.0], 100.0), ([19.5, 16.5, 2.0], 225.0), ([0.0, 0.0, 75.0], 80.0)] {
             let p = Projector::new(&x0).project(pw, e, true).unwrap();
             for j in 0..PARAMS {
-                let h = 1e-6 * x0[j].abs().max(1e-3);
+                // The pixel is linear in a_i, so a large step is exact there and beats roundoff.
+                let h = if j >= 16 { 1e-2 } else { 1e-6 } * x0[j].abs().max(1e-3);
                 let (mut xp, mut xm) = (x0, x0);
                 xp[j] += h;
                 xm[j] -= h;
