@@ -31,6 +31,7 @@ pub mod fit;
 pub mod lm;
 pub mod model;
 pub mod physics;
+pub mod pnp;
 pub mod thermal;
 
 pub use error::{Error, Result};

@@ -1,0 +1,153 @@
+//! Planar PnP: closed-form start from the homography, then LM.
+
+#![allow(clippy::needless_range_loop)]
+
+use crate::calib::jacobian::{to_params, Projector};
+use crate::calib::rac::nearest_rotation;
+use crate::error::{all_finite, Error, Result};
+use crate::fit::GivensQr;
+use crate::lm::{solve, Options, Problem, RowSink};
+use crate::model::rotation::matrix_to_rodrigues;
+use crate::model::CameraModel;
+
+/// The pose of a board (board frame -> camera frame) found by [`solve_pnp`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoardPose {
+    /// Rotation board -> camera, Rodrigues vector.
+    pub rotation_rodrigues: [f64; 3],
+    /// Translation board -> camera, mm: the board origin in camera coordinates.
+    pub translation_mm: [f64; 3],
+    /// RMS reprojection error, px.
+    pub rms_px: f64,
+    /// LM iterations.
+    pub iterations: usize,
+}
+
+/// The displacement of the board origin between two poses, in camera coordinates (mm);
+/// its norm is the length of a stage move.
+pub fn displacement_mm(a: &BoardPose, b: &BoardPose) -> [f64; 3] {
+    [
+        b.translation_mm[0] - a.translation_mm[0],
+        b.translation_mm[1] - a.translation_mm[1],
+        b.translation_mm[2] - a.translation_mm[2],
+    ]
+}
+
+struct Reprojection<'a> {
+    model: CameraModel,
+    e_com_ma: f64,
+    board_mm: &'a [[f64; 3]],
+    pixels: &'a [[f64; 2]],
+}
+
+impl Problem<6> for Reprojection<'_> {
+    fn eval(&mut self, x: &[f64; 6], jacobian: bool, sink: &mut dyn RowSink<6>) -> Result<()> {
+        let mut m = self.model;
+        m.rotation_rodrigues = [x[0], x[1], x[2]];
+        m.translation_mm = [x[3], x[4], x[5]];
+        let proj = Projector::new(&to_params(&m));
+        for (w, px) in self.board_mm.iter().zip(self.pixels) {
+            let p = proj.project(*w, self.e_com_ma, jacobian)?;
+            for row in 0..2 {
+                let j: [f64; 6] = core::array::from_fn(|k| p.d_params[row][k]);
+                sink.push(p.pixel[row] - px[row], &j);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The pose of a planar board (points with Z = 0 in the board frame, mm) seen at pixels
+/// `pixels` at compensated current `e_com_ma` through `model` (whose own R, T are not
+/// used).
+///
+/// Preconditions (typed errors): at least 4 points, as many pixels as points; finite
+/// input; every board point with Z = 0; the points not all on one line
+/// ([`Error::Degenerate`]); pixels the model can undistort.
+///
+/// ```
+/// use etl_core::model::CameraModel;
+/// use etl_core::pnp::solve_pnp;
+/// let mut cam = CameraModel::paper_rig();
+/// let board: Vec<[f64; 3]> = (0..20).map(|i| [1.5 * (i % 5) as f64, 1.5 * (i / 5) as f64, 0.0]).collect();
+/// // Put the board at the paper rig's pose shifted to Z_W = 48 mm.
+/// let px: Vec<[f64; 2]> = board.iter().map(|b| cam.project([b[0], b[1], 48.0], 100.0).unwrap()).collect();
+/// let pose = solve_pnp(&cam, 100.0, &board, &px).unwrap();
+/// let t = cam.world_to_camera([0.0, 0.0, 48.0]);
+/// assert!((pose.translation_mm[2] - t[2]).abs() < 1e-8);
+/// ```
+pub fn solve_pnp(model: &CameraModel, e_com_ma: f64, board_mm: &[[f64; 3]], pixels: &[[f64; 2]]) -> Result<BoardPose> {
+    if board_mm.len() != pixels.len() {
+        return Err(Error::InvalidArgument { what: "board points and pixels differ in number" });
+    }
+    if board_mm.len() < 4 {
+        return Err(Error::TooFew { what: "points for PnP", needed: 4, got: board_mm.len() });
+    }
+    let k = model.intrinsics(e_com_ma)?;
+    let mut scale = 0.0f64;
+    let mut centre = [0.0; 2];
+    for (w, p) in board_mm.iter().zip(pixels) {
+        all_finite(w, "board point")?;
+        all_finite(p, "pixel")?;
+        if w[2] != 0.0 {
+            return Err(Error::InvalidArgument { what: "board points must lie on Z = 0 of the board frame" });
+        }
+        centre[0] += w[0];
+        centre[1] += w[1];
+    }
+    let n = board_mm.len() as f64;
+    centre = [centre[0] / n, centre[1] / n];
+    for w in board_mm {
+        scale = scale.max((w[0] - centre[0]).abs()).max((w[1] - centre[1]).abs());
+    }
+    if !(scale > 0.0) {
+        return Err(Error::Degenerate { what: "all board points coincide" });
+    }
+    // DLT on board coordinates normalised to [-1, 1]: (X', Y') -> (x, y).
+    let mut qr = GivensQr::<8>::full();
+    for (w, p) in board_mm.iter().zip(pixels) {
+        let und = model.undistort(*p, e_com_ma)?;
+        let (x, y) = ((und[0] - k.u0) / k.fx, (und[1] - k.v0) / k.fy);
+        let (bx, by) = ((w[0] - centre[0]) / scale, (w[1] - centre[1]) / scale);
+        qr.add_row(&[bx, by, 1.0, 0.0, 0.0, 0.0, -x * bx, -x * by], x, 1.0)?;
+        qr.add_row(&[0.0, 0.0, 0.0, bx, by, 1.0, -y * bx, -y * by], y, 1.0)?;
+    }
+    let h = qr
+        .solve()
+        .map_err(|_| Error::Degenerate { what: "PnP points are collinear (the homography is undetermined)" })?;
+    // Columns of H in normalised board units; undo the normalisation: X' = (X - c) / s.
+    let c1 = [h[0] / scale, h[3] / scale, h[6] / scale];
+    let c2 = [h[1] / scale, h[4] / scale, h[7] / scale];
+    let c3 = [
+        h[2] - h[0] * centre[0] / scale - h[1] * centre[1] / scale,
+        h[5] - h[3] * centre[0] / scale - h[4] * centre[1] / scale,
+        1.0 - h[6] * centre[0] / scale - h[7] * centre[1] / scale,
+    ];
+    let n1 = libm::sqrt(c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2]);
+    let n2 = libm::sqrt(c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2]);
+    if !(n1 > 0.0 && n2 > 0.0) {
+        return Err(Error::Degenerate { what: "PnP homography is singular" });
+    }
+    let mut lambda = 2.0 / (n1 + n2);
+    if c3[2] * lambda < 0.0 {
+        lambda = -lambda; // the board is in front of the camera
+    }
+    let r1 = c1.map(|v| v * lambda);
+    let r2 = c2.map(|v| v * lambda);
+    let r3 = [r1[1] * r2[2] - r1[2] * r2[1], r1[2] * r2[0] - r1[0] * r2[2], r1[0] * r2[1] - r1[1] * r2[0]];
+    // Rows of R are (r1 r2 r3) as columns.
+    let m = [[r1[0], r2[0], r3[0]], [r1[1], r2[1], r3[1]], [r1[2], r2[2], r3[2]]];
+    let rot = nearest_rotation(&m);
+    let t = c3.map(|v| v * lambda);
+    let om = matrix_to_rodrigues(&rot);
+    let mut problem = Reprojection { model: *model, e_com_ma, board_mm, pixels };
+    let x0 = [om[0], om[1], om[2], t[0], t[1], t[2]];
+    let opts = Options { max_iterations: 50, ftol: 1e-15, xtol: 1e-15, gtol: 1e-15, ..Options::default() };
+    let r = solve(&mut problem, x0, &opts)?;
+    Ok(BoardPose {
+        rotation_rodrigues: [r.x[0], r.x[1], r.x[2]],
+        translation_mm: [r.x[3], r.x[4], r.x[5]],
+        rms_px: libm::sqrt(r.cost / n),
+        iterations: r.iterations,
+    })
+}
