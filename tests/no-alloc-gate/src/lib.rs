@@ -112,3 +112,45 @@ pub extern "C" fn etl_gate_physics(e_ma: f64, dp: f64, nu: f64) -> f64 {
         + l.gravity_error_mm(e_ma, dp).unwrap_or(0.0)
         + l.gravity_coefficient(e_ma, dp, nu).unwrap_or(0.0)
 }
+
+/// The whole calibration chain on a small synthetic rig: 3 views of 12 points, then the
+/// linear initialisation, the bundle adjustment (plain or errors-in-variables) and PnP.
+/// Returns the refined kf1x (or NaN on error).
+#[no_mangle]
+pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
+    use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, Estimator, Point, View, ViewCorrection, A0};
+    use etl_core::lm::BlockScratch;
+    let cam = CameraModel::paper_rig();
+    let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 12]; 3];
+    let setup = [(60.0, 90.0), (31.0, 130.0), (8.0, 200.0)];
+    for (k, (z, e)) in setup.into_iter().enumerate() {
+        for i in 0..12 {
+            let w = [1.5 * (i % 4) as f64, 1.5 * (i / 4) as f64, z];
+            let Ok(px) = cam.project(w, e) else { return f64::NAN };
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            pts[k][i] = Point { world_mm: w, pixel: [px[0] + sign * noise_px, px[1] - sign * noise_px] };
+        }
+    }
+    let views = [
+        View { e_com_ma: 90.0, points: &pts[0] },
+        View { e_com_ma: 130.0, points: &pts[1] },
+        View { e_com_ma: 200.0, points: &pts[2] },
+    ];
+    let a0 = A0 { kf0x: 5380.0, kf0y: 5430.0, u0: 900.0, v0: 550.0 };
+    let Ok(init) = initialise(&views, &a0) else { return f64::NAN };
+    let estimator = if eiv { Estimator::EIV_PAPER } else { Estimator::Paper };
+    let opts = BundleAdjustOptions { estimator, ..BundleAdjustOptions::default() };
+    let mut corr = [ViewCorrection::default(); 3];
+    let mut scratch = [BlockScratch::ZERO; 3];
+    let Ok(r) = bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch) else { return f64::NAN };
+    let mut board = [[0.0; 3]; 12];
+    let mut px = [[0.0; 2]; 12];
+    for i in 0..12 {
+        board[i] = [pts[1][i].world_mm[0], pts[1][i].world_mm[1], 0.0];
+        px[i] = pts[1][i].pixel;
+    }
+    match etl_core::pnp::solve_pnp(&r.model, 130.0, &board, &px) {
+        Ok(p) => r.model.kf_x[1] + p.translation_mm[2],
+        Err(_) => f64::NAN,
+    }
+}

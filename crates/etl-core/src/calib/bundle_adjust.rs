@@ -158,10 +158,13 @@ const HOLD_WEIGHT: f64 = 1e8;
 
 fn hold_rows(x: &[f64; PARAMS], x0: &[f64; PARAMS], mut push: impl FnMut(f64, &[f64; PARAMS])) {
     for i in [KF0X, KF0X + 4, U0, U0 + 1] {
-        let w = HOLD_WEIGHT / x0[i].abs().max(1.0);
+        let (Some(&xi), Some(&x0i)) = (x.get(i), x0.get(i)) else { continue };
+        let w = HOLD_WEIGHT / x0i.abs().max(1.0);
         let mut j = [0.0; PARAMS];
-        j[i] = w;
-        push((x[i] - x0[i]) * w, &j);
+        if let Some(ji) = j.get_mut(i) {
+            *ji = w;
+        }
+        push((xi - x0i) * w, &j);
     }
 }
 

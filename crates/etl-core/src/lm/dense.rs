@@ -274,9 +274,10 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
             let fnew = trial_cost(problem, &xnew, rows);
             // Predicted reduction of the linear model: ||Q^T r||^2 - ||R p + Q^T r||^2.
             let mut model = 0.0;
-            for i in 0..N {
-                let rp: f64 = (i..N).map(|j| r[i][j] * p[j]).sum();
-                model += (rp + qtf[i]) * (rp + qtf[i]);
+            for (i, (ri, qi)) in r.iter().zip(qtf.iter()).enumerate() {
+                // R is upper triangular: row i starts at column i.
+                let rp: f64 = ri.iter().zip(p.iter()).skip(i).map(|(a, b)| a * b).sum();
+                model += (rp + qi) * (rp + qi);
             }
             let pred = qtf2 - model;
             let actred = match fnew {
