@@ -4,5 +4,7 @@
 pub mod cli;
 pub mod error;
 pub mod formats;
+pub mod pipeline;
+pub mod simulate;
 
 pub use error::{Error, Result};

@@ -5,7 +5,10 @@ use clap::{Parser, Subcommand};
 
 use crate::error::Result;
 
+pub mod calibrate;
+pub mod demo;
 pub mod model;
+pub mod simulate;
 pub mod thermal;
 
 /// Calibrate and run cameras focused by an electrically tunable lens.
@@ -24,6 +27,13 @@ enum Command {
     Model(model::Args),
     /// Temperature compensation: evaluate or fit the E_T(T, E_in) surface.
     Thermal(thermal::Args),
+    /// Simulate the paper rig, calibrate it (paper and errors-in-variables estimators) and
+    /// validate against the truth: the main job on the built-in simulated rig.
+    Demo(demo::Args),
+    /// The paper rig's synthetic data without calibrating.
+    Simulate(simulate::Args),
+    /// Calibrate from corner observations: RAC, focal polynomial, distortion, bundle adjustment.
+    Calibrate(calibrate::Args),
 }
 
 /// Prints `value` as one JSON object on stdout.
@@ -35,6 +45,9 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Model(a) => model::run(a),
         Command::Thermal(a) => thermal::run(a),
+        Command::Demo(a) => demo::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
     }
 }
 

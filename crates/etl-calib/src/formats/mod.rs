@@ -15,6 +15,9 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 
+pub mod a0;
+pub mod calibration;
+pub mod observations;
 pub mod thermal;
 
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).

@@ -1,0 +1,113 @@
+//! The calibration pipeline from observations: E_com through the thermal surface -> A0
+//! -> RAC -> focal polynomial -> distortion -> bundle adjustment -> `etlcal.calibration/1`.
+
+use etl_core::calib::{
+    bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
+    View, ViewCorrection, A0,
+};
+use etl_core::lm::BlockScratch;
+use etl_core::model::CameraModel;
+use etl_core::thermal::ThermalCalibration;
+
+use crate::error::Result;
+use crate::formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
+use crate::formats::observations::Observations;
+
+/// Options of [`calibrate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CalibrateOptions {
+    /// The estimator of the bundle adjustment.
+    pub estimator: Estimator,
+    /// Hold A0 fixed in the bundle adjustment.
+    pub hold_a0: bool,
+    /// Robust loss.
+    pub robust: Option<RobustLoss>,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions { estimator: Estimator::Paper, hold_a0: false, robust: None }
+    }
+}
+
+/// The result: the file content and the solver's report.
+#[derive(Debug, Clone)]
+pub struct CalibrationResult {
+    /// What `etlcal calibrate` writes.
+    pub calibration: Calibration,
+    /// The bundle adjustment's report (covariance included).
+    pub report: BundleAdjustReport,
+    /// The initial (linear) model.
+    pub initial: CameraModel,
+}
+
+/// Calibrates from observations with a given A0.
+///
+/// Errors name the unmet precondition (e.g. fewer than 3 distinct currents).
+pub fn calibrate(
+    obs: &Observations,
+    a0: &A0,
+    thermal: &ThermalCalibration,
+    options: &CalibrateOptions,
+) -> Result<CalibrationResult> {
+    obs.validate()?;
+    let e_com = obs.e_com_ma(thermal)?;
+    let pts = obs.core_points();
+    let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
+    let initial = initialise(&views, a0)?;
+    let ba = BundleAdjustOptions {
+        estimator: options.estimator,
+        hold_a0: options.hold_a0,
+        robust: options.robust,
+        ..BundleAdjustOptions::default()
+    };
+    let mut corrections = vec![ViewCorrection::default(); views.len()];
+    let mut scratch = vec![BlockScratch::ZERO; bundle_adjust_scratch(views.len(), &options.estimator)];
+    let report = bundle_adjust(&views, &initial, &ba, &mut corrections, &mut scratch)?;
+    let m = report.model;
+    let summaries = views
+        .iter()
+        .zip(&corrections)
+        .map(|(v, c)| {
+            let (mut s, mut n) = (0.0, 0usize);
+            for p in v.points {
+                let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + c.dz_mm];
+                if let Ok(q) = m.project(w, v.e_com_ma + c.de_ma) {
+                    s += (q[0] - p.pixel[0]).powi(2) + (q[1] - p.pixel[1]).powi(2);
+                    n += 1;
+                }
+            }
+            ViewSummary {
+                e_com_ma: v.e_com_ma,
+                points: v.points.len(),
+                rms_px: if n > 0 { (s / n as f64).sqrt() } else { f64::NAN },
+                dz_mm: c.dz_mm,
+                de_ma: c.de_ma,
+            }
+        })
+        .collect();
+    let lo = e_com.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = e_com.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let calibration = Calibration {
+        format: FORMAT.into(),
+        image_size: obs.image_size,
+        rotation_rodrigues: m.rotation_rodrigues,
+        translation_mm: m.translation_mm,
+        kf_x: m.kf_x,
+        kf_y: m.kf_y,
+        principal_point: m.principal_point,
+        distortion_a: m.distortion_a,
+        thermal: Some(ThermalRef { coefficients: thermal.surface.coefficients }),
+        e_com_range_ma: [lo, hi],
+        rms_reprojection_px: report.rms_px,
+        std: ModelStd::from_params(&report.std),
+        estimator: match options.estimator {
+            Estimator::Paper => "paper".into(),
+            Estimator::Eiv { .. } => "eiv".into(),
+        },
+        iterations: report.iterations,
+        initial_rms_px: report.initial_rms_px,
+        views: summaries,
+    };
+    Ok(CalibrationResult { calibration, report, initial })
+}

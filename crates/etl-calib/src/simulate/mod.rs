@@ -1,0 +1,182 @@
+//! The paper rig (shared/paper/NOTES.md, section 5.1.2) as synthetic observations with
+//! the paper's noise model.
+//!
+//! Per view j the stage really stands at Z_W,j + dZ_j and the lens runs at E_j + dE_j while
+//! Z_W,j and E_j are recorded; each corner really sits 1 um off its nominal X, Y; the
+//! observed pixel carries 0.2 px of noise; and the A0 that a lens-off calibration would
+//! give is off by 0.3 % (kf0) and 1 px (u0, v0). Corners whose noise-free pixel leaves the
+//! 1936 x 1458 image are dropped (2311 of 2520 remain).
+
+use etl_core::calib::{Point, A0};
+use etl_core::model::CameraModel;
+use etl_core::thermal::ThermalSurface;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+use crate::formats::observations::{Observations, PointObs, ViewObs};
+
+/// Stage positions of the paper's 15 views, mm.
+pub const PAPER_Z_W_MM: [f64; 15] =
+    [75.0, 60.0, 48.0, 43.0, 35.0, 31.0, 28.0, 22.0, 19.0, 16.0, 13.0, 10.0, 8.0, 4.0, 2.0];
+/// Compensated currents of the paper's 15 views, mA.
+pub const PAPER_E_COM_MA: [f64; 15] =
+    [80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0, 180.0, 190.0, 200.0, 210.0, 225.0];
+/// Inner corners of the paper's board (columns, rows) and its square, mm.
+pub const PAPER_BOARD: ([usize; 2], f64) = ([14, 12], 1.5);
+/// Lens temperature of the simulated views, degC.
+pub const PAPER_TEMPERATURE_C: f64 = 27.0;
+
+/// Standard deviations of the noise model (NOTES.md).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NoiseModel {
+    /// Corner X_W, Y_W, mm.
+    pub xy_mm: f64,
+    /// Stage position Z_W per view, mm.
+    pub z_mm: f64,
+    /// Current per view, mA.
+    pub e_ma: f64,
+    /// Observed pixels, px.
+    pub px: f64,
+    /// Relative error of kf0x, kf0y from A0.
+    pub kf0_rel: f64,
+    /// Error of u0, v0 from A0, px.
+    pub pp_px: f64,
+}
+
+impl NoiseModel {
+    /// The paper's noise model.
+    pub const PAPER: NoiseModel =
+        NoiseModel { xy_mm: 0.001, z_mm: 0.010, e_ma: 0.4, px: 0.2, kf0_rel: 0.003, pp_px: 1.0 };
+    /// No noise at all.
+    pub const NONE: NoiseModel = NoiseModel { xy_mm: 0.0, z_mm: 0.0, e_ma: 0.0, px: 0.0, kf0_rel: 0.0, pp_px: 0.0 };
+}
+
+/// A simulated data set and the truth behind it.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// The observations as a user would record them.
+    pub observations: Observations,
+    /// The A0 a lens-off calibration would give (with its error).
+    pub a0: A0,
+    /// The true camera.
+    pub truth: CameraModel,
+    /// The true stage error of each view, mm.
+    pub true_dz_mm: Vec<f64>,
+    /// The true current error of each view, mA.
+    pub true_de_ma: Vec<f64>,
+}
+
+fn gauss(s: f64, rng: &mut ChaCha8Rng) -> f64 {
+    match Normal::new(0.0, s) {
+        Ok(n) if s > 0.0 => n.sample(rng),
+        _ => 0.0,
+    }
+}
+
+/// The visible corners of the paper board at stage position `z_mm` and current `e_ma`
+/// (board frame: X, Y in mm, Z = 0) with their noise-free pixels.
+pub fn visible_board(cam: &CameraModel, z_mm: f64, e_ma: f64) -> Vec<([f64; 2], [f64; 2])> {
+    let ([cols, rows], sq) = PAPER_BOARD;
+    let mut out = vec![];
+    for j in 0..rows {
+        for i in 0..cols {
+            let w = [sq * i as f64, sq * j as f64];
+            if let Ok(p) = cam.project([w[0], w[1], z_mm], e_ma) {
+                if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
+                    out.push((w, p));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Observed pixels of the visible board corners at the true stage position `z_mm` and
+/// true current `e_ma`, with corner and pixel noise. Returns (board X, Y; pixel).
+pub fn observe_board(
+    cam: &CameraModel,
+    z_mm: f64,
+    e_ma: f64,
+    noise: &NoiseModel,
+    rng: &mut ChaCha8Rng,
+) -> Vec<([f64; 2], [f64; 2])> {
+    visible_board(cam, z_mm, e_ma)
+        .into_iter()
+        .filter_map(|(w, _)| {
+            let truth = [w[0] + gauss(noise.xy_mm, rng), w[1] + gauss(noise.xy_mm, rng), z_mm];
+            let p = cam.project(truth, e_ma).ok()?;
+            Some((w, [p[0] + gauss(noise.px, rng), p[1] + gauss(noise.px, rng)]))
+        })
+        .collect()
+}
+
+/// The paper rig's 15 views under `noise`, seeded.
+pub fn paper_rig(noise: &NoiseModel, seed: u64) -> Simulation {
+    let truth = CameraModel::paper_rig();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut obs = Observations::new(CameraModel::PAPER_IMAGE_SIZE);
+    let (mut dzs, mut des) = (vec![], vec![]);
+    for (&z, &e) in PAPER_Z_W_MM.iter().zip(&PAPER_E_COM_MA) {
+        let (dz, de) = (gauss(noise.z_mm, &mut rng), gauss(noise.e_ma, &mut rng));
+        let mut points = vec![];
+        for (w, _) in visible_board(&truth, z, e) {
+            let real = [w[0] + gauss(noise.xy_mm, &mut rng), w[1] + gauss(noise.xy_mm, &mut rng), z + dz];
+            if let Ok(p) = truth.project(real, e + de) {
+                let pixel = [p[0] + gauss(noise.px, &mut rng), p[1] + gauss(noise.px, &mut rng)];
+                points.push(PointObs { world_mm: [w[0], w[1], z], pixel });
+            }
+        }
+        // The recorded current is E_com; the driver was commanded the E_in that gives it at
+        // the lens temperature.
+        let e_in = ThermalSurface::PAPER.e_in_for_e_com(e, PAPER_TEMPERATURE_C).unwrap_or(e);
+        obs.views.push(ViewObs { e_in_ma: e_in, temperature_c: PAPER_TEMPERATURE_C, e_com_ma: Some(e), points });
+        dzs.push(dz);
+        des.push(de);
+    }
+    let a0 = A0 {
+        kf0x: truth.kf_x[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
+        kf0y: truth.kf_y[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
+        u0: truth.principal_point[0] + gauss(noise.pp_px, &mut rng),
+        v0: truth.principal_point[1] + gauss(noise.pp_px, &mut rng),
+    };
+    Simulation { observations: obs, a0, truth, true_dz_mm: dzs, true_de_ma: des }
+}
+
+/// The stage position (mm) at which the paper rig is in focus at current `e_ma`
+/// (piecewise-linear through the paper's 15 views, clamped at the ends).
+pub fn focused_z_mm(e_ma: f64) -> f64 {
+    let (e, z) = (&PAPER_E_COM_MA, &PAPER_Z_W_MM);
+    if e_ma <= e[0] {
+        return z[0];
+    }
+    for k in 1..e.len() {
+        if e_ma <= e[k] {
+            let t = (e_ma - e[k - 1]) / (e[k] - e[k - 1]);
+            return z[k - 1] + t * (z[k] - z[k - 1]);
+        }
+    }
+    z[z.len() - 1]
+}
+
+/// Convenience: the observations' points as core points, for tests.
+pub fn core_points(sim: &Simulation) -> Vec<Vec<Point>> {
+    sim.observations.core_points()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_rig_has_2311_points_and_compensates_back() {
+        let s = paper_rig(&NoiseModel::NONE, 0);
+        assert_eq!(s.observations.views.iter().map(|v| v.points.len()).sum::<usize>(), 2311);
+        for v in &s.observations.views {
+            let e = ThermalSurface::PAPER.e_com_ma(v.temperature_c, v.e_in_ma).unwrap();
+            assert!((e - v.e_com_ma.unwrap()).abs() < 1e-8);
+        }
+        assert_eq!(focused_z_mm(225.0), 2.0);
+        assert!((focused_z_mm(85.0) - 67.5).abs() < 1e-12);
+    }
+}
