@@ -18,6 +18,7 @@ use crate::simulate::{paper_rig, NoiseModel, Simulation};
 
 /// Arguments of `etlcal simulate`.
 #[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Output directory (must exist).
     #[arg(long, value_name = "DIR")]
