@@ -8,6 +8,7 @@
 //! 4. [`bundle_adjust()`]: Eq. 24 by Levenberg-Marquardt, optionally errors-in-variables.
 
 pub mod bundle_adjust;
+pub mod crlb;
 pub mod distortion_init;
 pub mod focal_poly;
 mod initialise;

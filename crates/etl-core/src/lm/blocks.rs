@@ -21,7 +21,7 @@
 
 use super::options::{Options, StopReason};
 use super::report::BlockReport;
-use super::svd::Svd;
+use super::svd::sym_pinv;
 use crate::error::{all_finite, Error, Result};
 
 /// Receives residual rows of one block: the residual, its gradient with respect to the
@@ -146,41 +146,6 @@ fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>>(
         return Err(Error::NotFinite { what: "residuals" });
     }
     Ok(lin)
-}
-
-/// Pseudo-inverse of the symmetric positive semi-definite `a` through the SVD of
-/// D^-1 a D^-1 (D = sqrt(diag a)), dropping singular values below `tol` times the largest.
-/// Returns the pseudo-inverse and the rank.
-fn sym_pinv<const K: usize>(a: &[[f64; K]; K], tol: f64) -> ([[f64; K]; K], usize) {
-    let mut d = [1.0; K];
-    for i in 0..K {
-        if a[i][i] > 0.0 {
-            d[i] = libm::sqrt(a[i][i]);
-        }
-    }
-    let mut cols = [[0.0; K]; K];
-    for i in 0..K {
-        for j in 0..K {
-            cols[j][i] = a[i][j] / (d[i] * d[j]);
-        }
-    }
-    let svd = Svd::of_columns(cols);
-    let smax = svd.max_singular_value();
-    let mut inv = [[0.0; K]; K];
-    let mut rank = 0;
-    for k in 0..K {
-        let s = svd.s[k];
-        if !(s > tol * smax && s > 0.0) {
-            continue;
-        }
-        rank += 1;
-        for i in 0..K {
-            for j in 0..K {
-                inv[i][j] += svd.v[k][i] * svd.u[k][j] / s / (d[i] * d[j]);
-            }
-        }
-    }
-    (inv, rank)
 }
 
 /// One damped step: returns dx, the rank of the reduced system, and writes y_b + dy_b

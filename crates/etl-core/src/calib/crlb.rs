@@ -1,0 +1,81 @@
+//! The Cramer-Rao bound of the 25 numbers at the truth (the yardstick of NOTES.md).
+//!
+//! With pixel noise of standard deviation sigma on each coordinate, the Fisher information
+//! of the parameters is J^T J / sigma^2 (J: the Jacobian of all projections at the true
+//! parameters), and any unbiased estimator's covariance is at least its inverse. With the
+//! errors-in-variables unknowns (dZ_j, dE_j with Gaussian priors), the bound of the 25
+//! numbers is the inverse of the Schur complement of the per-view unknowns.
+
+use super::jacobian::{to_params, Projector, PARAMS};
+use super::observations::{validate, View};
+use crate::error::Result;
+use crate::lm::svd::sym_pinv;
+use crate::model::CameraModel;
+
+/// Relative singular-value threshold of the inversions (directions below it are
+/// unidentified and get no bound).
+const RANK_TOL: f64 = 1e-13;
+
+/// The CRLB covariance of the 25 numbers for pixel noise `sigma_px`, the recorded stage
+/// positions and currents exact (the model of the paper's Eq. 24).
+pub fn crlb_covariance(views: &[View<'_>], truth: &CameraModel, sigma_px: f64) -> Result<[[f64; PARAMS]; PARAMS]> {
+    crlb_covariance_eiv(views, truth, sigma_px, None)
+}
+
+/// The CRLB covariance of the 25 numbers with, per view, an unknown stage error and
+/// current error of prior standard deviations `priors = Some((sigma_z_mm, sigma_e_ma))`
+/// (None: both exact).
+pub fn crlb_covariance_eiv(
+    views: &[View<'_>],
+    truth: &CameraModel,
+    sigma_px: f64,
+    priors: Option<(f64, f64)>,
+) -> Result<[[f64; PARAMS]; PARAMS]> {
+    validate(views)?;
+    truth.validate()?;
+    let x = to_params(truth);
+    let proj = Projector::new(&x);
+    let w = 1.0 / (sigma_px * sigma_px);
+    let mut info = [[0.0; PARAMS]; PARAMS];
+    for view in views {
+        let mut cross = [[0.0; 2]; PARAMS]; // J_x^T J_y of the view
+        let mut vv = [[0.0; 2]; 2]; // J_y^T J_y of the view
+        for p in view.points {
+            let pr = proj.project(p.world_mm, view.e_com_ma, true)?;
+            for row in 0..2 {
+                let jx = &pr.d_params[row];
+                let jy = [pr.d_z_w[row], pr.d_e[row]];
+                for i in 0..PARAMS {
+                    for j in 0..PARAMS {
+                        info[i][j] += w * jx[i] * jx[j];
+                    }
+                    for k in 0..2 {
+                        cross[i][k] += w * jx[i] * jy[k];
+                    }
+                }
+                for k in 0..2 {
+                    for l in 0..2 {
+                        vv[k][l] += w * jy[k] * jy[l];
+                    }
+                }
+            }
+        }
+        if let Some((sz, se)) = priors {
+            vv[0][0] += 1.0 / (sz * sz);
+            vv[1][1] += 1.0 / (se * se);
+            let (vinv, _) = sym_pinv(&vv, RANK_TOL);
+            for i in 0..PARAMS {
+                for j in 0..PARAMS {
+                    let mut s = 0.0;
+                    for k in 0..2 {
+                        for l in 0..2 {
+                            s += cross[i][k] * vinv[k][l] * cross[j][l];
+                        }
+                    }
+                    info[i][j] -= s;
+                }
+            }
+        }
+    }
+    Ok(sym_pinv(&info, RANK_TOL).0)
+}
