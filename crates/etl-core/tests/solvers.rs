@@ -292,3 +292,53 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
     }
     assert!(worst.0 < 0.10, "spread of {} differs from its CRLB by {:.1} %", worst.1, 100.0 * worst.0);
 }
+
+#[test]
+fn hold_a0_keeps_the_lens_off_intrinsics() {
+    let (pts, e, a0) = paper_rig(&PAPER_NOISE, 41);
+    let views = as_views(&pts, &e);
+    let init = initialise(&views, &a0).unwrap();
+    let opts = BundleAdjustOptions { hold_a0: true, ..BundleAdjustOptions::default() };
+    let mut corr = vec![ViewCorrection::default(); views.len()];
+    let r = bundle_adjust(&views, &init, &opts, &mut corr, &mut []).unwrap();
+    assert!((r.model.kf_x[0] - a0.kf0x).abs() < 1e-4 && (r.model.kf_y[0] - a0.kf0y).abs() < 1e-4);
+    assert!((r.model.principal_point[0] - a0.u0).abs() < 1e-4 && (r.model.principal_point[1] - a0.v0).abs() < 1e-4);
+    assert!(r.std[6] < 1e-3 && r.std[14] < 1e-3, "held numbers have ~0 spread: {} {}", r.std[6], r.std[14]);
+    // The free numbers still moved from the linear start.
+    assert!((r.model.kf_x[1] - init.kf_x[1]).abs() > 0.0);
+}
+
+#[test]
+fn robust_loss_resists_bad_corners() {
+    let (clean, e, a0) = paper_rig(&Noise { px: 0.2, ..NO_NOISE }, 42);
+    let reference = calibrate(&clean, &e, &a0, Estimator::Paper).model;
+    // The same data with 30 corners misdetected by 18 px.
+    let mut pts = clean.clone();
+    for k in 0..30 {
+        let v = k % 15;
+        let i = (k * 7) % pts[v].len();
+        pts[v][i].pixel[0] += 15.0;
+        pts[v][i].pixel[1] -= 10.0;
+    }
+    let views = as_views(&pts, &e);
+    let init = initialise(&views, &a0).unwrap();
+    let run = |robust| {
+        let opts = BundleAdjustOptions { robust, ..BundleAdjustOptions::default() };
+        let mut corr = vec![ViewCorrection::default(); views.len()];
+        bundle_adjust(&views, &init, &opts, &mut corr, &mut []).unwrap().model
+    };
+    // Distance of an estimate from the clean-data estimate: max relative fx(E) difference.
+    let dist = |m: &CameraModel| {
+        (0..=145)
+            .map(|k| {
+                let x = 80.0 + k as f64;
+                ((m.focal_lengths(x).0 - reference.focal_lengths(x).0) / reference.focal_lengths(x).0).abs()
+            })
+            .fold(0.0f64, f64::max)
+    };
+    let plain = dist(&run(None));
+    let huber = dist(&run(Some(etl_core::calib::RobustLoss::Huber { k_px: 1.0 })));
+    let cauchy = dist(&run(Some(etl_core::calib::RobustLoss::Cauchy { k_px: 1.0 })));
+    println!("fx(E) shift caused by 30 bad corners: least squares {plain:.2e}, Huber {huber:.2e}, Cauchy {cauchy:.2e}");
+    assert!(huber < 0.2 * plain && cauchy < 0.2 * plain, "{plain} {huber} {cauchy}");
+}

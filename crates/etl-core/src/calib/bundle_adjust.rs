@@ -24,9 +24,12 @@
 //! 1e8 per unit of their magnitude (relative change ~1e-8 px-equivalents): their
 //! reported standard deviation is then ~0.
 //!
-//! **Robust loss**: per point, with s = |e|^2, the residual pair is scaled by
-//! sqrt(rho(s) / s) so the cost is sum rho(s) (Huber or Cauchy with threshold k px); the
-//! Jacobian is scaled by the same factor (its derivative is neglected, as in IRLS).
+//! **Robust loss** (Huber or Cauchy with threshold k px): iteratively reweighted least
+//! squares. Each point's residual pair gets the weight w = rho'(s), s = |e|^2, evaluated at
+//! a fixed reference estimate (the previous IRLS iterate), so every weighted solve has an
+//! exact Jacobian; the weights are recomputed from the reference on the fly (no per-point
+//! storage) and the loop stops when the estimate no longer moves (at most
+//! [`IRLS_MAX_ROUNDS`] rounds).
 
 use super::jacobian::{from_params, to_params, Projector, KF0X, PARAMS, U0};
 use super::observations::{distinct_currents, point_count, validate, View};
@@ -71,22 +74,39 @@ pub enum RobustLoss {
 }
 
 impl RobustLoss {
-    /// sqrt(rho(s) / s) for s = |e|^2 > 0.
-    fn scale(&self, s: f64) -> f64 {
-        if !(s > 0.0) {
-            return 1.0;
-        }
-        let rho = match *self {
+    /// The IRLS weight rho'(s) of a point with squared error s = |e|^2 (px^2).
+    fn weight(&self, s: f64) -> f64 {
+        match *self {
             RobustLoss::Huber { k_px } => {
                 if s <= k_px * k_px {
-                    s
+                    1.0
                 } else {
-                    2.0 * k_px * libm::sqrt(s) - k_px * k_px
+                    k_px / libm::sqrt(s)
                 }
             }
-            RobustLoss::Cauchy { k_px } => k_px * k_px * libm::log1p(s / (k_px * k_px)),
-        };
-        libm::sqrt(rho / s)
+            RobustLoss::Cauchy { k_px } => 1.0 / (1.0 + s / (k_px * k_px)),
+        }
+    }
+}
+
+/// Rounds of reweighting of the robust loss.
+pub const IRLS_MAX_ROUNDS: usize = 20;
+
+/// sqrt of the IRLS weight of a point, from its error at the reference estimate.
+fn robust_scale(
+    robust: Option<RobustLoss>,
+    reference: Option<&Projector>,
+    world_mm: [f64; 3],
+    e_ma: f64,
+    pixel: [f64; 2],
+) -> Result<f64> {
+    match (robust, reference) {
+        (Some(loss), Some(proj)) => {
+            let p = proj.project(world_mm, e_ma, false)?;
+            let (du, dv) = (p.pixel[0] - pixel[0], p.pixel[1] - pixel[1]);
+            Ok(libm::sqrt(loss.weight(du * du + dv * dv)))
+        }
+        _ => Ok(1.0),
     }
 }
 
@@ -172,6 +192,7 @@ struct Plain<'a, 'b> {
     views: &'a [View<'b>],
     x0: [f64; PARAMS],
     options: &'a BundleAdjustOptions,
+    reference: Option<Projector>,
 }
 
 impl Problem<PARAMS> for Plain<'_, '_> {
@@ -181,7 +202,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
             for p in view.points {
                 let pr = proj.project(p.world_mm, view.e_com_ma, jacobian)?;
                 let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
-                let f = self.options.robust.map_or(1.0, |r| r.scale(e[0] * e[0] + e[1] * e[1]));
+                let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
                 for row in 0..2 {
                     let mut j = pr.d_params[row];
                     if f != 1.0 {
@@ -205,6 +226,7 @@ struct Eiv<'a, 'b> {
     sigma_px: f64,
     sigma_z_mm: f64,
     sigma_e_ma: f64,
+    reference: Option<Projector>,
 }
 
 impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
@@ -228,7 +250,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + y[0]];
             let pr = proj.project(w, e_ma, jacobian)?;
             let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
-            let f = self.options.robust.map_or(1.0, |r| r.scale(e[0] * e[0] + e[1] * e[1])) * is;
+            let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
             for row in 0..2 {
                 let mut j = pr.d_params[row];
                 j.iter_mut().for_each(|v| *v *= f);
@@ -296,7 +318,19 @@ pub fn bundle_adjust(
     }
     let x0 = to_params(init);
     let initial_rms_px = rms(views, &x0, None)?;
-    let plain = lm::solve(&mut Plain { views, x0, options }, x0, &options.lm)?;
+    let mut plain = lm::solve(&mut Plain { views, x0, options, reference: None }, x0, &options.lm)?;
+    if options.robust.is_some() {
+        // IRLS: reweight around the latest estimate until it stops moving.
+        for _ in 0..IRLS_MAX_ROUNDS {
+            let reference = Some(Projector::new(&plain.x));
+            let next = lm::solve(&mut Plain { views, x0, options, reference }, plain.x, &options.lm)?;
+            let moved = next.x.iter().zip(plain.x.iter()).any(|(a, b)| (a - b).abs() > 1e-9 * b.abs().max(1e-12));
+            plain = next;
+            if !moved {
+                break;
+            }
+        }
+    }
     corrections.iter_mut().for_each(|c| *c = ViewCorrection::default());
     let sigma_plain = libm::sqrt(plain.sigma2);
     let (sigma_z_mm, sigma_e_ma, sigma_px) = match options.estimator {
@@ -334,7 +368,8 @@ pub fn bundle_adjust(
         needed: views.len(),
         got: MAX_EIV_VIEWS,
     })?;
-    let mut problem = Eiv { views, x0, options, sigma_px, sigma_z_mm, sigma_e_ma };
+    let reference = options.robust.map(|_| Projector::new(&plain.x));
+    let mut problem = Eiv { views, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
     let r = lm::solve_blocks(&mut problem, plain.x, y, &options.lm, scratch)?;
     for (c, yj) in corrections.iter_mut().zip(y.iter()) {
         *c = ViewCorrection { dz_mm: yj[0], de_ma: yj[1] };
