@@ -129,7 +129,7 @@ impl Default for BundleAdjustOptions {
             estimator: Estimator::Paper,
             hold_a0: false,
             robust: None,
-            lm: Options { max_iterations: 100, ftol: 1e-14, xtol: 1e-14, gtol: 1e-14, ..Options::default() },
+            lm: Options { max_iterations: 100, ftol: 1e-10, xtol: 1e-10, gtol: 1e-10, ..Options::default() },
         }
     }
 }

@@ -145,8 +145,11 @@ impl<const N: usize> GivensQr<N> {
                 continue;
             }
             let rkk = self.r[k][k];
-            let rho = libm::hypot(rkk, xk);
-            let (c, s) = (rkk / rho, xk / rho);
+            // Entries are bounded by GIVENS_MAX_ABS (1e100), so the squares cannot overflow
+            // and the plain square root is exact enough and much cheaper than hypot.
+            let rho = libm::sqrt(rkk * rkk + xk * xk);
+            let inv = 1.0 / rho;
+            let (c, s) = (rkk * inv, xk * inv);
             self.r[k][k] = rho;
             for j in k + 1..n {
                 let t = self.r[k][j];
