@@ -34,7 +34,7 @@
 use super::jacobian::{from_params, to_params, Projector, KF0X, PARAMS, U0};
 use super::observations::{distinct_currents, point_count, validate, View};
 use crate::error::{Error, Result};
-use crate::lm::{self, BlockProblem, BlockRowSink, BlockScratch, Options, Problem, RowSink, StopReason};
+use crate::lm::{self, Accumulation, BlockProblem, BlockRowSink, BlockScratch, Options, Problem, RowSink, StopReason};
 use crate::model::CameraModel;
 
 /// Which estimator.
@@ -129,7 +129,14 @@ impl Default for BundleAdjustOptions {
             estimator: Estimator::Paper,
             hold_a0: false,
             robust: None,
-            lm: Options { max_iterations: 100, ftol: 1e-10, xtol: 1e-10, gtol: 1e-10, ..Options::default() },
+            lm: Options {
+                max_iterations: 100,
+                ftol: 1e-10,
+                xtol: 1e-10,
+                gtol: 1e-10,
+                accumulation: Accumulation::NormalEquations,
+                ..Options::default()
+            },
         }
     }
 }

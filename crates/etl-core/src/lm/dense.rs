@@ -11,7 +11,7 @@
 
 #![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
 
-use super::options::{Options, StopReason};
+use super::options::{Accumulation, Options, StopReason};
 use super::report::Report;
 use super::svd::Svd;
 use super::{Problem, RowSink};
@@ -49,26 +49,112 @@ impl<const N: usize> RowSink<N> for CostSink {
     }
 }
 
-/// The linearisation at one point: R, Q^T r, the cost and the row count.
-struct Linearization<const N: usize> {
-    qr: GivensQr<N>,
+/// Accumulates the normal equations J^T J (upper triangle) and J^T r.
+struct NormalSink<const N: usize> {
+    a: [[f64; N]; N],
+    g: [f64; N],
     cost: f64,
     rows: usize,
 }
 
-fn linearize<const N: usize, P: Problem<N>>(problem: &mut P, x: &[f64; N]) -> Result<Linearization<N>> {
-    let mut sink = QrSink { qr: GivensQr::<N>::full(), cost: 0.0, rows: 0, error: None };
-    problem.eval(x, true, &mut sink)?;
-    if let Some(e) = sink.error {
-        return Err(e);
+impl<const N: usize> RowSink<N> for NormalSink<N> {
+    fn push(&mut self, r: f64, jac: &[f64; N]) {
+        self.rows += 1;
+        self.cost += r * r;
+        for (i, (ai, &ji)) in self.a.iter_mut().zip(jac.iter()).enumerate() {
+            self.g[i] += ji * r;
+            for (aik, &jk) in ai.iter_mut().zip(jac.iter()).skip(i) {
+                *aik += ji * jk;
+            }
+        }
     }
-    if !sink.cost.is_finite() {
-        return Err(Error::NotFinite { what: "residuals" });
+}
+
+/// The linearisation at one point: R, Q^T r, the cost and the row count.
+struct Linearization<const N: usize> {
+    r: [[f64; N]; N],
+    qtf: [f64; N],
+    cost: f64,
+    rows: usize,
+}
+
+fn linearize<const N: usize, P: Problem<N>>(
+    problem: &mut P,
+    x: &[f64; N],
+    accumulation: Accumulation,
+) -> Result<Linearization<N>> {
+    let (r, qtf, cost, rows) = match accumulation {
+        Accumulation::Qr => {
+            let mut sink = QrSink { qr: GivensQr::<N>::full(), cost: 0.0, rows: 0, error: None };
+            problem.eval(x, true, &mut sink)?;
+            if let Some(e) = sink.error {
+                return Err(e);
+            }
+            (*sink.qr.r_factor(), *sink.qr.qty(), sink.cost, sink.rows)
+        }
+        Accumulation::NormalEquations => {
+            let mut sink = NormalSink { a: [[0.0; N]; N], g: [0.0; N], cost: 0.0, rows: 0 };
+            problem.eval(x, true, &mut sink)?;
+            let (r, qtf) = cholesky_factor(&sink.a, &sink.g);
+            (r, qtf, sink.cost, sink.rows)
+        }
+    };
+    if !cost.is_finite() || r.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(Error::NotFinite { what: "residuals or Jacobian" });
     }
-    if sink.rows == 0 {
+    if rows == 0 {
         return Err(Error::TooFew { what: "residuals", needed: 1, got: 0 });
     }
-    Ok(Linearization { qr: sink.qr, cost: sink.cost, rows: sink.rows })
+    Ok(Linearization { r, qtf, cost, rows })
+}
+
+/// R with R^T R = A (A = J^T J, upper triangle given) and Q^T r = R^-T J^T r, by a
+/// Cholesky factorisation of the diagonally scaled A (unit diagonal), semidefinite: a pivot
+/// below 1e-14 of its scaled diagonal ends its row at zero (that direction then carries no
+/// information; the SVD of the step finds the rank).
+fn cholesky_factor<const N: usize>(a: &[[f64; N]; N], g: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
+    let d: [f64; N] = core::array::from_fn(|i| {
+        let v = a[i][i];
+        if v > 0.0 {
+            libm::sqrt(v)
+        } else {
+            1.0
+        }
+    });
+    let mut r = [[0.0; N]; N];
+    for i in 0..N {
+        let mut diag = a[i][i] / (d[i] * d[i]);
+        for k in 0..i {
+            diag -= r[k][i] * r[k][i];
+        }
+        if !(diag > 1e-14) {
+            continue; // row i stays zero
+        }
+        let rii = libm::sqrt(diag);
+        r[i][i] = rii;
+        for j in (i + 1)..N {
+            let mut v = a[i][j] / (d[i] * d[j]);
+            for k in 0..i {
+                v -= r[k][i] * r[k][j];
+            }
+            r[i][j] = v / rii;
+        }
+    }
+    // Unscale: R_scaled = R D^-1 column-wise, so R = R_scaled D.
+    let mut qtf = [0.0; N];
+    for i in 0..N {
+        let mut v = g[i] / d[i];
+        for k in 0..i {
+            v -= r[k][i] * qtf[k];
+        }
+        qtf[i] = if r[i][i] > 0.0 { v / r[i][i] } else { 0.0 };
+    }
+    for row in r.iter_mut() {
+        for (rij, dj) in row.iter_mut().zip(d.iter()) {
+            *rij *= dj;
+        }
+    }
+    (r, qtf)
 }
 
 /// Cost at a trial point, or `None` when the problem refuses it or it is not finite.
@@ -176,7 +262,7 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
         return Err(Error::InvalidArgument { what: "a problem needs at least one parameter" });
     }
     let mut x = x0;
-    let mut lin = linearize(problem, &x)?;
+    let mut lin = linearize(problem, &x, options.accumulation)?;
     let initial_cost = lin.cost;
     let rows = lin.rows;
     let mut evaluations = 1usize;
@@ -185,8 +271,8 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
     let mut delta = 0.0;
     let mut pending: Option<StopReason> = None;
     loop {
-        let r = *lin.qr.r_factor();
-        let qtf = *lin.qr.qty();
+        let r = lin.r;
+        let qtf = lin.qtf;
         let f = lin.cost;
         let mut colnorm = [0.0; N];
         for j in 0..N {
@@ -317,7 +403,7 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
                 finish!(s);
             }
         }
-        lin = linearize(problem, &x)?;
+        lin = linearize(problem, &x, options.accumulation)?;
         evaluations += 1;
     }
 }

@@ -42,7 +42,7 @@ pub mod svd;
 
 pub use blocks::{solve_blocks, solve_blocks_scratch, BlockProblem, BlockRowSink, BlockScratch};
 pub use dense::solve;
-pub use options::{Options, StopReason};
+pub use options::{Accumulation, Options, StopReason};
 pub use report::{BlockReport, Report};
 
 use crate::error::Result;
