@@ -1,8 +1,8 @@
 //! The LM solvers on problems with known answers, and their bad inputs.
 
 use etl_core::lm::{
-    solve, solve_blocks, solve_blocks_scratch, BlockProblem, BlockRowSink, BlockScratch, Options, Problem, RowSink,
-    StopReason,
+    solve, solve_blocks, solve_blocks_scratch, Accumulation, BlockProblem, BlockRowSink, BlockScratch, Options,
+    Problem, RowSink, StopReason,
 };
 use etl_core::Error;
 
@@ -161,4 +161,34 @@ fn bad_inputs_are_typed_errors() {
     let mut scratch = vec![BlockScratch::<1, 2>::ZERO; 3];
     let e = solve_blocks(&mut Circles(&pts), [2.0], &mut y2, &Options::default(), &mut scratch).unwrap_err();
     assert!(matches!(e, Error::InvalidArgument { .. }), "{e}");
+}
+
+#[test]
+fn normal_equations_accumulation_agrees_with_qr() {
+    let (centres, pts) = circle_points();
+    let x0 = [
+        2.0,
+        centres[0][0] + 0.3,
+        centres[0][1] - 0.2,
+        centres[1][0] + 0.3,
+        centres[1][1] - 0.2,
+        centres[2][0] + 0.3,
+        centres[2][1] - 0.2,
+    ];
+    let qr = solve(&mut Stacked(&pts), x0, &Options::default()).unwrap();
+    let ne =
+        solve(&mut Stacked(&pts), x0, &Options { accumulation: Accumulation::NormalEquations, ..Options::default() })
+            .unwrap();
+    for i in 0..7 {
+        assert!((qr.x[i] - ne.x[i]).abs() < 1e-10, "{i}: {} vs {}", qr.x[i], ne.x[i]);
+        assert!((qr.covariance[i][i] - ne.covariance[i][i]).abs() < 1e-8 * qr.covariance[i][i]);
+    }
+    // Rank deficiency is still reported through the semidefinite Cholesky.
+    let r = solve(
+        &mut Line { dependent: true },
+        [0.0, 0.0],
+        &Options { accumulation: Accumulation::NormalEquations, ..Options::default() },
+    )
+    .unwrap();
+    assert_eq!(r.stop, StopReason::RankDeficient);
 }
