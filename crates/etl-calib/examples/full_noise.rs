@@ -55,8 +55,23 @@ fn main() {
             (errors(&p.report.model, &sim.truth), errors(&e.report.model, &sim.truth))
         })
         .collect();
-    let names = ["max rel err fx(E)", "max rel err fy(E)", "principal point (px)", "kf1x", "kf2x", "kf3x", "kf1y", "kf2y", "kf3y", "om", "T"];
-    println!("{trials} trials of the paper rig with the paper's noise model ({:.1} s)\n", start.elapsed().as_secs_f64());
+    let names = [
+        "max rel err fx(E)",
+        "max rel err fy(E)",
+        "principal point (px)",
+        "kf1x",
+        "kf2x",
+        "kf3x",
+        "kf1y",
+        "kf2y",
+        "kf3y",
+        "om",
+        "T",
+    ];
+    println!(
+        "{trials} trials of the paper rig with the paper's noise model ({:.1} s)\n",
+        start.elapsed().as_secs_f64()
+    );
     println!("| error | paper BA mean | paper BA p95 | eiv BA mean | eiv BA p95 |\n|---|---|---|---|---|");
     for (k, name) in names.iter().enumerate() {
         let stats = |pick: &dyn Fn(&([f64; 11], [f64; 11])) -> f64| {
@@ -71,7 +86,13 @@ fn main() {
         if k == 2 {
             println!("| {name} | {pm:.2} | {pp:.2} | {em:.2} | {ep:.2} |");
         } else {
-            println!("| {name} | {:.3} % | {:.3} % | {:.3} % | {:.3} % |", 100.0 * pm, 100.0 * pp, 100.0 * em, 100.0 * ep);
+            println!(
+                "| {name} | {:.3} % | {:.3} % | {:.3} % | {:.3} % |",
+                100.0 * pm,
+                100.0 * pp,
+                100.0 * em,
+                100.0 * ep
+            );
         }
     }
 }

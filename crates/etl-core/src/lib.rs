@@ -25,8 +25,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
-pub mod error;
 pub mod calib;
+pub mod error;
 pub mod fit;
 pub mod lm;
 pub mod model;

@@ -42,8 +42,8 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path, expected: &str) 
 
 /// Writes `value` as pretty JSON to `path` atomically (temp file + rename).
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let mut bytes = serde_json::to_vec_pretty(value)
-        .map_err(|e| Error::Parse { path: path.to_owned(), message: e.to_string() })?;
+    let mut bytes =
+        serde_json::to_vec_pretty(value).map_err(|e| Error::Parse { path: path.to_owned(), message: e.to_string() })?;
     bytes.push(b'\n');
     write_atomic(path, &bytes)
 }
