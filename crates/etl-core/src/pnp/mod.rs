@@ -10,6 +10,8 @@
 //!    the full model (distortion included), using the analytic Jacobian of
 //!    [`crate::calib::jacobian`].
 
+mod homography;
 mod planar;
 
-pub use planar::{displacement_mm, solve_pnp, BoardPose};
+pub use homography::homography;
+pub use planar::{displacement_mm, solve_pnp, BoardPose, MAX_PNP_POINTS};

@@ -2,13 +2,16 @@
 
 #![allow(clippy::needless_range_loop)]
 
+use super::homography::homography;
 use crate::calib::jacobian::{to_params, Projector};
 use crate::calib::rac::nearest_rotation;
 use crate::error::{all_finite, Error, Result};
-use crate::fit::GivensQr;
 use crate::lm::{solve, Options, Problem, RowSink};
 use crate::model::rotation::matrix_to_rodrigues;
 use crate::model::CameraModel;
+
+/// Most points [`solve_pnp`] takes (its normalised points live on the stack: 32 bytes each).
+pub const MAX_PNP_POINTS: usize = 4096;
 
 /// The pose of a board (board frame -> camera frame) found by [`solve_pnp`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,45 +87,30 @@ pub fn solve_pnp(model: &CameraModel, e_com_ma: f64, board_mm: &[[f64; 3]], pixe
         return Err(Error::TooFew { what: "points for PnP", needed: 4, got: board_mm.len() });
     }
     let k = model.intrinsics(e_com_ma)?;
-    let mut scale = 0.0f64;
-    let mut centre = [0.0; 2];
     for (w, p) in board_mm.iter().zip(pixels) {
         all_finite(w, "board point")?;
         all_finite(p, "pixel")?;
         if w[2] != 0.0 {
             return Err(Error::InvalidArgument { what: "board points must lie on Z = 0 of the board frame" });
         }
-        centre[0] += w[0];
-        centre[1] += w[1];
     }
     let n = board_mm.len() as f64;
-    centre = [centre[0] / n, centre[1] / n];
-    for w in board_mm {
-        scale = scale.max((w[0] - centre[0]).abs()).max((w[1] - centre[1]).abs());
-    }
-    if !(scale > 0.0) {
-        return Err(Error::Degenerate { what: "all board points coincide" });
-    }
-    // DLT on board coordinates normalised to [-1, 1]: (X', Y') -> (x, y).
-    let mut qr = GivensQr::<8>::full();
-    for (w, p) in board_mm.iter().zip(pixels) {
+    // The homography from board (X, Y) to normalised undistorted image coordinates.
+    let mut img = [[0.0; 2]; MAX_PNP_POINTS];
+    let mut brd = [[0.0; 2]; MAX_PNP_POINTS];
+    let m = board_mm.len();
+    let (Some(img), Some(brd)) = (img.get_mut(..m), brd.get_mut(..m)) else {
+        return Err(Error::OutOfRange { what: "PnP points", value: m as f64, min: 4.0, max: MAX_PNP_POINTS as f64 });
+    };
+    for ((w, p), (bi, ii)) in board_mm.iter().zip(pixels).zip(brd.iter_mut().zip(img.iter_mut())) {
         let und = model.undistort(*p, e_com_ma)?;
-        let (x, y) = ((und[0] - k.u0) / k.fx, (und[1] - k.v0) / k.fy);
-        let (bx, by) = ((w[0] - centre[0]) / scale, (w[1] - centre[1]) / scale);
-        qr.add_row(&[bx, by, 1.0, 0.0, 0.0, 0.0, -x * bx, -x * by], x, 1.0)?;
-        qr.add_row(&[0.0, 0.0, 0.0, bx, by, 1.0, -y * bx, -y * by], y, 1.0)?;
+        *ii = [(und[0] - k.u0) / k.fx, (und[1] - k.v0) / k.fy];
+        *bi = [w[0], w[1]];
     }
-    let h = qr
-        .solve()
-        .map_err(|_| Error::Degenerate { what: "PnP points are collinear (the homography is undetermined)" })?;
-    // Columns of H in normalised board units; undo the normalisation: X' = (X - c) / s.
-    let c1 = [h[0] / scale, h[3] / scale, h[6] / scale];
-    let c2 = [h[1] / scale, h[4] / scale, h[7] / scale];
-    let c3 = [
-        h[2] - h[0] * centre[0] / scale - h[1] * centre[1] / scale,
-        h[5] - h[3] * centre[0] / scale - h[4] * centre[1] / scale,
-        1.0 - h[6] * centre[0] / scale - h[7] * centre[1] / scale,
-    ];
+    let h = homography(brd, img)?;
+    let c1 = [h[0][0], h[1][0], h[2][0]];
+    let c2 = [h[0][1], h[1][1], h[2][1]];
+    let c3 = [h[0][2], h[1][2], h[2][2]];
     let n1 = libm::sqrt(c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2]);
     let n2 = libm::sqrt(c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2]);
     if !(n1 > 0.0 && n2 > 0.0) {
