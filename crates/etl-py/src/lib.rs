@@ -1,8 +1,35 @@
 //! The Python module `etlcal` (built by maturin as `etlcal._etlcal`).
+//!
+//! A file per noun: [`errors`] (the exception hierarchy), [`calibration`], [`thermal`],
+//! [`physics`]; [`arrays`] converts numpy arrays. The Python package
+//! (`python/etlcal/`) re-exports these and adds the submodules and type stubs.
 use pyo3::prelude::*;
+
+pub mod arrays;
+pub mod calibration;
+pub mod errors;
+pub mod observations;
+pub mod physics;
+pub mod pipeline;
+pub mod pose;
+pub mod simulate;
+pub mod thermal;
 
 #[pymodule]
 fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    errors::register(m)?;
+    m.add_function(wrap_pyfunction!(errors::_raise_rust_error, m)?)?;
+    m.add_class::<calibration::Calibration>()?;
+    m.add_class::<thermal::ThermalSurface>()?;
+    m.add_class::<thermal::ThermalCalibration>()?;
+    m.add_class::<physics::LensPhysics>()?;
+    m.add_class::<observations::Observations>()?;
+    m.add_class::<observations::A0>()?;
+    m.add_class::<pose::BoardPose>()?;
+    m.add_class::<simulate::Simulation>()?;
+    m.add_function(wrap_pyfunction!(simulate::simulate_paper_rig, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(pipeline::cramer_rao_std, m)?)?;
     Ok(())
 }

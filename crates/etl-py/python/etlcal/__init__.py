@@ -1,4 +1,62 @@
-"""etlcal: calibration and control of cameras focused by an electrically tunable lens."""
-from ._etlcal import __version__
+"""etlcal: calibration and control of cameras focused by an electrically tunable lens.
 
-__all__ = ["__version__"]
+Units everywhere: lengths in mm, currents in mA, temperatures in degC, pixels with (0, 0)
+the centre of the top-left pixel. Arrays in and out are numpy arrays: (N, 3) world
+points, (N, 2) pixels, 3 x 3 matrices.
+
+Main nouns:
+- `Calibration`: a calibrated camera (load / save / e_com / intrinsics / distortion /
+  project / undistort / ray / solve_pnp / to_opencv).
+- `Observations`, `A0`: the input of `calibrate(...)`.
+- `ThermalSurface`, `ThermalCalibration`: temperature compensation (E_com = E_in - E_T).
+- `LensPhysics` and `etlcal.physics`: the lens's physical model.
+- `etlcal.simulate.paper_rig(seed)`: the paper's simulated rig.
+
+Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
+`NotConvergedError`, `BoardNotFoundError`, `FileError` (also an OSError), `DeviceError`,
+`DeviceTimeoutError` (also a TimeoutError).
+"""
+from ._etlcal import (
+    __version__,
+    A0,
+    BoardNotFoundError,
+    BoardPose,
+    Calibration,
+    DeviceError,
+    DeviceTimeoutError,
+    Error,
+    FileError,
+    InputError,
+    LensPhysics,
+    NotConvergedError,
+    Observations,
+    Simulation,
+    ThermalCalibration,
+    ThermalSurface,
+    calibrate,
+    cramer_rao_std,
+)
+from . import physics, simulate
+
+__all__ = [
+    "__version__",
+    "A0",
+    "BoardNotFoundError",
+    "BoardPose",
+    "Calibration",
+    "DeviceError",
+    "DeviceTimeoutError",
+    "Error",
+    "FileError",
+    "InputError",
+    "LensPhysics",
+    "NotConvergedError",
+    "Observations",
+    "Simulation",
+    "ThermalCalibration",
+    "ThermalSurface",
+    "calibrate",
+    "cramer_rao_std",
+    "physics",
+    "simulate",
+]

@@ -1,0 +1,71 @@
+"""Per-call overhead of the Python bindings over the Rust functions, both measured in one run.
+
+Rust side: the criterion benches of etl-core (`cargo bench -p etl-core --bench model`),
+read from criterion's JSON estimates (median). Python side: the same work through
+`etlcal` (timeit, best of 7 repeats of the median-ish mean), with a wheel built in release:
+
+    maturin build --release --manifest-path crates/etl-py/Cargo.toml --out /tmp/wheels
+    pip install /tmp/wheels/etlcal-*.whl
+    python benches/py_overhead.py
+
+Prints a Markdown table (the numbers of docs/BENCHMARKS.md, "Python bindings").
+"""
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import timeit
+
+import numpy as np
+
+import etlcal
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+
+
+def rust_median_ns(bench: str, name: str, package: str = "etl-core") -> float:
+    subprocess.run(
+        ["cargo", "bench", "-q", "-p", package, "--bench", bench, "--", name, "--exact"],
+        cwd=ROOT,
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    est = json.loads((TARGET / "criterion" / name / "new" / "estimates.json").read_text())
+    return est["median"]["point_estimate"]
+
+
+def python_ns(stmt, number: int) -> float:
+    # Best of the repeats: the least disturbed by the other jobs on the machine.
+    times = timeit.repeat(stmt, number=number, repeat=7)
+    return min(times) / number * 1e9
+
+
+def main() -> None:
+    cal = etlcal.Calibration.paper_rig()
+    board = np.array([[1.5 * i, 1.5 * j, 48.0] for j in range(12) for i in range(14)])
+    pixels = cal.project(board, 100.0)
+    rows = []
+    rust = rust_median_ns("model", "project_168_points")
+    py = python_ns(lambda: cal.project(board, 100.0), 20000)
+    rows.append(("project, 168 points", rust, py))
+    rust = rust_median_ns("model", "undistort_168_points")
+    py = python_ns(lambda: cal.undistort(pixels, 100.0), 2000)
+    rows.append(("undistort, 168 points", rust, py))
+    s = etlcal.ThermalSurface.paper()
+    rust = rust_median_ns("model", "e_com_one")
+    py = python_ns(lambda: s.e_com(143.2, 31.7), 200000)
+    rows.append(("ThermalSurface.e_com, one", rust, py))
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, etlcal {etlcal.__version__}")
+    print("| call | Rust (criterion median) | Python (best of 7) | overhead |")
+    print("|---|---|---|---|")
+    def fmt(ns: float) -> str:
+        return f"{ns:.0f} ns" if abs(ns) < 1000 else f"{ns / 1000:.2f} us"
+
+    for name, r, p in rows:
+        print(f"| {name} | {fmt(r)} | {fmt(p)} | {fmt(p - r)} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,25 @@
+"""Synthetic data: the paper rig (section 5.1.2) with the paper's noise model."""
+from typing import Mapping, Optional, Union
+
+from ._etlcal import Simulation, simulate_paper_rig
+
+__all__ = ["Simulation", "paper_rig"]
+
+
+def paper_rig(seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None) -> Simulation:
+    """The paper rig's 15 views (2311 corners of a 14 x 12 board, 1.5 mm squares, at stage
+    positions 75..2 mm and E_com 80..225 mA), seeded.
+
+    Args:
+        seed: random seed (an int >= 0); the same seed gives the same data as
+            `etlcal simulate --seed`.
+        noise: "paper" (default: 1 um on corners, 10 um on the stage, 0.4 mA on the
+            current, 0.2 px on pixels, 0.3 % on A0's kf0 and 1 px on its principal
+            point), "none", or a dict overriding some of xy_mm, z_mm, e_ma, px, kf0_rel,
+            pp_px.
+
+    Returns:
+        a `Simulation` with `observations`, `a0`, `truth` (a `Calibration`),
+        `true_dz_mm` and `true_de_ma`.
+    """
+    return simulate_paper_rig(seed, noise)

@@ -1,0 +1,152 @@
+//! numpy in and out: (N, k) point arrays, 3 x 3 matrices, scalars-or-arrays.
+
+use numpy::ndarray::{Array1, Array2};
+use numpy::{AllowTypeChange, IntoPyArray, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyFloat;
+
+use crate::errors::input_error;
+
+/// Points of dimension `K` read from an array-like of shape (N, K) or (K,).
+pub struct Points<const K: usize> {
+    /// The points, in order.
+    pub points: Vec<[f64; K]>,
+    /// The input was one point of shape (K,): the result is one point too.
+    pub single: bool,
+}
+
+/// Reads (N, K) or (K,) floats (any numeric dtype, any layout; lists too). `what` and
+/// `unit` name the argument in the error message.
+pub fn points<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Points<K>> {
+    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
+        obj.extract().map_err(|e| input_error(format!("{what} must be an array of numbers of shape (N, {K}): {e}")))?;
+    let shape = arr.shape().to_vec();
+    let single = match shape.as_slice() {
+        [k] if *k == K => true,
+        [_, k] if *k == K => false,
+        _ => return Err(input_error(format!("{what} must have shape (N, {K}) or ({K},), got {shape:?}"))),
+    };
+    // `as_slice` also accepts Fortran-ordered memory: only a C-ordered slice is row-major.
+    let c_slice = if arr.is_c_contiguous() { arr.as_slice().ok() } else { None };
+    let points = match c_slice {
+        Some(flat) => flat.chunks_exact(K).map(|c| core::array::from_fn(|i| c[i])).collect(),
+        None => {
+            let view = arr.as_array();
+            let n = if single { 1 } else { shape[0] };
+            let view = view.to_shape((n, K)).map_err(|e| input_error(format!("{what}: {e}")))?;
+            view.rows().into_iter().map(|r| core::array::from_fn(|i| r[i])).collect()
+        }
+    };
+    Ok(Points { points, single })
+}
+
+/// (N, K) float64 array from points (or (K,) when `single`).
+pub fn points_out<'py, const K: usize>(
+    py: Python<'py>,
+    pts: Vec<[f64; K]>,
+    single: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let n = pts.len();
+    let flat: Vec<f64> = pts.into_iter().flatten().collect();
+    if single {
+        Ok(Array1::from(flat).into_pyarray(py).into_any())
+    } else {
+        let a = Array2::from_shape_vec((n, K), flat).map_err(|e| input_error(e.to_string()))?;
+        Ok(a.into_pyarray(py).into_any())
+    }
+}
+
+/// A 3 x 3 float64 array from a row-major matrix.
+pub fn mat3_out<'py>(py: Python<'py>, m: [[f64; 3]; 3]) -> Bound<'py, PyAny> {
+    let flat: Vec<f64> = m.into_iter().flatten().collect();
+    // 9 elements always fit a 3 x 3 shape.
+    match Array2::from_shape_vec((3, 3), flat) {
+        Ok(a) => a.into_pyarray(py).into_any(),
+        Err(_) => py.None().into_bound(py),
+    }
+}
+
+/// A 1-D float64 array.
+pub fn vec_out<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
+    Array1::from(v.to_vec()).into_pyarray(py).into_any()
+}
+
+/// Reads exactly `N` numbers (a sequence or 1-D array).
+pub fn fixed<const N: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; N]> {
+    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
+        obj.extract().map_err(|e| input_error(format!("{what} must be {N} numbers: {e}")))?;
+    if arr.len() != N || arr.ndim() != 1 {
+        return Err(input_error(format!("{what} must be {N} numbers, got shape {:?}", arr.shape())));
+    }
+    let v = arr.as_array();
+    let mut out = [0.0; N];
+    for (o, x) in out.iter_mut().zip(v.iter()) {
+        *o = *x;
+    }
+    Ok(out)
+}
+
+/// Applies `f` to a float (-> float) or elementwise to an array-like (-> float64 array of
+/// the same shape). Stops at the first error.
+pub fn map1<'py>(x: &Bound<'py, PyAny>, what: &str, f: impl Fn(f64) -> PyResult<f64>) -> PyResult<Bound<'py, PyAny>> {
+    let py = x.py();
+    if let Ok(v) = x.cast::<PyFloat>() {
+        return Ok(PyFloat::new(py, f(v.value())?).into_any());
+    }
+    if !x.hasattr("__len__")? && !x.hasattr("__array__")? {
+        let v: f64 = x.extract().map_err(|e| input_error(format!("{what} must be a number or an array: {e}")))?;
+        return Ok(PyFloat::new(py, f(v)?).into_any());
+    }
+    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
+        x.extract().map_err(|e| input_error(format!("{what} must be a number or an array: {e}")))?;
+    if arr.ndim() == 0 {
+        let v = *arr.as_array().iter().next().unwrap_or(&f64::NAN);
+        return Ok(PyFloat::new(py, f(v)?).into_any());
+    }
+    let out = arr.as_array().mapv(|_| 0.0);
+    let mut out = out;
+    for (o, v) in out.iter_mut().zip(arr.as_array().iter()) {
+        *o = f(*v)?;
+    }
+    Ok(out.into_pyarray(py).into_any())
+}
+
+/// Applies `f` to two floats, or elementwise to two array-likes broadcast against each
+/// other (numpy's rules).
+pub fn map2<'py>(
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    what: (&str, &str),
+    f: impl Fn(f64, f64) -> PyResult<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let py = a.py();
+    let scalar = |x: &Bound<'py, PyAny>| -> PyResult<bool> {
+        Ok(x.cast::<PyFloat>().is_ok() || (!x.hasattr("__len__")? && !x.hasattr("__array__")?))
+    };
+    if scalar(a)? && scalar(b)? {
+        let x: f64 = a.extract().map_err(|e| input_error(format!("{} must be a number or an array: {e}", what.0)))?;
+        let y: f64 = b.extract().map_err(|e| input_error(format!("{} must be a number or an array: {e}", what.1)))?;
+        return Ok(PyFloat::new(py, f(x, y)?).into_any());
+    }
+    let np = py.import("numpy")?;
+    let asf = |x: &Bound<'py, PyAny>, name: &str| -> PyResult<Bound<'py, PyAny>> {
+        np.call_method1("asarray", (x, "float64"))
+            .map_err(|e| input_error(format!("{name} must be a number or an array: {e}")))
+    };
+    let (a, b) = (asf(a, what.0)?, asf(b, what.1)?);
+    let pair = np
+        .call_method1("broadcast_arrays", (a, b))
+        .map_err(|e| input_error(format!("{} and {} do not broadcast together: {e}", what.0, what.1)))?;
+    let x: Bound<'py, PyArrayDyn<f64>> = pair.get_item(0)?.cast_into()?;
+    let y: Bound<'py, PyArrayDyn<f64>> = pair.get_item(1)?.cast_into()?;
+    let (x, y) = (x.readonly(), y.readonly());
+    let mut out = x.as_array().mapv(|_| 0.0);
+    for ((o, u), v) in out.iter_mut().zip(x.as_array().iter()).zip(y.as_array().iter()) {
+        *o = f(*u, *v)?;
+    }
+    if out.ndim() == 0 {
+        let v = out.iter().next().copied().unwrap_or(f64::NAN);
+        return Ok(PyFloat::new(py, v).into_any());
+    }
+    Ok(out.into_pyarray(py).into_any())
+}

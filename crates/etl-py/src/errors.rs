@@ -1,0 +1,232 @@
+//! The exception hierarchy of `etlcal` and the mapping of the Rust error types onto it.
+//!
+//! Every exception raised by the library derives from `etlcal.Error`; the message is the
+//! Rust error's `Display` text, unchanged, so the CLI and Python say the same thing.
+//!
+//! | class | bases | raised for |
+//! |---|---|---|
+//! | `Error` | `Exception` | base of all below |
+//! | `InputError` | `Error`, `ValueError` | bad input: NaN, out of range, too few, degenerate data, malformed files |
+//! | `NotConvergedError` | `Error` | an iterative method missed its tolerance |
+//! | `BoardNotFoundError` | `Error` | no checkerboard found in an image |
+//! | `FileError` | `Error`, `OSError` | reading or writing a file failed |
+//! | `DeviceError` | `Error` | the lens driver answered wrongly or not at all |
+//! | `DeviceTimeoutError` | `DeviceError`, `TimeoutError` | the lens driver did not answer in time |
+//!
+//! The classes are made with `type(name, bases, namespace)` because two of them have two
+//! bases (pyo3's `create_exception!` takes one).
+
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
+
+/// The exception classes, created once per interpreter.
+pub struct Exceptions {
+    /// `etlcal.Error`.
+    pub base: Py<PyType>,
+    /// `etlcal.InputError`.
+    pub input: Py<PyType>,
+    /// `etlcal.NotConvergedError`.
+    pub not_converged: Py<PyType>,
+    /// `etlcal.BoardNotFoundError`.
+    pub board_not_found: Py<PyType>,
+    /// `etlcal.FileError`.
+    pub file: Py<PyType>,
+    /// `etlcal.DeviceError`.
+    pub device: Py<PyType>,
+    /// `etlcal.DeviceTimeoutError`.
+    pub device_timeout: Py<PyType>,
+}
+
+static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
+
+fn make_type(py: Python<'_>, name: &str, bases: &[&Bound<'_, PyAny>], doc: &str) -> PyResult<Py<PyType>> {
+    let ns = PyDict::new(py);
+    ns.set_item("__module__", "etlcal")?;
+    ns.set_item("__doc__", doc)?;
+    let bases = PyTuple::new(py, bases)?;
+    let ty = py.get_type::<PyType>().call1((name, bases, ns))?;
+    Ok(ty.cast_into::<PyType>()?.unbind())
+}
+
+fn build(py: Python<'_>) -> PyResult<Exceptions> {
+    let builtins = py.import("builtins")?;
+    let exception = builtins.getattr("Exception")?;
+    let value_error = builtins.getattr("ValueError")?;
+    let os_error = builtins.getattr("OSError")?;
+    let timeout_error = builtins.getattr("TimeoutError")?;
+    let base = make_type(py, "Error", &[&exception], "Base class of every exception raised by etlcal.")?;
+    let b = base.bind(py).as_any().clone();
+    let input = make_type(
+        py,
+        "InputError",
+        &[&b, &value_error],
+        "Bad input: a NaN, a value out of range, too few points/views/currents, data that \
+         do not determine the unknowns, a malformed file. Also a ValueError.",
+    )?;
+    let not_converged = make_type(
+        py,
+        "NotConvergedError",
+        &[&b],
+        "An iterative method (undistortion, Levenberg-Marquardt, autofocus, ...) did not \
+         reach its tolerance.",
+    )?;
+    let board_not_found =
+        make_type(py, "BoardNotFoundError", &[&b], "No checkerboard (or only part of it) was found in an image.")?;
+    let file = make_type(py, "FileError", &[&b, &os_error], "Reading or writing a file failed. Also an OSError.")?;
+    let device = make_type(
+        py,
+        "DeviceError",
+        &[&b],
+        "The lens driver (a serial port or the virtual lens) failed or answered wrongly.",
+    )?;
+    let d = device.bind(py).as_any().clone();
+    let device_timeout = make_type(
+        py,
+        "DeviceTimeoutError",
+        &[&d, &timeout_error],
+        "The lens driver did not answer in time. Also a TimeoutError.",
+    )?;
+    Ok(Exceptions { base, input, not_converged, board_not_found, file, device, device_timeout })
+}
+
+/// The exception classes of this interpreter.
+pub fn exceptions(py: Python<'_>) -> PyResult<&Exceptions> {
+    EXCEPTIONS.get_or_try_init(py, || build(py))
+}
+
+/// Which class a Rust error maps to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// `InputError`.
+    Input,
+    /// `NotConvergedError`.
+    NotConverged,
+    /// `BoardNotFoundError`.
+    BoardNotFound,
+    /// `FileError`.
+    File,
+    /// `DeviceError`.
+    Device,
+    /// `DeviceTimeoutError`.
+    DeviceTimeout,
+}
+
+/// A Python exception of class `kind` with message `msg`.
+pub fn raise(kind: Kind, msg: impl Into<String>) -> PyErr {
+    let msg: String = msg.into();
+    Python::attach(|py| match exceptions(py) {
+        Ok(ex) => {
+            let ty = match kind {
+                Kind::Input => &ex.input,
+                Kind::NotConverged => &ex.not_converged,
+                Kind::BoardNotFound => &ex.board_not_found,
+                Kind::File => &ex.file,
+                Kind::Device => &ex.device,
+                Kind::DeviceTimeout => &ex.device_timeout,
+            };
+            PyErr::from_type(ty.bind(py).clone(), (msg,))
+        }
+        Err(e) => e,
+    })
+}
+
+/// Bad input (an `InputError`, also a `ValueError`) raised by the bindings themselves,
+/// e.g. an array of the wrong shape.
+pub fn input_error(msg: impl Into<String>) -> PyErr {
+    raise(Kind::Input, msg)
+}
+
+/// The class of an etl-core error.
+pub fn core_kind(e: &etl_core::Error) -> Kind {
+    match e {
+        etl_core::Error::NotConverged { .. } => Kind::NotConverged,
+        _ => Kind::Input,
+    }
+}
+
+/// An etl-core error as a Python exception (same message).
+pub fn core_err(e: etl_core::Error) -> PyErr {
+    raise(core_kind(&e), e.to_string())
+}
+
+/// An etl-calib error as a Python exception (same message).
+pub fn calib_err(e: etl_calib::Error) -> PyErr {
+    let kind = match &e {
+        etl_calib::Error::Io { .. } => Kind::File,
+        etl_calib::Error::BoardNotFound(_) => Kind::BoardNotFound,
+        etl_calib::Error::Core(c) => core_kind(c),
+        _ => Kind::Input,
+    };
+    raise(kind, e.to_string())
+}
+
+/// `Result<T, etl_core::Error>` -> `PyResult<T>`.
+pub trait CoreResultExt<T> {
+    /// Maps the error with [`core_err`].
+    fn py(self) -> PyResult<T>;
+}
+
+impl<T> CoreResultExt<T> for Result<T, etl_core::Error> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(core_err)
+    }
+}
+
+impl<T> CoreResultExt<T> for Result<T, etl_calib::Error> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(calib_err)
+    }
+}
+
+/// Adds the exception classes to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    let ex = exceptions(py)?;
+    m.add("Error", ex.base.bind(py))?;
+    m.add("InputError", ex.input.bind(py))?;
+    m.add("NotConvergedError", ex.not_converged.bind(py))?;
+    m.add("BoardNotFoundError", ex.board_not_found.bind(py))?;
+    m.add("FileError", ex.file.bind(py))?;
+    m.add("DeviceError", ex.device.bind(py))?;
+    m.add("DeviceTimeoutError", ex.device_timeout.bind(py))?;
+    Ok(())
+}
+
+/// Test hook: raises the exception a given Rust error maps to, so that pytest can check
+/// every variant of the Rust error types (including those no public function can reach
+/// from valid Python input, such as `BufferTooSmall`).
+///
+/// `kind` names the variant: `core:NotFinite`, `core:OutOfRange`, `core:TooFew`,
+/// `core:Degenerate`, `core:BehindCamera`, `core:NotConverged`, `core:BufferTooSmall`,
+/// `core:InvalidArgument`, `calib:Io`, `calib:Parse`, `calib:Format`, `calib:Image`,
+/// `calib:BoardNotFound`, `calib:InvalidInput`, `calib:Core`.
+/// Returns the message the Rust side formats, after raising it.
+#[pyfunction]
+pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
+    use etl_core::Error as C;
+    let core = |e: C| Err(core_err(e));
+    let calib = |e: etl_calib::Error| Err(calib_err(e));
+    let p = std::path::PathBuf::from("x.json");
+    match kind {
+        "core:NotFinite" => core(C::NotFinite { what: "x" }),
+        "core:OutOfRange" => core(C::OutOfRange { what: "x", value: 5.0, min: 0.0, max: 1.0 }),
+        "core:TooFew" => core(C::TooFew { what: "views", needed: 3, got: 1 }),
+        "core:Degenerate" => core(C::Degenerate { what: "all points on one line" }),
+        "core:BehindCamera" => core(C::BehindCamera),
+        "core:NotConverged" => core(C::NotConverged { what: "solver", iterations: 7 }),
+        "core:BufferTooSmall" => core(C::BufferTooSmall { what: "out", needed: 4, got: 2 }),
+        "core:InvalidArgument" => core(C::InvalidArgument { what: "bad" }),
+        "calib:Io" => calib(etl_calib::Error::Io {
+            path: p,
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "not there"),
+        }),
+        "calib:Parse" => calib(etl_calib::Error::Parse { path: p, message: "line 1".into() }),
+        "calib:Format" => calib(etl_calib::Error::Format { path: p, found: "a/1".into(), expected: "b/1".into() }),
+        "calib:Image" => calib(etl_calib::Error::Image { path: p, message: "truncated".into() }),
+        "calib:BoardNotFound" => calib(etl_calib::Error::BoardNotFound("img.png".into())),
+        "calib:InvalidInput" => calib(etl_calib::Error::InvalidInput("negative".into())),
+        "calib:Core" => calib(etl_calib::Error::Core(C::NotConverged { what: "ba", iterations: 3 })),
+        _ => Err(input_error(format!("unknown error kind {kind:?}"))),
+    }
+}

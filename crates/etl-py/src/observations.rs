@@ -1,0 +1,361 @@
+//! `Observations` (`etlcal.observations/1`: the corners of the calibration views) and
+//! `A0` (`etlcal.a0/1`: the lens-off intrinsics).
+
+use std::path::{Path, PathBuf};
+
+use etl_calib::formats::a0::{A0File, FORMAT as A0_FORMAT};
+use etl_calib::formats::observations::{Observations as ObsFile, OffstateView, PointObs, ViewObs, FORMAT};
+use etl_core::calib::A0 as CoreA0;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple, PyType};
+
+use crate::arrays::{points, points_out};
+use crate::errors::{input_error, CoreResultExt};
+use crate::thermal::ThermalCalibration;
+
+/// Points of one view from (N, 3) world points and (N, 2) pixels.
+fn view_points(world_mm: &Bound<'_, PyAny>, pixels: &Bound<'_, PyAny>) -> PyResult<Vec<PointObs>> {
+    let w = points::<3>(world_mm, "world_mm")?;
+    let p = points::<2>(pixels, "pixels")?;
+    if w.single || p.single {
+        return Err(input_error("world_mm and pixels must be (N, 3) and (N, 2) arrays"));
+    }
+    if w.points.len() != p.points.len() {
+        return Err(input_error(format!(
+            "world_mm and pixels differ in length: {} vs {}",
+            w.points.len(),
+            p.points.len()
+        )));
+    }
+    Ok(w.points.into_iter().zip(p.points).map(|(world_mm, pixel)| PointObs { world_mm, pixel }).collect())
+}
+
+fn points_dict<'py>(py: Python<'py>, pts: &[PointObs]) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("world_mm", points_out(py, pts.iter().map(|p| p.world_mm).collect(), false)?)?;
+    d.set_item("pixels", points_out(py, pts.iter().map(|p| p.pixel).collect(), false)?)?;
+    Ok(d)
+}
+
+/// The corners of a calibration: per ETL view its driver current, lens temperature,
+/// optional compensated current and the (world point, observed pixel) pairs; optional
+/// lens-off views of a planar board (for A0). The content of an `etlcal.observations/1`
+/// file.
+///
+/// Args:
+///     image_size: (width, height) of the images, px.
+#[pyclass(module = "etlcal", eq, from_py_object)]
+#[derive(Clone, PartialEq)]
+pub struct Observations {
+    pub(crate) file: ObsFile,
+}
+
+#[pymethods]
+impl Observations {
+    #[new]
+    fn new(image_size: (u32, u32)) -> PyResult<Self> {
+        if image_size.0 == 0 || image_size.1 == 0 {
+            return Err(input_error(format!("image_size {image_size:?} must be positive")));
+        }
+        Ok(Observations { file: ObsFile::new([image_size.0, image_size.1]) })
+    }
+
+    /// Builds observations from arrays, one entry per view.
+    ///
+    /// Args:
+    ///     image_size: (width, height), px.
+    ///     world_mm: per view an (N_j, 3) array of world points, mm.
+    ///     pixels: per view an (N_j, 2) array of observed pixels, px.
+    ///     e_in_ma: per view the driver current, mA.
+    ///     temperature_c: per view the lens temperature, degC.
+    ///     e_com_ma: per view the compensated current, mA (optional; when given it is
+    ///         used as is, else it is computed through the thermal surface).
+    #[staticmethod]
+    #[pyo3(signature = (image_size, world_mm, pixels, e_in_ma, temperature_c, e_com_ma=None))]
+    fn from_arrays(
+        image_size: (u32, u32),
+        world_mm: Vec<Bound<'_, PyAny>>,
+        pixels: Vec<Bound<'_, PyAny>>,
+        e_in_ma: Vec<f64>,
+        temperature_c: Vec<f64>,
+        e_com_ma: Option<Vec<f64>>,
+    ) -> PyResult<Self> {
+        let n = world_mm.len();
+        if pixels.len() != n
+            || e_in_ma.len() != n
+            || temperature_c.len() != n
+            || e_com_ma.as_ref().is_some_and(|e| e.len() != n)
+        {
+            return Err(input_error(format!(
+                "world_mm, pixels, e_in_ma, temperature_c (and e_com_ma) need one entry per view: got {}, {}, {}, {}{}",
+                n,
+                pixels.len(),
+                e_in_ma.len(),
+                temperature_c.len(),
+                e_com_ma.as_ref().map(|e| format!(", {}", e.len())).unwrap_or_default()
+            )));
+        }
+        let mut o = Observations::new(image_size)?;
+        for i in 0..n {
+            o.add_view(&world_mm[i], &pixels[i], e_in_ma[i], temperature_c[i], e_com_ma.as_ref().map(|e| e[i]))?;
+        }
+        Ok(o)
+    }
+
+    /// Reads an `etlcal.observations/1` file.
+    ///
+    /// Args:
+    ///     path: the file (str or os.PathLike).
+    #[classmethod]
+    fn load(_cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
+        Ok(Observations { file: ObsFile::load(&path).py()? })
+    }
+
+    /// Writes an `etlcal.observations/1` file (atomically).
+    ///
+    /// Args:
+    ///     path: the file (str or os.PathLike); its directory must exist.
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        self.file.save(&path).py()
+    }
+
+    /// The `etlcal.observations/1` JSON text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.file).map_err(|e| input_error(e.to_string()))
+    }
+
+    /// Parses `etlcal.observations/1` JSON text (checked as `load` checks a file).
+    ///
+    /// Args:
+    ///     text: the JSON text.
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let p = Path::new("<json>");
+        let f: ObsFile = etl_calib::formats::parse_json(text, p, FORMAT).py()?;
+        f.validate().map_err(|e| etl_calib::Error::Parse { path: p.to_owned(), message: e.to_string() }).py()?;
+        Ok(Observations { file: f })
+    }
+
+    /// (width, height), px.
+    #[getter]
+    fn image_size(&self) -> (u32, u32) {
+        (self.file.image_size[0], self.file.image_size[1])
+    }
+
+    /// Adds an ETL view.
+    ///
+    /// Args:
+    ///     world_mm: (N, 3) world points, mm.
+    ///     pixels: (N, 2) observed pixels, px.
+    ///     e_in_ma: driver current, mA.
+    ///     temperature_c: lens temperature, degC.
+    ///     e_com_ma: compensated current, mA (optional: used as is when given).
+    #[pyo3(signature = (world_mm, pixels, e_in_ma, temperature_c, e_com_ma=None))]
+    fn add_view(
+        &mut self,
+        world_mm: &Bound<'_, PyAny>,
+        pixels: &Bound<'_, PyAny>,
+        e_in_ma: f64,
+        temperature_c: f64,
+        e_com_ma: Option<f64>,
+    ) -> PyResult<()> {
+        let pts = view_points(world_mm, pixels)?;
+        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: pts };
+        // Checked in place so that the message names the view's index.
+        self.file.views.push(v);
+        if let Err(e) = self.file.validate() {
+            self.file.views.pop();
+            return Err(crate::errors::calib_err(e));
+        }
+        Ok(())
+    }
+
+    /// Adds a lens-off view of a planar board (points with Z = 0), for A0.
+    ///
+    /// Args:
+    ///     world_mm: (N, 3) board points, mm (Z = 0).
+    ///     pixels: (N, 2) observed pixels, px.
+    fn add_offstate_view(&mut self, world_mm: &Bound<'_, PyAny>, pixels: &Bound<'_, PyAny>) -> PyResult<()> {
+        let pts = view_points(world_mm, pixels)?;
+        if pts.iter().any(|p| p.world_mm.iter().chain(&p.pixel).any(|x| !x.is_finite())) {
+            return Err(input_error("offstate view: a point is not finite"));
+        }
+        self.file.offstate_views.push(OffstateView { points: pts });
+        Ok(())
+    }
+
+    /// Number of ETL views.
+    fn __len__(&self) -> usize {
+        self.file.views.len()
+    }
+
+    /// Number of lens-off views.
+    #[getter]
+    fn offstate_count(&self) -> usize {
+        self.file.offstate_views.len()
+    }
+
+    /// Total number of points over the ETL views.
+    #[getter]
+    fn point_count(&self) -> usize {
+        self.file.views.iter().map(|v| v.points.len()).sum()
+    }
+
+    /// ETL view `index`: a dict with world_mm ((N, 3), mm), pixels ((N, 2), px), e_in_ma,
+    /// temperature_c and e_com_ma (None when not recorded).
+    ///
+    /// Args:
+    ///     index: view number (negative counts from the end).
+    fn view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
+        let v = pick(&self.file.views, index)?;
+        let d = points_dict(py, &v.points)?;
+        d.set_item("e_in_ma", v.e_in_ma)?;
+        d.set_item("temperature_c", v.temperature_c)?;
+        d.set_item("e_com_ma", v.e_com_ma)?;
+        Ok(d)
+    }
+
+    /// Lens-off view `index`: a dict with world_mm ((N, 3), mm) and pixels ((N, 2), px).
+    ///
+    /// Args:
+    ///     index: view number (negative counts from the end).
+    fn offstate_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
+        points_dict(py, &pick(&self.file.offstate_views, index)?.points)
+    }
+
+    /// E_com of every view, mA: as recorded, or compensated from (e_in_ma,
+    /// temperature_c) through `thermal`.
+    ///
+    /// Args:
+    ///     thermal: a ThermalCalibration (default: the paper's).
+    #[pyo3(signature = (thermal=None))]
+    fn e_com_ma(&self, thermal: Option<ThermalCalibration>) -> PyResult<Vec<f64>> {
+        let t = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
+        self.file.e_com_ma(&t).py()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Observations(image_size={:?}, views={}, points={}, offstate_views={})",
+            self.file.image_size,
+            self.file.views.len(),
+            self.point_count(),
+            self.file.offstate_views.len()
+        )
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let text = slf.borrow().to_json()?;
+        let ctor = py.get_type::<Observations>().getattr("from_json")?;
+        Ok((ctor, PyTuple::new(py, [text])?))
+    }
+}
+
+fn pick<T>(xs: &[T], index: isize) -> PyResult<&T> {
+    let n = xs.len() as isize;
+    let i = if index < 0 { index + n } else { index };
+    if i < 0 || i >= n {
+        return Err(pyo3::exceptions::PyIndexError::new_err(format!("view index {index} out of range ({n} views)")));
+    }
+    Ok(&xs[i as usize])
+}
+
+/// The lens-off intrinsics A0 (section 4.2): focal lengths at E = 0 and the principal
+/// point. The content of an `etlcal.a0/1` file.
+///
+/// Args:
+///     kf0x: fx at E = 0, px (> 0).
+///     kf0y: fy at E = 0, px (> 0).
+///     u0: principal point u0, px.
+///     v0: principal point v0, px.
+#[pyclass(module = "etlcal", frozen, eq, from_py_object)]
+#[derive(Clone, PartialEq)]
+pub struct A0 {
+    pub(crate) inner: CoreA0,
+}
+
+fn check_a0(a: &CoreA0) -> PyResult<()> {
+    let r = A0File::new(a);
+    if !([r.kf0x, r.kf0y, r.u0, r.v0].iter().all(|x| x.is_finite()) && r.kf0x > 0.0 && r.kf0y > 0.0) {
+        return Err(input_error("kf0x, kf0y must be positive and u0, v0 finite"));
+    }
+    Ok(())
+}
+
+#[pymethods]
+impl A0 {
+    #[new]
+    fn new(kf0x: f64, kf0y: f64, u0: f64, v0: f64) -> PyResult<Self> {
+        let inner = CoreA0 { kf0x, kf0y, u0, v0 };
+        check_a0(&inner)?;
+        Ok(A0 { inner })
+    }
+
+    /// Reads an `etlcal.a0/1` file.
+    ///
+    /// Args:
+    ///     path: the file (str or os.PathLike).
+    #[classmethod]
+    fn load(_cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
+        Ok(A0 { inner: A0File::load(&path).py()?.a0() })
+    }
+
+    /// Writes an `etlcal.a0/1` file (atomically).
+    ///
+    /// Args:
+    ///     path: the file (str or os.PathLike).
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        A0File::new(&self.inner).save(&path).py()
+    }
+
+    /// The `etlcal.a0/1` JSON text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&A0File::new(&self.inner)).map_err(|e| input_error(e.to_string()))
+    }
+
+    /// Parses `etlcal.a0/1` JSON text.
+    ///
+    /// Args:
+    ///     text: the JSON text.
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let f: A0File = etl_calib::formats::parse_json(text, Path::new("<json>"), A0_FORMAT).py()?;
+        A0::new(f.kf0x, f.kf0y, f.u0, f.v0)
+    }
+
+    /// fx at E = 0, px.
+    #[getter]
+    fn kf0x(&self) -> f64 {
+        self.inner.kf0x
+    }
+
+    /// fy at E = 0, px.
+    #[getter]
+    fn kf0y(&self) -> f64 {
+        self.inner.kf0y
+    }
+
+    /// Principal point u0, px.
+    #[getter]
+    fn u0(&self) -> f64 {
+        self.inner.u0
+    }
+
+    /// Principal point v0, px.
+    #[getter]
+    fn v0(&self) -> f64 {
+        self.inner.v0
+    }
+
+    fn __repr__(&self) -> String {
+        let a = &self.inner;
+        format!("A0(kf0x={:?}, kf0y={:?}, u0={:?}, v0={:?})", a.kf0x, a.kf0y, a.u0, a.v0)
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let a = slf.get().inner;
+        Ok((py.get_type::<A0>().into_any(), PyTuple::new(py, [a.kf0x, a.kf0y, a.u0, a.v0])?))
+    }
+}

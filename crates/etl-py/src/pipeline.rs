@@ -1,0 +1,128 @@
+//! `calibrate`: the calibration pipeline from observations (E_com -> RAC -> focal
+//! polynomial -> distortion -> bundle adjustment), run without the GIL.
+
+use etl_calib::pipeline::{calibrate as run_pipeline, CalibrateOptions};
+use etl_core::calib::{Estimator, RobustLoss};
+use pyo3::prelude::*;
+
+use crate::calibration::Calibration;
+use crate::errors::{input_error, CoreResultExt};
+use crate::observations::{Observations, A0};
+use crate::thermal::ThermalCalibration;
+
+/// Calibrates an ETL camera from observations (paper section 4): E_com of each view
+/// through the thermal surface (unless recorded), RAC (Eq. 19-20), the focal polynomial
+/// and tz (Eq. 21-22), the distortion (Eq. 23), then bundle adjustment (Eq. 24).
+///
+/// Args:
+///     observations: the corners of the ETL views (an `Observations`; >= 3 distinct
+///         currents, non-coplanar points: the board at several stage positions).
+///     a0: the lens-off intrinsics (an `A0`: kf0x, kf0y, u0, v0 in px), e.g. from
+///         `zhang(...)` on lens-off views.
+///     thermal: the temperature compensation used for views without a recorded E_com
+///         (a `ThermalCalibration`; default: the paper's).
+///     estimator: "paper" (Eq. 24: recorded stage positions and currents exact) or "eiv"
+///         (errors-in-variables: a stage and a current correction per view with
+///         Gaussian priors sigma_z_mm and sigma_e_ma).
+///     hold_a0: hold kf0x, kf0y, u0, v0 at A0 in the bundle adjustment.
+///     robust: None, "huber" or "cauchy" (a robust loss on each point's error).
+///     robust_k_px: threshold / scale of the robust loss, px.
+///     sigma_z_mm: "eiv" prior on the stage position, mm (paper: 0.010).
+///     sigma_e_ma: "eiv" prior on the current, mA (paper: 0.4).
+///     sigma_px: "eiv" pixel noise, px (default: estimated from a plain solution).
+///
+/// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
+/// error (`rms_px`) and per-view summaries (`views`).
+///
+/// Raises: InputError naming the unmet precondition (e.g. fewer than 3 distinct
+/// currents); NotConvergedError when the bundle adjustment fails.
+#[pyfunction]
+#[pyo3(signature = (observations, a0, thermal=None, estimator="paper", hold_a0=false, robust=None,
+    robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn calibrate(
+    py: Python<'_>,
+    observations: &Observations,
+    a0: &A0,
+    thermal: Option<ThermalCalibration>,
+    estimator: &str,
+    hold_a0: bool,
+    robust: Option<&str>,
+    robust_k_px: f64,
+    sigma_z_mm: f64,
+    sigma_e_ma: f64,
+    sigma_px: Option<f64>,
+) -> PyResult<Calibration> {
+    let estimator = match estimator {
+        "paper" => Estimator::Paper,
+        "eiv" => Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px },
+        other => return Err(input_error(format!("estimator must be \"paper\" or \"eiv\", got {other:?}"))),
+    };
+    let robust = match robust {
+        None => None,
+        Some("huber") => Some(RobustLoss::Huber { k_px: robust_k_px }),
+        Some("cauchy") => Some(RobustLoss::Cauchy { k_px: robust_k_px }),
+        Some(other) => return Err(input_error(format!("robust must be None, \"huber\" or \"cauchy\", got {other:?}"))),
+    };
+    let options = CalibrateOptions { estimator, hold_a0, robust };
+    let thermal = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
+    let obs = observations.file.clone();
+    let a0 = a0.inner;
+    let result = py.detach(|| run_pipeline(&obs, &a0, &thermal, &options)).py()?;
+    Ok(Calibration::from_file(result.calibration))
+}
+
+/// The Cramer-Rao lower bound of the calibration: the smallest standard deviation any
+/// unbiased estimator can reach for each of the 25 numbers, at the true camera, for the
+/// views' geometry (the benchmark of NOTES.md, "statistical efficiency").
+///
+/// Args:
+///     observations: the views (their world points and currents are used; the pixels
+///         are not).
+///     truth: the true camera (a `Calibration`).
+///     sigma_px: pixel noise standard deviation, px (> 0).
+///     sigma_z_mm: prior standard deviation of each view's stage position, mm (None:
+///         stage positions exact, the paper's model).
+///     sigma_e_ma: prior standard deviation of each view's current, mA (given together
+///         with sigma_z_mm).
+///     thermal: temperature compensation for views without a recorded E_com (default:
+///         the paper's).
+///
+/// Returns: a dict like `Calibration.std` (one standard deviation per number; NaN for
+/// directions the data do not identify).
+#[pyfunction]
+#[pyo3(signature = (observations, truth, sigma_px, sigma_z_mm=None, sigma_e_ma=None, thermal=None))]
+pub fn cramer_rao_std<'py>(
+    py: Python<'py>,
+    observations: &Observations,
+    truth: &Calibration,
+    sigma_px: f64,
+    sigma_z_mm: Option<f64>,
+    sigma_e_ma: Option<f64>,
+    thermal: Option<ThermalCalibration>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let priors = match (sigma_z_mm, sigma_e_ma) {
+        (None, None) => None,
+        (Some(z), Some(e)) => Some((z, e)),
+        _ => return Err(input_error("give both sigma_z_mm and sigma_e_ma, or neither")),
+    };
+    if !(sigma_px > 0.0 && sigma_px.is_finite()) {
+        return Err(input_error(format!("sigma_px = {sigma_px} must be a finite number > 0")));
+    }
+    let thermal = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
+    let obs = &observations.file;
+    obs.validate().py()?;
+    let e_com = obs.e_com_ma(&thermal).py()?;
+    let pts = obs.core_points();
+    let model = truth.model;
+    let cov = py
+        .detach(|| {
+            let views: Vec<etl_core::calib::View<'_>> =
+                pts.iter().zip(&e_com).map(|(p, &e)| etl_core::calib::View { e_com_ma: e, points: p }).collect();
+            etl_core::calib::crlb::crlb_covariance_eiv(&views, &model, sigma_px, priors)
+        })
+        .py()?;
+    let sd: [f64; 25] = core::array::from_fn(|i| if cov[i][i] >= 0.0 { cov[i][i].sqrt() } else { f64::NAN });
+    let std = etl_calib::formats::calibration::ModelStd::from_params(&sd);
+    crate::calibration::std_dict(py, &std)
+}

@@ -1,0 +1,147 @@
+//! `simulate_paper_rig`: the paper rig (section 5.1.2) as synthetic observations with the
+//! paper's noise model (Python: `etlcal.simulate.paper_rig`).
+
+use etl_calib::simulate::{paper_rig, NoiseModel, Simulation as CoreSimulation};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::calibration::Calibration;
+use crate::errors::input_error;
+use crate::observations::{Observations, A0};
+
+/// A simulated data set and the truth behind it.
+#[pyclass(module = "etlcal", frozen)]
+pub struct Simulation {
+    inner: CoreSimulation,
+    seed: u64,
+    noise: NoiseModel,
+}
+
+#[pymethods]
+impl Simulation {
+    /// The observations as a user would record them (an `Observations`).
+    #[getter]
+    fn observations(&self) -> Observations {
+        Observations { file: self.inner.observations.clone() }
+    }
+
+    /// The A0 a lens-off calibration would give, with its error (an `A0`).
+    #[getter]
+    fn a0(&self) -> A0 {
+        A0 { inner: self.inner.a0 }
+    }
+
+    /// The true camera (a `Calibration` of the paper rig with the paper's thermal
+    /// surface).
+    #[getter]
+    fn truth(&self) -> Calibration {
+        let [w, h] = self.inner.observations.image_size;
+        let mut c = Calibration::from_model(self.inner.truth, [w, h], [80.0, 225.0]);
+        c.file.thermal = Some(etl_calib::formats::calibration::ThermalRef {
+            coefficients: etl_core::thermal::ThermalSurface::PAPER.coefficients,
+        });
+        c
+    }
+
+    /// The true stage error of each view, mm.
+    #[getter]
+    fn true_dz_mm(&self) -> Vec<f64> {
+        self.inner.true_dz_mm.clone()
+    }
+
+    /// The true current error of each view, mA.
+    #[getter]
+    fn true_de_ma(&self) -> Vec<f64> {
+        self.inner.true_de_ma.clone()
+    }
+
+    /// The seed it was made with.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The noise model it was made with: a dict of standard deviations (see
+    /// `simulate.paper_rig`).
+    #[getter]
+    fn noise<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        noise_dict(py, &self.noise)
+    }
+
+    /// Pickles as the call that makes it (the simulation is deterministic).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
+        let f = py.import("etlcal._etlcal")?.getattr("simulate_paper_rig")?;
+        Ok((f, (self.seed, noise_dict(py, &self.noise)?)))
+    }
+
+    fn __repr__(&self) -> String {
+        let o = &self.inner.observations;
+        format!("Simulation(views={}, points={})", o.views.len(), o.views.iter().map(|v| v.points.len()).sum::<usize>())
+    }
+}
+
+/// What `__reduce__` returns: the callable and its arguments (seed, noise).
+type Reduced<'py> = (Bound<'py, PyAny>, (u64, Bound<'py, PyDict>));
+
+fn noise_dict<'py>(py: Python<'py>, m: &NoiseModel) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("xy_mm", m.xy_mm)?;
+    d.set_item("z_mm", m.z_mm)?;
+    d.set_item("e_ma", m.e_ma)?;
+    d.set_item("px", m.px)?;
+    d.set_item("kf0_rel", m.kf0_rel)?;
+    d.set_item("pp_px", m.pp_px)?;
+    Ok(d)
+}
+
+fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {
+    let Some(n) = noise else { return Ok(NoiseModel::PAPER) };
+    if let Ok(s) = n.extract::<String>() {
+        return match s.as_str() {
+            "paper" => Ok(NoiseModel::PAPER),
+            "none" => Ok(NoiseModel::NONE),
+            _ => Err(input_error(format!("noise must be \"paper\", \"none\" or a dict, got {s:?}"))),
+        };
+    }
+    let d = n.cast::<PyDict>().map_err(|_| input_error("noise must be \"paper\", \"none\" or a dict"))?;
+    let mut m = NoiseModel::PAPER;
+    for (k, v) in d.iter() {
+        let key: String = k.extract()?;
+        let val: f64 = v.extract()?;
+        if !(val.is_finite() && val >= 0.0) {
+            return Err(input_error(format!("noise {key} = {val} must be a finite number >= 0")));
+        }
+        match key.as_str() {
+            "xy_mm" => m.xy_mm = val,
+            "z_mm" => m.z_mm = val,
+            "e_ma" => m.e_ma = val,
+            "px" => m.px = val,
+            "kf0_rel" => m.kf0_rel = val,
+            "pp_px" => m.pp_px = val,
+            _ => {
+                return Err(input_error(format!(
+                    "unknown noise key {key:?} (known: xy_mm, z_mm, e_ma, px, kf0_rel, pp_px)"
+                )))
+            }
+        }
+    }
+    Ok(m)
+}
+
+/// The paper rig's 15 views (section 5.1.2; 2311 corners) under the paper's noise model,
+/// seeded (the same seed gives the same data as `etlcal simulate`).
+///
+/// Args:
+///     seed: random seed (an int >= 0).
+///     noise: "paper" (default), "none", or a dict overriding some standard deviations:
+///         xy_mm (corner X, Y, mm), z_mm (stage, mm), e_ma (current, mA), px (pixels, px),
+///         kf0_rel (relative, of A0's kf0), pp_px (A0's principal point, px).
+///
+/// Returns: a `Simulation` (observations, a0, truth, true_dz_mm, true_de_ma).
+#[pyfunction]
+#[pyo3(signature = (seed=0, noise=None))]
+pub fn simulate_paper_rig(py: Python<'_>, seed: u64, noise: Option<&Bound<'_, PyAny>>) -> PyResult<Simulation> {
+    let m = noise_model(noise)?;
+    let inner = py.detach(|| paper_rig(&m, seed));
+    Ok(Simulation { inner, seed, noise: m })
+}

@@ -1,0 +1,71 @@
+"""The exception hierarchy, and every variant of the Rust error types mapped to its class
+with the Rust message unchanged."""
+import pickle
+
+import pytest
+
+import etlcal
+
+
+def test_hierarchy():
+    assert issubclass(etlcal.Error, Exception)
+    assert issubclass(etlcal.InputError, etlcal.Error)
+    assert issubclass(etlcal.InputError, ValueError)
+    assert issubclass(etlcal.NotConvergedError, etlcal.Error)
+    assert not issubclass(etlcal.NotConvergedError, ValueError)
+    assert issubclass(etlcal.BoardNotFoundError, etlcal.Error)
+    assert issubclass(etlcal.FileError, etlcal.Error)
+    assert issubclass(etlcal.FileError, OSError)
+    assert issubclass(etlcal.DeviceError, etlcal.Error)
+    assert issubclass(etlcal.DeviceTimeoutError, etlcal.DeviceError)
+    assert issubclass(etlcal.DeviceTimeoutError, TimeoutError)
+    for cls in (etlcal.Error, etlcal.InputError, etlcal.DeviceTimeoutError):
+        assert cls.__module__ == "etlcal"
+        assert cls.__doc__
+
+
+# (variant, class, message exactly as etl_core / etl_calib format it)
+RUST_ERRORS = [
+    ("core:NotFinite", "InputError", "x is NaN or infinite; pass finite numbers"),
+    ("core:OutOfRange", "InputError", "x = 5 is outside [0, 1]"),
+    ("core:TooFew", "InputError", "too few views: the method needs at least 3, got 1"),
+    ("core:Degenerate", "InputError", "degenerate input: all points on one line"),
+    (
+        "core:BehindCamera",
+        "InputError",
+        "point is at or behind the camera (Z_C <= 0); check the pose and units (mm)",
+    ),
+    ("core:NotConverged", "NotConvergedError", "solver did not converge in 7 iterations"),
+    (
+        "core:BufferTooSmall",
+        "InputError",
+        "buffer out too small: needs 4 elements, got 2 (see its *_scratch function)",
+    ),
+    ("core:InvalidArgument", "InputError", "invalid argument: bad"),
+    ("calib:Io", "FileError", "x.json: not there"),
+    ("calib:Parse", "InputError", "x.json: line 1"),
+    ("calib:Format", "InputError", 'x.json: format "a/1" is not supported (expected "b/1")'),
+    ("calib:Image", "InputError", "x.json: cannot read image: truncated"),
+    ("calib:BoardNotFound", "BoardNotFoundError", "board not found: img.png"),
+    ("calib:InvalidInput", "InputError", "invalid input: negative"),
+    ("calib:Core", "NotConvergedError", "ba did not converge in 3 iterations"),
+]
+
+
+@pytest.mark.parametrize("variant,cls,message", RUST_ERRORS)
+def test_every_rust_error_variant_maps_to_its_class_with_the_same_message(variant, cls, message):
+    with pytest.raises(getattr(etlcal, cls)) as info:
+        etlcal._etlcal._raise_rust_error(variant)
+    assert type(info.value) is getattr(etlcal, cls)
+    assert str(info.value) == message
+
+
+def test_unknown_variant_is_an_input_error():
+    with pytest.raises(etlcal.InputError, match="unknown error kind"):
+        etlcal._etlcal._raise_rust_error("core:Nope")
+
+
+def test_exceptions_pickle():
+    e = etlcal.InputError("t_c is NaN or infinite; pass finite numbers")
+    back = pickle.loads(pickle.dumps(e))
+    assert type(back) is etlcal.InputError and str(back) == str(e)

@@ -1,0 +1,208 @@
+"""Observations, A0, simulate.paper_rig, calibrate and solve_pnp."""
+import math
+import pickle
+
+import numpy as np
+import pytest
+
+import etlcal
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return etlcal.simulate.paper_rig(seed=1)
+
+
+def test_simulation_matches_the_paper_rig(sim):
+    obs = sim.observations
+    assert len(obs) == 15 and obs.point_count == 2311
+    assert obs.image_size == (1936, 1458)
+    assert sim.truth.kf_x.tolist() == [5380.0, -7.0, 0.02, -3e-5]
+    assert len(sim.true_dz_mm) == 15 and len(sim.true_de_ma) == 15
+    assert obs.e_com_ma()[0] == 80.0 and obs.e_com_ma()[-1] == 225.0
+    assert sim.seed == 1 and sim.noise["px"] == 0.2
+    # Noise-free: every pixel is the projection of its world point.
+    clean = etlcal.simulate.paper_rig(seed=0, noise="none")
+    v = clean.observations.view(3)
+    assert np.max(np.abs(clean.truth.project(v["world_mm"], v["e_com_ma"]) - v["pixels"])) < 1e-9
+    assert clean.a0 == etlcal.A0(5380.0, 5430.0, 900.0, 550.0)
+    # Same seed, same data.
+    assert etlcal.simulate.paper_rig(1).observations == obs
+    assert pickle.loads(pickle.dumps(sim)).observations == obs
+    only_px = etlcal.simulate.paper_rig(2, noise={"z_mm": 0.0, "e_ma": 0.0})
+    assert only_px.true_dz_mm == [0.0] * 15
+    with pytest.raises(etlcal.InputError, match="unknown noise key"):
+        etlcal.simulate.paper_rig(0, noise={"pixels": 1.0})
+    with pytest.raises(etlcal.InputError, match="must be a finite number >= 0"):
+        etlcal.simulate.paper_rig(0, noise={"px": -1.0})
+    with pytest.raises(etlcal.InputError, match='noise must be "paper"'):
+        etlcal.simulate.paper_rig(0, noise="loud")
+    assert repr(sim) == "Simulation(views=15, points=2311)"
+
+
+def test_calibrate_recovers_the_rig(sim):
+    cal = etlcal.calibrate(sim.observations, sim.a0)
+    assert cal.estimator == "paper" and cal.iterations > 0
+    assert 0.25 < cal.rms_px < 0.5 and cal.initial_rms_px > cal.rms_px
+    truth = sim.truth
+    e = np.linspace(80, 225, 30)
+    fx = np.polyval(cal.kf_x[::-1], e)
+    fx_true = np.polyval(truth.kf_x[::-1], e)
+    assert np.max(np.abs(fx / fx_true - 1)) < 0.02
+    assert cal.std["kf_x"].shape == (4,) and np.all(cal.std["kf_x"] > 0)
+    assert len(cal.views) == 15 and cal.views[0]["points"] == 141
+    eiv = etlcal.calibrate(sim.observations, sim.a0, estimator="eiv")
+    assert eiv.estimator == "eiv"
+    dz = [v["dz_mm"] for v in eiv.views]
+    assert np.corrcoef(dz, sim.true_dz_mm)[0, 1] > 0.5
+    held = etlcal.calibrate(sim.observations, sim.a0, hold_a0=True, robust="huber", robust_k_px=1.0)
+    assert abs(held.kf_x[0] - sim.a0.kf0x) < 1e-3
+    assert etlcal.Calibration.from_json(cal.to_json()) == cal
+
+
+def test_calibrate_bad_inputs(sim):
+    obs = sim.observations
+    with pytest.raises(etlcal.InputError, match='estimator must be "paper" or "eiv"'):
+        etlcal.calibrate(obs, sim.a0, estimator="best")
+    with pytest.raises(etlcal.InputError, match="robust must be"):
+        etlcal.calibrate(obs, sim.a0, robust="l1")
+    two = etlcal.Observations((1936, 1458))
+    for i in (0, 1):
+        v = obs.view(i)
+        two.add_view(v["world_mm"], v["pixels"], v["e_in_ma"], v["temperature_c"], v["e_com_ma"])
+    with pytest.raises(etlcal.InputError) as info:
+        etlcal.calibrate(two, sim.a0)
+    assert "distinct currents" in str(info.value)
+    with pytest.raises(etlcal.InputError) as info:
+        etlcal.calibrate(etlcal.Observations((10, 10)), sim.a0)
+    assert str(info.value) == "invalid input: observations hold no views"
+
+
+def test_observations_build_save_load(sim, tmp_path):
+    obs = sim.observations
+    views = [obs.view(i) for i in range(len(obs))]
+    again = etlcal.Observations.from_arrays(
+        obs.image_size,
+        [v["world_mm"] for v in views],
+        [v["pixels"] for v in views],
+        [v["e_in_ma"] for v in views],
+        [v["temperature_c"] for v in views],
+        [v["e_com_ma"] for v in views],
+    )
+    assert again == obs
+    path = tmp_path / "obs.json"
+    obs.save(path)
+    assert etlcal.Observations.load(path) == obs
+    assert etlcal.Observations.from_json(obs.to_json()) == obs
+    assert pickle.loads(pickle.dumps(obs)) == obs
+    assert obs.view(-1)["e_com_ma"] == 225.0
+    with pytest.raises(IndexError):
+        obs.view(15)
+    # Without recorded E_com, it is compensated through the thermal surface.
+    o = etlcal.Observations((100, 100))
+    o.add_view([[0, 0, 10], [1, 0, 10]], [[1, 2], [3, 4]], e_in_ma=120.0, temperature_c=33.0)
+    assert o.view(0)["e_com_ma"] is None
+    assert o.e_com_ma()[0] == pytest.approx(etlcal.ThermalSurface.paper().e_com(120.0, 33.0), abs=1e-12)
+    hot = etlcal.ThermalCalibration(etlcal.ThermalSurface([1.0] + [0.0] * 9), (20, 40), (0, 250))
+    assert o.e_com_ma(hot) == [119.0]
+    o.add_offstate_view([[0, 0, 0], [4, 0, 0]], [[10, 10], [50, 10]])
+    assert o.offstate_count == 1 and o.offstate_view(0)["pixels"].shape == (2, 2)
+    assert "offstate_views=1" in repr(o)
+
+
+def test_observations_bad_inputs():
+    o = etlcal.Observations((100, 100))
+    with pytest.raises(etlcal.InputError) as info:
+        o.add_view([[0, 0, 10]], [[1, 2]], e_in_ma=math.nan, temperature_c=30.0)
+    assert str(info.value) == "invalid input: view 0: current or temperature is not finite"
+    assert len(o) == 0
+    with pytest.raises(etlcal.InputError) as info:
+        o.add_view([[0, 0, math.inf]], [[1, 2]], e_in_ma=100.0, temperature_c=30.0)
+    assert str(info.value) == "invalid input: view 0: a point is not finite"
+    with pytest.raises(etlcal.InputError) as info:
+        o.add_view(np.zeros((0, 3)), np.zeros((0, 2)), e_in_ma=100.0, temperature_c=30.0)
+    assert str(info.value) == "invalid input: view 0 has no points"
+    with pytest.raises(etlcal.InputError, match="differ in length"):
+        o.add_view([[0, 0, 1]], [[1, 2], [3, 4]], 100.0, 30.0)
+    with pytest.raises(etlcal.InputError, match="one entry per view"):
+        etlcal.Observations.from_arrays((10, 10), [[[0, 0, 1]]], [], [1.0], [1.0])
+    with pytest.raises(etlcal.InputError, match="image_size"):
+        etlcal.Observations((0, 10))
+    with pytest.raises(etlcal.InputError) as info:
+        etlcal.Observations.from_json('{"format": "etlcal.observations/1", "image_size": [4, 4], "views": []}')
+    assert str(info.value) == "<json>: invalid input: observations hold no views"
+    with pytest.raises(etlcal.InputError, match="not supported"):
+        etlcal.Observations.from_json('{"format": "etlcal.dataset/1"}')
+
+
+def test_a0(tmp_path):
+    a = etlcal.A0(5380.0, 5430.0, 900.0, 550.0)
+    assert (a.kf0x, a.kf0y, a.u0, a.v0) == (5380.0, 5430.0, 900.0, 550.0)
+    a.save(tmp_path / "a0.json")
+    assert etlcal.A0.load(tmp_path / "a0.json") == a
+    assert etlcal.A0.from_json(a.to_json()) == a
+    assert pickle.loads(pickle.dumps(a)) == a
+    assert repr(a) == "A0(kf0x=5380.0, kf0y=5430.0, u0=900.0, v0=550.0)"
+    with pytest.raises(etlcal.InputError, match="kf0x, kf0y must be positive"):
+        etlcal.A0(-1.0, 5430.0, 900.0, 550.0)
+    (tmp_path / "bad.json").write_text('{"format": "etlcal.a0/1", "kf0x": 0, "kf0y": 1, "u0": 0, "v0": 0}')
+    with pytest.raises(etlcal.InputError) as info:
+        etlcal.A0.load(tmp_path / "bad.json")
+    assert str(info.value) == f"{tmp_path / 'bad.json'}: kf0x, kf0y must be positive and u0, v0 finite"
+
+
+def test_solve_pnp_measures_a_stage_move():
+    cal = etlcal.Calibration.paper_rig()
+    board = np.array([[1.5 * i, 1.5 * j, 0.0] for j in range(12) for i in range(14)])
+    e = 140.0
+    poses = []
+    for z in (28.0, 30.0):
+        px = cal.project(board + [0, 0, z], e)
+        poses.append(cal.solve_pnp(board, px, e))
+    assert poses[0].rms_px < 1e-6 and poses[0].iterations >= 0
+    move = poses[0].displacement_mm(poses[1])
+    assert abs(np.linalg.norm(move) - 2.0) < 1e-6
+    # The board origin in camera coordinates is R (0, 0, z) + T.
+    expect = cal.rotation_matrix @ [0, 0, 28.0] + cal.translation_mm
+    assert np.max(np.abs(poses[0].translation_mm - expect)) < 1e-6
+    assert np.allclose(poses[0].rotation_matrix, cal.rotation_matrix, atol=1e-9)
+    assert np.allclose(poses[0].rotation_rodrigues, [0.2, 0.2, 0.2], atol=1e-9)
+    assert pickle.loads(pickle.dumps(poses[0])) == poses[0]
+    assert repr(poses[0]).startswith("BoardPose(")
+
+
+def test_solve_pnp_bad_inputs():
+    cal = etlcal.Calibration.paper_rig()
+    board = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    px = cal.project(board + [0, 0, 40.0], 120.0)
+    cases = [
+        ((board[:3], px[:3]), "too few points for PnP: the method needs at least 4, got 3"),
+        ((board, px[:3]), "invalid argument: board points and pixels differ in number"),
+        ((board + [0, 0, 1.0], px), "invalid argument: board points must lie on Z = 0 of the board frame"),
+        ((np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]]), px), None),
+        ((board, px * np.nan), "pixel is NaN or infinite; pass finite numbers"),
+    ]
+    for (b, p), message in cases:
+        with pytest.raises(etlcal.InputError) as info:
+            cal.solve_pnp(b, p, 120.0)
+        if message:
+            assert str(info.value) == message
+        else:
+            assert str(info.value).startswith("degenerate input:")
+
+
+def test_cramer_rao_bound_of_the_paper_rig():
+    sim = etlcal.simulate.paper_rig(0, noise="none")
+    plain = etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2)
+    # NOTES.md: with 0.2 px of pixel noise alone the bound of kf3 is about 3 %.
+    rel = plain["kf_x"][3] / 3e-5
+    assert 0.015 < rel < 0.06, rel
+    eiv = etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2, sigma_z_mm=0.010, sigma_e_ma=0.4)
+    assert np.all(eiv["kf_x"] > plain["kf_x"])
+    # Twice the noise, twice the bound.
+    double = etlcal.cramer_rao_std(sim.observations, sim.truth, 0.4)
+    assert np.allclose(double["kf_y"], 2 * plain["kf_y"], rtol=1e-9)
+    with pytest.raises(etlcal.InputError, match="give both"):
+        etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2, sigma_z_mm=0.01)
+    with pytest.raises(etlcal.InputError, match="sigma_px"):
+        etlcal.cramer_rao_std(sim.observations, sim.truth, 0.0)
