@@ -6,5 +6,6 @@ pub mod error;
 pub mod formats;
 pub mod pipeline;
 pub mod simulate;
+pub mod zhang;
 
 pub use error::{Error, Result};

@@ -151,7 +151,14 @@ fn bad_inputs_fail_with_one_line_and_write_nothing() {
         Path::new(&out),
         "nope.json",
     );
-    fails_without_writing(&["calibrate", "--observations", &obs, "--out", &out], Path::new(&out), "--a0");
+    // No A0: without --a0 it comes from the lens-off views; with none of those either, the
+    // message says to pass --a0.
+    let mut no_off: Value = serde_json::from_str(&text).unwrap();
+    no_off.as_object_mut().unwrap().remove("offstate_views");
+    std::fs::write(p("no_off.json"), no_off.to_string()).unwrap();
+    fails_without_writing(&["calibrate", "--observations", &p("no_off.json"), "--out", &out], Path::new(&out), "--a0");
+    let (code, _, err) = etlcal(&["calibrate", "--observations", &obs, "--out", &p("zhang_cal.json")]);
+    assert_eq!(code, 0, "A0 by Zhang from the lens-off views: {err}");
     // An output path in a missing directory: an error, and no directory is created.
     let (code, _, err) = etlcal(&["calibrate", "--observations", &obs, "--a0", &a0, "--out", &p("missing/cal.json")]);
     assert_eq!(code, 1);

@@ -3,9 +3,8 @@
 //!
 //! Observations (`etlcal.observations/1`) in, `etlcal.calibration/1` out (written
 //! atomically; nothing is written on failure). `--json` prints the object written.
-//! A0 from a file is required for now: A0 from the file's lens-off views (Zhang's method)
-//! and `--dataset` (images) are not implemented yet, and asking for them is an error
-//! that says so.
+//! Without `--a0`, A0 comes from the file's lens-off views by Zhang's method. `--dataset`
+//! (images) is not implemented yet, and asking for it is an error that says so.
 
 use std::path::PathBuf;
 
@@ -37,7 +36,7 @@ pub struct Args {
     /// A dataset of images (etlcal.dataset/1): not implemented yet.
     #[arg(long, value_name = "FILE", conflicts_with = "observations")]
     pub dataset: Option<PathBuf>,
-    /// Lens-off intrinsics (etlcal.a0/1).
+    /// Lens-off intrinsics (etlcal.a0/1); default: Zhang's method on the lens-off views.
     #[arg(long, value_name = "FILE")]
     pub a0: Option<PathBuf>,
     /// Where to write etlcal.calibration/1 (its directory must exist).
@@ -80,11 +79,7 @@ pub fn run(args: Args) -> Result<()> {
     let obs = Observations::load(obs_path)?;
     let a0 = match &args.a0 {
         Some(p) => A0File::load(p)?.a0(),
-        None => {
-            return Err(Error::InvalidInput(
-                "pass --a0 A0.json: A0 from lens-off views (Zhang's method) is not implemented yet".into(),
-            ))
-        }
+        None => crate::pipeline::a0_from_offstate(&obs)?.a0(),
     };
     let thermal = match &args.thermal {
         Some(p) => ThermalFile::load(p)?.calibration(),

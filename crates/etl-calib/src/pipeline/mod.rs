@@ -41,6 +41,26 @@ pub struct CalibrationResult {
     pub initial: CameraModel,
 }
 
+/// A0 from the observations' lens-off views by Zhang's method (section 4.2).
+///
+/// Errors: no lens-off views (pass an A0 file instead), or those of [`crate::zhang::zhang`].
+pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult> {
+    if obs.offstate_views.is_empty() {
+        return Err(crate::error::Error::InvalidInput(
+            "no lens-off views (offstate_views) in the observations: pass --a0 A0.json".into(),
+        ));
+    }
+    let views: Vec<crate::zhang::PlanarView> = obs
+        .offstate_views
+        .iter()
+        .map(|v| crate::zhang::PlanarView {
+            board_mm: v.points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect(),
+            pixels: v.points.iter().map(|p| p.pixel).collect(),
+        })
+        .collect();
+    crate::zhang::zhang(&views, obs.image_size)
+}
+
 /// Calibrates from observations with a given A0.
 ///
 /// Errors name the unmet precondition (e.g. fewer than 3 distinct currents).

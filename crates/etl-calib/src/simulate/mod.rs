@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::formats::observations::{Observations, PointObs, ViewObs};
+use crate::formats::observations::{Observations, OffstateView, PointObs, ViewObs};
 
 /// Stage positions of the paper's 15 views, mm.
 pub const PAPER_Z_W_MM: [f64; 15] =
@@ -111,6 +111,54 @@ pub fn observe_board(
         .collect()
 }
 
+/// Tilts (about X, about Y, degrees) of the 10 lens-off views: up to about 25 degrees.
+const LENS_OFF_TILTS_DEG: [(f64, f64); 10] = [
+    (0.0, 0.0),
+    (20.0, 0.0),
+    (-20.0, 0.0),
+    (0.0, 20.0),
+    (0.0, -20.0),
+    (15.0, 15.0),
+    (-15.0, 15.0),
+    (15.0, -15.0),
+    (-15.0, -15.0),
+    (25.0, 5.0),
+];
+
+/// The lens-off views of NOTES.md (this project's choice; the paper gives none): 10 views
+/// at E = 0 of a planar board of 11 x 8 inner corners with 4 mm squares, about 125 mm from the
+/// camera, tilted up to about 25 degrees, with corner and pixel noise. Points are in the
+/// board frame (Z = 0).
+pub fn lens_off_views(truth: &CameraModel, noise: &NoiseModel, rng: &mut ChaCha8Rng) -> Vec<OffstateView> {
+    let mut views = vec![];
+    for (k, &(ax, ay)) in LENS_OFF_TILTS_DEG.iter().enumerate() {
+        let om = [ax.to_radians(), ay.to_radians(), 0.05 * (k as f64 - 4.5) / 4.5];
+        let r = etl_core::model::rotation::rodrigues_to_matrix(om);
+        let centre = etl_core::model::rotation::mat_vec(&r, [20.0, 14.0, 0.0]);
+        let shift = [3.0 * ((k % 3) as f64 - 1.0), 2.0 * ((k % 2) as f64 - 0.5), 125.0 + 4.0 * (k % 4) as f64];
+        let cam = CameraModel {
+            rotation_rodrigues: om,
+            translation_mm: [shift[0] - centre[0], shift[1] - centre[1], shift[2] - centre[2]],
+            ..*truth
+        };
+        let mut points = vec![];
+        for j in 0..8 {
+            for i in 0..11 {
+                let w = [4.0 * i as f64, 4.0 * j as f64];
+                let real = [w[0] + gauss(noise.xy_mm, rng), w[1] + gauss(noise.xy_mm, rng), 0.0];
+                if let Ok(p) = cam.project(real, 0.0) {
+                    if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
+                        let pixel = [p[0] + gauss(noise.px, rng), p[1] + gauss(noise.px, rng)];
+                        points.push(PointObs { world_mm: [w[0], w[1], 0.0], pixel });
+                    }
+                }
+            }
+        }
+        views.push(OffstateView { points });
+    }
+    views
+}
+
 /// The paper rig's 15 views under `noise`, seeded.
 pub fn paper_rig(noise: &NoiseModel, seed: u64) -> Simulation {
     let truth = CameraModel::paper_rig();
@@ -134,6 +182,7 @@ pub fn paper_rig(noise: &NoiseModel, seed: u64) -> Simulation {
         dzs.push(dz);
         des.push(de);
     }
+    obs.offstate_views = lens_off_views(&truth, noise, &mut rng);
     let a0 = A0 {
         kf0x: truth.kf_x[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
         kf0y: truth.kf_y[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
