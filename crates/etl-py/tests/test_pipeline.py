@@ -89,6 +89,12 @@ def test_observations_build_save_load(sim, tmp_path):
         [v["temperature_c"] for v in views],
         [v["e_com_ma"] for v in views],
     )
+    # The simulation includes lens-off views (for Zhang's A0); from_arrays takes ETL views
+    # only, so add them back.
+    for i in range(obs.offstate_count):
+        off = obs.offstate_view(i)
+        again.add_offstate_view(off["world_mm"], off["pixels"])
+    assert obs.offstate_count == 10
     assert again == obs
     path = tmp_path / "obs.json"
     obs.save(path)
