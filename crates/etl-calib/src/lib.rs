@@ -1,10 +1,12 @@
 //! etl-calib: images, detection, Zhang's method, the calibration pipeline, studies,
 //! reports and the `etlcal` command line.
 
+pub mod baseline;
 pub mod cli;
 pub mod error;
 pub mod formats;
 pub mod pipeline;
+pub mod report;
 pub mod simulate;
 pub mod zhang;
 

@@ -1,10 +1,15 @@
-//! `etlcal calibrate --observations FILE --a0 A0.json --out calibration.json
-//! [--estimator paper|eiv] [--hold-a0] [--thermal FILE] [--json]`.
+//! `etlcal calibrate (--dataset FILE | --observations FILE) --out calibration.json
+//! [--method proposed|per-setting] [--a0 A0.json] [--estimator paper|eiv] [--hold-a0]
+//! [--thermal FILE] [--observations-out FILE] [--json]`.
 //!
-//! Observations (`etlcal.observations/1`) in, `etlcal.calibration/1` out (written
-//! atomically; nothing is written on failure). `--json` prints the object written.
-//! Without `--a0`, A0 comes from the file's lens-off views by Zhang's method. `--dataset`
-//! (images) is not implemented yet, and asking for it is an error that says so.
+//! A dataset (`etlcal.dataset/1`, images) or observations (`etlcal.observations/1`,
+//! corners) in, `etlcal.calibration/1` out (written atomically; nothing is written on
+//! failure). From a dataset, boards are detected in every image (in parallel, with a
+//! progress bar on a terminal); views whose board is not found are named on stderr and
+//! skipped, and the run fails only if what remains breaks a precondition.
+//! `--json` prints the object written. Without `--a0`, A0 comes from the lens-off views
+//! by Zhang's method. `--method per-setting` is the paper's baseline (Zhang at each
+//! current, a cubic through fx(E), fy(E); needs `setting_views`).
 
 use std::path::PathBuf;
 
@@ -14,8 +19,11 @@ use etl_core::thermal::ThermalCalibration;
 use super::print_json;
 use crate::error::{Error, Result};
 use crate::formats::a0::A0File;
+use crate::formats::calibration::Calibration;
+use crate::formats::dataset::Dataset;
 use crate::formats::observations::Observations;
 use crate::formats::thermal::ThermalFile;
+use crate::pipeline::dataset::{default_detector, observations_from_dataset};
 use crate::pipeline::{calibrate, CalibrateOptions};
 
 /// The bundle adjustment's estimator.
@@ -27,15 +35,31 @@ pub enum EstimatorArg {
     Eiv,
 }
 
+/// The calibration method.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MethodArg {
+    /// The paper's method: RAC, focal polynomial, distortion, bundle adjustment.
+    Proposed,
+    /// The baseline of section 5.2.3: Zhang at each current, then a cubic.
+    PerSetting,
+}
+
 /// Arguments of `etlcal calibrate`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Corner observations (etlcal.observations/1).
     #[arg(long, value_name = "FILE")]
     pub observations: Option<PathBuf>,
-    /// A dataset of images (etlcal.dataset/1): not implemented yet.
+    /// A dataset of images (etlcal.dataset/1).
     #[arg(long, value_name = "FILE", conflicts_with = "observations")]
     pub dataset: Option<PathBuf>,
+    /// The method: the paper's (one calibration over all currents) or the per-setting
+    /// baseline.
+    #[arg(long, value_enum, default_value = "proposed")]
+    pub method: MethodArg,
+    /// Also write the observations detected in a dataset's images here.
+    #[arg(long, value_name = "FILE", requires = "dataset")]
+    pub observations_out: Option<PathBuf>,
     /// Lens-off intrinsics (etlcal.a0/1); default: Zhang's method on the lens-off views.
     #[arg(long, value_name = "FILE")]
     pub a0: Option<PathBuf>,
@@ -65,29 +89,78 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The observations of `--observations`, or detected in the images of `--dataset`.
+pub fn load_input(
+    observations: Option<&std::path::Path>,
+    dataset: Option<&std::path::Path>,
+    progress: bool,
+) -> Result<Observations> {
+    match (observations, dataset) {
+        (Some(p), None) => Observations::load(p),
+        (None, Some(p)) => {
+            let ds = Dataset::load(p)?;
+            let (obs, summary) = observations_from_dataset(&ds, p, &default_detector(), progress)?;
+            for s in &summary.skipped {
+                eprintln!("etlcal: warning: {} ({} image) skipped: {}", s.image.display(), s.kind, s.reason);
+            }
+            Ok(obs)
+        }
+        _ => Err(Error::InvalidInput(
+            "pass --observations FILE (etlcal.observations/1) or --dataset FILE (etlcal.dataset/1)".into(),
+        )),
+    }
+}
+
 /// Runs `etlcal calibrate`.
 pub fn run(args: Args) -> Result<()> {
-    if args.dataset.is_some() {
-        return Err(Error::InvalidInput(
-            "--dataset (images) is not implemented yet: detect corners elsewhere and pass --observations".into(),
-        ));
+    // Cheap checks first: a bad flag or output path must not cost a detection run.
+    if !(args.sigma_z_um > 0.0 && args.sigma_e_ma > 0.0) {
+        return Err(Error::InvalidInput("--sigma-z-um and --sigma-e-ma must be positive".into()));
     }
-    let obs_path = args
-        .observations
-        .as_ref()
-        .ok_or_else(|| Error::InvalidInput("pass --observations FILE (etlcal.observations/1)".into()))?;
-    let obs = Observations::load(obs_path)?;
-    let a0 = match &args.a0 {
-        Some(p) => A0File::load(p)?.a0(),
-        None => crate::pipeline::a0_from_offstate(&obs)?.a0(),
-    };
+    for out in std::iter::once(&args.out).chain(&args.observations_out) {
+        let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if !parent.is_dir() {
+            return Err(Error::Io {
+                path: out.clone(),
+                source: std::io::Error::new(std::io::ErrorKind::NotFound, "the output directory does not exist"),
+            });
+        }
+    }
+    let obs = load_input(args.observations.as_deref(), args.dataset.as_deref(), !args.json)?;
     let thermal = match &args.thermal {
         Some(p) => ThermalFile::load(p)?.calibration(),
         None => ThermalCalibration::PAPER,
     };
-    if !(args.sigma_z_um > 0.0 && args.sigma_e_ma > 0.0) {
-        return Err(Error::InvalidInput("--sigma-z-um and --sigma-e-ma must be positive".into()));
+    let calibration = match args.method {
+        MethodArg::PerSetting => crate::baseline::per_setting(&obs, &thermal)?.calibration,
+        MethodArg::Proposed => calibrate_proposed(&args, &obs, &thermal)?,
+    };
+    if let Some(p) = &args.observations_out {
+        obs.save(p)?;
     }
+    calibration.save(&args.out)?;
+    if args.json {
+        print_json(&serde_json::to_value(&calibration).map_err(|e| Error::InvalidInput(e.to_string()))?);
+    } else {
+        let c = &calibration;
+        println!(
+            "calibrated {} views: rms {:.4} px (before BA {:.4} px), {} iterations, estimator {}",
+            c.views.len(),
+            c.rms_reprojection_px,
+            c.initial_rms_px,
+            c.iterations,
+            c.estimator
+        );
+        println!("wrote {}", args.out.display());
+    }
+    Ok(())
+}
+
+fn calibrate_proposed(args: &Args, obs: &Observations, thermal: &ThermalCalibration) -> Result<Calibration> {
+    let a0 = match &args.a0 {
+        Some(p) => A0File::load(p)?.a0(),
+        None => crate::pipeline::a0_from_offstate(obs)?.a0(),
+    };
     let robust = match args.huber_px {
         Some(k) if k > 0.0 => Some(RobustLoss::Huber { k_px: k }),
         Some(_) => return Err(Error::InvalidInput("--huber-px must be positive".into())),
@@ -100,21 +173,5 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     let opts = CalibrateOptions { estimator, hold_a0: args.hold_a0, robust };
-    let result = calibrate(&obs, &a0, &thermal, &opts)?;
-    result.calibration.save(&args.out)?;
-    if args.json {
-        print_json(&serde_json::to_value(&result.calibration).map_err(|e| Error::InvalidInput(e.to_string()))?);
-    } else {
-        let c = &result.calibration;
-        println!(
-            "calibrated {} views: rms {:.4} px (before BA {:.4} px), {} iterations, estimator {}",
-            c.views.len(),
-            c.rms_reprojection_px,
-            c.initial_rms_px,
-            c.iterations,
-            c.estimator
-        );
-        println!("wrote {}", args.out.display());
-    }
-    Ok(())
+    Ok(calibrate(obs, &a0, thermal, &opts)?.calibration)
 }

@@ -184,6 +184,11 @@ pub fn run(args: Args) -> Result<()> {
         sim.observations.views.iter().map(|v| v.points.len()).sum::<usize>()
     );
     write_atomic(&args.out.join("summary.md"), summary.as_bytes())?;
+    for (name, r) in [("report", &paper), ("report-eiv", &eiv)] {
+        let dir = args.out.join(name);
+        super::report::ensure_out_dir(&dir)?;
+        crate::report::write_report(&r.calibration, Some(&sim.observations), &thermal, &dir)?;
+    }
     if args.json {
         let mut j = serde_json::to_value(&vp).map_err(|e| Error::InvalidInput(e.to_string()))?;
         j["views_detected"] = json!(views);
@@ -195,7 +200,8 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         println!("{summary}");
         println!(
-            "wrote observations.json, a0.json, truth.json, calibration.json, calibration-eiv.json, summary.md to {}",
+            "wrote observations.json, a0.json, truth.json, calibration.json, calibration-eiv.json, summary.md, \
+             report/index.html, report-eiv/index.html to {}",
             args.out.display()
         );
     }

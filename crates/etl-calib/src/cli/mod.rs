@@ -7,9 +7,12 @@ use crate::error::Result;
 
 pub mod calibrate;
 pub mod demo;
+pub mod measure;
 pub mod model;
+pub mod report;
 pub mod simulate;
 pub mod thermal;
+pub mod zhang;
 
 /// Calibrate and run cameras focused by an electrically tunable lens.
 #[derive(Parser)]
@@ -34,6 +37,12 @@ enum Command {
     Simulate(simulate::Args),
     /// Calibrate from corner observations: RAC, focal polynomial, distortion, bundle adjustment.
     Calibrate(calibrate::Args),
+    /// Plots of a calibration (focal lengths, distortion, residuals) and an index.html.
+    Report(report::Args),
+    /// Monofocal calibration of a fixed-focus camera from board images (Zhang).
+    Zhang(zhang::Args),
+    /// The board's pose in two images at a lens current and the displacement between them.
+    Measure(measure::Args),
 }
 
 /// Prints `value` as one JSON object on stdout.
@@ -48,6 +57,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Calibrate(a) => calibrate::run(a),
+        Command::Report(a) => report::run(a),
+        Command::Zhang(a) => zhang::run(a),
+        Command::Measure(a) => measure::run(a),
     }
 }
 

@@ -1,7 +1,10 @@
-//! `etlcal simulate --out DIR --observations-only [--seed N] [--stage-noise-um X] [--json]`:
-//! the paper rig's synthetic data without calibrating: observations.json (with the
-//! paper's noise model), a0.json (the A0 a lens-off calibration would give) and
-//! truth.json (the true model and per-view errors).
+//! `etlcal simulate --out DIR --observations-only [--config sim.json] [--seed N]
+//! [--stage-noise-um X] [--setting-views] [--json]`: the paper rig's synthetic data without
+//! calibrating: observations.json (with the paper's noise model, lens-off views included,
+//! and with `--setting-views` the per-setting baseline's views), a0.json (the A0 a
+//! lens-off calibration would give) and truth.json (the true model and per-view errors).
+//! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
+//! given on the command line override it.
 //!
 //! Rendering images (without `--observations-only`) needs the synthetic camera, which is
 //! not implemented yet; asking for it is an error that says so.
@@ -14,7 +17,7 @@ use super::print_json;
 use crate::error::{Error, Result};
 use crate::formats::a0::A0File;
 use crate::formats::write_json;
-use crate::simulate::{paper_rig, NoiseModel, Simulation};
+use crate::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig, SimConfig, Simulation};
 
 /// Arguments of `etlcal simulate`.
 #[derive(clap::Args, Debug)]
@@ -26,18 +29,25 @@ pub struct Args {
     /// Write corner observations only (no images).
     #[arg(long)]
     pub observations_only: bool,
-    /// Random seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Stage-position noise per view, um (paper: 10).
-    #[arg(long, default_value_t = 10.0)]
-    pub stage_noise_um: f64,
-    /// Current noise per view, mA (paper: 0.4).
-    #[arg(long, default_value_t = 0.4)]
-    pub current_noise_ma: f64,
-    /// Pixel noise, px (paper: 0.2).
-    #[arg(long, default_value_t = 0.2)]
-    pub pixel_noise_px: f64,
+    /// Simulation configuration (etlcal.simconfig/1).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Random seed [default: 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Stage-position noise per view, um [default: 10, the paper's].
+    #[arg(long)]
+    pub stage_noise_um: Option<f64>,
+    /// Current noise per view, mA [default: 0.4].
+    #[arg(long)]
+    pub current_noise_ma: Option<f64>,
+    /// Pixel noise, px [default: 0.2].
+    #[arg(long)]
+    pub pixel_noise_px: Option<f64>,
+    /// Add the per-setting baseline's views (the default setting rig) unless the config
+    /// has one.
+    #[arg(long)]
+    pub setting_views: bool,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -61,6 +71,38 @@ pub fn write_simulation(sim: &Simulation, dir: &std::path::Path) -> Result<()> {
     )
 }
 
+/// The configuration of the flags: `--config` (or the defaults), overridden by flags.
+pub fn config_from(args: &Args) -> Result<SimConfig> {
+    let mut c = match &args.config {
+        Some(p) => SimConfig::load(p)?,
+        None => SimConfig::default(),
+    };
+    if let Some(s) = args.seed {
+        c.seed = s;
+    }
+    let n = &mut c.noise;
+    let flags = [args.stage_noise_um.map(|v| v / 1000.0), args.current_noise_ma, args.pixel_noise_px];
+    for (slot, v) in [&mut n.z_mm, &mut n.e_ma, &mut n.px].into_iter().zip(flags) {
+        if let Some(v) = v {
+            *slot = v;
+        }
+    }
+    if args.setting_views && c.setting_rig.is_none() {
+        c.setting_rig = Some(SettingRig::default());
+    }
+    c.validate()?;
+    Ok(c)
+}
+
+/// Simulates `config`.
+pub fn simulate(config: &SimConfig) -> Simulation {
+    let mut sim = paper_rig(&config.noise, config.seed);
+    if let Some(rig) = &config.setting_rig {
+        add_setting_views(&mut sim.observations, rig, &config.noise, config.seed);
+    }
+    sim
+}
+
 /// Runs `etlcal simulate`.
 pub fn run(args: Args) -> Result<()> {
     if !args.observations_only {
@@ -69,16 +111,18 @@ pub fn run(args: Args) -> Result<()> {
     if !args.out.is_dir() {
         return Err(Error::InvalidInput(format!("{}: output directory does not exist", args.out.display())));
     }
-    let noise = noise_from(args.stage_noise_um, args.current_noise_ma, args.pixel_noise_px)?;
-    let sim = paper_rig(&noise, args.seed);
+    let config = config_from(&args)?;
+    let sim = simulate(&config);
     write_simulation(&sim, &args.out)?;
     let points: usize = sim.observations.views.iter().map(|v| v.points.len()).sum();
     if args.json {
-        print_json(&json!({"views": sim.observations.views.len(), "points": points, "out": args.out}));
+        print_json(&json!({"views": sim.observations.views.len(), "points": points,
+            "setting_views": sim.observations.setting_views.len(), "out": args.out}));
     } else {
         println!(
-            "wrote observations.json, a0.json, truth.json ({} views, {points} points) to {}",
+            "wrote observations.json, a0.json, truth.json ({} views, {points} points, {} setting views) to {}",
             sim.observations.views.len(),
+            sim.observations.setting_views.len(),
             args.out.display()
         );
     }

@@ -72,6 +72,13 @@ pub struct ViewSummary {
     pub dz_mm: f64,
     /// Estimated current correction, mA (errors-in-variables; 0 otherwise).
     pub de_ma: f64,
+    /// The view's own estimate of fx, px: fx refitted to this view alone with every other
+    /// number of the calibration held (0 when not computed).
+    #[serde(default)]
+    pub fx_px: f64,
+    /// The view's own estimate of fy, px (as `fx_px`).
+    #[serde(default)]
+    pub fy_px: f64,
 }
 
 /// The whole file.

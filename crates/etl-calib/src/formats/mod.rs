@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 
 pub mod a0;
 pub mod calibration;
+pub mod dataset;
 pub mod observations;
 pub mod thermal;
 

@@ -1,5 +1,15 @@
-//! The calibration pipeline from observations: E_com through the thermal surface -> A0
-//! -> RAC -> focal polynomial -> distortion -> bundle adjustment -> `etlcal.calibration/1`.
+//! The calibration pipeline: dataset (images) or observations (corners) -> E_com through
+//! the thermal surface -> A0 (Zhang on the lens-off views, or given) -> RAC -> focal
+//! polynomial -> distortion -> bundle adjustment -> `etlcal.calibration/1`.
+//!
+//! [`calibrate`] starts from observations; [`dataset::observations_from_dataset`] turns a
+//! dataset's images into observations first (views whose board is not found are reported
+//! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports.
+
+pub mod dataset;
+mod view_focal;
+
+pub use view_focal::view_focal;
 
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
@@ -71,6 +81,12 @@ pub fn calibrate(
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult> {
     obs.validate()?;
+    if obs.views.is_empty() {
+        return Err(crate::error::Error::InvalidInput(
+            "no ETL views (views) in the observations: the proposed method needs the board on the stage at >= 3 currents"
+                .into(),
+        ));
+    }
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
@@ -97,12 +113,15 @@ pub fn calibrate(
                     n += 1;
                 }
             }
+            let (fx_px, fy_px) = view_focal(&m, v, c.dz_mm).unwrap_or((0.0, 0.0));
             ViewSummary {
                 e_com_ma: v.e_com_ma,
                 points: v.points.len(),
-                rms_px: if n > 0 { (s / n as f64).sqrt() } else { f64::NAN },
+                rms_px: if n > 0 { (s / n as f64).sqrt() } else { 0.0 },
                 dz_mm: c.dz_mm,
                 de_ma: c.de_ma,
+                fx_px,
+                fy_px,
             }
         })
         .collect();

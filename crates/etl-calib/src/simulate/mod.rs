@@ -16,6 +16,9 @@ use rand_distr::{Distribution, Normal};
 
 use crate::formats::observations::{Observations, OffstateView, PointObs, ViewObs};
 
+mod config;
+pub use config::{SimConfig, CONFIG_FORMAT};
+
 /// Stage positions of the paper's 15 views, mm.
 pub const PAPER_Z_W_MM: [f64; 15] =
     [75.0, 60.0, 48.0, 43.0, 35.0, 31.0, 28.0, 22.0, 19.0, 16.0, 13.0, 10.0, 8.0, 4.0, 2.0];
@@ -29,6 +32,7 @@ pub const PAPER_TEMPERATURE_C: f64 = 27.0;
 
 /// Standard deviations of the noise model (NOTES.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct NoiseModel {
     /// Corner X_W, Y_W, mm.
     pub xy_mm: f64,
@@ -206,6 +210,113 @@ pub fn focused_z_mm(e_ma: f64) -> f64 {
         }
     }
     z[z.len() - 1]
+}
+
+/// The per-setting baseline's rig (the paper's "existing method", section 5.2.3): at each
+/// current, `views_per_setting` views of the paper board near the plane in focus, each
+/// tilted as far as the depth of field allows.
+///
+/// Depth of field: a point `dz` mm off the plane in focus at depth Zc blurs to about
+/// fx * A * dz / Zc^2 px through an aperture of `aperture_mm`; keeping that below
+/// `blur_px` limits the board's depth extent to 2 dz and its tilt to
+/// asin(2 dz / board width), capped at `max_tilt_deg`. At high current (short distance,
+/// high magnification) the tilt falls to a few degrees, which is what makes the
+/// baseline's focal length scatter (paper Fig. 12(a)).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingRig {
+    /// The currents, mA.
+    pub e_com_ma: Vec<f64>,
+    /// Views per current.
+    pub views_per_setting: usize,
+    /// Blur accepted at the board's edges, px.
+    pub blur_px: f64,
+    /// Effective aperture diameter, mm.
+    pub aperture_mm: f64,
+    /// Largest tilt whatever the depth of field, degrees.
+    pub max_tilt_deg: f64,
+}
+
+impl Default for SettingRig {
+    fn default() -> Self {
+        SettingRig {
+            e_com_ma: vec![80.0, 100.0, 125.0, 150.0, 175.0, 200.0, 225.0],
+            views_per_setting: 15,
+            blur_px: 2.0,
+            aperture_mm: 2.5,
+            max_tilt_deg: 25.0,
+        }
+    }
+}
+
+impl SettingRig {
+    /// Depth of the plane in focus at current `e_ma`, mm (the paper rig's stage position for
+    /// that current, seen from the camera at the board's centre).
+    pub fn focus_depth_mm(truth: &CameraModel, e_ma: f64) -> f64 {
+        let ([cols, rows], sq) = PAPER_BOARD;
+        let c = [sq * (cols - 1) as f64 / 2.0, sq * (rows - 1) as f64 / 2.0, focused_z_mm(e_ma)];
+        truth.world_to_camera(c)[2]
+    }
+
+    /// The largest tilt the depth of field allows at `e_ma`, degrees.
+    pub fn tilt_limit_deg(&self, truth: &CameraModel, e_ma: f64) -> f64 {
+        let zc = Self::focus_depth_mm(truth, e_ma);
+        let (fx, _) = truth.focal_lengths(e_ma);
+        let dz = self.blur_px * zc * zc / (fx * self.aperture_mm);
+        let ([cols, _], sq) = PAPER_BOARD;
+        let width = sq * (cols - 1) as f64;
+        ((2.0 * dz / width).min(1.0)).asin().to_degrees().min(self.max_tilt_deg)
+    }
+}
+
+/// Simulates [`SettingRig`] into `obs.setting_views` (pixel noise, corner noise and one
+/// current error per setting from `noise`; no stage). Board points are in the board's
+/// frame (Z = 0); only corners inside the image are kept.
+pub fn add_setting_views(obs: &mut Observations, rig: &SettingRig, noise: &NoiseModel, seed: u64) {
+    let truth = CameraModel::paper_rig();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xba5e_11fe);
+    let ([cols, rows], sq) = PAPER_BOARD;
+    let centre = [sq * (cols - 1) as f64 / 2.0, sq * (rows - 1) as f64 / 2.0, 0.0];
+    for &e in &rig.e_com_ma {
+        let de = gauss(noise.e_ma, &mut rng);
+        let zc = SettingRig::focus_depth_mm(&truth, e);
+        let tilt = rig.tilt_limit_deg(&truth, e).to_radians();
+        for k in 0..rig.views_per_setting {
+            // Tilt axes spread evenly around the optical axis, the amount cycling through
+            // full, two thirds and one third of the limit; a little in-plane rotation.
+            let phi = 2.0 * std::f64::consts::PI * k as f64 / rig.views_per_setting as f64;
+            let amount = tilt * [1.0, 2.0 / 3.0, 1.0 / 3.0][k % 3];
+            let om = [amount * phi.cos(), amount * phi.sin(), 0.1 * ((k % 5) as f64 - 2.0) / 2.0];
+            let r = etl_core::model::rotation::rodrigues_to_matrix(om);
+            let c = etl_core::model::rotation::mat_vec(&r, centre);
+            let shift = [0.5 * ((k % 3) as f64 - 1.0), 0.4 * ((k % 2) as f64 - 0.5), zc];
+            let cam = CameraModel {
+                rotation_rodrigues: om,
+                translation_mm: [shift[0] - c[0], shift[1] - c[1], shift[2] - c[2]],
+                ..truth
+            };
+            let mut points = vec![];
+            for j in 0..rows {
+                for i in 0..cols {
+                    let w = [sq * i as f64, sq * j as f64];
+                    let real = [w[0] + gauss(noise.xy_mm, &mut rng), w[1] + gauss(noise.xy_mm, &mut rng), 0.0];
+                    if let Ok(p) = cam.project(real, e + de) {
+                        if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
+                            let pixel = [p[0] + gauss(noise.px, &mut rng), p[1] + gauss(noise.px, &mut rng)];
+                            points.push(PointObs { world_mm: [w[0], w[1], 0.0], pixel });
+                        }
+                    }
+                }
+            }
+            let e_in = ThermalSurface::PAPER.e_in_for_e_com(e, PAPER_TEMPERATURE_C).unwrap_or(e);
+            obs.setting_views.push(ViewObs {
+                e_in_ma: e_in,
+                temperature_c: PAPER_TEMPERATURE_C,
+                e_com_ma: Some(e),
+                points,
+            });
+        }
+    }
 }
 
 /// Convenience: the observations' points as core points, for tests.

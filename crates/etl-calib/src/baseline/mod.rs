@@ -1,0 +1,231 @@
+//! The baseline of the paper's section 5.2.3 (the "existing method"): a monofocal Zhang
+//! calibration at each current separately, then a cubic through fx(E) and fy(E).
+//!
+//! Input: the observations' `setting_views` (a planar board in a free pose per view,
+//! several views per current). Views whose E_com agree within
+//! [`SETTING_TOLERANCE_MA`] form one setting; each setting needs at least 3 views (Zhang)
+//! and the baseline at least 3 settings (a curve through fewer is not a calibration over
+//! current). The curve is a least-squares polynomial of degree min(3, settings - 1),
+//! weighted by each setting's standard deviation; (u0, v0) is the weighted mean of the
+//! settings'; k1, p1, p2 are fitted as quadratics in w = 1 / f_mean (Eq. 18) to give
+//! a1..a9. R and T are not defined by this method (no common world frame) and are written
+//! as zero: the result serves measurements (PnP), not stage geometry.
+
+use etl_core::lm::svd::sym_pinv;
+use etl_core::thermal::ThermalCalibration;
+
+use crate::error::{Error, Result};
+use crate::formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
+use crate::formats::observations::{Observations, SETTING_TOLERANCE_MA};
+use crate::zhang::{zhang, PlanarView, ZhangResult};
+
+/// One setting's Zhang calibration.
+#[derive(Debug, Clone)]
+pub struct SettingEstimate {
+    /// Mean E_com of the setting's views, mA.
+    pub e_com_ma: f64,
+    /// Views in the setting.
+    pub views: usize,
+    /// Points in the setting.
+    pub points: usize,
+    /// Zhang's result at this setting.
+    pub zhang: ZhangResult,
+}
+
+/// The baseline's result: every setting and the calibration file it gives.
+#[derive(Debug, Clone)]
+pub struct BaselineResult {
+    /// Per setting, sorted by current.
+    pub settings: Vec<SettingEstimate>,
+    /// What `etlcal calibrate --method per-setting` writes (`estimator` = "per-setting").
+    pub calibration: Calibration,
+}
+
+/// Weighted least squares of a polynomial of degree `deg` (<= 3) in t = (x - c) / h,
+/// returning raw monomial coefficients and their covariance.
+fn poly_fit(x: &[f64], y: &[f64], sd: &[f64], deg: usize) -> Result<([f64; 4], [[f64; 4]; 4])> {
+    let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (c, h) = ((hi + lo) / 2.0, ((hi - lo) / 2.0).max(1e-300));
+    let mut ata = [[0.0; 4]; 4];
+    let mut aty = [0.0; 4];
+    for ((&xi, &yi), &si) in x.iter().zip(y).zip(sd) {
+        let t = (xi - c) / h;
+        let w = 1.0 / (si * si).max(1e-300);
+        let row: [f64; 4] = core::array::from_fn(|k| if k <= deg { t.powi(k as i32) } else { 0.0 });
+        for i in 0..4 {
+            aty[i] += w * row[i] * yi;
+            for j in 0..4 {
+                ata[i][j] += w * row[i] * row[j];
+            }
+        }
+    }
+    let (inv, rank) = sym_pinv(&ata, 1e-12);
+    if rank < deg + 1 {
+        return Err(Error::Core(etl_core::Error::Degenerate { what: "per-setting curve fit is rank deficient" }));
+    }
+    let ct: [f64; 4] = core::array::from_fn(|i| (0..4).map(|j| inv[i][j] * aty[j]).sum());
+    // t^k = ((x - c) / h)^k expanded: raw = M ct with M[i][k] = C(k, i) (-c)^(k-i) / h^k.
+    let binom = |n: usize, k: usize| -> f64 { (0..k).fold(1.0, |acc, i| acc * (n - i) as f64 / (i + 1) as f64) };
+    let mut m = [[0.0; 4]; 4];
+    for k in 0..4 {
+        for i in 0..=k {
+            m[i][k] = binom(k, i) * (-c).powi((k - i) as i32) / h.powi(k as i32);
+        }
+    }
+    let raw: [f64; 4] = core::array::from_fn(|i| (0..4).map(|k| m[i][k] * ct[k]).sum());
+    let mut cov = [[0.0; 4]; 4];
+    for i in 0..4 {
+        for j in 0..4 {
+            cov[i][j] = (0..4).map(|a| (0..4).map(|b| m[i][a] * inv[a][b] * m[j][b]).sum::<f64>()).sum();
+        }
+    }
+    // The settings' own scatter, when larger than their stated std, widens the result.
+    let n = x.len();
+    if n > deg + 1 {
+        let chi2: f64 = x
+            .iter()
+            .zip(y)
+            .zip(sd)
+            .map(|((&xi, &yi), &si)| {
+                let f = raw[0] + raw[1] * xi + raw[2] * xi * xi + raw[3] * xi * xi * xi;
+                ((yi - f) / si).powi(2)
+            })
+            .sum();
+        let scale = (chi2 / (n - deg - 1) as f64).max(1.0);
+        cov.iter_mut().flatten().for_each(|v| *v *= scale);
+    }
+    Ok((raw, cov))
+}
+
+/// Runs the baseline on `obs.setting_views` (see the module docs).
+///
+/// Errors: no setting views; a setting with fewer than 3 views; fewer than 3 settings;
+/// Zhang's errors at a setting (named with its current).
+pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<BaselineResult> {
+    obs.validate()?;
+    if obs.setting_views.is_empty() {
+        return Err(Error::InvalidInput(
+            "--method per-setting needs setting_views (several board views at each current)".into(),
+        ));
+    }
+    let e_com = obs.setting_e_com_ma(thermal)?;
+    let mut order: Vec<usize> = (0..e_com.len()).collect();
+    order.sort_by(|&a, &b| e_com[a].total_cmp(&e_com[b]));
+    let mut groups: Vec<Vec<usize>> = vec![];
+    for i in order {
+        match groups.last_mut() {
+            Some(g) if (e_com[i] - e_com[g[0]]).abs() < SETTING_TOLERANCE_MA => g.push(i),
+            _ => groups.push(vec![i]),
+        }
+    }
+    if groups.len() < 3 {
+        return Err(Error::InvalidInput(format!(
+            "the per-setting baseline needs views at >= 3 distinct currents, got {}",
+            groups.len()
+        )));
+    }
+    let mut settings = vec![];
+    for g in &groups {
+        let e = g.iter().map(|&i| e_com[i]).sum::<f64>() / g.len() as f64;
+        if g.len() < 3 {
+            return Err(Error::InvalidInput(format!(
+                "the setting at {e:.1} mA has {} views; Zhang's method needs at least 3",
+                g.len()
+            )));
+        }
+        let views: Vec<PlanarView> = g
+            .iter()
+            .map(|&i| PlanarView {
+                board_mm: obs.setting_views[i].points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect(),
+                pixels: obs.setting_views[i].points.iter().map(|p| p.pixel).collect(),
+            })
+            .collect();
+        let z = zhang(&views, obs.image_size).map_err(|err| match err {
+            Error::InvalidInput(m) => Error::InvalidInput(format!("setting at {e:.1} mA: {m}")),
+            other => other,
+        })?;
+        let points = views.iter().map(|v| v.pixels.len()).sum();
+        settings.push(SettingEstimate { e_com_ma: e, views: g.len(), points, zhang: z });
+    }
+    let es: Vec<f64> = settings.iter().map(|s| s.e_com_ma).collect();
+    let deg = 3.min(settings.len() - 1);
+    let col = |f: &dyn Fn(&ZhangResult) -> (f64, f64)| -> (Vec<f64>, Vec<f64>) {
+        settings.iter().map(|s| f(&s.zhang)).map(|(v, sd)| (v, sd.max(1e-12))).unzip()
+    };
+    let (fx, sfx) = col(&|z| (z.fx, z.std[0]));
+    let (fy, sfy) = col(&|z| (z.fy, z.std[1]));
+    let (kf_x, cx) = poly_fit(&es, &fx, &sfx, deg)?;
+    let (kf_y, cy) = poly_fit(&es, &fy, &sfy, deg)?;
+    let wmean = |f: &dyn Fn(&ZhangResult) -> (f64, f64)| {
+        let (mut s, mut w) = (0.0, 0.0);
+        for st in &settings {
+            let (v, sd) = f(&st.zhang);
+            let wi = 1.0 / (sd * sd).max(1e-300);
+            s += wi * v;
+            w += wi;
+        }
+        (s / w, (1.0 / w).sqrt())
+    };
+    let (u0, su0) = wmean(&|z| (z.u0, z.std[2]));
+    let (v0, sv0) = wmean(&|z| (z.v0, z.std[3]));
+    // Eq. 18: k1, p1, p2 as quadratics in w = 1 / f_mean.
+    let ws: Vec<f64> = settings.iter().map(|s| 2.0 / (s.zhang.fx + s.zhang.fy)).collect();
+    let mut a = [0.0; 9];
+    let mut sa = [0.0; 9];
+    for (k, idx) in [4usize, 5, 6].into_iter().enumerate() {
+        let (y, sd) = col(&|z| {
+            let v = [z.k1, z.p1, z.p2][k];
+            (v, z.std[idx])
+        });
+        let (c, cov) = poly_fit(&ws, &y, &sd, 2)?;
+        // Eq. 18 order: a_(3k+1) w^2 + a_(3k+2) w + a_(3k+3).
+        a[3 * k] = c[2];
+        a[3 * k + 1] = c[1];
+        a[3 * k + 2] = c[0];
+        sa[3 * k] = cov[2][2].max(0.0).sqrt();
+        sa[3 * k + 1] = cov[1][1].max(0.0).sqrt();
+        sa[3 * k + 2] = cov[0][0].max(0.0).sqrt();
+    }
+    let sd4 = |c: &[[f64; 4]; 4]| -> [f64; 4] { core::array::from_fn(|i| c[i][i].max(0.0).sqrt()) };
+    let n_points: usize = settings.iter().map(|s| s.points).sum();
+    let rms = (settings.iter().map(|s| s.zhang.rms_px.powi(2) * s.points as f64).sum::<f64>() / n_points.max(1) as f64)
+        .sqrt();
+    let calibration = Calibration {
+        format: FORMAT.into(),
+        image_size: obs.image_size,
+        rotation_rodrigues: [0.0; 3],
+        translation_mm: [0.0; 3],
+        kf_x,
+        kf_y,
+        principal_point: [u0, v0],
+        distortion_a: a,
+        thermal: Some(ThermalRef { coefficients: thermal.surface.coefficients }),
+        e_com_range_ma: [es[0], es[es.len() - 1]],
+        rms_reprojection_px: rms,
+        std: ModelStd {
+            rotation_rodrigues: [0.0; 3],
+            translation_mm: [0.0; 3],
+            kf_x: sd4(&cx),
+            kf_y: sd4(&cy),
+            principal_point: [su0, sv0],
+            distortion_a: sa,
+        },
+        estimator: "per-setting".into(),
+        iterations: settings.iter().map(|s| s.zhang.iterations).max().unwrap_or(0),
+        initial_rms_px: rms,
+        views: settings
+            .iter()
+            .map(|s| ViewSummary {
+                e_com_ma: s.e_com_ma,
+                points: s.points,
+                rms_px: s.zhang.rms_px,
+                dz_mm: 0.0,
+                de_ma: 0.0,
+                fx_px: s.zhang.fx,
+                fy_px: s.zhang.fy,
+            })
+            .collect(),
+    };
+    Ok(BaselineResult { settings, calibration })
+}

@@ -1,0 +1,52 @@
+//! Each view's own focal lengths, for the report's fx(E), fy(E) plot (the points around
+//! the curve): fx, fy refitted to one view's points with R, T, the principal point and
+//! the distortion of the calibration held.
+
+use etl_core::calib::jacobian::{to_params, Projector, KF0X};
+use etl_core::calib::View;
+use etl_core::lm::{solve, Options, Problem, RowSink};
+use etl_core::model::CameraModel;
+
+use crate::error::Result;
+
+/// Index of kf0y in the 25-number vector (kf_x occupies four slots after kf0x).
+const KF0Y: usize = KF0X + 4;
+
+struct OneView<'a> {
+    model: CameraModel,
+    view: &'a View<'a>,
+    dz_mm: f64,
+}
+
+impl OneView<'_> {
+    fn at(&self, x: &[f64; 2]) -> CameraModel {
+        // A constant cubic: the current no longer matters, the distortion's w = 1 / f_mean
+        // follows the view's own focal lengths.
+        CameraModel { kf_x: [x[0], 0.0, 0.0, 0.0], kf_y: [x[1], 0.0, 0.0, 0.0], ..self.model }
+    }
+}
+
+impl Problem<2> for OneView<'_> {
+    fn eval(&mut self, x: &[f64; 2], jacobian: bool, sink: &mut dyn RowSink<2>) -> etl_core::Result<()> {
+        let proj = Projector::new(&to_params(&self.at(x)));
+        for p in self.view.points {
+            let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + self.dz_mm];
+            let q = proj.project(w, self.view.e_com_ma, jacobian)?;
+            for row in 0..2 {
+                sink.push(q.pixel[row] - p.pixel[row], &[q.d_params[row][KF0X], q.d_params[row][KF0Y]]);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The focal lengths (fx, fy) that fit `view` best with every other number of `model`
+/// held, the view's stage position corrected by `dz_mm` (errors-in-variables; else 0).
+///
+/// Errors: those of the LM (e.g. a point behind the camera).
+pub fn view_focal(model: &CameraModel, view: &View<'_>, dz_mm: f64) -> Result<(f64, f64)> {
+    let start = model.focal_lengths(view.e_com_ma);
+    let mut p = OneView { model: *model, view, dz_mm };
+    let r = solve(&mut p, [start.0, start.1], &Options::default())?;
+    Ok((r.x[0], r.x[1]))
+}
