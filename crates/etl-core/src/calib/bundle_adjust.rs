@@ -31,10 +31,13 @@
 //! storage) and the loop stops when the estimate no longer moves (at most
 //! [`IRLS_MAX_ROUNDS`] rounds).
 
-use super::jacobian::{from_params, to_params, Projector, KF0X, PARAMS, U0};
+use super::jacobian::{from_params, to_params, Projector, KF0X, PARAMS, REDUCED, R_FX, R_K1, U0};
 use super::observations::{distinct_currents, point_count, validate, View};
 use crate::error::{Error, Result};
-use crate::lm::{self, Accumulation, BlockProblem, BlockRowSink, BlockScratch, Options, Problem, RowSink, StopReason};
+use crate::lm::{
+    self, Accumulation, BlockProblem, BlockRowSink, BlockScratch, NormalEquations, Options, Problem, RowSink,
+    StopReason,
+};
 use crate::model::CameraModel;
 
 /// Which estimator.
@@ -102,7 +105,7 @@ fn robust_scale(
 ) -> Result<f64> {
     match (robust, reference) {
         (Some(loss), Some(proj)) => {
-            let p = proj.project(world_mm, e_ma, false)?;
+            let p = proj.project_reduced(world_mm, e_ma, false)?;
             let (du, dv) = (p.pixel[0] - pixel[0], p.pixel[1] - pixel[1]);
             Ok(libm::sqrt(loss.weight(du * du + dv * dv)))
         }
@@ -207,9 +210,16 @@ impl Problem<PARAMS> for Plain<'_, '_> {
         let proj = Projector::new(x);
         for view in self.views {
             for p in view.points {
+                let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
+                if !jacobian {
+                    // Trial points need only the cost: skip the 2 x 25 rows altogether.
+                    let pr = proj.project_reduced(p.world_mm, view.e_com_ma, false)?;
+                    sink.push(f * (pr.pixel[0] - p.pixel[0]), &[0.0; PARAMS]);
+                    sink.push(f * (pr.pixel[1] - p.pixel[1]), &[0.0; PARAMS]);
+                    continue;
+                }
                 let pr = proj.project(p.world_mm, view.e_com_ma, jacobian)?;
                 let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
-                let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
                 for row in 0..2 {
                     let mut j = pr.d_params[row];
                     if f != 1.0 {
@@ -223,6 +233,143 @@ impl Problem<PARAMS> for Plain<'_, '_> {
             hold_rows(x, &self.x0, |r, j| sink.push(r, j));
         }
         Ok(())
+    }
+
+    /// The same rows as [`Plain::eval`], folded view by view through the 13 per-view
+    /// variables: J_view = J_reduced C_view, so J_view^T J_view = C^T (J_reduced^T
+    /// J_reduced) C costs 13 x 13 per point instead of 25 x 25.
+    fn normal_equations(&mut self, x: &[f64; PARAMS], out: &mut NormalEquations<PARAMS>) -> Result<bool> {
+        let proj = Projector::new(x);
+        for view in self.views {
+            let mut normal = ViewNormal::ZERO;
+            for p in view.points {
+                let pr = proj.project_reduced(p.world_mm, view.e_com_ma, true)?;
+                let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
+                let r = [f * (pr.pixel[0] - p.pixel[0]), f * (pr.pixel[1] - p.pixel[1])];
+                out.cost += r[0] * r[0] + r[1] * r[1];
+                out.rows += 2;
+                normal.add_point(&pr.d_reduced, f, r);
+            }
+            let (a, g) = normal.expand();
+            fold_view(&a, &g, &proj.chain(view.e_com_ma)?, out);
+        }
+        if self.options.hold_a0 {
+            hold_rows(x, &self.x0, |r, j| out.push(r, j));
+        }
+        Ok(true)
+    }
+}
+
+/// Row length of the per-view normal equations of the 11 variables other than (u0, v0):
+/// padded to a multiple of 4 so that the accumulation vectorises.
+const PADDED: usize = 12;
+
+/// The 11 per-view variables other than u0, v0 (whose columns are the constants (1, 0)
+/// and (0, 1) and are accumulated as plain sums).
+const OTHER: [usize; 11] = [0, 1, 2, 3, 4, 5, R_FX, R_FX + 1, R_K1, R_K1 + 1, R_K1 + 2];
+
+/// A view's reduced normal equations: the 11 x 11 block of the variables in [`OTHER`]
+/// (full square, padded), their cross terms with u0 and v0 (column sums of the two rows),
+/// and the right-hand sides.
+struct ViewNormal {
+    a: [[f64; PADDED]; 11],
+    g: [f64; PADDED],
+    /// sum f j_u and sum f j_v over the points (the u0 and v0 columns' cross terms).
+    sum: [[f64; PADDED]; 2],
+    /// sum f^2 (the u0-u0 and v0-v0 terms, equal) and sum f r_u, sum f r_v.
+    f2: f64,
+    r_sum: [f64; 2],
+}
+
+impl ViewNormal {
+    const ZERO: Self =
+        ViewNormal { a: [[0.0; PADDED]; 11], g: [0.0; PADDED], sum: [[0.0; PADDED]; 2], f2: 0.0, r_sum: [0.0; 2] };
+
+    /// Adds a point's two rows f j (u and v) with residuals r.
+    fn add_point(&mut self, j: &[[f64; REDUCED]; 2], f: f64, r: [f64; 2]) {
+        let fj: [[f64; PADDED]; 2] = core::array::from_fn(|row| {
+            let mut v = [0.0; PADDED];
+            for (vk, &o) in v.iter_mut().zip(OTHER.iter()) {
+                *vk = f * j[row][o];
+            }
+            v
+        });
+        for (ai, (&u, &v)) in self.a.iter_mut().zip(fj[0].iter().zip(fj[1].iter())) {
+            for ((aik, &uk), &vk) in ai.iter_mut().zip(fj[0].iter()).zip(fj[1].iter()) {
+                *aik += u * uk + v * vk;
+            }
+        }
+        for row in 0..2 {
+            for ((gk, sk), &jk) in self.g.iter_mut().zip(self.sum[row].iter_mut()).zip(fj[row].iter()) {
+                *gk += jk * r[row];
+                *sk += f * jk;
+            }
+            self.r_sum[row] += f * r[row];
+        }
+        self.f2 += f * f;
+    }
+
+    /// The 13 x 13 normal equations (order of the per-view variables).
+    fn expand(&self) -> ([[f64; REDUCED]; REDUCED], [f64; REDUCED]) {
+        let (iu, iv) = (R_FX + 2, R_FX + 3);
+        let mut a = [[0.0; REDUCED]; REDUCED];
+        let mut g = [0.0; REDUCED];
+        for (p, &op) in OTHER.iter().enumerate() {
+            for (q, &oq) in OTHER.iter().enumerate() {
+                if let (Some(v), Some(&w)) = (a.get_mut(op).and_then(|r| r.get_mut(oq)), self.a[p].get(q)) {
+                    *v = w;
+                }
+            }
+            if let (Some(v), Some(&w)) = (g.get_mut(op), self.g.get(p)) {
+                *v = w;
+            }
+            for (row, &i) in [iu, iv].iter().enumerate() {
+                let w = self.sum[row].get(p).copied().unwrap_or(0.0);
+                if let Some(v) = a.get_mut(op).and_then(|r| r.get_mut(i)) {
+                    *v = w;
+                }
+                if let Some(v) = a.get_mut(i).and_then(|r| r.get_mut(op)) {
+                    *v = w;
+                }
+            }
+        }
+        a[iu][iu] = self.f2;
+        a[iv][iv] = self.f2;
+        g[iu] = self.r_sum[0];
+        g[iv] = self.r_sum[1];
+        (a, g)
+    }
+}
+
+/// out.a += C^T a C (upper triangle), out.g += C^T g, for a view's reduced normal
+/// equations (a: the full square) and its chain matrix C (13 x 25).
+fn fold_view(
+    a: &[[f64; REDUCED]; REDUCED],
+    g: &[f64; REDUCED],
+    c: &[[f64; PARAMS]; REDUCED],
+    out: &mut NormalEquations<PARAMS>,
+) {
+    // t = a_sym C, row by row.
+    let mut t = [[0.0; PARAMS]; REDUCED];
+    for (r, tr) in t.iter_mut().enumerate() {
+        for (s, cs) in c.iter().enumerate() {
+            let ars = a[r][s];
+            if ars != 0.0 {
+                for (trq, &csq) in tr.iter_mut().zip(cs.iter()) {
+                    *trq += ars * csq;
+                }
+            }
+        }
+    }
+    for (r, (cr, tr)) in c.iter().zip(t.iter()).enumerate() {
+        for (p, (&crp, outp)) in cr.iter().zip(out.a.iter_mut()).enumerate() {
+            if crp != 0.0 {
+                out.g[p] += crp * g[r];
+                for (apq, &trq) in outp.iter_mut().zip(tr.iter()).skip(p) {
+                    *apq += crp * trq;
+                }
+            }
+        }
     }
 }
 
@@ -282,7 +429,7 @@ fn rms(views: &[View<'_>], x: &[f64; PARAMS], corrections: Option<&[[f64; 2]]>) 
         let c = corrections.and_then(|c| c.get(j)).copied().unwrap_or([0.0; 2]);
         for p in view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + c[0]];
-            let pr = proj.project(w, view.e_com_ma + c[1], false)?;
+            let pr = proj.project_reduced(w, view.e_com_ma + c[1], false)?;
             s += (pr.pixel[0] - p.pixel[0]) * (pr.pixel[0] - p.pixel[0])
                 + (pr.pixel[1] - p.pixel[1]) * (pr.pixel[1] - p.pixel[1]);
             n += 1;
@@ -396,3 +543,51 @@ pub fn bundle_adjust(
 /// Largest number of views the errors-in-variables estimator takes (its per-view
 /// corrections are held on the stack: 16 bytes each).
 pub const MAX_EIV_VIEWS: usize = 256;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::observations::Point;
+
+    /// The per-view folded normal equations equal those of the streamed rows, with the
+    /// robust weights and the hold-A0 rows in play.
+    #[test]
+    fn folded_normal_equations_equal_the_streamed_ones() {
+        let truth = CameraModel::paper_rig();
+        let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 12]; 3];
+        let currents = [90.0, 150.0, 225.0];
+        for (k, view) in pts.iter_mut().enumerate() {
+            for (i, p) in view.iter_mut().enumerate() {
+                let w = [1.5 * (i % 4) as f64 + 3.0, 1.5 * (i / 4) as f64 + 2.0, 40.0 - 15.0 * k as f64];
+                let q = truth.project(w, currents[k]).unwrap();
+                // Deterministic "noise", large on one point so the robust weights bite.
+                let d = if i == 5 { 4.0 } else { 0.3 * ((i * 7 + k * 3) % 5) as f64 - 0.6 };
+                *p = Point { world_mm: w, pixel: [q[0] + d, q[1] - 0.5 * d] };
+            }
+        }
+        let views: [View; 3] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
+        let mut x = to_params(&truth);
+        x[0] += 1e-3;
+        x[7] *= 1.01;
+        x[20] += 0.1;
+        let options =
+            BundleAdjustOptions { hold_a0: true, robust: Some(RobustLoss::Huber { k_px: 1.0 }), ..Default::default() };
+        let x0 = to_params(&truth);
+        let mut plain = Plain { views: &views, x0, options: &options, reference: Some(Projector::new(&x0)) };
+        let mut folded = NormalEquations::<PARAMS>::ZERO;
+        assert!(plain.normal_equations(&x, &mut folded).unwrap());
+        let mut streamed = NormalEquations::<PARAMS>::ZERO;
+        plain.eval(&x, true, &mut streamed).unwrap();
+        assert_eq!(folded.rows, streamed.rows);
+        assert!((folded.cost - streamed.cost).abs() <= 1e-12 * streamed.cost);
+        for i in 0..PARAMS {
+            let gi = streamed.g[i];
+            assert!((folded.g[i] - gi).abs() <= 1e-9 * gi.abs().max(1e-9), "g[{i}]: {} vs {gi}", folded.g[i]);
+            for j in i..PARAMS {
+                let aij = streamed.a[i][j];
+                let scale = libm::sqrt(streamed.a[i][i] * streamed.a[j][j]);
+                assert!((folded.a[i][j] - aij).abs() <= 1e-11 * scale, "a[{i}][{j}]: {} vs {aij}", folded.a[i][j]);
+            }
+        }
+    }
+}

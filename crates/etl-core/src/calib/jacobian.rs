@@ -63,9 +63,10 @@ fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
     c
 }
 
-/// d(R(om) p)/d(om) = -R [p]x J_r(om), with the right Jacobian of SO(3)
-/// J_r = I - (1 - cos t)/t^2 [om]x + (t - sin t)/t^3 [om]x^2 (series below t = 1e-6).
-pub fn rotate_point_jacobian(r: &Mat3, om: [f64; 3], p: [f64; 3]) -> Mat3 {
+/// The right Jacobian of SO(3) at `om`:
+/// J_r = I - (1 - cos t)/t^2 [om]x + (t - sin t)/t^3 [om]x^2 (series below t = 1e-6), so
+/// that d(R(om) p)/d(om) = -R [p]x J_r = R [J_r e_k]x p column by column.
+pub fn right_jacobian(om: [f64; 3]) -> Mat3 {
     let t2 = om[0] * om[0] + om[1] * om[1] + om[2] * om[2];
     let t = libm::sqrt(t2);
     let (b, c) = if t < 1e-6 {
@@ -81,15 +82,13 @@ pub fn rotate_point_jacobian(r: &Mat3, om: [f64; 3], p: [f64; 3]) -> Mat3 {
             jr[i][j] = if i == j { 1.0 } else { 0.0 } - b * k[i][j] + c * k2[i][j];
         }
     }
-    let rp = mat_mul(r, &skew(p));
-    let m = mat_mul(&rp, &jr);
-    let mut out = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            out[i][j] = -m[i][j];
-        }
-    }
-    out
+    jr
+}
+
+/// d(R(om) p)/d(om) = -R [p]x J_r(om) (see [`right_jacobian`]).
+pub fn rotate_point_jacobian(r: &Mat3, om: [f64; 3], p: [f64; 3]) -> Mat3 {
+    let m = mat_mul(&mat_mul(r, &skew(p)), &right_jacobian(om));
+    core::array::from_fn(|i| core::array::from_fn(|j| -m[i][j]))
 }
 
 /// The projection of one point with its derivatives.
@@ -105,32 +104,97 @@ pub struct Projection {
     pub d_e: [f64; 2],
 }
 
+/// Number of per-view variables: at one current the pixel depends on the 25 numbers only
+/// through om1..om3, tx..tz, fx, fy, u0, v0, k1, p1, p2 (Eq. 13-18 with E fixed).
+pub const REDUCED: usize = 13;
+/// Index of fx among the per-view variables (fy follows, then u0, v0, k1, p1, p2).
+pub const R_FX: usize = 6;
+/// Index of k1 among the per-view variables.
+pub const R_K1: usize = 10;
+
+/// The projection of one point with its derivatives with respect to the 13 per-view
+/// variables ([`REDUCED`]). The full Jacobian is `d_reduced * chain`, with
+/// [`Projector::chain`] the view's 13 x 25 matrix: this factorisation is what makes the
+/// bundle adjustment's normal equations cheap (13 x 13 per point instead of 25 x 25).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReducedProjection {
+    /// Observed-frame pixel (u_d + u0, v_d + v0).
+    pub pixel: [f64; 2],
+    /// d pixel / d (om, T, fx, fy, u0, v0, k1, p1, p2); fx and fy as total derivatives
+    /// (directly, and through w = 2 / (fx + fy) in the distortion coefficients at fixed a).
+    pub d_reduced: [[f64; REDUCED]; 2],
+}
+
 /// Precomputed per-parameter-vector quantities (rotation), shared by all points.
 #[derive(Debug, Clone, Copy)]
 pub struct Projector {
     x: [f64; PARAMS],
     r: Mat3,
+    /// M_l = R [e_l]x J_r(om): d(R p)/d om = -sum_l p_l M_l, so the rotation's Jacobian
+    /// costs 27 multiplications per point and no trigonometry.
+    r_skew_jr: [Mat3; 3],
 }
 
 impl Projector {
     /// Prepares the projection for parameter vector `x`.
     pub fn new(x: &[f64; PARAMS]) -> Self {
-        Projector { x: *x, r: rodrigues_to_matrix([x[0], x[1], x[2]]) }
+        let r = rodrigues_to_matrix([x[0], x[1], x[2]]);
+        let jr = right_jacobian([x[0], x[1], x[2]]);
+        // d(R p)/d om = -R [p]x J_r, linear in p: -R [p]x J_r = sum_l p_l (R [J_r]... ) is
+        // precomputed as three matrices M_l = R [e_l]x J_r with d(R p)/d om = -sum_l p_l M_l.
+        let r_skew_jr = core::array::from_fn(|l| {
+            let mut e = [0.0; 3];
+            e[l] = 1.0;
+            mat_mul(&mat_mul(&r, &skew(e)), &jr)
+        });
+        Projector { x: *x, r, r_skew_jr }
     }
 
-    /// Projects `world_mm` at current `e_ma`, with derivatives when `jacobian`.
-    ///
-    /// Errors: the point at or behind the camera; non-positive focal length; non-finite
-    /// result.
-    pub fn project(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<Projection> {
+    fn focal(&self, e_ma: f64) -> Result<(f64, f64)> {
         let x = &self.x;
-        let kfx = [x[6], x[7], x[8], x[9]];
-        let kfy = [x[10], x[11], x[12], x[13]];
-        let fx = cubic(&kfx, e_ma);
-        let fy = cubic(&kfy, e_ma);
+        let fx = cubic(&[x[6], x[7], x[8], x[9]], e_ma);
+        let fy = cubic(&[x[10], x[11], x[12], x[13]], e_ma);
         if !(fx > 0.0 && fy > 0.0) {
             return Err(Error::Degenerate { what: "focal length is not positive at a view's current" });
         }
+        Ok((fx, fy))
+    }
+
+    /// The chain matrix C of a view at current `e_ma`: d(per-view variables)/d(25 numbers),
+    /// with fx = sum kf_xi E^i (Eq. 16), k_c = a_3c+1 w^2 + a_3c+2 w + a_3c+3 (Eq. 18) at
+    /// fixed w (w's own dependence on kf is already in the total derivatives of
+    /// [`ReducedProjection::d_reduced`]).
+    pub fn chain(&self, e_ma: f64) -> Result<[[f64; PARAMS]; REDUCED]> {
+        let (fx, fy) = self.focal(e_ma)?;
+        let w = 2.0 / (fx + fy);
+        let powers = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
+        let mut c = [[0.0; PARAMS]; REDUCED];
+        for k in 0..6 {
+            c[k][k] = 1.0;
+        }
+        for i in 0..4 {
+            c[R_FX][KF0X + i] = powers[i];
+            c[R_FX + 1][KF0X + 4 + i] = powers[i];
+        }
+        c[R_FX + 2][U0] = 1.0;
+        c[R_FX + 3][U0 + 1] = 1.0;
+        let wp = [w * w, w, 1.0];
+        for k in 0..3 {
+            for i in 0..3 {
+                c[R_K1 + k][16 + 3 * k + i] = wp[i];
+            }
+        }
+        Ok(c)
+    }
+
+    /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the 13
+    /// per-view variables when `jacobian`.
+    ///
+    /// Errors: the point at or behind the camera; non-positive focal length; non-finite
+    /// result.
+    pub fn project_reduced(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<ReducedProjection> {
+        let x = &self.x;
+        let (fx, fy) = self.focal(e_ma)?;
         let rc = mat_vec(&self.r, world_mm);
         let pc = [rc[0] + x[3], rc[1] + x[4], rc[2] + x[5]];
         if !(pc[2] > 0.0) {
@@ -147,7 +211,7 @@ impl Projector {
         if !(pixel[0].is_finite() && pixel[1].is_finite()) {
             return Err(Error::NotFinite { what: "projected pixel" });
         }
-        let mut out = Projection { pixel, d_params: [[0.0; PARAMS]; 2], d_z_w: [0.0; 2], d_e: [0.0; 2] };
+        let mut out = ReducedProjection { pixel, d_reduced: [[0.0; REDUCED]; 2] };
         if !jacobian {
             return Ok(out);
         }
@@ -158,54 +222,74 @@ impl Projector {
         // k = a_1 w^2 + a_2 w + a_3 (per coefficient): dk/dw, dw/dfx = dw/dfy = -w^2 / 2.
         let dkdw = [2.0 * a[0] * w + a[1], 2.0 * a[3] * w + a[4], 2.0 * a[6] * w + a[7]];
         let dwdf = -0.5 * w * w;
-        // Total derivative of the pixel w.r.t. (u, v, fx, fy) of the pinhole stage.
-        let mut g = [[0.0; 4]; 2]; // columns: u, v, fx (through w only), fy (through w only)
-        for row in 0..2 {
-            g[row][0] = jd[row][0];
-            g[row][1] = jd[row][1];
-            let via_w: f64 = (0..3).map(|k| dk[row][k] * dkdw[k]).sum::<f64>() * dwdf;
-            g[row][2] = via_w;
-            g[row][3] = via_w;
-        }
         // d(u, v)/d pc.
         let du_dpc = [fx * iz, 0.0, -u * iz];
         let dv_dpc = [0.0, fy * iz, -v * iz];
-        let mut dpix_dpc = [[0.0; 3]; 2];
+        let m = &self.r_skew_jr;
+        let drot: Mat3 = core::array::from_fn(|i| {
+            core::array::from_fn(|j| -(world_mm[0] * m[0][i][j] + world_mm[1] * m[1][i][j] + world_mm[2] * m[2][i][j]))
+        });
         for row in 0..2 {
+            let dp = &mut out.d_reduced[row];
+            let mut dpix_dpc = [0.0; 3];
             for k in 0..3 {
-                dpix_dpc[row][k] = g[row][0] * du_dpc[k] + g[row][1] * dv_dpc[k];
+                dpix_dpc[k] = jd[row][0] * du_dpc[k] + jd[row][1] * dv_dpc[k];
             }
-        }
-        let drot = rotate_point_jacobian(&self.r, [x[0], x[1], x[2]], world_mm);
-        let e2 = e_ma * e_ma;
-        let powers = [1.0, e_ma, e2, e2 * e_ma];
-        for row in 0..2 {
-            let dp = &mut out.d_params[row];
             for j in 0..3 {
-                dp[j] = (0..3).map(|k| dpix_dpc[row][k] * drot[k][j]).sum();
-                dp[3 + j] = dpix_dpc[row][j];
+                dp[j] = (0..3).map(|k| dpix_dpc[k] * drot[k][j]).sum();
+                dp[3 + j] = dpix_dpc[j];
             }
             // fx enters u directly (u = fx xn) and the distortion through w.
-            let dfx = g[row][0] * xn + g[row][2];
-            let dfy = g[row][1] * yn + g[row][3];
-            for i in 0..4 {
-                dp[6 + i] = dfx * powers[i];
-                dp[10 + i] = dfy * powers[i];
-            }
-            dp[14] = if row == 0 { 1.0 } else { 0.0 };
-            dp[15] = if row == 1 { 1.0 } else { 0.0 };
-            let wp = [w * w, w, 1.0];
-            for c in 0..3 {
-                for i in 0..3 {
-                    dp[16 + 3 * c + i] = dk[row][c] * wp[i];
+            let via_w: f64 = (0..3).map(|k| dk[row][k] * dkdw[k]).sum::<f64>() * dwdf;
+            dp[R_FX] = jd[row][0] * xn + via_w;
+            dp[R_FX + 1] = jd[row][1] * yn + via_w;
+            dp[R_FX + 2 + row] = 1.0;
+            dp[R_K1..R_K1 + 3].copy_from_slice(&dk[row]);
+        }
+        Ok(out)
+    }
+
+    /// d(fx, fy)/dE at `e_ma` (Eq. 16 differentiated).
+    pub fn focal_slope(&self, e_ma: f64) -> [f64; 2] {
+        let x = &self.x;
+        [x[7] + 2.0 * x[8] * e_ma + 3.0 * x[9] * e_ma * e_ma, x[11] + 2.0 * x[12] * e_ma + 3.0 * x[13] * e_ma * e_ma]
+    }
+
+    /// d pixel / d Z_W and d pixel / d E of a point from its per-view derivatives: a stage
+    /// shift moves the point along world Z (d pc / d Z_W = R e_z, as a change of T would),
+    /// and the current acts through fx and fy only.
+    pub fn view_shift_derivatives(&self, d_reduced: &[[f64; REDUCED]; 2], e_ma: f64) -> ([f64; 2], [f64; 2]) {
+        let slope = self.focal_slope(e_ma);
+        let mut d_z_w = [0.0; 2];
+        let mut d_e = [0.0; 2];
+        for row in 0..2 {
+            d_z_w[row] = (0..3).map(|k| d_reduced[row][3 + k] * self.r[k][2]).sum();
+            d_e[row] = d_reduced[row][R_FX] * slope[0] + d_reduced[row][R_FX + 1] * slope[1];
+        }
+        (d_z_w, d_e)
+    }
+
+    /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the 25
+    /// numbers, Z_W and E when `jacobian`.
+    ///
+    /// Errors: the point at or behind the camera; non-positive focal length; non-finite
+    /// result.
+    pub fn project(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<Projection> {
+        let red = self.project_reduced(world_mm, e_ma, jacobian)?;
+        let mut out = Projection { pixel: red.pixel, d_params: [[0.0; PARAMS]; 2], d_z_w: [0.0; 2], d_e: [0.0; 2] };
+        if !jacobian {
+            return Ok(out);
+        }
+        let c = self.chain(e_ma)?;
+        for row in 0..2 {
+            for (k, ck) in c.iter().enumerate() {
+                let g = red.d_reduced[row][k];
+                for (dp, &ckp) in out.d_params[row].iter_mut().zip(ck.iter()) {
+                    *dp += g * ckp;
                 }
             }
-            // A stage shift moves the point along world Z: d pc / d Z_W = R e_z.
-            out.d_z_w[row] = (0..3).map(|k| dpix_dpc[row][k] * self.r[k][2]).sum();
-            let dfx_de = x[7] + 2.0 * x[8] * e_ma + 3.0 * x[9] * e2;
-            let dfy_de = x[11] + 2.0 * x[12] * e_ma + 3.0 * x[13] * e2;
-            out.d_e[row] = dfx * dfx_de + dfy * dfy_de;
         }
+        (out.d_z_w, out.d_e) = self.view_shift_derivatives(&red.d_reduced, e_ma);
         Ok(out)
     }
 }

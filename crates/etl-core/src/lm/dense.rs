@@ -14,7 +14,7 @@
 use super::options::{Accumulation, Options, StopReason};
 use super::report::Report;
 use super::svd::Svd;
-use super::{Problem, RowSink};
+use super::{NormalEquations, Problem, RowSink};
 use crate::error::{all_finite, Error, Result};
 use crate::fit::GivensQr;
 
@@ -49,27 +49,6 @@ impl<const N: usize> RowSink<N> for CostSink {
     }
 }
 
-/// Accumulates the normal equations J^T J (upper triangle) and J^T r.
-struct NormalSink<const N: usize> {
-    a: [[f64; N]; N],
-    g: [f64; N],
-    cost: f64,
-    rows: usize,
-}
-
-impl<const N: usize> RowSink<N> for NormalSink<N> {
-    fn push(&mut self, r: f64, jac: &[f64; N]) {
-        self.rows += 1;
-        self.cost += r * r;
-        for (i, (ai, &ji)) in self.a.iter_mut().zip(jac.iter()).enumerate() {
-            self.g[i] += ji * r;
-            for (aik, &jk) in ai.iter_mut().zip(jac.iter()).skip(i) {
-                *aik += ji * jk;
-            }
-        }
-    }
-}
-
 /// The linearisation at one point: R, Q^T r, the cost and the row count.
 struct Linearization<const N: usize> {
     r: [[f64; N]; N],
@@ -93,8 +72,10 @@ fn linearize<const N: usize, P: Problem<N>>(
             (*sink.qr.r_factor(), *sink.qr.qty(), sink.cost, sink.rows)
         }
         Accumulation::NormalEquations => {
-            let mut sink = NormalSink { a: [[0.0; N]; N], g: [0.0; N], cost: 0.0, rows: 0 };
-            problem.eval(x, true, &mut sink)?;
+            let mut sink = NormalEquations::<N>::ZERO;
+            if !problem.normal_equations(x, &mut sink)? {
+                problem.eval(x, true, &mut sink)?;
+            }
             let (r, qtf) = cholesky_factor(&sink.a, &sink.g);
             (r, qtf, sink.cost, sink.rows)
         }
@@ -248,6 +229,76 @@ fn covariance_from_svd<const N: usize>(svd: &Svd<N>, keep: &[bool; N], diag: &[f
     cov
 }
 
+/// The SVD of the scaled factor B = U S V^T with the rank decision and c = U^T Q^T r.
+struct Spectral<const N: usize> {
+    svd: Svd<N>,
+    keep: [bool; N],
+    rank: usize,
+    c: [f64; N],
+}
+
+impl<const N: usize> Spectral<N> {
+    /// `b` row-major (upper triangular), `qtf` = Q^T r.
+    fn of(b: &[[f64; N]; N], qtf: &[f64; N], rank_tolerance: f64) -> Result<Self> {
+        let svd = Svd::of_rows(b);
+        let smax = svd.max_singular_value();
+        if !smax.is_finite() {
+            return Err(Error::NotFinite { what: "Jacobian" });
+        }
+        let mut keep = [false; N];
+        let mut rank = 0;
+        for k in 0..N {
+            keep[k] = svd.s[k] > rank_tolerance * smax && svd.s[k] > 0.0;
+            rank += keep[k] as usize;
+        }
+        let c = core::array::from_fn(|k| (0..N).map(|i| svd.u[k][i] * qtf[i]).sum());
+        Ok(Spectral { svd, keep, rank, c })
+    }
+}
+
+/// The inverse of the upper triangular `b` when it is certified to have full numerical
+/// rank: s_min(B) >= 1 / ||B^-1||_F and s_max(B) <= ||B||_F, so
+/// 1 / ||B^-1||_F > 100 `rank_tolerance` ||B||_F guarantees that every singular value
+/// clears the rank threshold (the factor 100 leaves room for rounding). `None` otherwise
+/// (the caller then decides the rank by the SVD).
+fn full_rank_inverse<const N: usize>(b: &[[f64; N]; N], rank_tolerance: f64) -> Option<[[f64; N]; N]> {
+    let mut inv = [[0.0; N]; N];
+    // Column j of B^-1 by back substitution of B x = e_j (x_i = 0 for i > j).
+    for j in 0..N {
+        for i in (0..=j).rev() {
+            let row = b.get(i)?;
+            let bii = *row.get(i)?;
+            if !(bii.abs() > 0.0) {
+                return None;
+            }
+            let rhs = if i == j { 1.0 } else { 0.0 };
+            let s: f64 = row
+                .iter()
+                .zip(inv.iter())
+                .take(j + 1)
+                .skip(i + 1)
+                .map(|(bik, ik)| bik * ik.get(j).unwrap_or(&0.0))
+                .sum();
+            *inv.get_mut(i)?.get_mut(j)? = (rhs - s) / bii;
+        }
+    }
+    let frob = |m: &[[f64; N]; N]| libm::sqrt(m.iter().flatten().map(|v| v * v).sum::<f64>());
+    let (nb, ninv) = (frob(b), frob(&inv));
+    (ninv.is_finite() && nb.is_finite() && 100.0 * rank_tolerance * nb * ninv < 1.0).then_some(inv)
+}
+
+/// (J^T J)^-1 sigma2 = D^-1 B^-1 B^-T D^-1 sigma2 for a certified full-rank B.
+fn covariance_from_inverse<const N: usize>(b_inv: &[[f64; N]; N], diag: &[f64; N], sigma2: f64) -> [[f64; N]; N] {
+    let mut cov = [[0.0; N]; N];
+    for ((ci, bi), di) in cov.iter_mut().zip(b_inv.iter()).zip(diag.iter()) {
+        for ((cij, bj), dj) in ci.iter_mut().zip(b_inv.iter()).zip(diag.iter()) {
+            let s: f64 = bi.iter().zip(bj.iter()).map(|(a, b)| a * b).sum();
+            *cij = sigma2 * s / (di * dj);
+        }
+    }
+    cov
+}
+
 /// Minimises sum_i r_i(x)^2 from `x0` (see the module documentation for the method).
 ///
 /// Errors: a non-finite start ([`Error::NotFinite`]); the problem's own error or
@@ -286,30 +337,43 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
         if delta == 0.0 {
             delta = if xnorm > 0.0 { options.step_factor * xnorm } else { options.step_factor };
         }
-        let mut cols = [[0.0; N]; N];
-        for j in 0..N {
-            for i in 0..N {
-                cols[j][i] = r[i][j] / diag[j];
+        // B = R D^-1 (upper triangular). Its SVD gives the rank and the damped steps; when
+        // B is certified well inside full rank, the Gauss-Newton step comes from a
+        // triangular solve and the SVD is computed only if the trust region binds (or for
+        // the covariance at the end): the usual case near a solution.
+        let mut b = [[0.0; N]; N];
+        for (bi, ri) in b.iter_mut().zip(r.iter()) {
+            for ((bij, rij), dj) in bi.iter_mut().zip(ri.iter()).zip(diag.iter()) {
+                *bij = rij / dj;
             }
         }
-        let svd = Svd::of_columns(cols);
-        let smax = svd.max_singular_value();
-        if !smax.is_finite() {
-            return Err(Error::NotFinite { what: "Jacobian" });
+        let b_inv = full_rank_inverse(&b, options.rank_tolerance);
+        let z_gauss_newton = b_inv.as_ref().map(|b_inv| {
+            let mut z = [0.0; N];
+            for (zi, row) in z.iter_mut().zip(b_inv.iter()) {
+                *zi = -row.iter().zip(qtf.iter()).map(|(a, q)| a * q).sum::<f64>();
+            }
+            z
+        });
+        let mut spectral: Option<Spectral<N>> = None;
+        if z_gauss_newton.is_none() {
+            spectral = Some(Spectral::of(&b, &qtf, options.rank_tolerance)?);
         }
-        let mut keep = [false; N];
-        let mut rank = 0;
-        for k in 0..N {
-            keep[k] = svd.s[k] > options.rank_tolerance * smax && svd.s[k] > 0.0;
-            rank += keep[k] as usize;
-        }
+        let rank = spectral.as_ref().map_or(N, |sp| sp.rank);
         let dof = rows.saturating_sub(rank);
         let sigma2 = if dof > 0 { f / dof as f64 } else { f };
         macro_rules! finish {
             ($stop:expr) => {{
                 // A minimum where some direction is undetermined is reported as such.
                 let stop = if rank < N && $stop.converged() { StopReason::RankDeficient } else { $stop };
-                let covariance = covariance_from_svd(&svd, &keep, &diag, sigma2);
+                let covariance = match (&spectral, &b_inv) {
+                    (Some(sp), _) => covariance_from_svd(&sp.svd, &sp.keep, &diag, sigma2),
+                    (None, Some(b_inv)) => covariance_from_inverse(b_inv, &diag, sigma2),
+                    (None, None) => {
+                        let sp = Spectral::of(&b, &qtf, options.rank_tolerance)?;
+                        covariance_from_svd(&sp.svd, &sp.keep, &diag, sigma2)
+                    }
+                };
                 return Ok(Report {
                     x,
                     stop,
@@ -341,15 +405,22 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
         if gnorm <= options.gtol {
             finish!(StopReason::GradientTolerance);
         }
-        let mut c = [0.0; N];
-        for k in 0..N {
-            c[k] = (0..N).map(|i| svd.u[k][i] * qtf[i]).sum();
-        }
         let qtf2: f64 = qtf.iter().map(|q| q * q).sum();
         // Inner loop: shrink the trust region until a step is accepted.
         loop {
-            let mu = secular_mu(&svd, &c, &keep, delta);
-            let z = scaled_step(&svd, &c, &keep, mu);
+            let (mu, z) = match z_gauss_newton {
+                Some(z) if norm(&z) <= 1.1 * delta => (0.0, z),
+                _ => {
+                    let sp = match spectral.take() {
+                        Some(sp) => sp,
+                        None => Spectral::of(&b, &qtf, options.rank_tolerance)?,
+                    };
+                    let mu = secular_mu(&sp.svd, &sp.c, &sp.keep, delta);
+                    let z = scaled_step(&sp.svd, &sp.c, &sp.keep, mu);
+                    spectral = Some(sp);
+                    (mu, z)
+                }
+            };
             let pnorm = norm(&z);
             if iterations == 0 && evaluations == 1 {
                 delta = delta.min(pnorm);

@@ -61,4 +61,47 @@ pub trait Problem<const N: usize> {
     /// number on every call. Returning an error at the starting point aborts the solve; at
     /// a trial point it rejects the step (e.g. a point that went behind the camera).
     fn eval(&mut self, x: &[f64; N], jacobian: bool, sink: &mut dyn RowSink<N>) -> Result<()>;
+
+    /// Optionally accumulates J^T J, J^T r, the cost and the residual count at `x` itself,
+    /// for problems whose structure makes that cheaper than streaming rows (the bundle
+    /// adjustment: each view's rows factor through 13 variables). Used only with
+    /// [`Accumulation::NormalEquations`]; must agree with [`Problem::eval`] (same residuals,
+    /// same count). The default returns `Ok(false)`: rows are streamed through `eval`.
+    fn normal_equations(&mut self, x: &[f64; N], out: &mut NormalEquations<N>) -> Result<bool> {
+        let _ = (x, out);
+        Ok(false)
+    }
+}
+
+/// The normal equations of a linearisation: J^T J (upper triangle, row i from column i),
+/// J^T r, the cost sum r_i^2 and the number of residuals. Also a [`RowSink`] that folds
+/// rows in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalEquations<const N: usize> {
+    /// J^T J; only the upper triangle (j >= i) is read.
+    pub a: [[f64; N]; N],
+    /// J^T r.
+    pub g: [f64; N],
+    /// sum r_i^2.
+    pub cost: f64,
+    /// Number of residuals.
+    pub rows: usize,
+}
+
+impl<const N: usize> NormalEquations<N> {
+    /// Empty equations.
+    pub const ZERO: Self = NormalEquations { a: [[0.0; N]; N], g: [0.0; N], cost: 0.0, rows: 0 };
+}
+
+impl<const N: usize> RowSink<N> for NormalEquations<N> {
+    fn push(&mut self, r: f64, jac: &[f64; N]) {
+        self.rows += 1;
+        self.cost += r * r;
+        for (i, (ai, &ji)) in self.a.iter_mut().zip(jac.iter()).enumerate() {
+            self.g[i] += ji * r;
+            for (aik, &jk) in ai.iter_mut().zip(jac.iter()).skip(i) {
+                *aik += ji * jk;
+            }
+        }
+    }
 }
