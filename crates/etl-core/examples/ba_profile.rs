@@ -36,14 +36,23 @@ fn main() {
     let views: Vec<View> = pts.iter().zip(&e).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let a0 = A0 { kf0x: 5380.0, kf0y: 5430.0, u0: 900.0, v0: 550.0 };
     let init = initialise(&views, &a0).expect("initialise");
-    let opts = BundleAdjustOptions::default();
+    let opts = if std::env::var_os("BA_EIV").is_some() {
+        let mut o = BundleAdjustOptions { estimator: etl_core::calib::Estimator::EIV_PAPER, ..Default::default() };
+        if let Some(d) = std::env::var("BA_DAMPING").ok().and_then(|d| d.parse().ok()) {
+            o.lm.initial_damping = d;
+        }
+        o
+    } else {
+        BundleAdjustOptions::default()
+    };
     let mut corr = vec![ViewCorrection::default(); views.len()];
-    let r = bundle_adjust(&views, &init, &opts, &mut corr, &mut []).expect("ba");
+    let mut scratch = vec![etl_core::lm::BlockScratch::ZERO; views.len()];
+    let r = bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch).expect("ba");
     if std::env::var_os("BA_TRACE").is_some() {
         for k in 1..=r.iterations {
             let mut o = opts;
             o.lm.max_iterations = k;
-            let rk = bundle_adjust(&views, &init, &o, &mut corr, &mut []).expect("ba");
+            let rk = bundle_adjust(&views, &init, &o, &mut corr, &mut scratch).expect("ba");
             println!(
                 "iterations {k}: rms {:.12} px, fx(225) rel err {:.3e}",
                 rk.rms_px,
@@ -68,7 +77,7 @@ fn main() {
             .fold(f64::INFINITY, f64::min)
     };
     let total = min_time(&mut || {
-        std::hint::black_box(bundle_adjust(&views, &init, &opts, &mut corr, &mut []).expect("ba"));
+        std::hint::black_box(bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch).expect("ba"));
     });
     if std::env::var_os("BA_ONLY").is_some() {
         println!("solve {:.3} ms", total * 1e3);

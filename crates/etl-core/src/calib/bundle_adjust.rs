@@ -35,8 +35,8 @@ use super::jacobian::{from_params, to_params, Projector, KF0X, PARAMS, REDUCED, 
 use super::observations::{distinct_currents, point_count, validate, View};
 use crate::error::{Error, Result};
 use crate::lm::{
-    self, Accumulation, BlockProblem, BlockRowSink, BlockScratch, NormalEquations, Options, Problem, RowSink,
-    StopReason,
+    self, Accumulation, BlockNormal, BlockProblem, BlockRowSink, BlockScratch, NormalEquations, Options, Problem,
+    RowSink, StopReason,
 };
 use crate::model::CameraModel;
 
@@ -138,6 +138,11 @@ impl Default for BundleAdjustOptions {
                 xtol: 1e-10,
                 gtol: 1e-10,
                 accumulation: Accumulation::NormalEquations,
+                // The errors-in-variables stage starts from the converged plain solution,
+                // where a Gauss-Newton-like step is right: Marquardt's usual 1e-3 holds
+                // back the flat directions (stage and current corrections against kf and
+                // T) for ~10 extra iterations. Nielsen's update raises it if a step fails.
+                initial_damping: 1e-8,
                 ..Options::default()
             },
         }
@@ -251,7 +256,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
                 normal.add_point(&pr.d_reduced, f, r);
             }
             let (a, g) = normal.expand();
-            fold_view(&a, &g, &proj.chain(view.e_com_ma)?, out);
+            fold_view(&a, &g, &proj.chain(view.e_com_ma)?, &mut out.a, &mut out.g);
         }
         if self.options.hold_a0 {
             hold_rows(x, &self.x0, |r, j| out.push(r, j));
@@ -341,13 +346,14 @@ impl ViewNormal {
     }
 }
 
-/// out.a += C^T a C (upper triangle), out.g += C^T g, for a view's reduced normal
+/// out_a += C^T a C (upper triangle), out_g += C^T g, for a view's reduced normal
 /// equations (a: the full square) and its chain matrix C (13 x 25).
 fn fold_view(
     a: &[[f64; REDUCED]; REDUCED],
     g: &[f64; REDUCED],
     c: &[[f64; PARAMS]; REDUCED],
-    out: &mut NormalEquations<PARAMS>,
+    out_a: &mut [[f64; PARAMS]; PARAMS],
+    out_g: &mut [f64; PARAMS],
 ) {
     // t = a_sym C, row by row.
     let mut t = [[0.0; PARAMS]; REDUCED];
@@ -362,9 +368,9 @@ fn fold_view(
         }
     }
     for (r, (cr, tr)) in c.iter().zip(t.iter()).enumerate() {
-        for (p, (&crp, outp)) in cr.iter().zip(out.a.iter_mut()).enumerate() {
+        for (p, ((&crp, outp), gp)) in cr.iter().zip(out_a.iter_mut()).zip(out_g.iter_mut()).enumerate() {
             if crp != 0.0 {
-                out.g[p] += crp * g[r];
+                *gp += crp * g[r];
                 for (apq, &trq) in outp.iter_mut().zip(tr.iter()).skip(p) {
                     *apq += crp * trq;
                 }
@@ -411,13 +417,74 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
                 sink.push(f * e[row], &j, &[f * pr.d_z_w[row], f * pr.d_e[row]]);
             }
         }
+        self.prior_rows(block, x, y, sink);
+        Ok(())
+    }
+
+    /// The same rows as [`Eiv::eval_block`], folded through the 13 per-view variables:
+    /// J_x = J_reduced C and J_y = J_reduced C_y ([`Projector::shift_chain`]), so U, W_b,
+    /// V_b all come from one 13 x 13 accumulation per view.
+    fn block_normal_equations(
+        &mut self,
+        block: usize,
+        x: &[f64; PARAMS],
+        y: &[f64; 2],
+        out: &mut BlockNormal<'_, PARAMS, 2>,
+    ) -> Result<bool> {
+        let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
+        let proj = Projector::new(x);
+        let is = 1.0 / self.sigma_px;
+        let e_ma = view.e_com_ma + y[1];
+        let mut normal = ViewNormal::ZERO;
+        for p in view.points {
+            let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + y[0]];
+            let pr = proj.project_reduced(w, e_ma, true)?;
+            let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
+            let r = [f * (pr.pixel[0] - p.pixel[0]), f * (pr.pixel[1] - p.pixel[1])];
+            out.cost += r[0] * r[0] + r[1] * r[1];
+            out.rows += 2;
+            normal.add_point(&pr.d_reduced, f, r);
+        }
+        let (a, g) = normal.expand();
+        let c = proj.chain(e_ma)?;
+        fold_view(&a, &g, &c, out.u, out.gx);
+        // W = C^T a C_y, V = C_y^T a C_y, g_y = C_y^T g.
+        let cy = proj.shift_chain(e_ma);
+        let mut acy = [[0.0; 2]; REDUCED];
+        for (ar, acyr) in a.iter().zip(acy.iter_mut()) {
+            for (&ars, cys) in ar.iter().zip(cy.iter()) {
+                acyr[0] += ars * cys[0];
+                acyr[1] += ars * cys[1];
+            }
+        }
+        for (cr, acyr) in c.iter().zip(acy.iter()) {
+            for (&crp, wp) in cr.iter().zip(out.w.iter_mut()) {
+                wp[0] += crp * acyr[0];
+                wp[1] += crp * acyr[1];
+            }
+        }
+        for (cyr, (acyr, &gr)) in cy.iter().zip(acy.iter().zip(g.iter())) {
+            for k in 0..2 {
+                out.gy[k] += cyr[k] * gr;
+                for l in 0..2 {
+                    out.v[k][l] += cyr[k] * acyr[l];
+                }
+            }
+        }
+        self.prior_rows(block, x, y, out);
+        Ok(true)
+    }
+}
+
+impl Eiv<'_, '_> {
+    /// The rows of the priors on the view's corrections, and (once) the hold-A0 rows.
+    fn prior_rows(&self, block: usize, x: &[f64; PARAMS], y: &[f64; 2], sink: &mut dyn BlockRowSink<PARAMS, 2>) {
         let zero = [0.0; PARAMS];
         sink.push(y[0] / self.sigma_z_mm, &zero, &[1.0 / self.sigma_z_mm, 0.0]);
         sink.push(y[1] / self.sigma_e_ma, &zero, &[0.0, 1.0 / self.sigma_e_ma]);
         if self.options.hold_a0 && block == 0 {
             hold_rows(x, &self.x0, |r, j| sink.push(r, j, &[0.0, 0.0]));
         }
-        Ok(())
     }
 }
 
@@ -549,10 +616,7 @@ mod tests {
     use super::*;
     use crate::calib::observations::Point;
 
-    /// The per-view folded normal equations equal those of the streamed rows, with the
-    /// robust weights and the hold-A0 rows in play.
-    #[test]
-    fn folded_normal_equations_equal_the_streamed_ones() {
+    fn three_views() -> ([[Point; 12]; 3], [f64; 3]) {
         let truth = CameraModel::paper_rig();
         let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 12]; 3];
         let currents = [90.0, 150.0, 225.0];
@@ -565,6 +629,19 @@ mod tests {
                 *p = Point { world_mm: w, pixel: [q[0] + d, q[1] - 0.5 * d] };
             }
         }
+        (pts, currents)
+    }
+
+    fn close(a: f64, b: f64, scale: f64, what: &str) {
+        assert!((a - b).abs() <= 1e-10 * scale.max(1e-9), "{what}: {a} vs {b}");
+    }
+
+    /// The per-view folded normal equations equal those of the streamed rows, with the
+    /// robust weights and the hold-A0 rows in play.
+    #[test]
+    fn folded_normal_equations_equal_the_streamed_ones() {
+        let truth = CameraModel::paper_rig();
+        let (pts, currents) = three_views();
         let views: [View; 3] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
         let mut x = to_params(&truth);
         x[0] += 1e-3;
@@ -587,6 +664,56 @@ mod tests {
                 let aij = streamed.a[i][j];
                 let scale = libm::sqrt(streamed.a[i][i] * streamed.a[j][j]);
                 assert!((folded.a[i][j] - aij).abs() <= 1e-11 * scale, "a[{i}][{j}]: {} vs {aij}", folded.a[i][j]);
+            }
+        }
+    }
+
+    /// The same for the errors-in-variables blocks: U, g_x, W, V, g_y.
+    #[test]
+    fn folded_block_normal_equations_equal_the_streamed_ones() {
+        let truth = CameraModel::paper_rig();
+        let (pts, currents) = three_views();
+        let views: [View; 3] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
+        let mut x = to_params(&truth);
+        x[4] += 0.01;
+        x[11] *= 0.99;
+        let options =
+            BundleAdjustOptions { hold_a0: true, robust: Some(RobustLoss::Cauchy { k_px: 1.0 }), ..Default::default() };
+        let x0 = to_params(&truth);
+        let mut eiv = Eiv {
+            views: &views,
+            x0,
+            options: &options,
+            sigma_px: 0.3,
+            sigma_z_mm: 0.01,
+            sigma_e_ma: 0.4,
+            reference: Some(Projector::new(&x0)),
+        };
+        let y = [0.004, -0.3];
+        for block in 0..3 {
+            let mut s = ([[0.0; PARAMS]; PARAMS], [0.0; PARAMS], [[0.0; 2]; PARAMS], [[0.0; 2]; 2], [0.0; 2]);
+            let mut f = s;
+            let mut streamed =
+                BlockNormal { u: &mut s.0, gx: &mut s.1, w: &mut s.2, v: &mut s.3, gy: &mut s.4, cost: 0.0, rows: 0 };
+            eiv.eval_block(block, &x, &y, true, &mut streamed).unwrap();
+            let (sc, sr) = (streamed.cost, streamed.rows);
+            let mut folded =
+                BlockNormal { u: &mut f.0, gx: &mut f.1, w: &mut f.2, v: &mut f.3, gy: &mut f.4, cost: 0.0, rows: 0 };
+            assert!(eiv.block_normal_equations(block, &x, &y, &mut folded).unwrap());
+            assert_eq!(folded.rows, sr);
+            close(folded.cost, sc, sc, "cost");
+            for i in 0..PARAMS {
+                close(f.1[i], s.1[i], libm::sqrt(s.0[i][i] * sc), "g_x");
+                for j in i..PARAMS {
+                    close(f.0[i][j], s.0[i][j], libm::sqrt(s.0[i][i] * s.0[j][j]), "U");
+                }
+                for k in 0..2 {
+                    close(f.2[i][k], s.2[i][k], libm::sqrt(s.0[i][i] * s.3[k][k]), "W");
+                }
+            }
+            for k in 0..2 {
+                close(f.4[k], s.4[k], libm::sqrt(s.3[k][k] * sc), "g_y");
+                close(f.3[k][1], s.3[k][1], libm::sqrt(s.3[k][k] * s.3[1][1]), "V");
             }
         }
     }

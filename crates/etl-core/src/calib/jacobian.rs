@@ -259,14 +259,28 @@ impl Projector {
     /// shift moves the point along world Z (d pc / d Z_W = R e_z, as a change of T would),
     /// and the current acts through fx and fy only.
     pub fn view_shift_derivatives(&self, d_reduced: &[[f64; REDUCED]; 2], e_ma: f64) -> ([f64; 2], [f64; 2]) {
-        let slope = self.focal_slope(e_ma);
-        let mut d_z_w = [0.0; 2];
-        let mut d_e = [0.0; 2];
+        let c = self.shift_chain(e_ma);
+        let mut d = [[0.0; 2]; 2];
         for row in 0..2 {
-            d_z_w[row] = (0..3).map(|k| d_reduced[row][3 + k] * self.r[k][2]).sum();
-            d_e[row] = d_reduced[row][R_FX] * slope[0] + d_reduced[row][R_FX + 1] * slope[1];
+            for (k, ck) in c.iter().enumerate() {
+                d[0][row] += d_reduced[row][k] * ck[0];
+                d[1][row] += d_reduced[row][k] * ck[1];
+            }
         }
-        (d_z_w, d_e)
+        (d[0], d[1])
+    }
+
+    /// d(per-view variables)/d(Z_W, E) (13 x 2): a stage shift moves the point along
+    /// world Z, which acts as the change R e_z of T; the current acts through fx and fy.
+    pub fn shift_chain(&self, e_ma: f64) -> [[f64; 2]; REDUCED] {
+        let slope = self.focal_slope(e_ma);
+        let mut c = [[0.0; 2]; REDUCED];
+        for k in 0..3 {
+            c[3 + k][0] = self.r[k][2];
+        }
+        c[R_FX][1] = slope[0];
+        c[R_FX + 1][1] = slope[1];
+        c
     }
 
     /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the 25

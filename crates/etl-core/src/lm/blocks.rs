@@ -19,9 +19,9 @@
 
 #![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
 
+use super::cholesky::psd_inverse;
 use super::options::{Options, StopReason};
 use super::report::BlockReport;
-use super::svd::sym_pinv;
 use crate::error::{all_finite, Error, Result};
 
 /// Receives residual rows of one block: the residual, its gradient with respect to the
@@ -46,6 +46,20 @@ pub trait BlockProblem<const N: usize, const M: usize> {
         jacobian: bool,
         sink: &mut dyn BlockRowSink<N, M>,
     ) -> Result<()>;
+
+    /// Optionally accumulates block `block`'s normal equations at (x, y) itself, for
+    /// problems whose structure makes that cheaper than streaming rows; must agree with
+    /// [`BlockProblem::eval_block`]. The default returns `Ok(false)` (rows are streamed).
+    fn block_normal_equations(
+        &mut self,
+        block: usize,
+        x: &[f64; N],
+        y: &[f64; M],
+        out: &mut BlockNormal<'_, N, M>,
+    ) -> Result<bool> {
+        let _ = (block, x, y, out);
+        Ok(false)
+    }
 }
 
 /// Per-block storage of [`solve_blocks`].
@@ -67,36 +81,43 @@ pub const fn solve_blocks_scratch<const N: usize, const M: usize>(block_count: u
     block_count
 }
 
-/// Accumulates the normal equations of one block.
-struct Acc<'a, const N: usize, const M: usize> {
-    u: &'a mut [[f64; N]; N],
-    gx: &'a mut [f64; N],
-    blk: &'a mut BlockScratch<N, M>,
-    cost: f64,
-    rows: usize,
-    jacobian: bool,
+/// The normal equations of one block, accumulated into the solver's storage: the block's
+/// contribution to U (upper triangle) and g_x, and its own W_b, V_b (upper triangle),
+/// g_yb, with the cost and row count. Also a [`BlockRowSink`] that folds rows in.
+pub struct BlockNormal<'a, const N: usize, const M: usize> {
+    /// sum J_x^T J_x (upper triangle), shared by all blocks.
+    pub u: &'a mut [[f64; N]; N],
+    /// sum J_x^T r, shared by all blocks.
+    pub gx: &'a mut [f64; N],
+    /// W_b = J_x^T J_y of this block.
+    pub w: &'a mut [[f64; M]; N],
+    /// V_b = J_y^T J_y of this block (upper triangle).
+    pub v: &'a mut [[f64; M]; M],
+    /// g_yb = J_y^T r of this block.
+    pub gy: &'a mut [f64; M],
+    /// sum r^2 of this block.
+    pub cost: f64,
+    /// Residuals of this block.
+    pub rows: usize,
 }
 
-impl<const N: usize, const M: usize> BlockRowSink<N, M> for Acc<'_, N, M> {
+impl<const N: usize, const M: usize> BlockRowSink<N, M> for BlockNormal<'_, N, M> {
     fn push(&mut self, r: f64, jx: &[f64; N], jy: &[f64; M]) {
         self.cost += r * r;
         self.rows += 1;
-        if !self.jacobian {
-            return;
-        }
         for i in 0..N {
             self.gx[i] += jx[i] * r;
             for j in i..N {
                 self.u[i][j] += jx[i] * jx[j];
             }
             for k in 0..M {
-                self.blk.w[i][k] += jx[i] * jy[k];
+                self.w[i][k] += jx[i] * jy[k];
             }
         }
         for k in 0..M {
-            self.blk.gy[k] += jy[k] * r;
+            self.gy[k] += jy[k] * r;
             for l in k..M {
-                self.blk.v[k][l] += jy[k] * jy[l];
+                self.v[k][l] += jy[k] * jy[l];
             }
         }
     }
@@ -116,24 +137,29 @@ fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>>(
     x: &[f64; N],
     ys: &[[f64; M]],
     scratch: &mut [BlockScratch<N, M>],
-    jacobian: bool,
 ) -> Result<Linearization<N>> {
     let mut lin = Linearization { u: [[0.0; N]; N], gx: [0.0; N], cost: 0.0, rows: 0 };
     for (b, (y, blk)) in ys.iter().zip(scratch.iter_mut()).enumerate() {
-        if jacobian {
-            blk.w = [[0.0; M]; N];
-            blk.v = [[0.0; M]; M];
-            blk.gy = [0.0; M];
+        blk.w = [[0.0; M]; N];
+        blk.v = [[0.0; M]; M];
+        blk.gy = [0.0; M];
+        let mut acc = BlockNormal {
+            u: &mut lin.u,
+            gx: &mut lin.gx,
+            w: &mut blk.w,
+            v: &mut blk.v,
+            gy: &mut blk.gy,
+            cost: 0.0,
+            rows: 0,
+        };
+        if !problem.block_normal_equations(b, x, y, &mut acc)? {
+            problem.eval_block(b, x, y, true, &mut acc)?;
         }
-        let mut acc = Acc { u: &mut lin.u, gx: &mut lin.gx, blk, cost: 0.0, rows: 0, jacobian };
-        problem.eval_block(b, x, y, jacobian, &mut acc)?;
         lin.cost += acc.cost;
         lin.rows += acc.rows;
-        if jacobian {
-            for k in 0..M {
-                for l in 0..k {
-                    blk.v[k][l] = blk.v[l][k];
-                }
+        for k in 0..M {
+            for l in 0..k {
+                blk.v[k][l] = blk.v[l][k];
             }
         }
     }
@@ -168,7 +194,7 @@ fn step<const N: usize, const M: usize>(
         for k in 0..M {
             vd[k][k] += mu * blk.v[k][k];
         }
-        let (vinv, _) = sym_pinv(&vd, tol);
+        let (vinv, _) = psd_inverse(&vd, tol);
         // wv = W V*^-1 (N x M)
         let mut wv = [[0.0; M]; N];
         for i in 0..N {
@@ -183,7 +209,7 @@ fn step<const N: usize, const M: usize>(
             rhs[i] += (0..M).map(|k| wv[i][k] * blk.gy[k]).sum::<f64>();
         }
     }
-    let (sinv, rank) = sym_pinv(&s, tol);
+    let (sinv, rank) = psd_inverse(&s, tol);
     let mut dx = [0.0; N];
     for i in 0..N {
         dx[i] = (0..N).map(|j| sinv[i][j] * rhs[j]).sum();
@@ -198,7 +224,7 @@ fn step<const N: usize, const M: usize>(
         for k in 0..M {
             vd[k][k] += mu * blk.v[k][k];
         }
-        let (vinv, _) = sym_pinv(&vd, tol);
+        let (vinv, _) = psd_inverse(&vd, tol);
         let mut t = [0.0; M];
         for k in 0..M {
             t[k] = blk.gy[k] + (0..N).map(|i| blk.w[i][k] * dx[i]).sum::<f64>();
@@ -245,7 +271,7 @@ pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
     let unknowns = N + M * blocks;
     let tol = options.rank_tolerance;
     let mut x = x0;
-    let mut lin = evaluate(problem, &x, y, scratch, true)?;
+    let mut lin = evaluate(problem, &x, y, scratch)?;
     if lin.rows == 0 {
         return Err(Error::TooFew { what: "residuals", needed: 1, got: 0 });
     }
@@ -264,7 +290,7 @@ pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
             ($stop:expr) => {{
                 let mut s0 = lin.u;
                 for blk in scratch.iter() {
-                    let (vinv, _) = sym_pinv(&blk.v, tol);
+                    let (vinv, _) = psd_inverse(&blk.v, tol);
                     for i in 0..N {
                         for j in 0..N {
                             let mut acc = 0.0;
@@ -277,7 +303,7 @@ pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
                         }
                     }
                 }
-                let (mut cov, _) = sym_pinv(&s0, tol);
+                let (mut cov, _) = psd_inverse(&s0, tol);
                 let dof = rows.saturating_sub(unknowns);
                 let sigma2 = if dof > 0 { f / dof as f64 } else { f };
                 for row in cov.iter_mut() {
@@ -384,7 +410,7 @@ pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
             mu *= nu;
             nu *= 2.0;
         }
-        lin = evaluate(problem, &x, y, scratch, true)?;
+        lin = evaluate(problem, &x, y, scratch)?;
         evaluations += 1;
     }
 }

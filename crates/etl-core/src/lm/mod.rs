@@ -35,12 +35,14 @@
 //! ```
 
 mod blocks;
+mod cholesky;
 mod dense;
 mod options;
 mod report;
 pub mod svd;
 
-pub use blocks::{solve_blocks, solve_blocks_scratch, BlockProblem, BlockRowSink, BlockScratch};
+pub use blocks::{solve_blocks, solve_blocks_scratch, BlockNormal, BlockProblem, BlockRowSink, BlockScratch};
+pub use cholesky::spd_inverse;
 pub use dense::solve;
 pub use options::{Accumulation, Options, StopReason};
 pub use report::{BlockReport, Report};
