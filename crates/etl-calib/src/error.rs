@@ -53,4 +53,7 @@ pub enum Error {
     /// The core refused the problem (its message names the unmet precondition).
     #[error("{0}")]
     Core(#[from] etl_core::Error),
+    /// The lens driver or the virtual lens failed (etl-hw).
+    #[error("lens: {0}")]
+    Lens(#[from] etl_hw::HwError),
 }

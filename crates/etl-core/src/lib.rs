@@ -28,6 +28,8 @@
 pub mod calib;
 pub mod error;
 pub mod fit;
+pub mod focus;
+pub mod lens;
 pub mod lm;
 pub mod model;
 pub mod physics;

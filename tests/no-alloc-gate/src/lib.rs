@@ -154,3 +154,36 @@ pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
         Err(_) => f64::NAN,
     }
 }
+
+/// The four sharpness measures on a caller's 8-bit frame with stride; their sum, or NaN.
+#[no_mangle]
+pub extern "C" fn etl_gate_sharpness_u8(data: &[u8; 64], width: usize, height: usize, stride: usize) -> f64 {
+    use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView};
+    let Ok(v) = ImageView::new(data, width, height, stride) else { return f64::NAN };
+    let mut s = 0.0;
+    for m in [tenengrad(&v), laplacian_variance(&v), brenner(&v), normalised_variance(&v)] {
+        s += m.unwrap_or(f64::NAN);
+    }
+    s
+}
+
+/// The same on a 16-bit frame.
+#[no_mangle]
+pub extern "C" fn etl_gate_sharpness_u16(data: &[u16; 64], width: usize, height: usize, stride: usize) -> f64 {
+    use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView};
+    let Ok(v) = ImageView::new(data, width, height, stride) else { return f64::NAN };
+    let mut s = 0.0;
+    for m in [tenengrad(&v), laplacian_variance(&v), brenner(&v), normalised_variance(&v)] {
+        s += m.unwrap_or(f64::NAN);
+    }
+    s
+}
+
+/// Autofocus on a caller-positioned peak with caller-chosen options; best current or NaN.
+#[no_mangle]
+pub extern "C" fn etl_gate_autofocus(centre_ma: f64, lo: f64, hi: f64, coarse: usize, budget: usize, tol: f64) -> f64 {
+    use etl_core::focus::{autofocus, AutofocusOptions};
+    let opts = AutofocusOptions { range_ma: [lo, hi], coarse_points: coarse, max_evaluations: budget, tolerance_ma: tol };
+    let f = |e: f64| if e > 1e6 { Err(etl_core::Error::Degenerate { what: "gate" }) } else { Ok(-(e - centre_ma) * (e - centre_ma)) };
+    autofocus(f, &opts).map(|r| r.best_ma + r.evaluations as f64).unwrap_or(f64::NAN)
+}

@@ -7,10 +7,15 @@ use crate::error::Result;
 
 pub mod calibrate;
 pub mod demo;
+pub mod detect;
+pub mod lens;
+pub mod lens_sim;
 pub mod measure;
 pub mod model;
 pub mod report;
+pub mod sharpness;
 pub mod simulate;
+pub mod study;
 pub mod thermal;
 pub mod zhang;
 
@@ -43,6 +48,16 @@ enum Command {
     Zhang(zhang::Args),
     /// The board's pose in two images at a lens current and the displacement between them.
     Measure(measure::Args),
+    /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
+    Study(study::Args),
+    /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
+    Sharpness(sharpness::Args),
+    /// Find the checkerboard's corners in images (sub-pixel, stable order).
+    Detect(detect::Args),
+    /// Drive an Optotune lens (Lens Driver 4) or the virtual lens: info, current, temperature, hold.
+    Lens(lens::Args),
+    /// Run a virtual lens on a pseudo-terminal and print its port path.
+    LensSim(lens_sim::Args),
 }
 
 /// Prints `value` as one JSON object on stdout.
@@ -60,6 +75,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Report(a) => report::run(a),
         Command::Zhang(a) => zhang::run(a),
         Command::Measure(a) => measure::run(a),
+        Command::Study(a) => study::run(a),
+        Command::Sharpness(a) => sharpness::run(a),
+        Command::Detect(a) => detect::run(a),
+        Command::Lens(a) => lens::run(a),
+        Command::LensSim(a) => lens_sim::run(a),
     }
 }
 

@@ -18,6 +18,13 @@
 //! `e_com_ma` is optional as in the observations. `offstate_board` defaults to `board`.
 //! `setting_views` are the per-setting baseline's views (several per current, board in a
 //! free pose each).
+//!
+//! Extension (optional, per view of any kind): `"board"` overrides the dataset's board for
+//! that image and `"first_corner": [i0, j0]` says which inner corner of the physical board
+//! the image's corner (0, 0) is; corner (i, j) of the image then sits at
+//! ((i0 + i) square_mm, (j0 + j) square_mm). This is how views that see only part of a
+//! large board are recorded: the detector is asked for the part that is fully visible
+//! (a board found only in part is otherwise an error).
 
 use std::path::{Path, PathBuf};
 
@@ -76,6 +83,12 @@ pub struct DatasetView {
     pub e_com_ma: Option<f64>,
     /// The stage position, mm.
     pub z_w_mm: f64,
+    /// Board of this image when it differs from the dataset's (see the module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<Board>,
+    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_corner: Option<[usize; 2]>,
 }
 
 /// A lens-off view (E = 0) of the lens-off board.
@@ -84,6 +97,12 @@ pub struct DatasetView {
 pub struct OffstateImage {
     /// The image, relative to the dataset file.
     pub image: PathBuf,
+    /// Board of this image when it differs from the dataset's (see the module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<Board>,
+    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_corner: Option<[usize; 2]>,
 }
 
 /// A view for the per-setting baseline: the board in a free pose at a current.
@@ -99,6 +118,12 @@ pub struct SettingImage {
     /// Compensated current, mA (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub e_com_ma: Option<f64>,
+    /// Board of this image when it differs from the dataset's (see the module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<Board>,
+    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_corner: Option<[usize; 2]>,
 }
 
 /// The whole file.
@@ -180,7 +205,25 @@ impl Dataset {
                 return Err(Error::InvalidInput(format!("setting view {i}: current or temperature is not finite")));
             }
         }
+        let overrides = self
+            .views
+            .iter()
+            .map(|v| ("view", &v.image, v.board))
+            .chain(self.offstate_views.iter().map(|v| ("offstate view", &v.image, v.board)))
+            .chain(self.setting_views.iter().map(|v| ("setting view", &v.image, v.board)));
+        for (kind, image, board) in overrides {
+            if let Some(b) = board {
+                b.validate().map_err(|e| Error::InvalidInput(format!("{kind} {}: board: {e}", image.display())))?;
+            }
+        }
         Ok(())
+    }
+
+    /// The board and first corner of the ETL view `i` (its own, or the dataset's board and
+    /// [0, 0]).
+    pub fn view_board(&self, i: usize) -> Option<(Board, [usize; 2])> {
+        let v = self.views.get(i)?;
+        Some((v.board.unwrap_or(self.board), v.first_corner.unwrap_or([0, 0])))
     }
 
     /// `image` resolved against the directory of the dataset file `dataset_path`.

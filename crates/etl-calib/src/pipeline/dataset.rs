@@ -75,33 +75,28 @@ pub fn observations_from_dataset(
     progress: bool,
 ) -> Result<(Observations, DetectionSummary)> {
     dataset.validate()?;
-    let mut jobs: Vec<(Kind, PathBuf, Board)> = vec![];
+    // (kind, image, board asked of the detector, index of its corner (0, 0) on the board).
+    let mut jobs: Vec<(Kind, PathBuf, Board, [usize; 2])> = vec![];
     for (i, v) in dataset.views.iter().enumerate() {
-        jobs.push((Kind::View(i), Dataset::resolve(dataset_path, &v.image), dataset.board));
+        let board = v.board.unwrap_or(dataset.board);
+        jobs.push((Kind::View(i), Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
     }
     for v in &dataset.offstate_views {
-        jobs.push((Kind::Offstate, Dataset::resolve(dataset_path, &v.image), dataset.offstate_board()));
+        let board = v.board.unwrap_or(dataset.offstate_board());
+        jobs.push((Kind::Offstate, Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
     }
     for (i, v) in dataset.setting_views.iter().enumerate() {
-        jobs.push((Kind::Setting(i), Dataset::resolve(dataset_path, &v.image), dataset.board));
+        let board = v.board.unwrap_or(dataset.board);
+        jobs.push((Kind::Setting(i), Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
     }
     // Missing files fail the run before any detection work.
-    for (_, path, _) in &jobs {
+    for (_, path, _, _) in &jobs {
         std::fs::metadata(path).map_err(|source| Error::Io { path: path.clone(), source })?;
     }
-    let bar = if progress {
-        let b = indicatif::ProgressBar::new(jobs.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("detecting {bar:40} {pos}/{len} images ({eta})")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = crate::progress::bar(jobs.len(), "detecting", progress);
     let results: Vec<Result<Detection>> = jobs
         .par_iter()
-        .map(|(_, path, board)| {
+        .map(|(_, path, board, _)| {
             let r = detector.detect(path, board.inner_corners);
             bar.inc(1);
             r
@@ -111,7 +106,7 @@ pub fn observations_from_dataset(
 
     let mut obs = Observations::new(dataset.image_size);
     let mut summary = DetectionSummary { images: jobs.len(), ..DetectionSummary::default() };
-    for ((kind, path, board), result) in jobs.iter().zip(results) {
+    for ((kind, path, board, [i0, j0]), result) in jobs.iter().zip(results) {
         let det = match result {
             Ok(d) => d,
             Err(Error::BoardNotFound(reason)) => {
@@ -143,7 +138,7 @@ pub fn observations_from_dataset(
             .corners
             .iter()
             .map(|&([i, j], pixel)| PointObs {
-                world_mm: [i as f64 * board.square_mm, j as f64 * board.square_mm, z],
+                world_mm: [(i0 + i) as f64 * board.square_mm, (j0 + j) as f64 * board.square_mm, z],
                 pixel,
             })
             .collect();
@@ -226,8 +221,13 @@ impl CornerDetector for ImageDetector {
 }
 
 fn find_corners(
-    _img: &image::GrayImage,
-    _inner: [usize; 2],
+    img: &image::GrayImage,
+    inner: [usize; 2],
 ) -> std::result::Result<Vec<([usize; 2], [f64; 2])>, String> {
-    Err("checkerboard detection is not in this build yet".into())
+    let pattern = crate::detect::Pattern::new(inner[0], inner[1]).map_err(|e| e.to_string())?;
+    let det = crate::detect::detect_corners(img, pattern).map_err(|e| match e {
+        Error::BoardNotFound(m) => m,
+        other => other.to_string(),
+    })?;
+    Ok(det.indexed().collect())
 }

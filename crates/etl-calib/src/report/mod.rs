@@ -40,7 +40,7 @@ const FONT_CANDIDATES: [&str; 6] = [
 ];
 
 /// Registers a font for plot text once; false when none was found.
-fn font_available() -> bool {
+pub(crate) fn font_available() -> bool {
     static FONT: OnceLock<bool> = OnceLock::new();
     *FONT.get_or_init(|| {
         let env = std::env::var_os("ETLCAL_FONT").map(PathBuf::from);

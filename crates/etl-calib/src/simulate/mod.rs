@@ -7,6 +7,8 @@
 //! give is off by 0.3 % (kf0) and 1 px (u0, v0). Corners whose noise-free pixel leaves the
 //! 1936 x 1458 image are dropped (2311 of 2520 remain).
 
+pub mod images;
+
 use etl_core::calib::{Point, A0};
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface;
@@ -135,20 +137,11 @@ const LENS_OFF_TILTS_DEG: [(f64, f64); 10] = [
 /// board frame (Z = 0).
 pub fn lens_off_views(truth: &CameraModel, noise: &NoiseModel, rng: &mut ChaCha8Rng) -> Vec<OffstateView> {
     let mut views = vec![];
-    for (k, &(ax, ay)) in LENS_OFF_TILTS_DEG.iter().enumerate() {
-        let om = [ax.to_radians(), ay.to_radians(), 0.05 * (k as f64 - 4.5) / 4.5];
-        let r = etl_core::model::rotation::rodrigues_to_matrix(om);
-        let centre = etl_core::model::rotation::mat_vec(&r, [20.0, 14.0, 0.0]);
-        let shift = [3.0 * ((k % 3) as f64 - 1.0), 2.0 * ((k % 2) as f64 - 0.5), 125.0 + 4.0 * (k % 4) as f64];
-        let cam = CameraModel {
-            rotation_rodrigues: om,
-            translation_mm: [shift[0] - centre[0], shift[1] - centre[1], shift[2] - centre[2]],
-            ..*truth
-        };
+    for cam in lens_off_poses(truth) {
         let mut points = vec![];
-        for j in 0..8 {
-            for i in 0..11 {
-                let w = [4.0 * i as f64, 4.0 * j as f64];
+        for j in 0..LENS_OFF_BOARD.0[1] {
+            for i in 0..LENS_OFF_BOARD.0[0] {
+                let w = [LENS_OFF_BOARD.1 * i as f64, LENS_OFF_BOARD.1 * j as f64];
                 let real = [w[0] + gauss(noise.xy_mm, rng), w[1] + gauss(noise.xy_mm, rng), 0.0];
                 if let Ok(p) = cam.project(real, 0.0) {
                     if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
@@ -161,6 +154,29 @@ pub fn lens_off_views(truth: &CameraModel, noise: &NoiseModel, rng: &mut ChaCha8
         views.push(OffstateView { points });
     }
     views
+}
+
+/// The lens-off board: inner corners (columns, rows) and square size, mm (NOTES.md).
+pub const LENS_OFF_BOARD: ([usize; 2], f64) = ([11, 8], 4.0);
+
+/// The camera of each lens-off view with the board frame as its world frame (board at
+/// Z = 0): the truth's intrinsics and distortion, the view's pose.
+pub fn lens_off_poses(truth: &CameraModel) -> Vec<CameraModel> {
+    LENS_OFF_TILTS_DEG
+        .iter()
+        .enumerate()
+        .map(|(k, &(ax, ay))| {
+            let om = [ax.to_radians(), ay.to_radians(), 0.05 * (k as f64 - 4.5) / 4.5];
+            let r = etl_core::model::rotation::rodrigues_to_matrix(om);
+            let centre = etl_core::model::rotation::mat_vec(&r, [20.0, 14.0, 0.0]);
+            let shift = [3.0 * ((k % 3) as f64 - 1.0), 2.0 * ((k % 2) as f64 - 0.5), 125.0 + 4.0 * (k % 4) as f64];
+            CameraModel {
+                rotation_rodrigues: om,
+                translation_mm: [shift[0] - centre[0], shift[1] - centre[1], shift[2] - centre[2]],
+                ..*truth
+            }
+        })
+        .collect()
 }
 
 /// The paper rig's 15 views under `noise`, seeded.

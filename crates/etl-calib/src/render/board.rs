@@ -1,0 +1,247 @@
+//! The printed board and its exact area coverage over a pixel's footprint.
+//!
+//! Board frame (formats::dataset): inner corner (i, j) at (i s, j s). The pattern covers
+//! [-s, cols s] x [-s, rows s], i.e. (cols + 1) x (rows + 1) squares; square (a, b), the one
+//! whose lower corner is (a s, b s) for a = -1..cols-1, b = -1..rows-1, is black when
+//! a + b is even, so the outer corner square (-1, -1) is black. Around the pattern lies a
+//! white margin `margin_mm` wide, and beyond it the background, a flat surface in the
+//! board's plane.
+//!
+//! Along each axis the board frame splits into slabs: background (below), margin, the
+//! pattern's squares, margin, background (above). The reflectance is constant on every
+//! product of an X slab and a Y slab, so the exact mean over a pixel's footprint (a
+//! quadrilateral on the board) is the sum over the slab rectangles it touches of the area
+//! clipped by that rectangle times its grey level, over the footprint's area.
+
+/// Grey level of a region, before shading and noise (8-bit scale).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Levels {
+    pub dark: f64,
+    pub light: f64,
+    pub background: f64,
+}
+
+/// One axis of the board's slab grid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Axis {
+    /// Start of the pattern, mm (= -square).
+    lo_mm: f64,
+    square_mm: f64,
+    /// Squares of the pattern along this axis (inner corners + 1).
+    squares: i32,
+    margin_mm: f64,
+}
+
+impl Axis {
+    fn hi_mm(&self) -> f64 {
+        self.lo_mm + self.squares as f64 * self.square_mm
+    }
+
+    /// Slab index of coordinate `x`: -2 background, -1 margin, 0..squares the pattern's
+    /// squares, `squares` margin, `squares + 1` background.
+    #[inline]
+    fn slab(&self, x: f64) -> i32 {
+        let hi = self.hi_mm();
+        if x < self.lo_mm {
+            if x < self.lo_mm - self.margin_mm {
+                -2
+            } else {
+                -1
+            }
+        } else if x < hi {
+            (((x - self.lo_mm) / self.square_mm) as i32).min(self.squares - 1)
+        } else if x < hi + self.margin_mm {
+            self.squares
+        } else {
+            self.squares + 1
+        }
+    }
+
+    /// The interval of slab `s`.
+    fn bounds(&self, s: i32) -> (f64, f64) {
+        let hi = self.hi_mm();
+        match s {
+            i32::MIN..=-2 => (f64::NEG_INFINITY, self.lo_mm - self.margin_mm),
+            -1 => (self.lo_mm - self.margin_mm, self.lo_mm),
+            s if s < self.squares => {
+                // Consistent with `slab` at the boundaries: square k is [lo + k s, lo + (k+1) s).
+                let a = self.lo_mm + s as f64 * self.square_mm;
+                let b = if s + 1 == self.squares { hi } else { self.lo_mm + (s + 1) as f64 * self.square_mm };
+                (a, b)
+            }
+            s if s == self.squares => (hi, hi + self.margin_mm),
+            _ => (hi + self.margin_mm, f64::INFINITY),
+        }
+    }
+}
+
+/// The board's layout in its own frame and the grey level of each region.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BoardLayout {
+    x: Axis,
+    y: Axis,
+    levels: Levels,
+}
+
+/// A polygon of at most `N` vertices on the stack (clipping a quadrilateral by a rectangle
+/// gives at most 8).
+const N: usize = 12;
+
+#[derive(Clone, Copy)]
+struct Poly {
+    p: [[f64; 2]; N],
+    n: usize,
+}
+
+impl Poly {
+    fn signed_area(&self) -> f64 {
+        let mut a = 0.0;
+        for k in 0..self.n {
+            let (p, q) = (self.p[k], self.p[(k + 1) % self.n]);
+            a += p[0] * q[1] - p[1] * q[0];
+        }
+        0.5 * a
+    }
+
+    /// Keeps the part where `sign * (coord[axis] - bound) <= 0` (Sutherland-Hodgman).
+    fn clip(&self, axis: usize, bound: f64, keep_below: bool) -> Poly {
+        let mut out = Poly { p: [[0.0; 2]; N], n: 0 };
+        if !bound.is_finite() {
+            return *self;
+        }
+        let inside = |p: [f64; 2]| if keep_below { p[axis] <= bound } else { p[axis] >= bound };
+        for k in 0..self.n {
+            let (a, b) = (self.p[k], self.p[(k + 1) % self.n]);
+            let (ia, ib) = (inside(a), inside(b));
+            if ia && out.n < N {
+                out.p[out.n] = a;
+                out.n += 1;
+            }
+            if ia != ib && out.n < N {
+                let t = (bound - a[axis]) / (b[axis] - a[axis]);
+                let mut q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+                q[axis] = bound;
+                out.p[out.n] = q;
+                out.n += 1;
+            }
+        }
+        out
+    }
+}
+
+impl BoardLayout {
+    /// The layout of a board with `inner_corners` [cols, rows] and `square_mm` squares,
+    /// with a white margin of `margin_mm`.
+    pub fn new(inner_corners: [usize; 2], square_mm: f64, margin_mm: f64, levels: Levels) -> Self {
+        let axis = |n: usize| Axis {
+            lo_mm: -square_mm,
+            square_mm,
+            squares: i32::try_from(n + 1).unwrap_or(i32::MAX / 4),
+            margin_mm,
+        };
+        BoardLayout { x: axis(inner_corners[0]), y: axis(inner_corners[1]), levels }
+    }
+
+    /// The region (X slab, Y slab) of a board point.
+    #[inline]
+    pub fn region(&self, x_mm: f64, y_mm: f64) -> (i32, i32) {
+        (self.x.slab(x_mm), self.y.slab(y_mm))
+    }
+
+    /// Grey level of region (sx, sy).
+    #[inline]
+    pub fn level(&self, (sx, sy): (i32, i32)) -> f64 {
+        let bg = |s: i32, a: &Axis| s <= -2 || s > a.squares;
+        let margin = |s: i32, a: &Axis| s == -1 || s == a.squares;
+        if bg(sx, &self.x) || bg(sy, &self.y) {
+            self.levels.background
+        } else if margin(sx, &self.x) || margin(sy, &self.y) {
+            self.levels.light
+        } else if (sx + sy) % 2 == 0 {
+            self.levels.dark
+        } else {
+            self.levels.light
+        }
+    }
+
+    /// Grey level of a board point.
+    #[inline]
+    pub fn level_at(&self, x_mm: f64, y_mm: f64) -> f64 {
+        self.level(self.region(x_mm, y_mm))
+    }
+
+    /// Exact mean grey level over the quadrilateral `quad` (board frame, mm; vertices in
+    /// order around it).
+    pub fn mean_over(&self, quad: &[[f64; 2]; 4]) -> f64 {
+        let mut poly = Poly { p: [[0.0; 2]; N], n: 4 };
+        poly.p[..4].copy_from_slice(quad);
+        let total = poly.signed_area();
+        if !(total.abs() > 0.0) || !total.is_finite() {
+            return self.level_at(quad[0][0], quad[0][1]);
+        }
+        let (mut sx0, mut sx1, mut sy0, mut sy1) = (i32::MAX, i32::MIN, i32::MAX, i32::MIN);
+        for q in quad {
+            let (sx, sy) = self.region(q[0], q[1]);
+            sx0 = sx0.min(sx);
+            sx1 = sx1.max(sx);
+            sy0 = sy0.min(sy);
+            sy1 = sy1.max(sy);
+        }
+        let mut sum = 0.0;
+        for sx in sx0..=sx1 {
+            let (xa, xb) = self.x.bounds(sx);
+            let px = poly.clip(0, xa, false).clip(0, xb, true);
+            if px.n < 3 {
+                continue;
+            }
+            for sy in sy0..=sy1 {
+                let (ya, yb) = self.y.bounds(sy);
+                let c = px.clip(1, ya, false).clip(1, yb, true);
+                if c.n >= 3 {
+                    sum += c.signed_area() * self.level((sx, sy));
+                }
+            }
+        }
+        sum / total
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const L: Levels = Levels { dark: 40.0, light: 210.0, background: 100.0 };
+
+    #[test]
+    fn colours_of_the_pattern_margin_and_background() {
+        let b = BoardLayout::new([14, 12], 1.5, 1.0, L);
+        assert_eq!(b.level_at(-0.75, -0.75), 40.0); // square (-1, -1): black
+        assert_eq!(b.level_at(0.75, -0.75), 210.0);
+        assert_eq!(b.level_at(0.75, 0.75), 40.0);
+        assert_eq!(b.level_at(20.0, 17.0), 40.0); // square (13, 11): 24 even
+        assert_eq!(b.level_at(-1.6, 3.0), 210.0); // margin
+        assert_eq!(b.level_at(21.5, 3.0), 210.0);
+        assert_eq!(b.level_at(-2.6, 3.0), 100.0); // background
+        assert_eq!(b.level_at(3.0, 19.6), 100.0);
+    }
+
+    #[test]
+    fn coverage_of_squares_is_exact() {
+        let b = BoardLayout::new([5, 4], 1.0, 0.5, L);
+        // A unit square centred on inner corner (1, 1): half black, half white.
+        let q = [[0.5, 0.5], [1.5, 0.5], [1.5, 1.5], [0.5, 1.5]];
+        assert!((b.mean_over(&q) - 125.0).abs() < 1e-12);
+        // Reverse orientation gives the same mean.
+        let r = [q[3], q[2], q[1], q[0]];
+        assert!((b.mean_over(&r) - 125.0).abs() < 1e-12);
+        // A diamond inside square (0, 0) (black) touching its edges.
+        let d = [[0.5, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 0.5]];
+        assert!((b.mean_over(&d) - 40.0).abs() < 1e-12);
+        // A strip 0.25 into the black square (0, 0) and 0.75 into white (1, 0).
+        let s = [[0.75, 0.2], [1.75, 0.2], [1.75, 0.4], [0.75, 0.4]];
+        assert!((b.mean_over(&s) - (0.25 * 40.0 + 0.75 * 210.0)).abs() < 1e-12);
+        // Straddling the margin and background: the margin is [-1.5, -1), background below.
+        let m = [[-1.75, 0.2], [-1.25, 0.2], [-1.25, 0.3], [-1.75, 0.3]];
+        assert!((b.mean_over(&m) - 155.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,540 @@
+//! [`LensClient`]: an Optotune Lens Driver 4 over a serial port (facts sheet section 9).
+//!
+//! Safety rules it keeps:
+//! - no call can command a current outside the driver's software limits (read from the
+//!   driver with `CrUA`/`CrLA` when the port is opened) and its max current: requests
+//!   beyond them are clamped (the result says so), NaN and infinities are refused;
+//! - one lock around each command and its reply (the protocol has no tags);
+//! - bytes left on the line (e.g. an unsolicited error frame after a fire-and-forget `Aw`)
+//!   are drained before each command and recorded ([`LensClient::take_unsolicited`]);
+//! - every read has a deadline ([`OpenOptions::timeout`]): no call hangs;
+//! - [`LensClient::reconnect`] reopens the port without `Start`, so the lens keeps its
+//!   current (and focus); the EEPROM-backed limits are never written.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+use serialport::{ClearBuffer, SerialPort};
+
+use crate::codec::scaling::{current_code, current_ma, temperature_c, FirmwareType};
+use crate::codec::{scan_reply, Command, Mode, Reply, Scan};
+use crate::error::{HwError, Result};
+
+/// How to open the driver.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OpenOptions {
+    /// Send the `Start` handshake (expects `Ready`). It flushes the driver's input and
+    /// **zeroes the output current**: leave it off to reconnect to a lens in use.
+    pub handshake: bool,
+    /// Deadline for each reply.
+    pub timeout: Duration,
+    /// Baud rate (115200 for the USB port; the virtual COM port ignores it).
+    pub baud_rate: u32,
+    /// Old firmware (before 2016): set the current with `A` instead of `Aw`.
+    pub legacy_set_current: bool,
+}
+
+impl Default for OpenOptions {
+    /// No handshake, 500 ms timeout, 115200 baud, `Aw`.
+    fn default() -> Self {
+        OpenOptions { handshake: false, timeout: Duration::from_millis(500), baud_rate: 115_200, legacy_set_current: false }
+    }
+}
+
+/// What `identify` reads from the driver.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DeviceInfo {
+    /// Firmware type (`H`), which decides the focal-power encoding.
+    pub firmware_type: FirmwareType,
+    /// Firmware version (`V`) as "major.minor.build.revision".
+    pub firmware_version: String,
+    /// Lens serial number (`X`), as text ("00000000" when the lens EEPROM was not read).
+    pub lens_serial: String,
+    /// Status bytes #4..#1 (`Sr`).
+    pub status: [u8; 4],
+    /// Max-current calibration, mA (`CrMA`).
+    pub max_current_ma: f64,
+    /// Upper software limit, mA (`CrUA`).
+    pub upper_limit_ma: f64,
+    /// Lower software limit, mA (`CrLA`).
+    pub lower_limit_ma: f64,
+}
+
+/// The outcome of a set-current call.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SetCurrent {
+    /// What the caller asked for, mA.
+    pub requested_ma: f64,
+    /// What was sent (clamped and quantised), mA.
+    pub commanded_ma: f64,
+    /// The code sent.
+    pub code: i16,
+    /// The request was outside the limits and was clamped.
+    pub clamped: bool,
+}
+
+/// An error frame that arrived when no reply was expected (after a fire-and-forget
+/// command), found when draining before the next command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Unsolicited {
+    /// The frame (`Reply::Error(id)` or `Reply::Nack`).
+    pub reply: Reply,
+    /// The command sent before it (its likely cause).
+    pub after: &'static str,
+}
+
+/// The focal-power range controlled mode reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlledRange {
+    /// Status byte #1 (bit 2: no temperature limits received).
+    pub status: u8,
+    /// Smallest reachable focal power, dpt.
+    pub min_dpt: f64,
+    /// Largest reachable focal power, dpt.
+    pub max_dpt: f64,
+}
+
+struct Inner {
+    port: Option<Box<dyn SerialPort>>,
+    rx: Vec<u8>,
+    last_command: &'static str,
+    unsolicited: Vec<Unsolicited>,
+    max_current_ma: f64,
+    limit_codes: (i16, i16),
+    firmware: FirmwareType,
+    legacy_temperature: bool,
+    fp_range_dpt: Option<(f64, f64)>,
+}
+
+/// The driver over a serial port. All methods take `&self` (an internal lock serialises
+/// command-reply pairs), so one client can be shared between threads.
+///
+/// ```
+/// use etl_hw::client::{LensClient, OpenOptions};
+/// use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
+/// let device = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
+/// let lens = LensClient::open(device.path(), OpenOptions { handshake: true, ..Default::default() }).unwrap();
+/// let r = lens.set_current_ma(1000.0).unwrap(); // beyond the limits: clamped
+/// assert!(r.clamped && (r.commanded_ma - 292.84).abs() < 1e-9);
+/// assert!(lens.set_current_ma(f64::NAN).is_err());
+/// assert_eq!(lens.identify().unwrap().lens_serial, "ETLV0001");
+/// ```
+pub struct LensClient {
+    path: PathBuf,
+    options: OpenOptions,
+    inner: Mutex<Inner>,
+}
+
+fn open_port(path: &Path, options: &OpenOptions) -> Result<Box<dyn SerialPort>> {
+    let name = path.to_string_lossy().into_owned();
+    let port = serialport::new(name.clone(), options.baud_rate)
+        .data_bits(serialport::DataBits::Eight)
+        .parity(serialport::Parity::None)
+        .stop_bits(serialport::StopBits::One)
+        .flow_control(serialport::FlowControl::None)
+        .timeout(options.timeout)
+        .open()
+        .map_err(|e| HwError::Open { path: name.clone(), message: e.to_string() })?;
+    port.clear(ClearBuffer::All).map_err(|e| HwError::Open { path: name, message: e.to_string() })?;
+    Ok(port)
+}
+
+impl LensClient {
+    /// Opens the driver at `path`: optional `Start` handshake, then reads the max current,
+    /// the software limits and the firmware type (needed to clamp and encode).
+    ///
+    /// Errors: the port cannot be opened ([`HwError::Open`]); no or bad replies
+    /// ([`HwError::Timeout`], [`HwError::Crc`], [`HwError::Device`]); a max current <= 0 or
+    /// limits with lower > upper ([`HwError::Protocol`]).
+    pub fn open(path: impl AsRef<Path>, options: OpenOptions) -> Result<LensClient> {
+        let path = path.as_ref().to_owned();
+        let port = open_port(&path, &options)?;
+        let client = LensClient {
+            path,
+            options,
+            inner: Mutex::new(Inner {
+                port: Some(port),
+                rx: Vec::new(),
+                last_command: "",
+                unsolicited: Vec::new(),
+                max_current_ma: crate::codec::scaling::DEFAULT_MAX_CURRENT_MA,
+                limit_codes: (0, 0),
+                firmware: FirmwareType::Other(b'?'),
+                legacy_temperature: false,
+                fp_range_dpt: None,
+            }),
+        };
+        if options.handshake {
+            match client.transact(Command::Start)? {
+                Some(Reply::Ready) => {}
+                other => return Err(HwError::Protocol(format!("expected Ready after Start, got {other:?}"))),
+            }
+        }
+        client.read_calibration()?;
+        Ok(client)
+    }
+
+    fn read_calibration(&self) -> Result<()> {
+        let max = match self.transact(Command::ReadMaxCurrent)? {
+            Some(Reply::MaxCurrent { centi_ma }) if centi_ma > 0 => f64::from(centi_ma) / 100.0,
+            other => return Err(HwError::Protocol(format!("bad max-current reply {other:?}"))),
+        };
+        let upper = match self.transact(Command::ReadUpperLimit)? {
+            Some(Reply::UpperLimit { code }) => code.clamp(-4095, 4095),
+            other => return Err(HwError::Protocol(format!("bad upper-limit reply {other:?}"))),
+        };
+        let lower = match self.transact(Command::ReadLowerLimit)? {
+            Some(Reply::LowerLimit { code }) => code.clamp(-4095, 4095),
+            other => return Err(HwError::Protocol(format!("bad lower-limit reply {other:?}"))),
+        };
+        if lower > upper {
+            return Err(HwError::Protocol(format!("driver limits are inverted: lower {lower} > upper {upper}")));
+        }
+        let fw = match self.transact(Command::FirmwareType)? {
+            Some(Reply::FirmwareType(letter)) => FirmwareType::from_letter(letter),
+            other => return Err(HwError::Protocol(format!("bad firmware-type reply {other:?}"))),
+        };
+        let mut inner = self.lock();
+        inner.max_current_ma = max;
+        inner.limit_codes = (lower, upper);
+        inner.firmware = fw;
+        Ok(())
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Inner> {
+        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// The port path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The options the client was opened with.
+    pub fn options(&self) -> OpenOptions {
+        self.options
+    }
+
+    /// The software limits, mA ([lower, upper]), as read at open.
+    pub fn limits_ma(&self) -> [f64; 2] {
+        let i = self.lock();
+        [current_ma(i.limit_codes.0, i.max_current_ma), current_ma(i.limit_codes.1, i.max_current_ma)]
+    }
+
+    /// The max-current calibration, mA.
+    pub fn max_current_ma(&self) -> f64 {
+        self.lock().max_current_ma
+    }
+
+    /// Error frames drained since the last call (oldest first).
+    pub fn take_unsolicited(&self) -> Vec<Unsolicited> {
+        std::mem::take(&mut self.lock().unsolicited)
+    }
+
+    /// Sends `command` and, if it has a reply, waits for it: the one primitive every other
+    /// method uses. Error frames in reply become [`HwError::Device`]/[`HwError::Nack`].
+    pub fn transact(&self, command: Command) -> Result<Option<Reply>> {
+        let mut inner = self.lock();
+        let inner = &mut *inner;
+        let path = self.path.display().to_string();
+        let io = |source: std::io::Error| HwError::Io { path: path.clone(), source };
+        let port = inner
+            .port
+            .as_mut()
+            .ok_or_else(|| io(std::io::Error::new(std::io::ErrorKind::NotConnected, "port closed; reconnect")))?;
+        // Drain what is on the line: stray bytes and error frames of earlier writes.
+        let pending = port.bytes_to_read().map_err(|e| io(e.into()))? as usize;
+        if pending > 0 {
+            let mut tmp = vec![0u8; pending];
+            let n = port.read(&mut tmp).map_err(io)?;
+            inner.rx.extend_from_slice(&tmp[..n]);
+        }
+        if !inner.rx.is_empty() {
+            let mut at = 0;
+            while at < inner.rx.len() {
+                match Reply::decode(&inner.rx[at..]) {
+                    Ok((r @ (Reply::Error(_) | Reply::Nack), n)) => {
+                        inner.unsolicited.push(Unsolicited { reply: r, after: inner.last_command });
+                        at += n;
+                    }
+                    Ok((_, n)) => at += n,
+                    Err(_) => at += 1,
+                }
+            }
+            inner.rx.clear();
+        }
+        inner.last_command = command.name();
+        port.write_all(&command.encode()).map_err(io)?;
+        port.flush().map_err(io)?;
+        if !command.has_reply() {
+            return Ok(None);
+        }
+        let expected: &[u8] = match command {
+            Command::Start => b"Ready",
+            Command::GetCurrent => b"A",
+            Command::ReadMaxCurrent => b"CMA",
+            Command::ReadUpperLimit => b"CUA",
+            Command::ReadLowerLimit => b"CLA",
+            Command::SetMode(m) => match m {
+                Mode::Current => b"MDA",
+                Mode::Sinusoidal => b"MSA",
+                Mode::Rectangular => b"MQA",
+                Mode::Triangular => b"MTA",
+                Mode::Analog => b"MAA",
+                Mode::Controlled => b"MCA",
+            },
+            Command::ReadMode => b"MMA",
+            Command::GetFocalPower => b"PD",
+            Command::SetTemperatureLimits { .. } => b"PT",
+            Command::Temperature => b"TCA",
+            Command::TemperatureLegacy => b"TA",
+            Command::FirmwareType => b"H",
+            Command::FirmwareBranch => b"F",
+            Command::PartNumber => b"J",
+            Command::FirmwareVersion => b"V",
+            Command::DeviceId => b"IR",
+            Command::LensSerial => b"X",
+            Command::Status => b"S",
+            Command::AnalogInput => b"GAA",
+            // Fire-and-forget commands returned above.
+            _ => b"",
+        };
+        let deadline = Instant::now() + self.options.timeout;
+        let mut chunk = [0u8; 256];
+        loop {
+            match scan_reply(&inner.rx, expected) {
+                Scan::Found { reply, end, .. } => {
+                    inner.rx.drain(..end);
+                    return match reply {
+                        Reply::Error(id) => Err(HwError::Device { command: command.name(), id }),
+                        Reply::Nack => Err(HwError::Nack { command: command.name() }),
+                        r => Ok(Some(r)),
+                    };
+                }
+                Scan::Corrupted { .. } => {
+                    // Drop the frame and whatever follows it: the line is resynchronised by
+                    // the next command's drain.
+                    inner.rx.clear();
+                    let _ = port.clear(ClearBuffer::Input);
+                    return Err(HwError::Crc { command: command.name() });
+                }
+                Scan::NeedMore => {}
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                inner.rx.clear();
+                return Err(HwError::Timeout { command: command.name(), timeout: self.options.timeout });
+            }
+            port.set_timeout(deadline - now).map_err(|e| io(e.into()))?;
+            match port.read(&mut chunk) {
+                Ok(0) => {}
+                Ok(n) => inner.rx.extend_from_slice(&chunk[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(e) => return Err(io(e)),
+            }
+        }
+    }
+
+    /// Reads the firmware type, version, lens serial, status, max current and limits.
+    pub fn identify(&self) -> Result<DeviceInfo> {
+        self.read_calibration()?;
+        let firmware_version = match self.transact(Command::FirmwareVersion)? {
+            Some(Reply::FirmwareVersion { major, minor, build, revision }) => {
+                format!("{major}.{minor}.{build}.{revision}")
+            }
+            other => return Err(HwError::Protocol(format!("bad version reply {other:?}"))),
+        };
+        let lens_serial = match self.transact(Command::LensSerial)? {
+            Some(Reply::LensSerial(b)) => b.iter().map(|&c| if c.is_ascii_graphic() { char::from(c) } else { '?' }).collect(),
+            other => return Err(HwError::Protocol(format!("bad lens-serial reply {other:?}"))),
+        };
+        let status = match self.transact(Command::Status)? {
+            Some(Reply::Status(s)) => s,
+            other => return Err(HwError::Protocol(format!("bad status reply {other:?}"))),
+        };
+        let [lower_limit_ma, upper_limit_ma] = self.limits_ma();
+        let i = self.lock();
+        Ok(DeviceInfo {
+            firmware_type: i.firmware,
+            firmware_version,
+            lens_serial,
+            status,
+            max_current_ma: i.max_current_ma,
+            upper_limit_ma,
+            lower_limit_ma,
+        })
+    }
+
+    /// The code for `ma`, clamped to the limits; `Err` for NaN/infinite.
+    fn clamped_code(&self, ma: f64) -> Result<(i16, bool)> {
+        let ma = etl_core::error::finite(ma, "current (mA)")?;
+        let i = self.lock();
+        let (lo, hi) = i.limit_codes;
+        let [lo_ma, hi_ma] = [current_ma(lo, i.max_current_ma), current_ma(hi, i.max_current_ma)];
+        let clamped = ma < lo_ma || ma > hi_ma;
+        // Clamp in mA (no overflow of the i16 code), then the code itself (rounding).
+        let code = current_code(ma.clamp(lo_ma, hi_ma), i.max_current_ma).clamp(lo, hi);
+        Ok((code, clamped))
+    }
+
+    /// Sets the output current (`Aw`, fire-and-forget): clamped to the driver's software
+    /// limits, rounded to the nearest code. NaN/infinite are refused ([`HwError::Core`]).
+    pub fn set_current_ma(&self, ma: f64) -> Result<SetCurrent> {
+        let (code, clamped) = self.clamped_code(ma)?;
+        let cmd = if self.options.legacy_set_current {
+            Command::SetCurrentLegacy { code }
+        } else {
+            Command::SetCurrent { code }
+        };
+        self.transact(cmd)?;
+        Ok(SetCurrent { requested_ma: ma, commanded_ma: current_ma(code, self.max_current_ma()), code, clamped })
+    }
+
+    /// The output current, mA (`Ar`).
+    pub fn current_ma(&self) -> Result<f64> {
+        match self.transact(Command::GetCurrent)? {
+            Some(Reply::Current { code }) => Ok(current_ma(code, self.max_current_ma())),
+            other => Err(HwError::Protocol(format!("bad current reply {other:?}"))),
+        }
+    }
+
+    /// The lens temperature, degC (`TCA`, falling back to the old `TA` when the firmware
+    /// answers `E 02`/`E 03`). [`HwError::NoSensor`] for the no-sensor value 4095 or a
+    /// reading outside -40..125 degC.
+    pub fn temperature_c(&self) -> Result<f64> {
+        let legacy = self.lock().legacy_temperature;
+        let reply = if legacy {
+            self.transact(Command::TemperatureLegacy)?
+        } else {
+            match self.transact(Command::Temperature) {
+                Err(HwError::Device { id: 2 | 3, .. }) => {
+                    self.lock().legacy_temperature = true;
+                    self.transact(Command::TemperatureLegacy)?
+                }
+                r => r?,
+            }
+        };
+        let raw = match reply {
+            Some(Reply::Temperature { raw }) => raw,
+            Some(Reply::TemperatureLegacy { status: 0, raw }) => raw,
+            Some(Reply::TemperatureLegacy { raw, .. }) => return Err(HwError::NoSensor { raw }),
+            other => return Err(HwError::Protocol(format!("bad temperature reply {other:?}"))),
+        };
+        temperature_c(raw).ok_or(HwError::NoSensor { raw })
+    }
+
+    /// Switches the operation mode (`Mw?A`); for controlled mode use
+    /// [`Self::enter_controlled_mode`].
+    pub fn set_mode(&self, mode: Mode) -> Result<()> {
+        if mode == Mode::Controlled {
+            return self.enter_controlled_mode().map(|_| ());
+        }
+        match self.transact(Command::SetMode(mode))? {
+            Some(Reply::Mode(m)) if m == mode => Ok(()),
+            other => Err(HwError::Protocol(format!("bad mode reply {other:?}"))),
+        }
+    }
+
+    /// The active mode (`MMA`): None for position-controlled (code 7) and unknown codes.
+    pub fn mode(&self) -> Result<Option<Mode>> {
+        match self.transact(Command::ReadMode)? {
+            Some(Reply::ActiveMode { code }) => Ok(Mode::from_active_code(code)),
+            other => Err(HwError::Protocol(format!("bad mode reply {other:?}"))),
+        }
+    }
+
+    /// Sends the temperature limits for controlled mode (`PwTA`, max first), degC.
+    pub fn set_temperature_limits_c(&self, max_c: f64, min_c: f64) -> Result<ControlledRange> {
+        let max_c = etl_core::error::finite(max_c, "max temperature")?;
+        let min_c = etl_core::error::finite(min_c, "min temperature")?;
+        if !(min_c < max_c) || min_c < -40.0 || max_c > 125.0 {
+            return Err(etl_core::Error::InvalidArgument { what: "temperature limits need -40 <= min < max <= 125 degC" }.into());
+        }
+        let cmd = Command::SetTemperatureLimits {
+            max_x16: crate::codec::scaling::temperature_raw(max_c),
+            min_x16: crate::codec::scaling::temperature_raw(min_c),
+        };
+        match self.transact(cmd)? {
+            Some(Reply::TemperatureLimits { status, max_fp, min_fp }) => Ok(self.range(status, min_fp, max_fp)),
+            other => Err(HwError::Protocol(format!("bad temperature-limits reply {other:?}"))),
+        }
+    }
+
+    fn range(&self, status: u8, min_fp: i16, max_fp: i16) -> ControlledRange {
+        let fw = self.lock().firmware;
+        ControlledRange { status, min_dpt: fw.fp_dpt(min_fp), max_dpt: fw.fp_dpt(max_fp) }
+    }
+
+    /// Enters focal-power controlled mode (`MwCA`); send the temperature limits first.
+    /// Errors with [`HwError::Protocol`] when the status says the mode was refused (bit 2:
+    /// no temperature limits).
+    pub fn enter_controlled_mode(&self) -> Result<ControlledRange> {
+        match self.transact(Command::SetMode(Mode::Controlled))? {
+            Some(Reply::ControlledMode { status, max_fp, min_fp }) => {
+                let r = self.range(status, min_fp, max_fp);
+                if status & 0b100 != 0 {
+                    return Err(HwError::Protocol("controlled mode refused: no temperature limits received (call set_temperature_limits_c first)".into()));
+                }
+                self.lock().fp_range_dpt = Some((r.min_dpt, r.max_dpt));
+                Ok(r)
+            }
+            other => Err(HwError::Protocol(format!("bad controlled-mode reply {other:?}"))),
+        }
+    }
+
+    /// Sets the focal power in controlled mode (`PwDA`, fire-and-forget), dioptres,
+    /// encoded for the firmware type and clamped to the range `MwCA` reported. Errors on
+    /// NaN and when controlled mode was not entered through this client.
+    pub fn set_focal_power_dpt(&self, dpt: f64) -> Result<f64> {
+        let dpt = etl_core::error::finite(dpt, "focal power (dpt)")?;
+        let (fw, range) = {
+            let i = self.lock();
+            (i.firmware, i.fp_range_dpt)
+        };
+        let Some((lo, hi)) = range else {
+            return Err(etl_core::Error::InvalidArgument { what: "enter controlled mode before setting a focal power" }.into());
+        };
+        let code = fw.fp_code(dpt.clamp(lo.min(hi), hi.max(lo)));
+        self.transact(Command::SetFocalPower { code })?;
+        Ok(fw.fp_dpt(code))
+    }
+
+    /// The focal power the driver reports (`PrDA`), dioptres.
+    pub fn focal_power_dpt(&self) -> Result<f64> {
+        match self.transact(Command::GetFocalPower)? {
+            Some(Reply::FocalPower { code }) => Ok(self.lock().firmware.fp_dpt(code)),
+            other => Err(HwError::Protocol(format!("bad focal-power reply {other:?}"))),
+        }
+    }
+
+    /// Reopens the port at the same path without `Start` (the lens keeps its current)
+    /// and re-reads the limits. Use after an I/O error (cable pulled and plugged back).
+    pub fn reconnect(&self) -> Result<()> {
+        {
+            let mut i = self.lock();
+            i.port = None; // close first: the port is opened exclusively
+            i.rx.clear();
+        }
+        let port = open_port(&self.path, &self.options)?;
+        self.lock().port = Some(port);
+        self.read_calibration()
+    }
+}
+
+impl etl_core::lens::Lens for LensClient {
+    type Error = HwError;
+
+    fn set_current_ma(&mut self, e_in_ma: f64) -> Result<f64> {
+        LensClient::set_current_ma(self, e_in_ma).map(|r| r.commanded_ma)
+    }
+
+    fn current_ma(&mut self) -> Result<f64> {
+        LensClient::current_ma(self)
+    }
+
+    fn temperature_c(&mut self) -> Result<f64> {
+        LensClient::temperature_c(self)
+    }
+}

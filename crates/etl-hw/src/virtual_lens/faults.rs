@@ -1,0 +1,27 @@
+//! Fault injection for the virtual lens: what a flaky cable, a busy driver or a firmware
+//! quirk does to the byte stream. Counters apply to the next N events and count down.
+
+use std::time::Duration;
+
+/// Faults the virtual lens injects (all off by default). Set them with
+/// [`VirtualLens::set_faults`](super::VirtualLens::set_faults) or
+/// [`VirtualLens::with_faults`](super::VirtualLens::with_faults).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Faults {
+    /// Every reply is sent this long (wall time) after its command.
+    pub reply_delay: Duration,
+    /// The next N replies are never sent (the command is executed).
+    pub silence_next: u32,
+    /// The next N replies have a CRC byte flipped.
+    pub corrupt_next: u32,
+    /// Sent before the next reply, once (stray bytes on the line).
+    pub garbage_before_next: Vec<u8>,
+    /// The next N commands are treated as if their CRC had failed (not executed; answered
+    /// `E 01`, or `N\r\n` when [`VirtualLensConfig::nack_on_crc`](super::VirtualLensConfig::nack_on_crc) is set).
+    pub crc_error_next: u32,
+    /// The next command (also a fire-and-forget one) is not executed and answered with
+    /// the error frame `E` + this id.
+    pub error_frame_next: Option<u8>,
+    /// The next N bytes the host sends are lost.
+    pub drop_rx_bytes_next: u32,
+}

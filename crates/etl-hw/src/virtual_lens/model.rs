@@ -1,0 +1,274 @@
+//! The physical model behind the virtual lens: the liquid lens of the paper (Eq. 1-10)
+//! driven at E_com = E_in - E_T(T, E_in) (Eq. 8), a first-order thermal model (ambient,
+//! coil heating, a heater/Peltier element, one time constant) and the lens's digital
+//! sensor (1/16 degC steps, a new value every 0.1 s).
+
+use etl_core::physics::LensPhysics;
+use etl_core::thermal::ThermalSurface;
+
+use crate::codec::scaling::{current_ma, temperature_raw};
+use crate::codec::Mode;
+
+/// The thermal model: dT/dt = (T_eq - T) / tau with
+/// T_eq = ambient + R_th (I^2 R_coil + P_heater).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThermalModel {
+    /// Ambient temperature, degC.
+    pub ambient_c: f64,
+    /// Thermal resistance lens -> ambient, K/W.
+    pub thermal_resistance_k_per_w: f64,
+    /// Coil resistance, ohm (the coil's I^2 R heats the lens).
+    pub coil_resistance_ohm: f64,
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
+impl Default for ThermalModel {
+    /// 25 degC ambient, 8 K/W, a 12 ohm coil (+5.5 K at 240 mA), tau = 60 s.
+    fn default() -> Self {
+        ThermalModel { ambient_c: 25.0, thermal_resistance_k_per_w: 8.0, coil_resistance_ohm: 12.0, tau_s: 60.0 }
+    }
+}
+
+/// A snapshot of the virtual lens's true state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LensState {
+    /// Model time since spawn, s (wall time x time scale, plus explicit advances).
+    pub model_time_s: f64,
+    /// The current the driver outputs (after its clamping and quantisation), mA.
+    pub e_in_ma: f64,
+    /// The current code the driver outputs.
+    pub current_code: i16,
+    /// True lens temperature, degC.
+    pub temperature_c: f64,
+    /// What the lens's sensor reports, degC (quantised, updated every sensor period).
+    pub sensor_c: f64,
+    /// E_T(T, E_in) of the configured surface, mA (NaN outside its domain).
+    pub e_t_ma: f64,
+    /// E_com = E_in - E_T, mA: the current the optics respond to.
+    pub e_com_ma: f64,
+    /// Focal length of the liquid lens f_liq(E_com) (Eq. 5), mm (NaN outside the model's range).
+    pub f_liq_mm: f64,
+    /// Focal length of the ETL group f_com(E_com) (Eq. 10), mm.
+    pub f_com_mm: f64,
+    /// Focal power of the liquid lens 1000 / f_liq, dioptres.
+    pub focal_power_dpt: f64,
+    /// Heater power (negative: a Peltier element cooling), W.
+    pub heater_w: f64,
+    /// Operation mode.
+    pub mode: Mode,
+}
+
+/// The device's registers and physics.
+#[derive(Debug, Clone)]
+pub(crate) struct Model {
+    pub physics: LensPhysics,
+    pub surface: ThermalSurface,
+    pub thermal: ThermalModel,
+    pub sensor_period_s: f64,
+    pub has_sensor: bool,
+    pub max_current_centi_ma: i16,
+    pub upper_limit_code: i16,
+    pub lower_limit_code: i16,
+    pub time_s: f64,
+    pub temperature_c: f64,
+    pub sensor_raw: i16,
+    pub code: i16,
+    pub heater_w: f64,
+    pub mode: Mode,
+    pub fp_code: i16,
+    pub temperature_limits_x16: Option<(i16, i16)>,
+}
+
+impl Model {
+    pub fn max_current_ma(&self) -> f64 {
+        f64::from(self.max_current_centi_ma) / 100.0
+    }
+
+    pub fn e_in_ma(&self) -> f64 {
+        current_ma(self.code, self.max_current_ma())
+    }
+
+    fn t_eq_c(&self) -> f64 {
+        let i_a = self.e_in_ma() / 1000.0;
+        self.thermal.ambient_c
+            + self.thermal.thermal_resistance_k_per_w * (i_a * i_a * self.thermal.coil_resistance_ohm + self.heater_w)
+    }
+
+    fn temperature_after(&self, dt_s: f64) -> f64 {
+        let t_eq = self.t_eq_c();
+        t_eq + (self.temperature_c - t_eq) * (-dt_s / self.thermal.tau_s).exp()
+    }
+
+    /// Advances the model by `dt_s` at constant inputs; the sensor samples the true
+    /// temperature at each multiple of its period.
+    pub fn advance(&mut self, dt_s: f64) {
+        if !(dt_s > 0.0) {
+            return;
+        }
+        let p = self.sensor_period_s;
+        let ticks_before = (self.time_s / p).floor();
+        let ticks_after = ((self.time_s + dt_s) / p).floor();
+        if ticks_after > ticks_before {
+            let to_last_tick = ticks_after * p - self.time_s;
+            self.sensor_raw = temperature_raw(self.temperature_after(to_last_tick));
+        }
+        self.temperature_c = self.temperature_after(dt_s);
+        self.time_s += dt_s;
+    }
+
+    /// Jumps to thermal equilibrium at the present inputs (the sensor follows at once).
+    pub fn settle(&mut self) {
+        self.temperature_c = self.t_eq_c();
+        self.sensor_raw = temperature_raw(self.temperature_c);
+    }
+
+    /// The heater power that makes the equilibrium temperature `t_c` at the present current.
+    pub fn heater_for_c(&self, t_c: f64) -> f64 {
+        let i_a = self.e_in_ma() / 1000.0;
+        (t_c - self.thermal.ambient_c) / self.thermal.thermal_resistance_k_per_w
+            - i_a * i_a * self.thermal.coil_resistance_ohm
+    }
+
+    /// Sets the output code as the firmware does: clamped to +-4095 and to the software
+    /// limits.
+    pub fn apply_code(&mut self, code: i16) {
+        self.code = code.clamp(-4095, 4095).clamp(self.lower_limit_code, self.upper_limit_code);
+    }
+
+    pub fn sensor_c(&self) -> f64 {
+        f64::from(self.sensor_raw) / 16.0
+    }
+
+    /// Focal power of the liquid lens at compensated current `e_com_ma` (NaN outside the
+    /// physics model's range).
+    pub fn power_dpt_at(&self, e_com_ma: f64) -> f64 {
+        self.physics.f_liq_mm(e_com_ma).map(|f| 1000.0 / f).unwrap_or(f64::NAN)
+    }
+
+    /// The compensated current that gives focal power `dpt`, by bisection over
+    /// [0, upper limit] (power rises with current there); None if out of reach.
+    pub fn e_com_for_power(&self, dpt: f64) -> Option<f64> {
+        let (mut lo, mut hi) = (0.0, current_ma(self.upper_limit_code, self.max_current_ma()));
+        let (plo, phi) = (self.power_dpt_at(lo), self.power_dpt_at(hi));
+        if !(plo <= dpt && dpt <= phi) {
+            return None;
+        }
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if self.power_dpt_at(mid) < dpt {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(0.5 * (lo + hi))
+    }
+
+    pub fn state(&self) -> LensState {
+        let e_in_ma = self.e_in_ma();
+        let e_t_ma = self.surface.e_t_ma(self.temperature_c, e_in_ma).unwrap_or(f64::NAN);
+        let e_com_ma = e_in_ma - e_t_ma;
+        let f_liq_mm = self.physics.f_liq_mm(e_com_ma).unwrap_or(f64::NAN);
+        let f_com_mm = self.physics.f_com_mm(e_com_ma).unwrap_or(f64::NAN);
+        LensState {
+            model_time_s: self.time_s,
+            e_in_ma,
+            current_code: self.code,
+            temperature_c: self.temperature_c,
+            sensor_c: self.sensor_c(),
+            e_t_ma,
+            e_com_ma,
+            f_liq_mm,
+            f_com_mm,
+            focal_power_dpt: 1000.0 / f_liq_mm,
+            heater_w: self.heater_w,
+            mode: self.mode,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model() -> Model {
+        Model {
+            physics: LensPhysics::paper(),
+            surface: ThermalSurface::PAPER,
+            thermal: ThermalModel::default(),
+            sensor_period_s: 0.1,
+            has_sensor: true,
+            max_current_centi_ma: 29284,
+            upper_limit_code: 4095,
+            lower_limit_code: -4095,
+            time_s: 0.0,
+            temperature_c: 25.0,
+            sensor_raw: 400,
+            code: 0,
+            heater_w: 0.0,
+            mode: Mode::Current,
+            fp_code: 0,
+            temperature_limits_x16: None,
+        }
+    }
+
+    /// First-order response: after one time constant 63.2 % of the step.
+    #[test]
+    fn thermal_step_response() {
+        let mut m = model();
+        m.heater_w = 1.0; // +8 K at equilibrium
+        m.advance(60.0);
+        assert!((m.temperature_c - (25.0 + 8.0 * (1.0 - (-1.0f64).exp()))).abs() < 1e-9);
+        // Coil heating: 240 mA in 12 ohm at 8 K/W is +5.53 K.
+        let mut m = model();
+        m.apply_code(crate::codec::scaling::current_code(240.0, 292.84));
+        m.settle();
+        let i = m.e_in_ma() / 1000.0;
+        assert!((m.temperature_c - (25.0 + 8.0 * 12.0 * i * i)).abs() < 1e-12);
+        assert!((m.heater_for_c(30.0) - (5.0 / 8.0 - 12.0 * i * i)).abs() < 1e-12);
+    }
+
+    /// The sensor holds the value sampled at the last 0.1 s tick, in 1/16 degC steps.
+    #[test]
+    fn sensor_quantises_and_samples() {
+        let mut m = model();
+        m.heater_w = 1.0;
+        m.advance(0.05);
+        assert_eq!(m.sensor_raw, 400); // no tick yet
+        m.advance(0.06); // tick at 0.1 s
+        let at_tick = 25.0 + 8.0 * (1.0 - (-0.1f64 / 60.0).exp());
+        assert_eq!(m.sensor_raw, (at_tick * 16.0).round() as i16);
+        assert_eq!(m.sensor_c() * 16.0, f64::from(m.sensor_raw));
+    }
+
+    /// E_com = E_in - E_T(T, E_in) drives the optics (Eq. 8): at 37 degC the focal power
+    /// at a fixed E_in is that of E_com at 27 degC-ish.
+    #[test]
+    fn state_follows_eq_8_and_10() {
+        let mut m = model();
+        m.apply_code(crate::codec::scaling::current_code(150.0, 292.84));
+        m.temperature_c = 37.0;
+        let s = m.state();
+        let e_t = ThermalSurface::PAPER.e_t_ma(37.0, s.e_in_ma).unwrap();
+        assert!((s.e_com_ma - (s.e_in_ma - e_t)).abs() < 1e-12);
+        assert!((s.f_liq_mm - LensPhysics::paper().f_liq_mm(s.e_com_ma).unwrap()).abs() < 1e-12);
+        assert!((s.f_com_mm - LensPhysics::paper().f_com_mm(s.e_com_ma).unwrap()).abs() < 1e-12);
+        // The inverse used by controlled mode.
+        let dpt = m.power_dpt_at(120.0);
+        assert!((m.e_com_for_power(dpt).unwrap() - 120.0).abs() < 1e-9);
+        assert!(m.e_com_for_power(100.0).is_none());
+    }
+
+    /// The firmware clamps to +-4095 and to the software limits.
+    #[test]
+    fn firmware_clamps_codes() {
+        let mut m = model();
+        m.upper_limit_code = 3000;
+        m.lower_limit_code = -100;
+        m.apply_code(i16::MAX);
+        assert_eq!(m.code, 3000);
+        m.apply_code(i16::MIN);
+        assert_eq!(m.code, -100);
+    }
+}
