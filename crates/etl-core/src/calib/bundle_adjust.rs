@@ -31,7 +31,8 @@
 //! storage) and the loop stops when the estimate no longer moves (at most
 //! [`IRLS_MAX_ROUNDS`] rounds).
 
-use super::jacobian::{from_params, to_params, Projector, KF0X, PARAMS, REDUCED, R_FX, R_K1, U0};
+use super::basis::{Basis, A0_INDICES};
+use super::jacobian::{from_params, to_params, Projector, PARAMS, REDUCED, R_FX, R_K1};
 use super::observations::{distinct_currents, point_count, validate, View};
 use crate::error::{Error, Result};
 use crate::lm::{
@@ -191,27 +192,74 @@ pub const fn bundle_adjust_scratch(views: usize, estimator: &Estimator) -> usize
 
 const HOLD_WEIGHT: f64 = 1e8;
 
-fn hold_rows(x: &[f64; PARAMS], x0: &[f64; PARAMS], mut push: impl FnMut(f64, &[f64; PARAMS])) {
-    for i in [KF0X, KF0X + 4, U0, U0 + 1] {
-        let (Some(&xi), Some(&x0i)) = (x.get(i), x0.get(i)) else { continue };
+fn hold_rows(x: &[f64; PARAMS], x0: &[f64; PARAMS], internal: &Internal, mut push: impl FnMut(f64, &[f64; PARAMS])) {
+    for i in A0_INDICES {
+        let (Some(&xi), Some(&x0i), Some(row)) = (x.get(i), x0.get(i), internal.dxdz.get(i)) else { continue };
         let w = HOLD_WEIGHT / x0i.abs().max(1.0);
-        let mut j = [0.0; PARAMS];
-        if let Some(ji) = j.get_mut(i) {
-            *ji = w;
-        }
+        let j: [f64; PARAMS] = core::array::from_fn(|k| w * row.get(k).copied().unwrap_or(0.0));
         push((xi - x0i) * w, &j);
     }
 }
 
+/// The solver's parameters ([`Basis`]) and the constant dx/dz that maps their gradients.
+struct Internal {
+    basis: Basis,
+    dxdz: [[f64; PARAMS]; PARAMS],
+}
+
+impl Internal {
+    fn new(views: &[View<'_>], init: &CameraModel) -> Self {
+        let basis = Basis::for_views(views, init);
+        Internal { basis, dxdz: basis.params_jacobian() }
+    }
+
+    /// A gradient row with respect to x as one with respect to z: j_z = j_x dx/dz.
+    fn row(&self, jx: &[f64; PARAMS]) -> [f64; PARAMS] {
+        let mut jz = [0.0; PARAMS];
+        for (&ji, di) in jx.iter().zip(self.dxdz.iter()) {
+            if ji != 0.0 {
+                for (jzk, &dik) in jz.iter_mut().zip(di.iter()) {
+                    *jzk += ji * dik;
+                }
+            }
+        }
+        jz
+    }
+
+    /// cov_x = dx/dz cov_z (dx/dz)^T.
+    fn covariance(&self, cov_z: &[[f64; PARAMS]; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
+        let mut t = [[0.0; PARAMS]; PARAMS];
+        for (ti, di) in t.iter_mut().zip(self.dxdz.iter()) {
+            for (k, &dik) in di.iter().enumerate() {
+                if dik != 0.0 {
+                    for (tij, &ckj) in ti.iter_mut().zip(cov_z[k].iter()) {
+                        *tij += dik * ckj;
+                    }
+                }
+            }
+        }
+        let mut out = [[0.0; PARAMS]; PARAMS];
+        for (oi, ti) in out.iter_mut().zip(t.iter()) {
+            for (oij, dj) in oi.iter_mut().zip(self.dxdz.iter()) {
+                *oij = ti.iter().zip(dj.iter()).map(|(a, b)| a * b).sum();
+            }
+        }
+        out
+    }
+}
+
+/// The paper's problem over the internal parameters z ([`Basis`]).
 struct Plain<'a, 'b> {
     views: &'a [View<'b>],
     x0: [f64; PARAMS],
     options: &'a BundleAdjustOptions,
     reference: Option<Projector>,
+    internal: &'a Internal,
 }
 
 impl Problem<PARAMS> for Plain<'_, '_> {
-    fn eval(&mut self, x: &[f64; PARAMS], jacobian: bool, sink: &mut dyn RowSink<PARAMS>) -> Result<()> {
+    fn eval(&mut self, z: &[f64; PARAMS], jacobian: bool, sink: &mut dyn RowSink<PARAMS>) -> Result<()> {
+        let x = &self.internal.basis.to_params(z);
         let proj = Projector::new(x);
         for view in self.views {
             for p in view.points {
@@ -226,7 +274,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
                 let pr = proj.project(p.world_mm, view.e_com_ma, jacobian)?;
                 let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
                 for row in 0..2 {
-                    let mut j = pr.d_params[row];
+                    let mut j = self.internal.row(&pr.d_params[row]);
                     if f != 1.0 {
                         j.iter_mut().for_each(|v| *v *= f);
                     }
@@ -235,7 +283,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
             }
         }
         if self.options.hold_a0 {
-            hold_rows(x, &self.x0, |r, j| sink.push(r, j));
+            hold_rows(x, &self.x0, self.internal, |r, j| sink.push(r, j));
         }
         Ok(())
     }
@@ -243,7 +291,8 @@ impl Problem<PARAMS> for Plain<'_, '_> {
     /// The same rows as [`Plain::eval`], folded view by view through the 13 per-view
     /// variables: J_view = J_reduced C_view, so J_view^T J_view = C^T (J_reduced^T
     /// J_reduced) C costs 13 x 13 per point instead of 25 x 25.
-    fn normal_equations(&mut self, x: &[f64; PARAMS], out: &mut NormalEquations<PARAMS>) -> Result<bool> {
+    fn normal_equations(&mut self, z: &[f64; PARAMS], out: &mut NormalEquations<PARAMS>) -> Result<bool> {
+        let x = &self.internal.basis.to_params(z);
         let proj = Projector::new(x);
         for view in self.views {
             let mut normal = ViewNormal::ZERO;
@@ -256,10 +305,10 @@ impl Problem<PARAMS> for Plain<'_, '_> {
                 normal.add_point(&pr.d_reduced, f, r);
             }
             let (a, g) = normal.expand();
-            fold_view(&a, &g, &proj.chain(view.e_com_ma)?, &mut out.a, &mut out.g);
+            fold_view(&a, &g, &proj.chain_in(view.e_com_ma, &self.internal.basis)?, &mut out.a, &mut out.g);
         }
         if self.options.hold_a0 {
-            hold_rows(x, &self.x0, |r, j| out.push(r, j));
+            hold_rows(x, &self.x0, self.internal, |r, j| out.push(r, j));
         }
         Ok(true)
     }
@@ -381,6 +430,7 @@ fn fold_view(
 
 struct Eiv<'a, 'b> {
     views: &'a [View<'b>],
+    internal: &'a Internal,
     x0: [f64; PARAMS],
     options: &'a BundleAdjustOptions,
     sigma_px: f64,
@@ -403,6 +453,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
         sink: &mut dyn BlockRowSink<PARAMS, 2>,
     ) -> Result<()> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
+        let x = &self.internal.basis.to_params(x);
         let proj = Projector::new(x);
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
@@ -412,7 +463,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
             let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
             let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
             for row in 0..2 {
-                let mut j = pr.d_params[row];
+                let mut j = self.internal.row(&pr.d_params[row]);
                 j.iter_mut().for_each(|v| *v *= f);
                 sink.push(f * e[row], &j, &[f * pr.d_z_w[row], f * pr.d_e[row]]);
             }
@@ -432,6 +483,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
         out: &mut BlockNormal<'_, PARAMS, 2>,
     ) -> Result<bool> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
+        let x = &self.internal.basis.to_params(x);
         let proj = Projector::new(x);
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
@@ -446,7 +498,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
             normal.add_point(&pr.d_reduced, f, r);
         }
         let (a, g) = normal.expand();
-        let c = proj.chain(e_ma)?;
+        let c = proj.chain_in(e_ma, &self.internal.basis)?;
         fold_view(&a, &g, &c, out.u, out.gx);
         // W = C^T a C_y, V = C_y^T a C_y, g_y = C_y^T g.
         let cy = proj.shift_chain(e_ma);
@@ -483,7 +535,7 @@ impl Eiv<'_, '_> {
         sink.push(y[0] / self.sigma_z_mm, &zero, &[1.0 / self.sigma_z_mm, 0.0]);
         sink.push(y[1] / self.sigma_e_ma, &zero, &[0.0, 1.0 / self.sigma_e_ma]);
         if self.options.hold_a0 && block == 0 {
-            hold_rows(x, &self.x0, |r, j| sink.push(r, j, &[0.0, 0.0]));
+            hold_rows(x, &self.x0, self.internal, |r, j| sink.push(r, j, &[0.0, 0.0]));
         }
     }
 }
@@ -539,12 +591,17 @@ pub fn bundle_adjust(
     }
     let x0 = to_params(init);
     let initial_rms_px = rms(views, &x0, None)?;
-    let mut plain = lm::solve(&mut Plain { views, x0, options, reference: None }, x0, &options.lm)?;
+    // The solver works in the well-conditioned internal parameters z (basis.rs).
+    let internal = Internal::new(views, init);
+    let basis = internal.basis;
+    let z0 = basis.to_internal(&x0);
+    let internal = &internal;
+    let mut plain = lm::solve(&mut Plain { views, x0, options, reference: None, internal }, z0, &options.lm)?;
     if options.robust.is_some() {
         // IRLS: reweight around the latest estimate until it stops moving.
         for _ in 0..IRLS_MAX_ROUNDS {
-            let reference = Some(Projector::new(&plain.x));
-            let next = lm::solve(&mut Plain { views, x0, options, reference }, plain.x, &options.lm)?;
+            let reference = Some(Projector::new(&basis.to_params(&plain.x)));
+            let next = lm::solve(&mut Plain { views, x0, options, reference, internal }, plain.x, &options.lm)?;
             let moved = next.x.iter().zip(plain.x.iter()).any(|(a, b)| (a - b).abs() > 1e-9 * b.abs().max(1e-12));
             plain = next;
             if !moved {
@@ -556,12 +613,14 @@ pub fn bundle_adjust(
     let sigma_plain = libm::sqrt(plain.sigma2);
     let (sigma_z_mm, sigma_e_ma, sigma_px) = match options.estimator {
         Estimator::Paper => {
+            let x = basis.to_params(&plain.x);
+            let covariance = internal.covariance(&plain.covariance);
             return Ok(BundleAdjustReport {
-                model: from_params(&plain.x),
-                std: std_of(&plain.covariance),
-                covariance: plain.covariance,
+                model: from_params(&x),
+                std: std_of(&covariance),
+                covariance,
                 initial_rms_px,
-                rms_px: rms(views, &plain.x, None)?,
+                rms_px: rms(views, &x, None)?,
                 iterations: plain.iterations,
                 stop: plain.stop,
                 sigma_px: sigma_plain,
@@ -589,18 +648,20 @@ pub fn bundle_adjust(
         needed: views.len(),
         got: MAX_EIV_VIEWS,
     })?;
-    let reference = options.robust.map(|_| Projector::new(&plain.x));
-    let mut problem = Eiv { views, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
+    let reference = options.robust.map(|_| Projector::new(&basis.to_params(&plain.x)));
+    let mut problem = Eiv { views, internal, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
     let r = lm::solve_blocks(&mut problem, plain.x, y, &options.lm, scratch)?;
     for (c, yj) in corrections.iter_mut().zip(y.iter()) {
         *c = ViewCorrection { dz_mm: yj[0], de_ma: yj[1] };
     }
+    let x = basis.to_params(&r.x);
+    let covariance = internal.covariance(&r.covariance);
     Ok(BundleAdjustReport {
-        model: from_params(&r.x),
-        std: std_of(&r.covariance),
-        covariance: r.covariance,
+        model: from_params(&x),
+        std: std_of(&covariance),
+        covariance,
         initial_rms_px,
-        rms_px: rms(views, &r.x, Some(y))?,
+        rms_px: rms(views, &x, Some(y))?,
         iterations: r.iterations,
         stop: r.stop,
         sigma_px,
@@ -650,7 +711,10 @@ mod tests {
         let options =
             BundleAdjustOptions { hold_a0: true, robust: Some(RobustLoss::Huber { k_px: 1.0 }), ..Default::default() };
         let x0 = to_params(&truth);
-        let mut plain = Plain { views: &views, x0, options: &options, reference: Some(Projector::new(&x0)) };
+        let internal = Internal::new(&views, &truth);
+        let mut plain =
+            Plain { views: &views, x0, options: &options, reference: Some(Projector::new(&x0)), internal: &internal };
+        let x = internal.basis.to_internal(&x);
         let mut folded = NormalEquations::<PARAMS>::ZERO;
         assert!(plain.normal_equations(&x, &mut folded).unwrap());
         let mut streamed = NormalEquations::<PARAMS>::ZERO;
@@ -680,8 +744,11 @@ mod tests {
         let options =
             BundleAdjustOptions { hold_a0: true, robust: Some(RobustLoss::Cauchy { k_px: 1.0 }), ..Default::default() };
         let x0 = to_params(&truth);
+        let internal = Internal::new(&views, &truth);
+        let x = internal.basis.to_internal(&x);
         let mut eiv = Eiv {
             views: &views,
+            internal: &internal,
             x0,
             options: &options,
             sigma_px: 0.3,

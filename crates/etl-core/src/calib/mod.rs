@@ -7,6 +7,7 @@
 //! 3. [`distortion_init`]: k1, p1, p2 per view (Eq. 23), then a1..a9 (Eq. 18);
 //! 4. [`bundle_adjust()`]: Eq. 24 by Levenberg-Marquardt, optionally errors-in-variables.
 
+pub mod basis;
 pub mod bundle_adjust;
 pub mod crlb;
 pub mod distortion_init;
