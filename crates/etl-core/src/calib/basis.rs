@@ -126,27 +126,30 @@ impl Basis {
 
     fn map(&self, v: &[f64; PARAMS], forward: bool) -> [f64; PARAMS] {
         let mut out = *v;
-        for start in [6, 10] {
-            let a = [v[start], v[start + 1], v[start + 2], v[start + 3]];
+        let (ex, ey) = (v.get(6..10), v.get(10..14));
+        for (start, part) in [(6, ex), (10, ey)] {
+            let Some(&[a0, a1, a2, a3]) = part else { continue };
+            let a = [a0, a1, a2, a3];
             let m = if forward {
                 mono_to_cheb(a, 4, self.e_mid, self.e_half)
             } else {
                 cheb_to_mono(a, 4, self.e_mid, self.e_half)
             };
-            out[start..start + 4].copy_from_slice(&m);
+            if let Some(slot) = out.get_mut(start..start + 4) {
+                slot.copy_from_slice(&m);
+            }
         }
-        for c in 0..3 {
-            let s = 16 + 3 * c;
+        for s in [16, 19, 22] {
             // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
-            let a = [v[s + 2], v[s + 1], v[s], 0.0];
+            let Some(&[q2, q1, q0]) = v.get(s..s + 3) else { continue };
             let m = if forward {
-                mono_to_cheb(a, 3, self.w_mid, self.w_half)
+                mono_to_cheb([q0, q1, q2, 0.0], 3, self.w_mid, self.w_half)
             } else {
-                cheb_to_mono(a, 3, self.w_mid, self.w_half)
+                cheb_to_mono([q0, q1, q2, 0.0], 3, self.w_mid, self.w_half)
             };
-            out[s] = m[2];
-            out[s + 1] = m[1];
-            out[s + 2] = m[0];
+            if let Some(slot) = out.get_mut(s..s + 3) {
+                slot.copy_from_slice(&[m[2], m[1], m[0]]);
+            }
         }
         out
     }
