@@ -36,7 +36,10 @@ pub(crate) fn line_diff(a: f32, b: f32) -> f32 {
 /// Keeps the saddles that pass the ring test at one of `radii` (detection-level px; several
 /// because printed squares often do not quite touch at their corners, and a small ring then
 /// misses one of the dark squares, while a large ring reaches past small squares).
-pub(crate) fn corners(s: &Plane, saddles: &[Saddle], radii: &[f32]) -> Vec<Corner> {
+///
+/// Only the `max_saddles` strongest saddles are tested (the sharp staircase of edges seen at
+/// the detection level gives many weak ones, all rejected by the ring test).
+pub(crate) fn corners(s: &Plane, saddles: &[Saddle], radii: &[f32], max_saddles: usize) -> Vec<Corner> {
     let rings: Vec<(f32, Vec<[f32; 2]>)> = radii
         .iter()
         .map(|&radius| {
@@ -51,13 +54,14 @@ pub(crate) fn corners(s: &Plane, saddles: &[Saddle], radii: &[f32]) -> Vec<Corne
         .collect();
     let mut out = Vec::new();
     let mut v = [0.0f32; RING_SAMPLES];
-    for sd in saddles {
+    for sd in saddles.iter().take(max_saddles) {
         for (radius, ring) in &rings {
             if !s.contains(sd.p, radius + 1.0) {
                 continue;
             }
             for (val, o) in v.iter_mut().zip(ring) {
-                *val = s.bilinear(sd.p[0] + o[0], sd.p[1] + o[1]);
+                // Inside: `contains` above keeps radius + 1 px from every border.
+                *val = s.bilinear_inside(sd.p[0] + o[0], sd.p[1] + o[1]);
             }
             if let Some(line) = ring_lines(&v) {
                 out.push(Corner { p: sd.p, line });

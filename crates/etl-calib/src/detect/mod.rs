@@ -6,7 +6,7 @@
 //! another size, is an [`Error::BoardNotFound`] with the reason, never a wrong grid.
 //!
 //! The steps, one file each:
-//! 1. `response`: the image is box-downsampled (2x above 1280 x 800, 4x above 2560 x 1600)
+//! 1. `response`: the image is box-downsampled (2x from 1280 x 800, 4x from 2560 x 1600)
 //!    and smoothed (Gaussian, sigma 1.5 px at that level); local maxima of the saddle
 //!    response `I_xy^2 - I_xx I_yy` are the candidates.
 //! 2. `candidates`: a ring test keeps the candidates around which the image is light, dark,
@@ -22,7 +22,9 @@
 //!    put in the documented order.
 //! 5. `refine`: every corner is refined at full resolution by point symmetry
 //!    (`I(c + d) = I(c - d)` over a disc of radius 0.4 of the local square size, at most
-//!    24 px), unbiased under blur and perspective.
+//!    24 px, on the neighbourhood smoothed by a [1 2 1] binomial), unbiased under blur and
+//!    perspective: RMS 0.009 / 0.008 / 0.010 px on rendered 1936 x 1458 boards at blur
+//!    sigma 0.5 / 1.5 / 3 px with noise 2 grey levels (tests/detect.rs).
 //!
 //! # Order
 //! Index `j * cols + i` is corner (i, j); the board square between corners (0,0), (1,0),
@@ -212,7 +214,7 @@ pub fn detect_view<T: Sample>(img: GrayView<'_, T>, pattern: Pattern) -> Result<
     let level = plane::downsample(img, factor);
     let smooth = plane::gaussian(&level, SMOOTH_SIGMA);
     let saddles = response::saddles(&smooth);
-    let corners = candidates::corners(&smooth, &saddles, &RING_RADII);
+    let corners = candidates::corners(&smooth, &saddles, &RING_RADII, 12 * pattern.len() + 1000);
     if corners.len() < pattern.len() {
         return Err(Error::BoardNotFound(format!(
             "{} corner-like points in the image, the {pattern} board has {}",

@@ -97,6 +97,19 @@ impl Plane {
         top + fy * (bot - top)
     }
 
+    /// Bilinear interpolation at a point known to be inside `[0, w-2] x [0, h-2]`.
+    #[inline(always)]
+    pub fn bilinear_inside(&self, x: f32, y: f32) -> f32 {
+        let (x0, y0) = (x as usize, y as usize);
+        let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+        let i = y0 * self.width + x0;
+        let w = self.width;
+        let (a, b, c, d) = (self.data[i], self.data[i + 1], self.data[i + w], self.data[i + w + 1]);
+        let top = a + fx * (b - a);
+        let bot = c + fx * (d - c);
+        top + fy * (bot - top)
+    }
+
     pub fn contains(&self, p: [f32; 2], margin: f32) -> bool {
         p[0] >= margin
             && p[1] >= margin

@@ -20,8 +20,8 @@ pub(crate) struct Saddle {
 /// grey levels after smoothing stays two orders of magnitude below.
 const RESPONSE_FLOOR: f32 = 0.3;
 /// Maxima weaker than this fraction of the strongest are not corners of the same board
-/// (allows a 20-fold contrast drop across the image from uneven lighting).
-const RESPONSE_RELATIVE: f32 = 0.0025;
+/// (allows a 10-fold contrast drop across the image from uneven lighting).
+const RESPONSE_RELATIVE: f32 = 0.01;
 
 /// Local maxima (5 x 5) of the saddle response of the smoothed plane, strongest first.
 pub(crate) fn saddles(s: &Plane) -> Vec<Saddle> {

