@@ -12,6 +12,7 @@ pub mod lens;
 pub mod lens_sim;
 pub mod measure;
 pub mod model;
+pub mod render;
 pub mod report;
 pub mod sharpness;
 pub mod simulate;
@@ -54,6 +55,8 @@ enum Command {
     Sharpness(sharpness::Args),
     /// Find the checkerboard's corners in images (sub-pixel, stable order).
     Detect(detect::Args),
+    /// A synthetic image of a board through the paper rig's camera, and its true corners.
+    Render(render::Args),
     /// Drive an Optotune lens (Lens Driver 4) or the virtual lens: info, current, temperature, hold.
     Lens(lens::Args),
     /// Run a virtual lens on a pseudo-terminal and print its port path.
@@ -61,8 +64,12 @@ enum Command {
 }
 
 /// Prints `value` as one JSON object on stdout.
+///
+/// A closed stdout (`etlcal ... --json | head`) is not an error worth a panic: the write
+/// is dropped.
 pub fn print_json(value: &serde_json::Value) {
-    println!("{value}");
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stdout().lock(), "{value}");
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -78,6 +85,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Study(a) => study::run(a),
         Command::Sharpness(a) => sharpness::run(a),
         Command::Detect(a) => detect::run(a),
+        Command::Render(a) => render::run(a),
         Command::Lens(a) => lens::run(a),
         Command::LensSim(a) => lens_sim::run(a),
     }
