@@ -33,7 +33,7 @@ impl Window {
         let rr = (radius * radius) as f64;
         let mut dy = 0;
         while dy <= r {
-            let mut dx = -r + ((r % step) as isize);
+            let mut dx = -r + (r % step);
             while dx <= r {
                 if dy > 0 || dx > 0 {
                     let d2 = (dx * dx + dy * dy) as f64;
