@@ -13,6 +13,7 @@ pub mod report;
 pub mod sharpness;
 pub mod simulate;
 pub mod study;
+pub mod thermal_calibration;
 pub mod zhang;
 
 pub use error::{Error, Result};

@@ -16,7 +16,7 @@
 
 use std::path::PathBuf;
 
-use etl_core::thermal::{ThermalCalibration, ThermalFit};
+use etl_core::thermal::ThermalCalibration;
 use serde_json::json;
 
 use super::print_json;
@@ -38,6 +38,34 @@ pub enum ThermalCommand {
     Eval(EvalArgs),
     /// Fit the cubic surface E_T(T, E_in) to a CSV table and write etlcal.thermal/1.
     Fit(FitArgs),
+    /// The temperature-calibration procedure (section 4.1) against the virtual lens and the
+    /// synthetic camera: refocus at every temperature step, fit, write the surface and table.
+    Calibrate(CalibrateArgs),
+}
+
+/// Arguments of `etlcal thermal calibrate`.
+#[derive(clap::Args, Debug)]
+pub struct CalibrateArgs {
+    /// Run against the virtual lens (on a pseudo-terminal, through the real client) and the
+    /// synthetic camera. Required: a real rig needs a camera binding (from Python or Rust).
+    #[arg(long, required = true)]
+    pub r#virtual: bool,
+    /// Where to write the fitted surface (etlcal.thermal/1).
+    #[arg(long, value_name = "thermal.json")]
+    pub out: PathBuf,
+    /// Where to write the raw table (CSV `temperature_c,e_in_ma,e_t_ma`; default: beside
+    /// --out, with .csv).
+    #[arg(long, value_name = "TABLE.csv")]
+    pub table: Option<PathBuf>,
+    /// Half width of each refocus search, mA.
+    #[arg(long, default_value_t = 20.0)]
+    pub search_ma: f64,
+    /// A 5 x 5 grid (40..240 mA by 50, 27..37 degC by 2.5) instead of the paper's 11 x 11.
+    #[arg(long)]
+    pub quick: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `etlcal thermal eval`.
@@ -77,7 +105,70 @@ pub fn run(args: Args) -> Result<()> {
     match args.command {
         ThermalCommand::Eval(a) => run_eval(a),
         ThermalCommand::Fit(a) => run_fit(a),
+        ThermalCommand::Calibrate(a) => run_calibrate(a),
     }
+}
+
+/// Runs `etlcal thermal calibrate --virtual`.
+pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
+    use crate::thermal_calibration::virtual_rig::{surface_error_ma, VirtualCamera, VirtualClimate};
+    use crate::thermal_calibration::{run_procedure, ProcedureOptions};
+    use etl_hw::client::{LensClient, OpenOptions};
+    use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
+    let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
+    for p in [&args.out, &table] {
+        if let Some(parent) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if !parent.is_dir() {
+                return Err(Error::InvalidInput(format!("{}: output directory does not exist", parent.display())));
+            }
+        }
+    }
+    let mut options = ProcedureOptions { search_half_width_ma: args.search_ma, ..ProcedureOptions::default() };
+    if args.quick {
+        options.e_in_grid_ma = vec![40.0, 90.0, 140.0, 190.0, 240.0];
+        options.temperatures_c = vec![27.0, 29.5, 32.0, 34.5, 37.0];
+    }
+    let config = VirtualLensConfig::default();
+    let truth = config.surface;
+    let device = VirtualLens::spawn(config).map_err(|e| Error::InvalidInput(format!("virtual lens: {e}")))?;
+    let mut client = LensClient::open(device.path(), OpenOptions::default())
+        .map_err(|e| Error::InvalidInput(format!("{}: {e}", device.path().display())))?;
+    let mut camera = VirtualCamera::new(&device);
+    let mut climate = VirtualClimate(&device);
+    let r = run_procedure(&mut client, &mut camera, &mut climate, &options, !args.json)?;
+    let t0 = options.temperatures_c.first().copied().unwrap_or(27.0);
+    let (referenced, absolute) = surface_error_ma(&r, &truth, t0, r.calibration.t_range_c, r.calibration.e_in_range_ma)?;
+    crate::formats::thermal::write_thermal_table(&table, &r.samples)?;
+    let file = ThermalFile::new(&r.calibration, r.rms_ma);
+    file.save(&args.out)?;
+    if args.json {
+        print_json(&json!({
+            "format": file.format,
+            "coefficients": file.coefficients,
+            "rms_ma": file.rms_ma,
+            "t_range_c": file.t_range_c,
+            "e_in_range_ma": file.e_in_range_ma,
+            "samples": r.samples.len(),
+            "frames": r.frames,
+            "surface_error_ma": referenced,
+            "surface_error_absolute_ma": absolute,
+            "out": args.out.display().to_string(),
+            "table": table.display().to_string(),
+        }));
+    } else {
+        println!(
+            "{} samples from {} frames; fit RMS {:.3} mA; against the virtual lens's true surface: {:.3} mA RMS \
+             (referenced to {t0} degC as the procedure is), {:.3} mA absolute; wrote {} and {}",
+            r.samples.len(),
+            r.frames,
+            r.rms_ma,
+            referenced,
+            absolute,
+            args.out.display(),
+            table.display()
+        );
+    }
+    Ok(())
 }
 
 /// Runs `etlcal thermal eval`.
@@ -110,21 +201,8 @@ pub fn run_eval(args: EvalArgs) -> Result<()> {
 /// Runs `etlcal thermal fit`.
 pub fn run_fit(args: FitArgs) -> Result<()> {
     let rows = read_thermal_table(&args.table)?;
-    // Scale the fit by the table's own ranges when they are not degenerate (the solve
-    // reports degenerate tables by name below).
-    let (mut t, mut e) = ([f64::INFINITY, f64::NEG_INFINITY], [f64::INFINITY, f64::NEG_INFINITY]);
-    for r in &rows {
-        t = [t[0].min(r.temperature_c), t[1].max(r.temperature_c)];
-        e = [e[0].min(r.e_in_ma), e[1].max(r.e_in_ma)];
-    }
-    let mut fit = ThermalFit::with_ranges(t, e).unwrap_or_default();
-    for (i, r) in rows.iter().enumerate() {
-        fit.add(r.temperature_c, r.e_in_ma, r.e_t_ma)
-            .map_err(|err| Error::InvalidInput(format!("{}: data row {}: {err}", args.table.display(), i + 1)))?;
-    }
-    let (cal, rms_ma) = fit
-        .solve_calibration()
-        .map_err(|err| Error::InvalidInput(format!("{}: cannot fit the surface: {err}", args.table.display())))?;
+    let (cal, rms_ma) = crate::thermal_calibration::fit_samples(&rows)
+        .map_err(|err| Error::InvalidInput(format!("{}: {err}", args.table.display())))?;
     let file = ThermalFile::new(&cal, rms_ma);
     file.save(&args.out)?;
     if args.json {

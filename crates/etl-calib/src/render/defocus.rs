@@ -109,7 +109,7 @@ pub(crate) fn blur_varying(
     levels: &[u16],
     (pw, ph): (usize, usize),
     pad: usize,
-    (w, h): (usize, usize),
+    (w, _h): (usize, usize),
     dst: &mut [f32],
 ) {
     use rayon::prelude::*;
