@@ -1,6 +1,8 @@
-//! `etlcal simulate --out DIR --observations-only [--config sim.json] [--seed N]
+//! `etlcal simulate --out DIR [--observations-only] [--config sim.json] [--seed N]
 //! [--stage-noise-um X] [--setting-views] [--json]`: the paper rig's synthetic data without
-//! calibrating: observations.json (with the paper's noise model, lens-off views included,
+//! calibrating: without `--observations-only`, every view rendered by the synthetic camera
+//! (`views/`, `offstate/`) with `dataset.json` recording them (`simulate::images`); always
+//! observations.json (with the paper's noise model, lens-off views included,
 //! and with `--setting-views` the per-setting baseline's views), a0.json (the A0 a
 //! lens-off calibration would give) and truth.json (the true model and per-view errors).
 //! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
@@ -105,22 +107,38 @@ pub fn simulate(config: &SimConfig) -> Simulation {
 
 /// Runs `etlcal simulate`.
 pub fn run(args: Args) -> Result<()> {
-    if !args.observations_only {
-        return Err(Error::InvalidInput("rendering images is not implemented yet: pass --observations-only".into()));
-    }
     if !args.out.is_dir() {
         return Err(Error::InvalidInput(format!("{}: output directory does not exist", args.out.display())));
     }
     let config = config_from(&args)?;
     let sim = simulate(&config);
+    if !args.observations_only && config.setting_rig.is_some() {
+        return Err(Error::InvalidInput(
+            "rendering the per-setting baseline's views is not supported: pass --observations-only with --setting-views"
+                .into(),
+        ));
+    }
     write_simulation(&sim, &args.out)?;
+    let mut images = 0;
+    if !args.observations_only {
+        let dataset = crate::simulate::images::render_rig(
+            &sim,
+            &args.out,
+            &crate::simulate::images::ImageOptions::default(),
+            config.seed,
+            !args.json,
+        )?;
+        images = dataset.views.len() + dataset.offstate_views.len();
+        dataset.save(&args.out.join("dataset.json"))?;
+    }
     let points: usize = sim.observations.views.iter().map(|v| v.points.len()).sum();
     if args.json {
         print_json(&json!({"views": sim.observations.views.len(), "points": points,
-            "setting_views": sim.observations.setting_views.len(), "out": args.out}));
+            "setting_views": sim.observations.setting_views.len(), "images": images, "out": args.out}));
     } else {
+        let rendered = if images > 0 { format!("{images} images, dataset.json, ") } else { String::new() };
         println!(
-            "wrote observations.json, a0.json, truth.json ({} views, {points} points, {} setting views) to {}",
+            "wrote {rendered}observations.json, a0.json, truth.json ({} views, {points} points, {} setting views) to {}",
             sim.observations.views.len(),
             sim.observations.setting_views.len(),
             args.out.display()
