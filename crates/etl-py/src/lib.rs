@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 pub mod arrays;
 pub mod calibration;
 pub mod errors;
+pub mod images;
 pub mod observations;
 pub mod physics;
 pub mod pipeline;
@@ -31,5 +32,9 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::simulate_paper_rig, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::cramer_rao_std, m)?)?;
+    m.add_function(wrap_pyfunction!(images::detect_corners, m)?)?;
+    m.add_function(wrap_pyfunction!(images::sharpness, m)?)?;
+    m.add_function(wrap_pyfunction!(images::render, m)?)?;
+    m.add_function(wrap_pyfunction!(images::autofocus, m)?)?;
     Ok(())
 }

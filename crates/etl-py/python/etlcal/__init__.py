@@ -11,6 +11,9 @@ Main nouns:
 - `ThermalSurface`, `ThermalCalibration`: temperature compensation (E_com = E_in - E_T).
 - `LensPhysics` and `etlcal.physics`: the lens's physical model.
 - `etlcal.simulate.paper_rig(seed)`: the paper's simulated rig.
+- Images (2-D uint8/uint16 numpy arrays): `detect_corners(image, "14x12")`,
+  `sharpness(image, "cpbd")`, `render(e_com_ma=...)` (the synthetic camera),
+  `autofocus(callable)`.
 
 Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 `NotConvergedError`, `BoardNotFoundError`, `FileError` (also an OSError), `DeviceError`,
@@ -33,8 +36,12 @@ from ._etlcal import (
     Simulation,
     ThermalCalibration,
     ThermalSurface,
+    autofocus,
     calibrate,
     cramer_rao_std,
+    detect_corners,
+    render,
+    sharpness,
 )
 from . import physics, simulate
 
@@ -55,8 +62,12 @@ __all__ = [
     "Simulation",
     "ThermalCalibration",
     "ThermalSurface",
+    "autofocus",
     "calibrate",
     "cramer_rao_std",
+    "detect_corners",
+    "render",
+    "sharpness",
     "physics",
     "simulate",
 ]

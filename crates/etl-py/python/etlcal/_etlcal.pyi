@@ -1,6 +1,6 @@
 """Type stubs of the native module etlcal._etlcal (units: mm, mA, degC, px)."""
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, final, overload
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -324,3 +324,39 @@ def cramer_rao_std(
     sigma_e_ma: Optional[float] = None,
     thermal: Optional[ThermalCalibration] = None,
 ) -> Dict[str, _F64]: ...
+
+
+def detect_corners(image: np.ndarray, pattern: Union[str, Tuple[int, int]]) -> np.ndarray:
+    """Inner corners of a checkerboard, sub-pixel: (cols*rows, 2) float64 pixels, row by row.
+    `image`: 2-D uint8/uint16. Raises BoardNotFoundError (absent, partial, other size)."""
+    ...
+
+def sharpness(image: np.ndarray, metric: str = "cpbd") -> float:
+    """Sharpness (larger is sharper): "cpbd" (bit-exact with the cpbd package), "tenengrad",
+    "laplacian", "brenner", "normvar"."""
+    ...
+
+def render(
+    e_com_ma: float = 150.0,
+    z_mm: Optional[float] = None,
+    pattern: Union[str, Tuple[int, int], None] = None,
+    square_mm: float = 1.5,
+    aperture_mm: float = 2.5,
+    blur_px: float = 0.0,
+    noise: float = 2.0,
+    bit_depth: int = 8,
+    seed: int = 1,
+) -> Tuple[np.ndarray, np.ndarray]:
+    """A synthetic image of a board on the paper rig (mm, mA, px) and its true corners (N, 2)."""
+    ...
+
+def autofocus(
+    sharpness_at: Callable[[float], float],
+    range_ma: Tuple[float, float] = (75.0, 240.0),
+    coarse_points: int = 7,
+    max_evaluations: int = 15,
+    tolerance_ma: float = 0.1,
+) -> Dict[str, Any]:
+    """Current of best focus: coarse scan then Brent; returns best_ma, best_sharpness,
+    evaluations, bracket_ma, converged."""
+    ...

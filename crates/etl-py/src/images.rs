@@ -1,0 +1,261 @@
+//! Images: `detect_corners`, `sharpness`, `render` and `autofocus`, numpy arrays in and out.
+//!
+//! Images are 2-D numpy arrays of dtype uint8 or uint16 (rows x columns, grey levels);
+//! a C-contiguous uint8/uint16 array is read in place, anything else is copied once.
+
+use etl_calib::detect::{detect_view, GrayView, Pattern};
+use etl_calib::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};
+use etl_calib::sharpness::{sharpness as measure, sharpness_u16, Gray16Image, Metric};
+use etl_core::focus::{autofocus as search, AutofocusOptions};
+use etl_core::model::CameraModel;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::arrays::points_out;
+use crate::errors::{input_error, CoreResultExt};
+
+/// A grey image read from numpy: 8- or 16-bit samples, row-major.
+enum Pixels {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+}
+
+/// Reads a 2-D uint8 or uint16 array as (width, height, samples); `f` gets a borrowed
+/// view of C-contiguous arrays without a copy.
+fn with_image<R>(obj: &Bound<'_, PyAny>, f: impl FnOnce(usize, usize, ImageRef<'_>) -> PyResult<R>) -> PyResult<R> {
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u8>>() {
+        let (h, w) = (a.shape()[0], a.shape()[1]);
+        return match a.as_slice() {
+            Ok(s) if a.is_c_contiguous() => f(w, h, ImageRef::U8(s)),
+            _ => {
+                let owned = Pixels::U8(a.as_array().iter().copied().collect());
+                call_owned(w, h, &owned, f)
+            }
+        };
+    }
+    if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u16>>() {
+        let (h, w) = (a.shape()[0], a.shape()[1]);
+        return match a.as_slice() {
+            Ok(s) if a.is_c_contiguous() => f(w, h, ImageRef::U16(s)),
+            _ => {
+                let owned = Pixels::U16(a.as_array().iter().copied().collect());
+                call_owned(w, h, &owned, f)
+            }
+        };
+    }
+    Err(input_error("image must be a 2-D numpy array of dtype uint8 or uint16 (rows x columns)"))
+}
+
+fn call_owned<R>(
+    w: usize,
+    h: usize,
+    owned: &Pixels,
+    f: impl FnOnce(usize, usize, ImageRef<'_>) -> PyResult<R>,
+) -> PyResult<R> {
+    match owned {
+        Pixels::U8(v) => f(w, h, ImageRef::U8(v)),
+        Pixels::U16(v) => f(w, h, ImageRef::U16(v)),
+    }
+}
+
+/// Borrowed samples.
+#[derive(Clone, Copy)]
+enum ImageRef<'a> {
+    U8(&'a [u8]),
+    U16(&'a [u16]),
+}
+
+fn pattern_of(obj: &Bound<'_, PyAny>) -> PyResult<Pattern> {
+    if let Ok(s) = obj.extract::<String>() {
+        return s.parse::<Pattern>().py();
+    }
+    let (c, r): (usize, usize) =
+        obj.extract().map_err(|_| input_error("pattern must be \"CxR\" (e.g. \"14x12\") or (cols, rows)"))?;
+    Pattern::new(c, r).py()
+}
+
+/// Finds the inner corners of a checkerboard in an image, refined to sub-pixel accuracy.
+///
+/// Args:
+///     image: 2-D numpy array, dtype uint8 or uint16 (rows x columns).
+///     pattern: inner corners as "CxR" (e.g. "14x12") or (cols, rows).
+///
+/// Returns: (cols * rows, 2) float64 array of pixels (u, v), px, (0, 0) the centre of the
+/// top-left pixel; row by row on the board (corner (i, j) at index j * cols + i); the
+/// board square between corners (0, 0) and (1, 1) is the dark one.
+///
+/// Raises: BoardNotFoundError when the board is absent, partly outside the image or of
+/// another size (never a wrong grid); InputError for a bad array or pattern.
+#[pyfunction]
+pub fn detect_corners<'py>(
+    py: Python<'py>,
+    image: &Bound<'py, PyAny>,
+    pattern: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let pattern = pattern_of(pattern)?;
+    let corners = with_image(image, |w, h, px| {
+        let bad = || input_error(format!("image of {w} x {h} px has an inconsistent buffer"));
+        py.detach(|| match px {
+            ImageRef::U8(s) => GrayView::new(w, h, s).map(|v| detect_view(v, pattern)),
+            ImageRef::U16(s) => GrayView::new(w, h, s).map(|v| detect_view(v, pattern)),
+        })
+        .ok_or_else(bad)?
+        .py()
+    })?;
+    points_out(py, corners.corners_px, false)
+}
+
+fn metric_of(name: &str) -> PyResult<Metric> {
+    name.parse::<Metric>().py()
+}
+
+/// The sharpness of an image (larger is sharper).
+///
+/// Args:
+///     image: 2-D numpy array, dtype uint8 or uint16.
+///     metric: "cpbd" (the reference package's value exactly; 8-bit scale, a uint16 image
+///         is divided by 257 first), "tenengrad", "laplacian", "brenner" or "normvar".
+///
+/// Returns: the value (float; CPBD in [0, 1]).
+///
+/// Raises: InputError for an unknown metric or an image too small (CPBD needs 64 x 64).
+#[pyfunction]
+#[pyo3(signature = (image, metric="cpbd"))]
+pub fn sharpness(py: Python<'_>, image: &Bound<'_, PyAny>, metric: &str) -> PyResult<f64> {
+    let metric = metric_of(metric)?;
+    with_image(image, |w, h, px| {
+        let bad = || input_error(format!("image of {w} x {h} px has an inconsistent buffer"));
+        match px {
+            ImageRef::U8(s) => {
+                let img = image::GrayImage::from_raw(w as u32, h as u32, s.to_vec()).ok_or_else(bad)?;
+                py.detach(|| measure(&img, metric)).py()
+            }
+            ImageRef::U16(s) => {
+                let img = Gray16Image::from_raw(w as u32, h as u32, s.to_vec()).ok_or_else(bad)?;
+                py.detach(|| sharpness_u16(&img, metric)).py()
+            }
+        }
+    })
+}
+
+/// Renders a checkerboard on the paper rig's stage through the paper rig's camera (the
+/// synthetic camera: exact anti-aliasing, distortion, thin-lens defocus, noise).
+///
+/// Args:
+///     e_com_ma: compensated lens current, mA.
+///     z_mm: stage position Z_W, mm (None: the rig's focus position at the current).
+///     pattern: inner corners "CxR" or (cols, rows).
+///     square_mm: square size, mm.
+///     aperture_mm: aperture diameter for the defocus, mm (0: none).
+///     blur_px: additional uniform Gaussian blur, px.
+///     noise: read noise, grey levels (8-bit scale).
+///     bit_depth: 8 or 16.
+///     seed: noise seed.
+///
+/// Returns: (image, corners): a (1458, 1936) uint8/uint16 array and the (N, 2) true
+/// pixels of the inner corners in `detect_corners`' order.
+#[pyfunction]
+#[pyo3(signature = (e_com_ma=150.0, z_mm=None, pattern=None, square_mm=1.5, aperture_mm=2.5, blur_px=0.0,
+    noise=2.0, bit_depth=8, seed=1))]
+#[allow(clippy::too_many_arguments)]
+pub fn render<'py>(
+    py: Python<'py>,
+    e_com_ma: f64,
+    z_mm: Option<f64>,
+    pattern: Option<&Bound<'py, PyAny>>,
+    square_mm: f64,
+    aperture_mm: f64,
+    blur_px: f64,
+    noise: f64,
+    bit_depth: u8,
+    seed: u64,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let pattern = match pattern {
+        Some(p) => pattern_of(p)?,
+        None => Pattern::new(14, 12).py()?,
+    };
+    let depth = match bit_depth {
+        8 => BitDepth::Eight,
+        16 => BitDepth::Sixteen,
+        b => return Err(input_error(format!("bit_depth must be 8 or 16, got {b}"))),
+    };
+    let truth = CameraModel::paper_rig();
+    let z = z_mm.unwrap_or_else(|| etl_calib::simulate::focused_z_mm(e_com_ma));
+    let board = etl_calib::formats::dataset::Board { inner_corners: [pattern.cols, pattern.rows], square_mm };
+    board.validate().py()?;
+    let scene = Scene::new(truth, e_com_ma, board, z, CameraModel::PAPER_IMAGE_SIZE);
+    let focus = if aperture_mm > 0.0 { Optics::paper_focus(&truth, e_com_ma, aperture_mm) } else { Optics::sharp() };
+    let opts = RenderOptions {
+        optics: Optics { base_sigma_px: blur_px, ..focus },
+        photometry: Photometry { read_noise: noise, ..Photometry::default() },
+        bit_depth: depth,
+        seed,
+    };
+    let r = py.detach(|| render_board(&scene, &opts)).py()?;
+    let (w, h) = (r.image.width as usize, r.image.height as usize);
+    let image = match depth {
+        BitDepth::Eight => {
+            let a = Array2::from_shape_vec((h, w), r.image.data.iter().map(|&v| v.min(255) as u8).collect())
+                .map_err(|e| input_error(e.to_string()))?;
+            a.into_pyarray(py).into_any()
+        }
+        BitDepth::Sixteen => {
+            let a = Array2::from_shape_vec((h, w), r.image.data).map_err(|e| input_error(e.to_string()))?;
+            a.into_pyarray(py).into_any()
+        }
+    };
+    Ok((image, points_out(py, r.corners_px, false)?))
+}
+
+/// Finds the lens current of best focus with few evaluations: a coarse scan of the range,
+/// then Brent's parabolic/golden-section refinement (etl-core's `focus::autofocus`).
+///
+/// Args:
+///     sharpness_at: a callable current_ma -> sharpness (float, larger is sharper), e.g.
+///         set the lens, grab a frame, return `etlcal.sharpness(frame, "tenengrad")`.
+///     range_ma: (lo, hi) searched, mA.
+///     coarse_points: points of the coarse scan (>= 3; spaced finer than the peak's width).
+///     max_evaluations: total calls allowed (>= coarse_points).
+///     tolerance_ma: stop when the bracket is narrower than twice this, mA.
+///
+/// Returns: dict with "best_ma", "best_sharpness", "evaluations", "bracket_ma",
+/// "converged".
+///
+/// Raises: InputError for bad options or a non-finite sharpness; the callable's own
+/// exception as it is.
+#[pyfunction]
+#[pyo3(signature = (sharpness_at, range_ma=(75.0, 240.0), coarse_points=7, max_evaluations=15, tolerance_ma=0.1))]
+pub fn autofocus<'py>(
+    py: Python<'py>,
+    sharpness_at: &Bound<'py, PyAny>,
+    range_ma: (f64, f64),
+    coarse_points: usize,
+    max_evaluations: usize,
+    tolerance_ma: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let options = AutofocusOptions { range_ma: [range_ma.0, range_ma.1], coarse_points, max_evaluations, tolerance_ma };
+    let mut raised: Option<PyErr> = None;
+    let r = search(
+        |e| match sharpness_at.call1((e,)).and_then(|v| v.extract::<f64>()) {
+            Ok(v) => Ok(v),
+            Err(err) => {
+                raised = Some(err);
+                Err(etl_core::Error::InvalidArgument { what: "sharpness_at raised" })
+            }
+        },
+        &options,
+    );
+    if let Some(err) = raised {
+        return Err(err);
+    }
+    let r = r.py()?;
+    let d = PyDict::new(py);
+    d.set_item("best_ma", r.best_ma)?;
+    d.set_item("best_sharpness", r.best_sharpness)?;
+    d.set_item("evaluations", r.evaluations)?;
+    d.set_item("bracket_ma", (r.bracket_ma[0], r.bracket_ma[1]))?;
+    d.set_item("converged", r.converged)?;
+    Ok(d)
+}

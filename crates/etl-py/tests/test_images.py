@@ -1,0 +1,87 @@
+"""Images from Python: render, detect_corners, sharpness, autofocus; the same numbers as
+the Rust side, and each bad input as the right exception class."""
+import numpy as np
+import pytest
+
+import etlcal
+
+
+@pytest.fixture(scope="module")
+def board():
+    return etlcal.render(e_com_ma=150.0, seed=5)
+
+
+def test_render_gives_an_image_and_its_true_corners(board):
+    image, corners = board
+    assert image.shape == (1458, 1936) and image.dtype == np.uint8
+    assert corners.shape == (168, 2)
+    truth = etlcal.simulate.paper_rig(1).truth
+    # The default stage position is the rig's focus position at the current (22 mm at
+    # 150 mA); corner (i, j) is the model's projection of (1.5 i, 1.5 j, 22).
+    want = truth.project(np.array([[0.0, 0.0, 22.0], [1.5 * 3, 1.5 * 2, 22.0]]), 150.0)
+    assert np.allclose(corners[[0, 2 * 14 + 3]], want, atol=1e-9)
+
+
+def test_detect_corners_finds_the_true_corners_to_hundredths_of_a_pixel(board):
+    image, corners = board
+    found = etlcal.detect_corners(image, "14x12")
+    assert found.shape == (168, 2)
+    inside = (corners[:, 0] > 0) & (corners[:, 0] < 1935) & (corners[:, 1] > 0) & (corners[:, 1] < 1457)
+    if inside.all():
+        rms = np.sqrt(np.mean(np.sum((found - corners) ** 2, axis=1)))
+        assert rms < 0.03
+    # The same from a 16-bit image and from a non-contiguous view (copied once).
+    wide = image.astype(np.uint16) * 257
+    assert np.allclose(etlcal.detect_corners(wide, (14, 12)), found, atol=1e-3)
+    assert np.allclose(etlcal.detect_corners(np.asfortranarray(image), "14x12"), found)
+
+
+def test_detect_corners_bad_input(board):
+    image, _ = board
+    with pytest.raises(etlcal.BoardNotFoundError):
+        etlcal.detect_corners(image, "15x12")
+    with pytest.raises(etlcal.BoardNotFoundError):
+        etlcal.detect_corners(np.full((480, 640), 128, np.uint8), "9x6")
+    with pytest.raises(etlcal.InputError):
+        etlcal.detect_corners(image.astype(np.float32), "14x12")
+    with pytest.raises(etlcal.InputError):
+        etlcal.detect_corners(image, "14by12")
+    with pytest.raises(etlcal.InputError):
+        etlcal.detect_corners(image[None], "14x12")
+
+
+def test_sharpness_measures_and_bad_input(board):
+    image, _ = board
+    blurred, _ = etlcal.render(e_com_ma=150.0, blur_px=2.0, seed=5)
+    for metric in ["cpbd", "tenengrad", "laplacian", "brenner", "normvar"]:
+        v = etlcal.sharpness(image, metric)
+        assert np.isfinite(v)
+        if metric != "cpbd":
+            assert v > etlcal.sharpness(blurred, metric), metric
+    assert 0.0 <= etlcal.sharpness(image) <= 1.0
+    with pytest.raises(etlcal.InputError):
+        etlcal.sharpness(image, "sharpest")
+    with pytest.raises(etlcal.InputError):
+        etlcal.sharpness(np.zeros((10, 10), np.uint8), "cpbd")
+
+
+def test_autofocus_on_a_python_callable():
+    calls = []
+
+    def peak(e):
+        calls.append(e)
+        return 1.0 / np.sqrt(1.0 + ((e - 151.3) / 4.0) ** 2)
+
+    r = etlcal.autofocus(peak)
+    assert abs(r["best_ma"] - 151.3) < 0.5 and r["evaluations"] == len(calls) <= 15
+    assert all(75.0 <= e <= 240.0 for e in calls)
+
+    def broken(e):
+        raise RuntimeError("camera unplugged")
+
+    with pytest.raises(RuntimeError, match="camera unplugged"):
+        etlcal.autofocus(broken)
+    with pytest.raises(etlcal.InputError):
+        etlcal.autofocus(peak, range_ma=(100.0, 50.0))
+    with pytest.raises(etlcal.InputError):
+        etlcal.autofocus(lambda e: float("nan"))
