@@ -9,6 +9,7 @@ pub mod arrays;
 pub mod calibration;
 pub mod errors;
 pub mod images;
+pub mod lens;
 pub mod observations;
 pub mod physics;
 pub mod pipeline;
@@ -36,5 +37,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::sharpness, m)?)?;
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
     m.add_function(wrap_pyfunction!(images::autofocus, m)?)?;
+    m.add_class::<lens::Lens>()?;
+    m.add_class::<lens::VirtualLens>()?;
     Ok(())
 }

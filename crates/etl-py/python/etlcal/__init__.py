@@ -11,6 +11,8 @@ Main nouns:
 - `ThermalSurface`, `ThermalCalibration`: temperature compensation (E_com = E_in - E_T).
 - `LensPhysics` and `etlcal.physics`: the lens's physical model.
 - `etlcal.simulate.paper_rig(seed)`: the paper's simulated rig.
+- Hardware: `Lens(port)` (Optotune Lens Driver 4; a context manager) and `VirtualLens()`
+  (the simulated device on a pseudo-terminal: `Lens(VirtualLens().port)`).
 - Images (2-D uint8/uint16 numpy arrays): `detect_corners(image, "14x12")`,
   `sharpness(image, "cpbd")`, `render(e_com_ma=...)` (the synthetic camera),
   `autofocus(callable)`.
@@ -30,12 +32,14 @@ from ._etlcal import (
     Error,
     FileError,
     InputError,
+    Lens,
     LensPhysics,
     NotConvergedError,
     Observations,
     Simulation,
     ThermalCalibration,
     ThermalSurface,
+    VirtualLens,
     autofocus,
     calibrate,
     cramer_rao_std,
@@ -56,12 +60,14 @@ __all__ = [
     "Error",
     "FileError",
     "InputError",
+    "Lens",
     "LensPhysics",
     "NotConvergedError",
     "Observations",
     "Simulation",
     "ThermalCalibration",
     "ThermalSurface",
+    "VirtualLens",
     "autofocus",
     "calibrate",
     "cramer_rao_std",
