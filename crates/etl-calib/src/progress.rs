@@ -9,7 +9,8 @@ pub fn bar(len: usize, label: &str, show: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let b = ProgressBar::new(len as u64);
-    if let Ok(style) = ProgressStyle::with_template("{msg:>10} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})") {
+    if let Ok(style) = ProgressStyle::with_template("{msg:>10} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})")
+    {
         b.set_style(style);
     }
     b.set_message(label.to_owned());

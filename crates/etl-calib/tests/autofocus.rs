@@ -61,7 +61,10 @@ fn autofocus_finds_the_best_current_within_half_a_milliampere() {
             Ok(sharpness(&img, METRIC).expect("sharpness"))
         };
         let r = autofocus(measure, &AutofocusOptions::default()).unwrap();
-        println!("board at {z:.2} mm: best focus {want:.2} mA, found {:.2} mA with {} renders", r.best_ma, r.evaluations);
+        println!(
+            "board at {z:.2} mm: best focus {want:.2} mA, found {:.2} mA with {} renders",
+            r.best_ma, r.evaluations
+        );
         assert!(r.evaluations <= 15);
         let tolerance_ma = if target < 190.0 { 0.5 } else { 1.0 };
         assert!((r.best_ma - want).abs() < tolerance_ma, "found {} mA, truth {want} mA", r.best_ma);

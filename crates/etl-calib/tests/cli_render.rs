@@ -35,7 +35,8 @@ fn renders_an_image_whose_detected_corners_are_the_true_ones() {
     if in_image.iter().all(|b| b.as_bool() == Some(true)) {
         let mut s = 0.0;
         for (a, b) in found.iter().zip(corners) {
-            let (du, dv) = (a[0].as_f64().unwrap() - b[0].as_f64().unwrap(), a[1].as_f64().unwrap() - b[1].as_f64().unwrap());
+            let (du, dv) =
+                (a[0].as_f64().unwrap() - b[0].as_f64().unwrap(), a[1].as_f64().unwrap() - b[1].as_f64().unwrap());
             s += du * du + dv * dv;
         }
         let rms = (s / found.len() as f64).sqrt();

@@ -137,10 +137,8 @@ fn rendered_move(
     let j0 = blocks[0].1[1].max(blocks[1].1[1]);
     let i1 = (blocks[0].1[0] + blocks[0].0.inner_corners[0]).min(blocks[1].1[0] + blocks[1].0.inner_corners[0]);
     let j1 = (blocks[0].1[1] + blocks[0].0.inner_corners[1]).min(blocks[1].1[1] + blocks[1].0.inner_corners[1]);
-    let block = crate::formats::dataset::Board {
-        inner_corners: [i1.saturating_sub(i0), j1.saturating_sub(j0)],
-        square_mm,
-    };
+    let block =
+        crate::formats::dataset::Board { inner_corners: [i1.saturating_sub(i0), j1.saturating_sub(j0)], square_mm };
     let first = [i0, j0];
     let mut out = vec![];
     for (n, z) in [z_mm, z_mm + 2.0].into_iter().enumerate() {
@@ -152,7 +150,10 @@ fn rendered_move(
             ..RenderOptions::default()
         };
         let image = render(&scene, &opts)?.image.to_dynamic();
-        let det = crate::detect::detect_dynamic(&image, crate::detect::Pattern::new(block.inner_corners[0], block.inner_corners[1])?)?;
+        let det = crate::detect::detect_dynamic(
+            &image,
+            crate::detect::Pattern::new(block.inner_corners[0], block.inner_corners[1])?,
+        )?;
         out.push(
             det.indexed()
                 .map(|([i, j], p)| ([(i0 + i) as f64 * square_mm, (j0 + j) as f64 * square_mm], p))

@@ -137,7 +137,8 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     let mut climate = VirtualClimate(&device);
     let r = run_procedure(&mut client, &mut camera, &mut climate, &options, !args.json)?;
     let t0 = options.temperatures_c.first().copied().unwrap_or(27.0);
-    let (referenced, absolute) = surface_error_ma(&r, &truth, t0, r.calibration.t_range_c, r.calibration.e_in_range_ma)?;
+    let (referenced, absolute) =
+        surface_error_ma(&r, &truth, t0, r.calibration.t_range_c, r.calibration.e_in_range_ma)?;
     crate::formats::thermal::write_thermal_table(&table, &r.samples)?;
     let file = ThermalFile::new(&r.calibration, r.rms_ma);
     file.save(&args.out)?;

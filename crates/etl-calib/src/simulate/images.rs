@@ -89,7 +89,9 @@ pub fn visible_block(
             pre[l + 1][k + 1] = pre[l][k + 1] + pre[l + 1][k] - pre[l][k] + usize::from(!grid[l][k]);
         }
     }
-    let outside = |k0: usize, l0: usize, k1: usize, l1: usize| pre[l1 + 1][k1 + 1] + pre[l0][k0] - pre[l0][k1 + 1] - pre[l1 + 1][k0];
+    let outside = |k0: usize, l0: usize, k1: usize, l1: usize| {
+        pre[l1 + 1][k1 + 1] + pre[l0][k0] - pre[l0][k1 + 1] - pre[l1 + 1][k0]
+    };
     let mut best: Option<(usize, [usize; 4])> = None;
     // Inner corners i0..=i1 need square corners (i0 + 1 - 1)..=(i1 + 1 + 1) in k.
     for i0 in 0..cols {
@@ -107,9 +109,7 @@ pub fn visible_block(
             }
         }
     }
-    best.map(|(_, [i0, i1, j0, j1])| {
-        (Board { inner_corners: [i1 - i0 + 1, j1 - j0 + 1], square_mm: s }, [i0, j0])
-    })
+    best.map(|(_, [i0, i1, j0, j1])| (Board { inner_corners: [i1 - i0 + 1, j1 - j0 + 1], square_mm: s }, [i0, j0]))
 }
 
 /// `cam` with its world frame moved so that the board's corner `first` is the origin:
@@ -135,13 +135,7 @@ struct Job {
 ///
 /// Errors: a view in which not even 3 x 3 corners fit the image (named); rendering or
 /// writing failures.
-pub fn render_rig(
-    sim: &Simulation,
-    dir: &Path,
-    options: &ImageOptions,
-    seed: u64,
-    progress: bool,
-) -> Result<Dataset> {
+pub fn render_rig(sim: &Simulation, dir: &Path, options: &ImageOptions, seed: u64, progress: bool) -> Result<Dataset> {
     let truth = &sim.truth;
     let size = sim.observations.image_size;
     let (paper_inner, paper_square) = PAPER_BOARD;
@@ -149,14 +143,16 @@ pub fn render_rig(
     let mut dataset = Dataset::new(size, paper_board);
     let mut jobs = vec![];
     for (k, view) in sim.observations.views.iter().enumerate() {
-        let z_rec = view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
-            Error::InvalidInput(format!("simulated view {k} has no points, so no stage position"))
-        })?;
+        let z_rec =
+            view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
+                Error::InvalidInput(format!("simulated view {k} has no points, so no stage position"))
+            })?;
         let e_rec = view.e_com_ma.unwrap_or(view.e_in_ma);
         let z = z_rec + sim.true_dz_mm.get(k).copied().unwrap_or(0.0);
         let e = e_rec + sim.true_de_ma.get(k).copied().unwrap_or(0.0);
-        let (block, first) = visible_block(truth, e, paper_board, z, size, options.margin_px)
-            .ok_or_else(|| Error::InvalidInput(format!("view {k}: not even 3 x 3 corners of the board fit the image")))?;
+        let (block, first) = visible_block(truth, e, paper_board, z, size, options.margin_px).ok_or_else(|| {
+            Error::InvalidInput(format!("view {k}: not even 3 x 3 corners of the board fit the image"))
+        })?;
         let image = PathBuf::from(format!("views/view{k:02}.png"));
         jobs.push(Job {
             path: dir.join(&image),
