@@ -37,6 +37,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::sharpness, m)?)?;
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
     m.add_function(wrap_pyfunction!(images::autofocus, m)?)?;
+    m.add_function(wrap_pyfunction!(images::zhang, m)?)?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<lens::VirtualLens>()?;
     Ok(())

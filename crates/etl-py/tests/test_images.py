@@ -85,3 +85,20 @@ def test_autofocus_on_a_python_callable():
         etlcal.autofocus(peak, range_ma=(100.0, 50.0))
     with pytest.raises(etlcal.InputError):
         etlcal.autofocus(lambda e: float("nan"))
+
+
+def test_zhang_on_rendered_lens_off_views_and_bad_input():
+    sim = etlcal.simulate.paper_rig(1)
+    obs = sim.observations
+    views = []
+    for k in range(obs.offstate_count):
+        v = obs.offstate_view(k)
+        views.append((v["world_mm"][:, :2], v["pixels"]))
+    r = etlcal.zhang(views, (1936, 1458))
+    truth = sim.truth.intrinsics(0.0)
+    assert abs(r["fx"] / truth[0, 0] - 1.0) < 2e-3 and abs(r["fy"] / truth[1, 1] - 1.0) < 2e-3
+    assert abs(r["rms_px"] - 0.2 * np.sqrt(2.0)) < 0.05 and r["views_used"] == len(views)
+    with pytest.raises(etlcal.InputError):
+        etlcal.zhang(views[:2], (1936, 1458))
+    with pytest.raises(etlcal.InputError):
+        etlcal.zhang([(views[0][0], views[0][1][:-1])] * 3, (1936, 1458))

@@ -46,6 +46,7 @@ from ._etlcal import (
     detect_corners,
     render,
     sharpness,
+    zhang,
 )
 from . import physics, simulate
 
@@ -74,6 +75,7 @@ __all__ = [
     "detect_corners",
     "render",
     "sharpness",
+    "zhang",
     "physics",
     "simulate",
 ]
