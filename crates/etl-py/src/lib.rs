@@ -40,5 +40,6 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::zhang, m)?)?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<lens::VirtualLens>()?;
+    m.add_function(wrap_pyfunction!(lens::thermal_calibration, m)?)?;
     Ok(())
 }

@@ -46,6 +46,7 @@ from ._etlcal import (
     detect_corners,
     render,
     sharpness,
+    thermal_calibration,
     zhang,
 )
 from . import physics, simulate
@@ -75,6 +76,7 @@ __all__ = [
     "detect_corners",
     "render",
     "sharpness",
+    "thermal_calibration",
     "zhang",
     "physics",
     "simulate",

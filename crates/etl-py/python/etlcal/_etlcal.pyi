@@ -392,3 +392,17 @@ def zhang(views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]], image_size: Tupl
     """Zhang's monofocal calibration from (board_mm (N,2), pixels (N,2)) views: fx, fy, u0, v0
     (px), k1, p1, p2, std, rms_px, iterations, views_used, poses."""
     ...
+
+def thermal_calibration(
+    lens: Lens,
+    capture: Callable[[], np.ndarray],
+    set_temperature: Callable[[float], None],
+    place_board: Optional[Callable[[], None]] = None,
+    e_in_grid_ma: Optional[Sequence[float]] = None,
+    temperatures_c: Optional[Sequence[float]] = None,
+    search_ma: float = 20.0,
+    metric: str = "tenengrad",
+) -> Dict[str, Any]:
+    """The section 4.1 temperature procedure with your camera and climate as callables:
+    returns calibration (ThermalCalibration), rms_ma, samples ((N, 3): T, E_in, E_T), frames."""
+    ...
