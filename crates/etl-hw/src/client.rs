@@ -39,7 +39,12 @@ pub struct OpenOptions {
 impl Default for OpenOptions {
     /// No handshake, 500 ms timeout, 115200 baud, `Aw`.
     fn default() -> Self {
-        OpenOptions { handshake: false, timeout: Duration::from_millis(500), baud_rate: 115_200, legacy_set_current: false }
+        OpenOptions {
+            handshake: false,
+            timeout: Duration::from_millis(500),
+            baud_rate: 115_200,
+            legacy_set_current: false,
+        }
     }
 }
 
@@ -347,7 +352,9 @@ impl LensClient {
             other => return Err(HwError::Protocol(format!("bad version reply {other:?}"))),
         };
         let lens_serial = match self.transact(Command::LensSerial)? {
-            Some(Reply::LensSerial(b)) => b.iter().map(|&c| if c.is_ascii_graphic() { char::from(c) } else { '?' }).collect(),
+            Some(Reply::LensSerial(b)) => {
+                b.iter().map(|&c| if c.is_ascii_graphic() { char::from(c) } else { '?' }).collect()
+            }
             other => return Err(HwError::Protocol(format!("bad lens-serial reply {other:?}"))),
         };
         let status = match self.transact(Command::Status)? {
@@ -450,7 +457,10 @@ impl LensClient {
         let max_c = etl_core::error::finite(max_c, "max temperature")?;
         let min_c = etl_core::error::finite(min_c, "min temperature")?;
         if !(min_c < max_c) || min_c < -40.0 || max_c > 125.0 {
-            return Err(etl_core::Error::InvalidArgument { what: "temperature limits need -40 <= min < max <= 125 degC" }.into());
+            return Err(etl_core::Error::InvalidArgument {
+                what: "temperature limits need -40 <= min < max <= 125 degC",
+            }
+            .into());
         }
         let cmd = Command::SetTemperatureLimits {
             max_x16: crate::codec::scaling::temperature_raw(max_c),
@@ -475,7 +485,10 @@ impl LensClient {
             Some(Reply::ControlledMode { status, max_fp, min_fp }) => {
                 let r = self.range(status, min_fp, max_fp);
                 if status & 0b100 != 0 {
-                    return Err(HwError::Protocol("controlled mode refused: no temperature limits received (call set_temperature_limits_c first)".into()));
+                    return Err(HwError::Protocol(
+                        "controlled mode refused: no temperature limits received (call set_temperature_limits_c first)"
+                            .into(),
+                    ));
                 }
                 self.lock().fp_range_dpt = Some((r.min_dpt, r.max_dpt));
                 Ok(r)
@@ -494,7 +507,10 @@ impl LensClient {
             (i.firmware, i.fp_range_dpt)
         };
         let Some((lo, hi)) = range else {
-            return Err(etl_core::Error::InvalidArgument { what: "enter controlled mode before setting a focal power" }.into());
+            return Err(etl_core::Error::InvalidArgument {
+                what: "enter controlled mode before setting a focal power",
+            }
+            .into());
         };
         let code = fw.fp_code(dpt.clamp(lo.min(hi), hi.max(lo)));
         self.transact(Command::SetFocalPower { code })?;

@@ -73,7 +73,12 @@ impl NtcModel {
     pub fn temperature_c(&self, r_ohm: f64) -> Result<f64, Error> {
         finite(r_ohm, "thermistor resistance")?;
         if r_ohm <= 0.0 {
-            return Err(Error::OutOfRange { what: "thermistor resistance (ohm)", value: r_ohm, min: 0.0, max: f64::INFINITY });
+            return Err(Error::OutOfRange {
+                what: "thermistor resistance (ohm)",
+                value: r_ohm,
+                min: 0.0,
+                max: f64::INFINITY,
+            });
         }
         let inv_t = match *self {
             NtcModel::Beta { r0_ohm, t0_c, beta_k } => 1.0 / (t0_c + ZERO_C_IN_K) + (r_ohm / r0_ohm).ln() / beta_k,
@@ -133,7 +138,12 @@ impl Divider {
         let x = (adc / self.adc_full_scale).clamp(1e-5, 0.99999);
         let r = self.pullup_ohm * x / (1.0 - x) - self.series_ohm;
         if r <= 0.0 {
-            return Err(Error::OutOfRange { what: "thermistor resistance from the ADC (ohm)", value: r, min: 0.0, max: f64::INFINITY });
+            return Err(Error::OutOfRange {
+                what: "thermistor resistance from the ADC (ohm)",
+                value: r,
+                min: 0.0,
+                max: f64::INFINITY,
+            });
         }
         Ok(r)
     }

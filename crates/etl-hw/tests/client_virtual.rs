@@ -12,7 +12,9 @@ use proptest::prelude::*;
 
 fn spawn(config: VirtualLensConfig) -> (VirtualLens, LensClient) {
     let device = VirtualLens::spawn(config).unwrap();
-    let client = LensClient::open(device.path(), OpenOptions { timeout: Duration::from_millis(300), ..Default::default() }).unwrap();
+    let client =
+        LensClient::open(device.path(), OpenOptions { timeout: Duration::from_millis(300), ..Default::default() })
+            .unwrap();
     (device, client)
 }
 
@@ -24,7 +26,8 @@ fn sync(client: &LensClient) {
 
 #[test]
 fn identify_reads_everything() {
-    let (_device, client) = spawn(VirtualLensConfig { upper_limit_code: 3000, lower_limit_code: -1000, ..Default::default() });
+    let (_device, client) =
+        spawn(VirtualLensConfig { upper_limit_code: 3000, lower_limit_code: -1000, ..Default::default() });
     let info = client.identify().unwrap();
     assert_eq!(info.firmware_type, FirmwareType::Other(b'C'));
     assert_eq!(info.firmware_version, "3.8.1.5");
@@ -75,7 +78,8 @@ fn handshake_zeroes_the_current_and_reconnect_without_it_keeps_it() {
 
 #[test]
 fn limits_clamp_and_nan_is_refused() {
-    let (device, client) = spawn(VirtualLensConfig { upper_limit_code: 2800, lower_limit_code: 0, ..Default::default() });
+    let (device, client) =
+        spawn(VirtualLensConfig { upper_limit_code: 2800, lower_limit_code: 0, ..Default::default() });
     let [lo, hi] = client.limits_ma();
     assert_eq!(lo, 0.0);
     let r = client.set_current_ma(250.0).unwrap();
@@ -129,7 +133,8 @@ fn old_firmware_falls_back_to_ta_and_legacy_a() {
         ..Default::default()
     })
     .unwrap();
-    let client = LensClient::open(device.path(), OpenOptions { legacy_set_current: true, ..Default::default() }).unwrap();
+    let client =
+        LensClient::open(device.path(), OpenOptions { legacy_set_current: true, ..Default::default() }).unwrap();
     assert_eq!(client.temperature_c().unwrap(), 28.0);
     assert_eq!(client.temperature_c().unwrap(), 28.0); // second call goes to TA directly
     client.set_current_ma(80.0).unwrap();

@@ -49,10 +49,16 @@ fn reply() -> impl Strategy<Value = Reply> {
         any::<i16>().prop_map(|code| Reply::LowerLimit { code }),
         // `MwCA` is answered by ControlledMode, never by Mode(Controlled).
         mode().prop_filter("not controlled", |m| *m != Mode::Controlled).prop_map(Reply::Mode),
-        (any::<u8>(), any::<i16>(), any::<i16>())
-            .prop_map(|(status, max_fp, min_fp)| Reply::ControlledMode { status, max_fp, min_fp }),
-        (any::<u8>(), any::<i16>(), any::<i16>())
-            .prop_map(|(status, max_fp, min_fp)| Reply::TemperatureLimits { status, max_fp, min_fp }),
+        (any::<u8>(), any::<i16>(), any::<i16>()).prop_map(|(status, max_fp, min_fp)| Reply::ControlledMode {
+            status,
+            max_fp,
+            min_fp
+        }),
+        (any::<u8>(), any::<i16>(), any::<i16>()).prop_map(|(status, max_fp, min_fp)| Reply::TemperatureLimits {
+            status,
+            max_fp,
+            min_fp
+        }),
         any::<u8>().prop_map(|code| Reply::ActiveMode { code }),
         any::<i16>().prop_map(|code| Reply::FocalPower { code }),
         any::<i16>().prop_map(|raw| Reply::Temperature { raw }),

@@ -10,9 +10,11 @@ use etl_hw::HwError;
 
 fn spawn(config: VirtualLensConfig, timeout_ms: u64) -> (VirtualLens, LensClient) {
     let device = VirtualLens::spawn(config).unwrap();
-    let client =
-        LensClient::open(device.path(), OpenOptions { timeout: Duration::from_millis(timeout_ms), ..Default::default() })
-            .unwrap();
+    let client = LensClient::open(
+        device.path(),
+        OpenOptions { timeout: Duration::from_millis(timeout_ms), ..Default::default() },
+    )
+    .unwrap();
     (device, client)
 }
 

@@ -120,7 +120,11 @@ pub fn run(args: Args) -> Result<()> {
             (Some(d), p)
         }
     };
-    let options = OpenOptions { handshake: args.handshake, timeout: Duration::from_millis(args.timeout_ms), ..Default::default() };
+    let options = OpenOptions {
+        handshake: args.handshake,
+        timeout: Duration::from_millis(args.timeout_ms),
+        ..Default::default()
+    };
     let client = LensClient::open(&path, options)?;
     match args.command {
         LensCommand::Info => {

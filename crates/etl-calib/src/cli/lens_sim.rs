@@ -36,7 +36,9 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let [lo, hi] = [args.lower_limit, args.upper_limit];
     if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= -292.84 && hi <= 292.84) {
-        return Err(Error::InvalidInput(format!("limits [{lo}, {hi}] mA must satisfy -292.84 <= lower <= upper <= 292.84")));
+        return Err(Error::InvalidInput(format!(
+            "limits [{lo}, {hi}] mA must satisfy -292.84 <= lower <= upper <= 292.84"
+        )));
     }
     let config = VirtualLensConfig {
         time_scale: args.time_scale,

@@ -247,7 +247,9 @@ impl Command {
         let mut f = Vec::with_capacity(12);
         f.extend_from_slice(self.name().as_bytes());
         match *self {
-            Command::SetCurrent { code } | Command::SetCurrentLegacy { code } => f.extend_from_slice(&code.to_be_bytes()),
+            Command::SetCurrent { code } | Command::SetCurrentLegacy { code } => {
+                f.extend_from_slice(&code.to_be_bytes())
+            }
             Command::GetCurrent | Command::ReadMaxCurrent | Command::ReadUpperLimit | Command::ReadLowerLimit => {
                 f.extend_from_slice(&[0, 0])
             }

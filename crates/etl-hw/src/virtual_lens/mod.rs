@@ -210,8 +210,11 @@ impl VirtualLens {
             fp_code: 0,
             temperature_limits_x16: None,
         };
-        let dir = std::env::temp_dir()
-            .join(format!("etl-vlens-{}-{}", std::process::id(), SERIAL.fetch_add(1, Ordering::Relaxed)));
+        let dir = std::env::temp_dir().join(format!(
+            "etl-vlens-{}-{}",
+            std::process::id(),
+            SERIAL.fetch_add(1, Ordering::Relaxed)
+        ));
         std::fs::create_dir_all(&dir).map_err(|e| HwError::Virtual(format!("{}: {e}", dir.display())))?;
         let link = dir.join("lens");
         let (pty, name) = open_pty()?;
