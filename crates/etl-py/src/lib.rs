@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 
 pub mod arrays;
 pub mod calibration;
+pub mod dataset;
 pub mod errors;
 pub mod images;
 pub mod lens;
@@ -27,6 +28,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<thermal::ThermalCalibration>()?;
     m.add_class::<physics::LensPhysics>()?;
     m.add_class::<observations::Observations>()?;
+    m.add_class::<dataset::Dataset>()?;
     m.add_class::<observations::A0>()?;
     m.add_class::<pose::BoardPose>()?;
     m.add_class::<simulate::Simulation>()?;
