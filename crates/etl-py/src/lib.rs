@@ -16,6 +16,7 @@ pub mod physics;
 pub mod pipeline;
 pub mod pose;
 pub mod simulate;
+pub mod studies;
 pub mod thermal;
 
 #[pymodule]
@@ -40,6 +41,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
     m.add_function(wrap_pyfunction!(images::autofocus, m)?)?;
     m.add_function(wrap_pyfunction!(images::zhang, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::study, m)?)?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<lens::VirtualLens>()?;
     m.add_function(wrap_pyfunction!(lens::thermal_calibration, m)?)?;

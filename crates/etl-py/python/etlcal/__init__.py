@@ -47,6 +47,7 @@ from ._etlcal import (
     detect_corners,
     render,
     sharpness,
+    study,
     thermal_calibration,
     zhang,
 )
@@ -78,6 +79,7 @@ __all__ = [
     "detect_corners",
     "render",
     "sharpness",
+    "study",
     "thermal_calibration",
     "zhang",
     "physics",
