@@ -57,6 +57,14 @@ def main() -> None:
     rust = rust_median_ns("model", "e_com_one")
     py = python_ns(lambda: s.e_com(143.2, 31.7), 200000)
     rows.append(("ThermalSurface.e_com, one", rust, py))
+    # detect_corners on the very image the Rust bench detects (it writes it next to its
+    # estimates); OpenCV only reads the PNG here.
+    rust = rust_median_ns("detect", "detect_1936x1458_14x12/blur_1.5", package="etl-calib")
+    import cv2
+
+    img = cv2.imread(str(TARGET / "criterion" / "detect_view_blur_1.5.png"), cv2.IMREAD_GRAYSCALE)
+    py = python_ns(lambda: etlcal.detect_corners(img, "14x12"), 5)
+    rows.append(("detect_corners, 1936 x 1458", rust, py))
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, etlcal {etlcal.__version__}")
     print("| call | Rust (criterion median) | Python (best of 7) | overhead |")
     print("|---|---|---|---|")
@@ -64,7 +72,7 @@ def main() -> None:
         return f"{ns:.0f} ns" if abs(ns) < 1000 else f"{ns / 1000:.2f} us"
 
     for name, r, p in rows:
-        print(f"| {name} | {fmt(r)} | {fmt(p)} | {fmt(p - r)} |")
+        print(f"| {name} | {fmt(r)} | {fmt(p)} | {fmt(p - r)} ({100 * (p - r) / r:+.1f} %) |")
 
 
 if __name__ == "__main__":
