@@ -36,7 +36,8 @@ fn bench(c: &mut Criterion) {
     for blur in [0.5, 1.5, 3.0] {
         let img = view(blur);
         // The same image for benches/py_overhead.py (the Python binding's overhead).
-        let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| "../../target".into(), std::path::PathBuf::from);
+        let target =
+            std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| "../../target".into(), std::path::PathBuf::from);
         let _ = std::fs::create_dir_all(target.join("criterion"));
         let _ = img.save(target.join("criterion").join(format!("detect_view_blur_{blur}.png")));
         g.bench_function(format!("blur_{blur}"), |b| b.iter(|| detect_corners(&img, pattern).expect("found")));

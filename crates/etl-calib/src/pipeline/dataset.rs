@@ -87,7 +87,12 @@ pub fn observations_from_dataset(
     }
     for (i, v) in dataset.setting_views.iter().enumerate() {
         let board = v.board.unwrap_or(dataset.board);
-        jobs.push((Kind::Setting(i), Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
+        jobs.push((
+            Kind::Setting(i),
+            Dataset::resolve(dataset_path, &v.image),
+            board,
+            v.first_corner.unwrap_or([0, 0]),
+        ));
     }
     // Missing files fail the run before any detection work.
     for (_, path, _, _) in &jobs {
@@ -220,10 +225,7 @@ impl CornerDetector for ImageDetector {
     }
 }
 
-fn find_corners(
-    img: &image::GrayImage,
-    inner: [usize; 2],
-) -> std::result::Result<Vec<([usize; 2], [f64; 2])>, String> {
+fn find_corners(img: &image::GrayImage, inner: [usize; 2]) -> std::result::Result<Vec<([usize; 2], [f64; 2])>, String> {
     let pattern = crate::detect::Pattern::new(inner[0], inner[1]).map_err(|e| e.to_string())?;
     let det = crate::detect::detect_corners(img, pattern).map_err(|e| match e {
         Error::BoardNotFound(m) => m,

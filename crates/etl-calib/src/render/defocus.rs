@@ -113,9 +113,10 @@ pub(crate) fn blur_varying(
     dst: &mut [f32],
 ) {
     use rayon::prelude::*;
-    let (lo, hi) = levels.par_chunks(pw.max(1)).map(|r| {
-        r.iter().fold((u16::MAX, 0u16), |(a, b), &l| (a.min(l), b.max(l)))
-    }).reduce(|| (u16::MAX, 0), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+    let (lo, hi) = levels
+        .par_chunks(pw.max(1))
+        .map(|r| r.iter().fold((u16::MAX, 0u16), |(a, b), &l| (a.min(l), b.max(l))))
+        .reduce(|| (u16::MAX, 0), |a, b| (a.0.min(b.0), a.1.max(b.1)));
     if hi == 0 || lo > hi {
         dst.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             let s = (y + pad) * pw + pad;

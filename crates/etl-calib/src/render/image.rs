@@ -99,7 +99,8 @@ mod tests {
 
     #[test]
     fn png_round_trip_8_and_16_bit() {
-        for (depth, data) in [(BitDepth::Eight, vec![0u16, 40, 210, 255, 7, 9]), (BitDepth::Sixteen, vec![0, 1, 65535, 300, 40000, 9])]
+        for (depth, data) in
+            [(BitDepth::Eight, vec![0u16, 40, 210, 255, 7, 9]), (BitDepth::Sixteen, vec![0, 1, 65535, 300, 40000, 9])]
         {
             let img = Image { width: 3, height: 2, bit_depth: depth, data };
             let png = img.encode_png().unwrap();

@@ -74,8 +74,9 @@ impl PixelToBoard {
             [r[1][0], r[1][1], r[1][2] * board_z_mm + t[1]],
             [r[2][0], r[2][1], r[2][2] * board_z_mm + t[2]],
         ];
-        let hinv = inverse3(&h)
-            .ok_or_else(|| Error::InvalidInput("the camera centre lies in the board plane (board seen edge-on)".into()))?;
+        let hinv = inverse3(&h).ok_or_else(|| {
+            Error::InvalidInput("the camera centre lies in the board plane (board seen edge-on)".into())
+        })?;
         let mut m = hinv;
         for row in m.iter_mut() {
             row[0] /= k.fx;

@@ -107,7 +107,10 @@ impl Scene {
             return Err(Error::InvalidInput(format!("board plane Z must be finite, got {}", self.board_z_mm)));
         }
         if !(self.margin_mm.is_finite() && self.margin_mm >= 0.0) {
-            return Err(Error::InvalidInput(format!("margin must be finite and not negative, got {} mm", self.margin_mm)));
+            return Err(Error::InvalidInput(format!(
+                "margin must be finite and not negative, got {} mm",
+                self.margin_mm
+            )));
         }
         let [w, h] = self.image_size;
         if !(1..=MAX_IMAGE_SIDE_PX).contains(&w) || !(1..=MAX_IMAGE_SIDE_PX).contains(&h) {
@@ -155,11 +158,7 @@ impl Optics {
     /// views; the depth is that of `SettingRig::focus_depth_mm`).
     pub fn paper_focus(truth: &CameraModel, e_com_ma: f64, aperture_mm: f64) -> Self {
         let _ = focused_z_mm; // the stage position behind SettingRig::focus_depth_mm
-        Optics {
-            focus_depth_mm: Some(SettingRig::focus_depth_mm(truth, e_com_ma)),
-            aperture_mm,
-            base_sigma_px: 0.0,
-        }
+        Optics { focus_depth_mm: Some(SettingRig::focus_depth_mm(truth, e_com_ma)), aperture_mm, base_sigma_px: 0.0 }
     }
 
     /// Checks: focus depth positive and finite when given, aperture and base blur finite
@@ -258,9 +257,10 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
     let mut corners_px = Vec::with_capacity(cols * rows);
     for j in 0..rows {
         for i in 0..cols {
-            let p = scene.model.project(scene.corner_world_mm(i, j), scene.e_com_ma).map_err(|e| {
-                Error::InvalidInput(format!("inner corner ({i}, {j}) cannot be projected: {e}"))
-            })?;
+            let p = scene
+                .model
+                .project(scene.corner_world_mm(i, j), scene.e_com_ma)
+                .map_err(|e| Error::InvalidInput(format!("inner corner ({i}, {j}) cannot be projected: {e}")))?;
             corners_px.push(p);
         }
     }

@@ -72,7 +72,10 @@ impl Photometry {
             )));
         }
         if !(self.read_noise.is_finite() && self.read_noise >= 0.0) {
-            return Err(Error::InvalidInput(format!("read noise must be finite and not negative, got {}", self.read_noise)));
+            return Err(Error::InvalidInput(format!(
+                "read noise must be finite and not negative, got {}",
+                self.read_noise
+            )));
         }
         if !(self.photon_gain.is_finite() && self.photon_gain >= 0.0) {
             return Err(Error::InvalidInput(format!(

@@ -20,8 +20,13 @@ use rayon::prelude::*;
 /// SciPy's sigma-1 Gaussian taps at distances 0..=4
 /// (`scipy.ndimage._filters._gaussian_kernel1d(1.0, 0, 4)`, NumPy 2.4 on x86-64; the
 /// values are the correctly rounded normalised `exp(-x^2/2)`).
-const GAUSS: [f64; 5] =
-    [0.398_943_469_357_097_76, 0.241_971_445_656_600_73, 0.053_991_127_420_704_41, 0.004_431_861_620_031_265_5, 0.000_133_830_624_614_741_75];
+const GAUSS: [f64; 5] = [
+    0.398_943_469_357_097_76,
+    0.241_971_445_656_600_73,
+    0.053_991_127_420_704_41,
+    0.004_431_861_620_031_265_5,
+    0.000_133_830_624_614_741_75,
+];
 
 /// scikit-image's default low threshold as the C `float` its Cython receives.
 const LOW: f64 = 0.1f32 as f64;
@@ -53,7 +58,10 @@ fn gauss_line(line: &[f64], out: &mut [f64]) {
     let at = |i: isize| if i >= 0 && (i as usize) < n { line[i as usize] } else { 0.0 };
     for (i, o) in out.iter_mut().enumerate() {
         let i = i as isize;
-        *o = gauss_tap(at(i), [at(i - 4) + at(i + 4), at(i - 3) + at(i + 3), at(i - 2) + at(i + 2), at(i - 1) + at(i + 1)]);
+        *o = gauss_tap(
+            at(i),
+            [at(i - 4) + at(i + 4), at(i - 3) + at(i + 3), at(i - 2) + at(i + 2), at(i - 1) + at(i + 1)],
+        );
     }
 }
 
@@ -88,16 +96,14 @@ fn smooth(image: &[f64], w: usize, h: usize) -> Vec<f64> {
     gauss_line(&ones, &mut bleed_rows);
 
     let mut smoothed = vec![0.0f64; w * h];
-    smoothed.par_chunks_mut(w).zip(vertical.par_chunks(w)).zip(bleed_rows.par_iter()).for_each(
-        |((out, line), &b)| {
-            let mut bleed = vec![0.0f64; w];
-            gauss_line(&vec![b; w], &mut bleed);
-            gauss_line(line, out);
-            for (o, b) in out.iter_mut().zip(&bleed) {
-                *o /= b + f64::EPSILON;
-            }
-        },
-    );
+    smoothed.par_chunks_mut(w).zip(vertical.par_chunks(w)).zip(bleed_rows.par_iter()).for_each(|((out, line), &b)| {
+        let mut bleed = vec![0.0f64; w];
+        gauss_line(&vec![b; w], &mut bleed);
+        gauss_line(line, out);
+        for (o, b) in out.iter_mut().zip(&bleed) {
+            *o /= b + f64::EPSILON;
+        }
+    });
     smoothed
 }
 

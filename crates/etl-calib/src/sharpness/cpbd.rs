@@ -107,8 +107,7 @@ fn pool(data: &[u8], edges: &[bool], widths: &[u8], w: usize, h: usize) -> f64 {
                     }
                 }
             }
-            let bins: &[(u8, usize)] =
-                if hi - lo <= JNB_CONTRAST_SPLIT { &SHARP_BINS_JNB5 } else { &SHARP_BINS_JNB3 };
+            let bins: &[(u8, usize)] = if hi - lo <= JNB_CONTRAST_SPLIT { &SHARP_BINS_JNB5 } else { &SHARP_BINS_JNB3 };
             for &(wd, bin) in bins {
                 hist[bin] += count_by_width[wd as usize];
             }

@@ -93,7 +93,12 @@ where
     }
     let n = options.coarse_points;
     if n < 3 {
-        return Err(Error::OutOfRange { what: "autofocus coarse_points", value: n as f64, min: 3.0, max: f64::INFINITY });
+        return Err(Error::OutOfRange {
+            what: "autofocus coarse_points",
+            value: n as f64,
+            min: 3.0,
+            max: f64::INFINITY,
+        });
     }
     if options.max_evaluations < n {
         return Err(Error::OutOfRange {
