@@ -42,6 +42,32 @@ def python_ns(stmt, number: int) -> float:
     return min(times) / number * 1e9
 
 
+def rust_detect_ms(png: pathlib.Path, warm: bool) -> float:
+    """Best per-call time of the `detect_timing` example of etl-py (a fresh process)."""
+    args = ["cargo", "run", "-q", "--release", "-p", "etl-py", "--example", "detect_timing", "--", str(png)]
+    out = subprocess.run(args + (["--warm"] if warm else []), cwd=ROOT, check=True, capture_output=True, text=True)
+    return float(out.stdout.split()[0])
+
+
+PY_DETECT = """
+import sys, timeit
+import cv2, numpy as np, etlcal
+if sys.argv[2] == "warm":
+    a = np.ones(16 << 20, np.uint8)
+    del a
+img = cv2.imread(sys.argv[1], cv2.IMREAD_GRAYSCALE)
+etlcal.detect_corners(img, "14x12")
+t = timeit.repeat(lambda: etlcal.detect_corners(img, "14x12"), number=5, repeat=7)
+print(min(t) / 5 * 1e3)
+"""
+
+
+def python_detect_ms(png: pathlib.Path, warm: bool) -> float:
+    """The same loop as `rust_detect_ms` through etlcal, in a fresh interpreter."""
+    args = [sys.executable, "-c", PY_DETECT, str(png), "warm" if warm else "cold"]
+    return float(subprocess.run(args, check=True, capture_output=True, text=True).stdout)
+
+
 def main() -> None:
     cal = etlcal.Calibration.paper_rig()
     board = np.array([[1.5 * i, 1.5 * j, 48.0] for j in range(12) for i in range(14)])
@@ -58,15 +84,26 @@ def main() -> None:
     py = python_ns(lambda: s.e_com(143.2, 31.7), 200000)
     rows.append(("ThermalSurface.e_com, one", rust, py))
     # detect_corners on the very image the Rust bench detects (it writes it next to its
-    # estimates); OpenCV only reads the PNG here.
+    # estimates); OpenCV only reads the PNG here. The criterion median is taken after the
+    # bench rendered its image, which leaves glibc's malloc "warm" (its mmap threshold
+    # raised by a large free), so the detector's large temporaries come from the heap; in a
+    # fresh process each of them is a new mmap whose pages fault on first touch (~3x the
+    # time). Compare like with like: both sides in fresh processes, cold and warmed by one
+    # 16 MiB allocation, same timing loop (best of 7 repeats of 5 calls).
     rust = rust_median_ns("detect", "detect_1936x1458_14x12/blur_1.5", package="etl-calib")
+    png = TARGET / "criterion" / "detect_view_blur_1.5.png"
+    for warm in [False, True]:
+        r_ms = rust_detect_ms(png, warm)
+        p_ms = python_detect_ms(png, warm)
+        state = "warm malloc" if warm else "fresh process"
+        rows.append((f"detect_corners, 1936 x 1458, {state}", r_ms * 1e6, p_ms * 1e6))
     import cv2
 
-    img = cv2.imread(str(TARGET / "criterion" / "detect_view_blur_1.5.png"), cv2.IMREAD_GRAYSCALE)
+    img = cv2.imread(str(png), cv2.IMREAD_GRAYSCALE)
     py = python_ns(lambda: etlcal.detect_corners(img, "14x12"), 5)
-    rows.append(("detect_corners, 1936 x 1458", rust, py))
+    rows.append(("detect_corners, 1936 x 1458, vs criterion (this process)", rust, py))
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, etlcal {etlcal.__version__}")
-    print("| call | Rust (criterion median) | Python (best of 7) | overhead |")
+    print("| call | Rust | Python (best of 7) | overhead |")
     print("|---|---|---|---|")
     def fmt(ns: float) -> str:
         return f"{ns:.0f} ns" if abs(ns) < 1000 else f"{ns / 1000:.2f} us"

@@ -123,7 +123,9 @@ impl Calibration {
 impl Calibration {
     #[new]
     #[pyo3(signature = (rotation_rodrigues, translation_mm, kf_x, kf_y, principal_point, distortion_a,
-        image_size=(1936, 1458), e_com_range_ma=(0.0, 250.0), thermal=None, rms_px=0.0))]
+        image_size=(1936, 1458), e_com_range_ma=(0.0, 250.0), thermal=None, rms_px=0.0),
+        text_signature = "(rotation_rodrigues, translation_mm, kf_x, kf_y, principal_point, distortion_a, \
+            image_size=(1936, 1458), e_com_range_ma=(0.0, 250.0), thermal=None, rms_px=0.0)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         rotation_rodrigues: &Bound<'_, PyAny>,

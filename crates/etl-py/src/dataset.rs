@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use etl_calib::formats::dataset::{Dataset as DatasetFile, FORMAT};
+use etl_calib::formats::dataset::{Board, Dataset as DatasetFile, DatasetView, OffstateImage, SettingImage, FORMAT};
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
@@ -23,8 +23,177 @@ pub struct Dataset {
     path: Option<PathBuf>,
 }
 
+/// A finite number or an InputError naming it.
+fn finite(v: f64, what: &str) -> PyResult<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(input_error(format!("{what} must be finite, got {v}")))
+    }
+}
+
+/// A board from the dict form of `Dataset.board`: {"inner_corners": (cols, rows),
+/// "square_mm": mm}.
+fn board_of(d: &Bound<'_, PyDict>, what: &str) -> PyResult<Board> {
+    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        d.get_item(k)?.ok_or_else(|| input_error(format!("{what} needs \"inner_corners\" and \"square_mm\"")))
+    };
+    let (c, r): (usize, usize) = get("inner_corners")?
+        .extract()
+        .map_err(|_| input_error(format!("{what}[\"inner_corners\"] must be (cols, rows)")))?;
+    let square_mm: f64 =
+        get("square_mm")?.extract().map_err(|_| input_error(format!("{what}[\"square_mm\"] must be a number")))?;
+    let board = Board { inner_corners: [c, r], square_mm };
+    board.validate().map_err(|e| input_error(format!("{what}: {e}")))?;
+    Ok(board)
+}
+
 #[pymethods]
 impl Dataset {
+    /// An empty dataset to fill with `add_view` (and `add_offstate_view`,
+    /// `add_setting_view`) while capturing, then `save`.
+    ///
+    /// Args:
+    ///     image_size: (width, height) of every image, px.
+    ///     inner_corners: the board's inner corners (cols, rows), at least 3 x 3.
+    ///     square_mm: the board's square size, mm.
+    ///     base_dir: where relative image paths resolve until the dataset is saved or
+    ///         loaded (default: the working directory).
+    ///     offstate_board: the lens-off views' board when it differs, as a dict
+    ///         {"inner_corners": (cols, rows), "square_mm": mm}.
+    ///
+    /// Raises: InputError for a zero image size or a bad board.
+    #[new]
+    #[pyo3(signature = (image_size, inner_corners, square_mm, base_dir=None, offstate_board=None))]
+    fn new(
+        image_size: (u32, u32),
+        inner_corners: (usize, usize),
+        square_mm: f64,
+        base_dir: Option<PathBuf>,
+        offstate_board: Option<Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        if image_size.0 == 0 || image_size.1 == 0 {
+            return Err(input_error("image_size must be positive"));
+        }
+        let board = Board { inner_corners: [inner_corners.0, inner_corners.1], square_mm };
+        board.validate().py()?;
+        let mut file = DatasetFile::new([image_size.0, image_size.1], board);
+        file.offstate_board = offstate_board.map(|b| board_of(&b, "offstate_board")).transpose()?;
+        Ok(Dataset { file, path: base_dir.map(|d| d.join("dataset.json")) })
+    }
+
+    /// Adds an ETL view: the image of the board on the stage and what was recorded with it.
+    ///
+    /// Args:
+    ///     image: the image file, relative to the dataset file (or absolute).
+    ///     e_in_ma: the commanded lens current, mA.
+    ///     temperature_c: the lens temperature, degC.
+    ///     z_w_mm: the stage position Z_W, mm.
+    ///     e_com_ma: the compensated current, mA (None: computed from the thermal
+    ///         calibration when the observations are made).
+    ///     board: this image's board when it differs (a part of the physical board, e.g.
+    ///         when the rest is out of view), {"inner_corners": (cols, rows), "square_mm": mm}.
+    ///     first_corner: (i, j), the index on the physical board of this image's corner
+    ///         (0, 0) (default (0, 0)).
+    ///
+    /// Raises: InputError for a non-finite number or a bad board.
+    #[pyo3(signature = (image, e_in_ma, temperature_c, z_w_mm, e_com_ma=None, board=None, first_corner=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_view(
+        &mut self,
+        image: PathBuf,
+        e_in_ma: f64,
+        temperature_c: f64,
+        z_w_mm: f64,
+        e_com_ma: Option<f64>,
+        board: Option<Bound<'_, PyDict>>,
+        first_corner: Option<(usize, usize)>,
+    ) -> PyResult<()> {
+        let view = DatasetView {
+            image,
+            e_in_ma: finite(e_in_ma, "e_in_ma")?,
+            temperature_c: finite(temperature_c, "temperature_c")?,
+            e_com_ma: e_com_ma.map(|e| finite(e, "e_com_ma")).transpose()?,
+            z_w_mm: finite(z_w_mm, "z_w_mm")?,
+            board: board.map(|b| board_of(&b, "board")).transpose()?,
+            first_corner: first_corner.map(|(i, j)| [i, j]),
+        };
+        self.file.views.push(view);
+        Ok(())
+    }
+
+    /// Adds a lens-off view (E = 0; the views that give A0 by Zhang's method).
+    ///
+    /// Args:
+    ///     image: the image file, relative to the dataset file (or absolute).
+    ///     board: this image's board when it differs (a part of the physical board, e.g.
+    ///         when the rest is out of view), {"inner_corners": (cols, rows), "square_mm": mm}.
+    ///     first_corner: (i, j), the index on the physical board of this image's corner
+    ///         (0, 0) (default (0, 0)).
+    ///
+    /// Raises: InputError for a bad board.
+    #[pyo3(signature = (image, board=None, first_corner=None))]
+    fn add_offstate_view(
+        &mut self,
+        image: PathBuf,
+        board: Option<Bound<'_, PyDict>>,
+        first_corner: Option<(usize, usize)>,
+    ) -> PyResult<()> {
+        self.file.offstate_views.push(OffstateImage {
+            image,
+            board: board.map(|b| board_of(&b, "board")).transpose()?,
+            first_corner: first_corner.map(|(i, j)| [i, j]),
+        });
+        Ok(())
+    }
+
+    /// Adds a view for the per-setting baseline (the board in a free pose at a current).
+    ///
+    /// Args:
+    ///     image: the image file, relative to the dataset file (or absolute).
+    ///     e_in_ma: the commanded lens current, mA.
+    ///     temperature_c: the lens temperature, degC.
+    ///     e_com_ma: the compensated current, mA (optional).
+    ///     board: this image's board when it differs (a part of the physical board, e.g.
+    ///         when the rest is out of view), {"inner_corners": (cols, rows), "square_mm": mm}.
+    ///     first_corner: (i, j), the index on the physical board of this image's corner
+    ///         (0, 0) (default (0, 0)).
+    ///
+    /// Raises: InputError for a non-finite number or a bad board.
+    #[pyo3(signature = (image, e_in_ma, temperature_c, e_com_ma=None, board=None, first_corner=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_setting_view(
+        &mut self,
+        image: PathBuf,
+        e_in_ma: f64,
+        temperature_c: f64,
+        e_com_ma: Option<f64>,
+        board: Option<Bound<'_, PyDict>>,
+        first_corner: Option<(usize, usize)>,
+    ) -> PyResult<()> {
+        self.file.setting_views.push(SettingImage {
+            image,
+            e_in_ma: finite(e_in_ma, "e_in_ma")?,
+            temperature_c: finite(temperature_c, "temperature_c")?,
+            e_com_ma: e_com_ma.map(|e| finite(e, "e_com_ma")).transpose()?,
+            board: board.map(|b| board_of(&b, "board")).transpose()?,
+            first_corner: first_corner.map(|(i, j)| [i, j]),
+        });
+        Ok(())
+    }
+
+    /// Number of lens-off views.
+    #[getter]
+    fn offstate_count(&self) -> usize {
+        self.file.offstate_views.len()
+    }
+
+    /// Number of per-setting baseline views.
+    #[getter]
+    fn setting_count(&self) -> usize {
+        self.file.setting_views.len()
+    }
+
     /// Reads an `etlcal.dataset/1` file.
     ///
     /// Args:
@@ -35,7 +204,10 @@ impl Dataset {
     }
 
     /// Writes the file (atomically); image paths stay as they are (relative to the file).
+    ///
+    /// Raises: InputError for a dataset that would not load (no views); FileError.
     fn save(&mut self, path: PathBuf) -> PyResult<()> {
+        self.file.validate().py()?;
         self.file.save(&path).py()?;
         self.path = Some(path);
         Ok(())

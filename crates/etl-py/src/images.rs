@@ -1,17 +1,18 @@
-//! Images: `detect_corners`, `sharpness`, `render` and `autofocus`, numpy arrays in and out.
+//! Images: `detect_corners`, `sharpness` and `render`, numpy arrays in and out.
 //!
 //! Images are 2-D numpy arrays of dtype uint8 or uint16 (rows x columns, grey levels);
-//! a C-contiguous uint8/uint16 array is read in place, anything else is copied once.
+//! a C-contiguous uint8/uint16 array is read in place (detection and sharpness; CPBD of a
+//! 16-bit image converts to 8 bits), anything else is copied once.
 
 use etl_calib::detect::{detect_view, GrayView, Pattern};
 use etl_calib::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};
-use etl_calib::sharpness::{sharpness as measure, sharpness_u16, Gray16Image, Metric};
-use etl_core::focus::{autofocus as search, AutofocusOptions};
+use etl_calib::sharpness::cpbd::cpbd;
+use etl_calib::sharpness::{sharpness_u16, Gray16Image, Metric};
+use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView, Pixel};
 use etl_core::model::CameraModel;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use crate::arrays::points_out;
 use crate::errors::{input_error, CoreResultExt};
@@ -125,18 +126,29 @@ fn metric_of(name: &str) -> PyResult<Metric> {
 #[pyo3(signature = (image, metric="cpbd"))]
 pub fn sharpness(py: Python<'_>, image: &Bound<'_, PyAny>, metric: &str) -> PyResult<f64> {
     let metric = metric_of(metric)?;
-    with_image(image, |w, h, px| {
-        let bad = || input_error(format!("image of {w} x {h} px has an inconsistent buffer"));
-        match px {
-            ImageRef::U8(s) => {
-                let img = image::GrayImage::from_raw(w as u32, h as u32, s.to_vec()).ok_or_else(bad)?;
-                py.detach(|| measure(&img, metric)).py()
-            }
-            ImageRef::U16(s) => {
-                let img = Gray16Image::from_raw(w as u32, h as u32, s.to_vec()).ok_or_else(bad)?;
-                py.detach(|| sharpness_u16(&img, metric)).py()
-            }
+    with_image(image, |w, h, px| match px {
+        ImageRef::U8(s) if metric == Metric::Cpbd => py.detach(|| cpbd(s, w, h)).py(),
+        ImageRef::U8(s) => py.detach(|| gradient_measure(s, w, h, metric)).py(),
+        ImageRef::U16(s) if metric == Metric::Cpbd => {
+            // CPBD reads 8-bit levels: etl-calib converts (a copy it makes anyway).
+            let img = Gray16Image::from_raw(w as u32, h as u32, s.to_vec())
+                .ok_or_else(|| input_error(format!("image of {w} x {h} px has an inconsistent buffer")))?;
+            py.detach(|| sharpness_u16(&img, metric)).py()
         }
+        ImageRef::U16(s) => py.detach(|| gradient_measure(s, w, h, metric)).py(),
+    })
+}
+
+/// The gradient measures on the numpy buffer in place: the etl-core `focus` functions
+/// etl-calib's `sharpness` calls on an image's raw buffer (same values, same errors).
+fn gradient_measure<T: Pixel>(data: &[T], w: usize, h: usize, metric: Metric) -> etl_calib::Result<f64> {
+    let view = ImageView::packed(data, w, h)?;
+    Ok(match metric {
+        Metric::Tenengrad => tenengrad(&view)?,
+        Metric::Laplacian => laplacian_variance(&view)?,
+        Metric::Brenner => brenner(&view)?,
+        Metric::Normvar => normalised_variance(&view)?,
+        Metric::Cpbd => return Err(etl_calib::Error::InvalidInput("CPBD is not a gradient measure".into())),
     })
 }
 
@@ -207,110 +219,4 @@ pub fn render<'py>(
         }
     };
     Ok((image, points_out(py, r.corners_px, false)?))
-}
-
-/// Finds the lens current of best focus with few evaluations: a coarse scan of the range,
-/// then Brent's parabolic/golden-section refinement (etl-core's `focus::autofocus`).
-///
-/// Args:
-///     sharpness_at: a callable current_ma -> sharpness (float, larger is sharper), e.g.
-///         set the lens, grab a frame, return `etlcal.sharpness(frame, "tenengrad")`.
-///     range_ma: (lo, hi) searched, mA.
-///     coarse_points: points of the coarse scan (>= 3; spaced finer than the peak's width).
-///     max_evaluations: total calls allowed (>= coarse_points).
-///     tolerance_ma: stop when the bracket is narrower than twice this, mA.
-///
-/// Returns: dict with "best_ma", "best_sharpness", "evaluations", "bracket_ma",
-/// "converged".
-///
-/// Raises: InputError for bad options or a non-finite sharpness; the callable's own
-/// exception as it is.
-#[pyfunction]
-#[pyo3(signature = (sharpness_at, range_ma=(75.0, 240.0), coarse_points=7, max_evaluations=15, tolerance_ma=0.1))]
-pub fn autofocus<'py>(
-    py: Python<'py>,
-    sharpness_at: &Bound<'py, PyAny>,
-    range_ma: (f64, f64),
-    coarse_points: usize,
-    max_evaluations: usize,
-    tolerance_ma: f64,
-) -> PyResult<Bound<'py, PyDict>> {
-    let options = AutofocusOptions { range_ma: [range_ma.0, range_ma.1], coarse_points, max_evaluations, tolerance_ma };
-    let mut raised: Option<PyErr> = None;
-    let r = search(
-        |e| match sharpness_at.call1((e,)).and_then(|v| v.extract::<f64>()) {
-            Ok(v) => Ok(v),
-            Err(err) => {
-                raised = Some(err);
-                Err(etl_core::Error::InvalidArgument { what: "sharpness_at raised" })
-            }
-        },
-        &options,
-    );
-    if let Some(err) = raised {
-        return Err(err);
-    }
-    let r = r.py()?;
-    let d = PyDict::new(py);
-    d.set_item("best_ma", r.best_ma)?;
-    d.set_item("best_sharpness", r.best_sharpness)?;
-    d.set_item("evaluations", r.evaluations)?;
-    d.set_item("bracket_ma", (r.bracket_ma[0], r.bracket_ma[1]))?;
-    d.set_item("converged", r.converged)?;
-    Ok(d)
-}
-
-/// Zhang's monofocal calibration of a fixed-focus camera from views of a planar board:
-/// homographies, the closed form, then Levenberg-Marquardt over the intrinsics, the paper's
-/// distortion (k1, p1, p2) and every view's pose. Gives A0 from lens-off views.
-///
-/// Args:
-///     views: a list of (board_mm, pixels) pairs: (N, 2) board coordinates, mm (or (N, 3)
-///         with Z = 0), and the (N, 2) detected pixels, px (e.g. `detect_corners`).
-///     image_size: (width, height), px.
-///
-/// Returns: dict with "fx", "fy", "u0", "v0" (px), "k1" (1/px^2), "p1", "p2" (1/px),
-/// "std" (one standard deviation of those seven, same order), "rms_px", "iterations",
-/// "views_used", "poses" (list of (rodrigues, translation_mm)).
-///
-/// Raises: InputError naming the unmet precondition (at least 3 views, 4 points each,
-/// views not all parallel).
-#[pyfunction]
-pub fn zhang<'py>(
-    py: Python<'py>,
-    views: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)>,
-    image_size: (u32, u32),
-) -> PyResult<Bound<'py, PyDict>> {
-    let mut planar = Vec::with_capacity(views.len());
-    for (k, (board, pixels)) in views.iter().enumerate() {
-        let board_mm: Vec<[f64; 2]> = match crate::arrays::points::<2>(board, "board_mm") {
-            Ok(p) => p.points,
-            Err(_) => crate::arrays::points::<3>(board, &format!("views[{k}] board_mm"))?
-                .points
-                .into_iter()
-                .map(|p| [p[0], p[1]])
-                .collect(),
-        };
-        let pixels = crate::arrays::points::<2>(pixels, &format!("views[{k}] pixels"))?.points;
-        if board_mm.len() != pixels.len() {
-            return Err(input_error(format!(
-                "views[{k}]: {} board points but {} pixels",
-                board_mm.len(),
-                pixels.len()
-            )));
-        }
-        planar.push(etl_calib::zhang::PlanarView { board_mm, pixels });
-    }
-    let r = py.detach(|| etl_calib::zhang::zhang(&planar, [image_size.0, image_size.1])).py()?;
-    let d = PyDict::new(py);
-    for (name, v) in [("fx", r.fx), ("fy", r.fy), ("u0", r.u0), ("v0", r.v0), ("k1", r.k1), ("p1", r.p1), ("p2", r.p2)]
-    {
-        d.set_item(name, v)?;
-    }
-    d.set_item("std", r.std.to_vec())?;
-    d.set_item("rms_px", r.rms_px)?;
-    d.set_item("iterations", r.iterations)?;
-    d.set_item("views_used", r.views_used)?;
-    d.set_item("poses", r.poses.iter().map(|(om, t)| (om.to_vec(), t.to_vec())).collect::<Vec<_>>())?;
-    Ok(d)
 }

@@ -7,12 +7,14 @@
 use std::time::Duration;
 
 use etl_hw::client::{LensClient, OpenOptions};
-use etl_hw::virtual_lens::{VirtualLens as Device, VirtualLensConfig};
+use etl_hw::hold::{hold, HoldConfig, HoldError, HoldStep};
+use etl_hw::virtual_lens::{Faults, VirtualLens as Device, VirtualLensConfig};
 use etl_hw::HwError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::errors::{raise, Kind};
+use crate::thermal::ThermalCalibration;
 
 fn hw_err(e: HwError) -> PyErr {
     let kind = match &e {
@@ -43,6 +45,33 @@ impl Lens {
     fn client(&self) -> PyResult<&LensClient> {
         self.client.as_ref().ok_or_else(|| raise(Kind::Device, "the lens is closed"))
     }
+
+    /// The open client, for procedures that drive the lens (`thermal_calibration`).
+    pub(crate) fn client_mut(&mut self) -> PyResult<&mut LensClient> {
+        self.client.as_mut().ok_or_else(|| raise(Kind::Device, "the lens is closed"))
+    }
+}
+
+/// The hold's error with its own message ("lens: ..." / "compensation: ..."), the class
+/// from what failed.
+fn hold_err(e: HoldError<HwError>) -> PyErr {
+    let kind = match &e {
+        HoldError::Lens(HwError::Timeout { .. }) => Kind::DeviceTimeout,
+        HoldError::Lens(HwError::Core(_)) | HoldError::Core(_) => Kind::Input,
+        HoldError::Lens(_) => Kind::Device,
+    };
+    raise(kind, e.to_string())
+}
+
+fn step_dict<'py>(py: Python<'py>, s: &HoldStep) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("index", s.index)?;
+    d.set_item("temperature_c", s.temperature_c)?;
+    d.set_item("e_in_ma", s.e_in_ma)?;
+    d.set_item("e_com_ma", s.e_com_ma)?;
+    d.set_item("error_ma", s.error_ma)?;
+    d.set_item("extrapolated", s.extrapolated)?;
+    Ok(d)
 }
 
 #[pymethods]
@@ -97,6 +126,105 @@ impl Lens {
     fn limits_ma(&self) -> PyResult<(f64, f64)> {
         let [lo, hi] = self.client()?.limits_ma();
         Ok((lo, hi))
+    }
+
+    /// The serial port's path.
+    #[getter]
+    fn port(&self) -> PyResult<String> {
+        Ok(self.client()?.path().display().to_string())
+    }
+
+    /// Reopens the port at the same path without the handshake (the lens keeps its
+    /// current) and re-reads the limits: after a DeviceError from a pulled cable.
+    fn reconnect(&self, py: Python<'_>) -> PyResult<()> {
+        let c = self.client()?;
+        py.detach(|| c.reconnect()).map_err(hw_err)
+    }
+
+    /// Live temperature compensation (paper section 2.2.1 iii): holds a wanted E_com while
+    /// the lens temperature changes. Each step reads T, solves E_in - E_T(T, E_in) = E_com
+    /// for E_in (the calibration's inverse) and sends it. Runs without the GIL; `on_step`,
+    /// if given, is called with the GIL after each step.
+    ///
+    /// Args:
+    ///     calibration: a `ThermalCalibration` (its surface and ranges).
+    ///     e_com_ma: the compensated current to hold, mA.
+    ///     steps: stop after this many steps (None: by `duration_s` or `on_step`).
+    ///     duration_s: stop after this long, s (None: by `steps` or `on_step`).
+    ///     rate_hz: steps per second, Hz (0: as fast as the link allows).
+    ///     on_step: callable(dict) -> bool | None, given "index", "temperature_c",
+    ///         "e_in_ma", "e_com_ma" (the surface's E_com at the commanded current), "error_ma"
+    ///         (quantisation and clamping), "extrapolated"; returning False stops the loop.
+    ///
+    /// Returns: dict with "commands_sent", "elapsed_s", "achieved_rate_hz",
+    /// "worst_e_com_error_ma", "temperature_range_c" (min, max), "extrapolated_steps",
+    /// "last" (the last step's dict or None).
+    ///
+    /// Raises: InputError for a non-finite E_com, a negative rate, no stopping rule, or an
+    /// E_com the surface cannot reach at the temperature read; DeviceError /
+    /// DeviceTimeoutError from the link; `on_step`'s own exception as it is (also
+    /// KeyboardInterrupt).
+    #[pyo3(signature = (calibration, e_com_ma, steps=None, duration_s=None, rate_hz=0.0, on_step=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn hold<'py>(
+        &mut self,
+        py: Python<'py>,
+        calibration: PyRef<'py, ThermalCalibration>,
+        e_com_ma: f64,
+        steps: Option<u64>,
+        duration_s: Option<f64>,
+        rate_hz: f64,
+        on_step: Option<Py<PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        if steps.is_none() && duration_s.is_none() && on_step.is_none() {
+            return Err(raise(Kind::Input, "hold needs steps, duration_s or on_step to stop"));
+        }
+        if steps == Some(0) {
+            return Err(raise(Kind::Input, "hold steps must be >= 1"));
+        }
+        let duration = match duration_s {
+            Some(d) if d.is_finite() && d >= 0.0 => Some(Duration::from_secs_f64(d)),
+            Some(d) => return Err(raise(Kind::Input, format!("duration_s must be finite and >= 0, got {d}"))),
+            None => None,
+        };
+        let config = HoldConfig { e_com_ma, rate_hz, duration };
+        let cal = calibration.inner;
+        let client = self.client_mut()?;
+        let mut raised: Option<PyErr> = None;
+        let report = py.detach(|| {
+            hold(client, &cal, &config, |s| {
+                if steps.is_some_and(|n| s.index + 1 >= n) {
+                    return false;
+                }
+                let Some(f) = &on_step else { return true };
+                Python::attach(|py| {
+                    let go = py.check_signals().and_then(|_| {
+                        let r = f.call1(py, (step_dict(py, s)?,))?;
+                        Ok(r.is_none(py) || r.is_truthy(py)?)
+                    });
+                    go.unwrap_or_else(|e| {
+                        raised = Some(e);
+                        false
+                    })
+                })
+            })
+        });
+        if let Some(e) = raised {
+            return Err(e);
+        }
+        let r = report.map_err(hold_err)?;
+        let d = PyDict::new(py);
+        d.set_item("commands_sent", r.commands_sent)?;
+        d.set_item("elapsed_s", r.elapsed.as_secs_f64())?;
+        d.set_item("achieved_rate_hz", r.achieved_rate_hz)?;
+        d.set_item("worst_e_com_error_ma", r.worst_e_com_error_ma)?;
+        d.set_item("temperature_range_c", (r.temperature_range_c[0], r.temperature_range_c[1]))?;
+        d.set_item("extrapolated_steps", r.extrapolated_steps)?;
+        match &r.last {
+            Some(s) => d.set_item("last", step_dict(py, s)?)?,
+            None => d.set_item("last", py.None())?,
+        }
+        Ok(d)
     }
 
     /// Closes the port (the lens keeps its current).
@@ -169,126 +297,69 @@ impl VirtualLens {
         let [lo, hi] = self.device.limits_ma();
         (lo, hi)
     }
-}
 
-/// Keeps the first Python exception of a callable (re-raised as it is after the run) and
-/// gives the procedure an error that stops it.
-fn keep(raised: &mut Option<PyErr>, e: PyErr) -> etl_calib::Error {
-    let msg = e.to_string();
-    raised.get_or_insert(e);
-    etl_calib::Error::InvalidInput(format!("a Python callable raised: {msg}"))
-}
-
-/// The procedure's camera as Python callables.
-struct PyCamera<'py> {
-    capture: Bound<'py, PyAny>,
-    place_board: Option<Bound<'py, PyAny>>,
-    raised: Option<PyErr>,
-}
-
-impl etl_calib::thermal_calibration::Camera for PyCamera<'_> {
-    fn capture(&mut self) -> etl_calib::Result<image::GrayImage> {
-        let frame = self.capture.call0().map_err(|e| keep(&mut self.raised, e))?;
-        let arr = frame
-            .extract::<numpy::PyReadonlyArray2<'_, u8>>()
-            .map_err(|_| etl_calib::Error::InvalidInput("capture() must return a 2-D uint8 numpy array".into()))?;
-        let (h, w) = {
-            use numpy::PyUntypedArrayMethods;
-            (arr.shape()[0], arr.shape()[1])
-        };
-        let data: Vec<u8> = arr.as_array().iter().copied().collect();
-        image::GrayImage::from_raw(w as u32, h as u32, data)
-            .ok_or_else(|| etl_calib::Error::InvalidInput("capture() returned an inconsistent array".into()))
+    /// Sets the ambient temperature, degC (the lens drifts towards the new equilibrium
+    /// in model time; see `advance_s`).
+    fn set_ambient_c(&self, t_c: f64) {
+        self.device.set_ambient_c(t_c);
     }
 
-    fn place_board_in_focus(&mut self) -> etl_calib::Result<()> {
-        if let Some(f) = &self.place_board {
-            f.call0().map_err(|e| keep(&mut self.raised, e))?;
+    /// Advances the thermal model by `dt_s` model seconds at once, s.
+    fn advance_s(&self, dt_s: f64) {
+        self.device.advance_s(dt_s);
+    }
+
+    /// Injects faults into the link (replacing any before; all off by default): what a
+    /// flaky cable, a busy driver or a firmware quirk does to the byte stream.
+    ///
+    /// Args:
+    ///     reply_delay_ms: every reply is sent this long after its command, ms.
+    ///     silence_next: the next N replies are never sent (the command is executed).
+    ///     corrupt_next: the next N replies have a CRC byte flipped.
+    ///     crc_error_next: the next N commands are treated as failing their CRC.
+    ///     error_frame_next: the next command is answered with the error frame `E` + id
+    ///         (1 CRC, 2 not in this firmware, 3 unknown command, 4 lens incompatible).
+    ///     drop_rx_bytes_next: the next N bytes the host sends are lost.
+    ///     garbage_before_next: bytes sent once before the next reply.
+    #[pyo3(signature = (reply_delay_ms=0.0, silence_next=0, corrupt_next=0, crc_error_next=0, error_frame_next=None,
+        drop_rx_bytes_next=0, garbage_before_next=Vec::new()),
+        text_signature = "($self, reply_delay_ms=0.0, silence_next=0, corrupt_next=0, crc_error_next=0, \
+            error_frame_next=None, drop_rx_bytes_next=0, garbage_before_next=b'')")]
+    #[allow(clippy::too_many_arguments)]
+    fn inject_faults(
+        &self,
+        reply_delay_ms: f64,
+        silence_next: u32,
+        corrupt_next: u32,
+        crc_error_next: u32,
+        error_frame_next: Option<u8>,
+        drop_rx_bytes_next: u32,
+        garbage_before_next: Vec<u8>,
+    ) -> PyResult<()> {
+        if !(reply_delay_ms.is_finite() && reply_delay_ms >= 0.0) {
+            return Err(raise(Kind::Input, format!("reply_delay_ms must be finite and >= 0, got {reply_delay_ms}")));
         }
+        self.device.set_faults(Faults {
+            reply_delay: Duration::from_secs_f64(reply_delay_ms / 1e3),
+            silence_next,
+            corrupt_next,
+            garbage_before_next,
+            crc_error_next,
+            error_frame_next,
+            drop_rx_bytes_next,
+        });
         Ok(())
     }
-}
 
-/// The procedure's climate as a Python callable.
-struct PyClimate<'py> {
-    set_temperature: Bound<'py, PyAny>,
-    raised: Option<PyErr>,
-}
+    /// Pulls the cable: closes the pseudo-terminal; the client's next I/O fails with
+    /// DeviceError.
+    fn disconnect(&self) {
+        self.device.disconnect();
+    }
 
-impl etl_calib::thermal_calibration::Climate for PyClimate<'_> {
-    fn set_temperature_c(&mut self, t_c: f64) -> etl_calib::Result<()> {
-        self.set_temperature.call1((t_c,)).map_err(|e| keep(&mut self.raised, e))?;
-        Ok(())
+    /// Plugs the cable back in (a new pseudo-terminal behind the same `port`); the lens
+    /// keeps its current and temperature. Then call `Lens.reconnect()`.
+    fn reconnect(&self) -> PyResult<()> {
+        self.device.reconnect().map_err(hw_err)
     }
-}
-
-/// The temperature-calibration procedure of the paper's section 4.1 (Fig. 4) on your rig:
-/// for each driver current on the grid, place the board in focus at the first
-/// temperature, then at every temperature step refocus by maximising sharpness and record
-/// E_T = refocused E_in - the first one; fit the cubic surface (Eq. 7).
-///
-/// Args:
-///     lens: an open `Lens`.
-///     capture: callable () -> 2-D uint8 numpy array, a frame at the lens's present state.
-///     set_temperature: callable (t_c) -> None that brings the lens to t_c degC and waits.
-///     place_board: callable () -> None that puts the board in focus for the present
-///         current (None: the board is already there).
-///     e_in_grid_ma: driver currents, mA (default the paper's 40..240 by 20).
-///     temperatures_c: temperature steps, degC, the first is the reference (default
-///         27..37 by 1).
-///     search_ma: half width of each refocus search, mA.
-///     metric: sharpness measure ("tenengrad" by default; see `sharpness`).
-///
-/// Returns: dict with "calibration" (a `ThermalCalibration`), "rms_ma", "samples" (an
-/// (N, 3) array of temperature_c, e_in_ma, e_t_ma) and "frames".
-///
-/// Raises: the callables' own exceptions as they are; InputError for bad options or a
-/// refocus that ends at the edge of its window; DeviceError / DeviceTimeoutError.
-#[pyfunction]
-#[pyo3(signature = (lens, capture, set_temperature, place_board=None, e_in_grid_ma=None, temperatures_c=None,
-    search_ma=20.0, metric="tenengrad"))]
-#[allow(clippy::too_many_arguments)]
-pub fn thermal_calibration<'py>(
-    py: Python<'py>,
-    mut lens: PyRefMut<'py, Lens>,
-    capture: Bound<'py, PyAny>,
-    set_temperature: Bound<'py, PyAny>,
-    place_board: Option<Bound<'py, PyAny>>,
-    e_in_grid_ma: Option<Vec<f64>>,
-    temperatures_c: Option<Vec<f64>>,
-    search_ma: f64,
-    metric: &str,
-) -> PyResult<Bound<'py, PyDict>> {
-    use crate::errors::CoreResultExt;
-    use etl_calib::thermal_calibration::{run_procedure, ProcedureOptions};
-    let mut options = ProcedureOptions {
-        search_half_width_ma: search_ma,
-        metric: metric.parse::<etl_calib::sharpness::Metric>().py()?,
-        ..ProcedureOptions::default()
-    };
-    if let Some(g) = e_in_grid_ma {
-        options.e_in_grid_ma = g;
-    }
-    if let Some(t) = temperatures_c {
-        options.temperatures_c = t;
-    }
-    let client = lens.client.as_mut().ok_or_else(|| raise(Kind::Device, "the lens is closed"))?;
-    // The camera and climate are Python callables: the procedure runs with the GIL held.
-    let mut camera = PyCamera { capture, place_board, raised: None };
-    let mut climate = PyClimate { set_temperature, raised: None };
-    let result = run_procedure(client, &mut camera, &mut climate, &options, false);
-    if let Some(e) = camera.raised.take().or(climate.raised.take()) {
-        return Err(e);
-    }
-    let r = result.py()?;
-    let samples: Vec<[f64; 3]> = r.samples.iter().map(|s| [s.temperature_c, s.e_in_ma, s.e_t_ma]).collect();
-    let d = PyDict::new(py);
-    d.set_item(
-        "calibration",
-        Py::new(py, crate::thermal::ThermalCalibration { inner: r.calibration, rms_ma: r.rms_ma })?,
-    )?;
-    d.set_item("rms_ma", r.rms_ma)?;
-    d.set_item("samples", crate::arrays::points_out(py, samples, false)?)?;
-    d.set_item("frames", r.frames)?;
-    Ok(d)
 }

@@ -1,14 +1,18 @@
 //! The Python module `etlcal` (built by maturin as `etlcal._etlcal`).
 //!
 //! A file per noun: [`errors`] (the exception hierarchy), [`calibration`], [`thermal`],
-//! [`physics`]; [`arrays`] converts numpy arrays. The Python package
-//! (`python/etlcal/`) re-exports these and adds the submodules and type stubs.
+//! [`physics`], [`observations`], [`dataset`], [`pipeline`] (calibrate), [`zhang`],
+//! [`images`] (detect_corners, sharpness, render), [`focus`] (autofocus), [`lens`] (Lens,
+//! VirtualLens), [`thermal_calibration`], [`studies`]; [`arrays`] converts numpy arrays.
+//! The Python package (`python/etlcal/`) re-exports these and adds the submodules and type
+//! stubs.
 use pyo3::prelude::*;
 
 pub mod arrays;
 pub mod calibration;
 pub mod dataset;
 pub mod errors;
+pub mod focus;
 pub mod images;
 pub mod lens;
 pub mod observations;
@@ -18,6 +22,8 @@ pub mod pose;
 pub mod simulate;
 pub mod studies;
 pub mod thermal;
+pub mod thermal_calibration;
+pub mod zhang;
 
 #[pymodule]
 fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -39,11 +45,11 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::detect_corners, m)?)?;
     m.add_function(wrap_pyfunction!(images::sharpness, m)?)?;
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
-    m.add_function(wrap_pyfunction!(images::autofocus, m)?)?;
-    m.add_function(wrap_pyfunction!(images::zhang, m)?)?;
+    m.add_function(wrap_pyfunction!(focus::autofocus, m)?)?;
+    m.add_function(wrap_pyfunction!(zhang::zhang, m)?)?;
     m.add_function(wrap_pyfunction!(studies::study, m)?)?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<lens::VirtualLens>()?;
-    m.add_function(wrap_pyfunction!(lens::thermal_calibration, m)?)?;
+    m.add_function(wrap_pyfunction!(thermal_calibration::thermal_calibration, m)?)?;
     Ok(())
 }

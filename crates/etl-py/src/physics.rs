@@ -79,7 +79,10 @@ impl LensPhysics {
         young_modulus_pa=3.0e6, membrane_radius_mm=5.0, membrane_thickness_mm=0.1,
         poisson_ratio=0.48, prestrain=0.05, n_liq=1.4, n_0=1.0, p0_pa=1200.0,
         k_e0_pa=2.061e-13, k_e1_pa_per_ma=7.8, k_e2_pa_per_ma2=-0.004, f_pri_mm=30.0,
-        d_lens_mm=3.0))]
+        d_lens_mm=3.0),
+        text_signature = "(young_modulus_pa=3000000.0, membrane_radius_mm=5.0, membrane_thickness_mm=0.1, \
+            poisson_ratio=0.48, prestrain=0.05, n_liq=1.4, n_0=1.0, p0_pa=1200.0, k_e0_pa=2.061e-13, \
+            k_e1_pa_per_ma=7.8, k_e2_pa_per_ma2=-0.004, f_pri_mm=30.0, d_lens_mm=3.0)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         young_modulus_pa: f64,

@@ -1,5 +1,6 @@
 """Dataset from Python: a rendered rig (written by `etlcal simulate`), detection into
 Observations, calibration; bad files as the right exceptions; pickling."""
+import json
 import pickle
 import subprocess
 
@@ -22,6 +23,19 @@ def test_dataset_detect_and_calibrate(tmp_path, etlcal_binary):
     truth = etlcal.simulate.paper_rig(4).truth
     for e in [80.0, 150.0, 225.0]:
         assert abs(cal.intrinsics(e)[0, 0] / truth.intrinsics(e)[0, 0] - 1.0) < 0.01
+    # The same file built view by view from Python (what a capture script does).
+    truth = json.loads(ds.to_json())
+    built = etlcal.Dataset(tuple(truth["image_size"]), tuple(truth["board"]["inner_corners"]),
+                           truth["board"]["square_mm"], base_dir=tmp_path)
+    for v in truth["views"]:
+        built.add_view(v["image"], v["e_in_ma"], v["temperature_c"], v["z_w_mm"], v.get("e_com_ma"))
+    for v in truth.get("offstate_views", []):
+        built.add_offstate_view(v["image"])
+    for v in truth.get("setting_views", []):
+        built.add_setting_view(v["image"], v["e_in_ma"], v["temperature_c"], v.get("e_com_ma"))
+    if "offstate_board" not in truth:
+        assert json.loads(built.to_json()) == truth
+    assert built.images() == ds.images() and built.offstate_count == ds.offstate_count == 10
     again = pickle.loads(pickle.dumps(ds))
     assert again.to_json() == ds.to_json() and again.images() == ds.images()
     # A missing image is a FileError before any work.
@@ -37,3 +51,52 @@ def test_bad_dataset_files(tmp_path):
         etlcal.Dataset.load(bad)
     with pytest.raises(etlcal.FileError):
         etlcal.Dataset.load(tmp_path / "missing.json")
+
+
+def test_dataset_json_round_trip_and_save(tmp_path):
+    text = ('{"format": "etlcal.dataset/1", "image_size": [640, 480], '
+            '"board": {"inner_corners": [9, 6], "square_mm": 2.5}, '
+            '"views": [{"image": "a.png", "e_in_ma": 100.0, "temperature_c": 30.0, "z_w_mm": 40.0}]}')
+    ds = etlcal.Dataset.from_json(text, base_dir=tmp_path)
+    assert len(ds) == 1 and ds.image_size == (640, 480)
+    assert ds.board == {"inner_corners": (9, 6), "square_mm": 2.5}
+    assert [str(p) for p in ds.images()] == [str(tmp_path / "a.png")]
+    assert "views=1" in repr(ds)
+    out = tmp_path / "sub" / "d.json"
+    out.parent.mkdir()
+    ds.save(out)
+    again = etlcal.Dataset.load(out)
+    assert again.to_json() == ds.to_json()
+    assert [str(p) for p in again.images()] == [str(out.parent / "a.png")]
+    with pytest.raises(etlcal.FileError):
+        ds.save(tmp_path / "missing-dir" / "d.json")
+    with pytest.raises(etlcal.Error):
+        etlcal.Dataset.from_json("{not json")
+
+
+def test_dataset_built_in_python_and_its_bad_input(tmp_path):
+    ds = etlcal.Dataset((640, 480), (9, 6), 2.5)
+    with pytest.raises(etlcal.InputError, match="no views"):
+        ds.save(tmp_path / "empty.json")
+    ds.add_view("v0.png", 100.0, 30.0, 40.0)
+    ds.add_view("v1.png", 150.0, 30.5, 30.0, e_com_ma=148.0)
+    ds.add_offstate_view("off0.png")
+    ds.add_setting_view("s0.png", 120.0, 29.0)
+    assert (len(ds), ds.offstate_count, ds.setting_count) == (2, 1, 1)
+    ds.save(tmp_path / "d.json")
+    again = etlcal.Dataset.load(tmp_path / "d.json")
+    assert again.to_json() == ds.to_json()
+    assert [str(p) for p in again.images()] == [str(tmp_path / "v0.png"), str(tmp_path / "v1.png")]
+    with pytest.raises(etlcal.InputError, match="e_in_ma must be finite"):
+        ds.add_view("v2.png", float("nan"), 30.0, 40.0)
+    with pytest.raises(etlcal.InputError, match="z_w_mm must be finite"):
+        ds.add_view("v2.png", 100.0, 30.0, float("inf"))
+    with pytest.raises(etlcal.InputError, match="temperature_c must be finite"):
+        ds.add_setting_view("s1.png", 100.0, float("nan"))
+    assert len(ds) == 2 and ds.setting_count == 1
+    with pytest.raises(etlcal.InputError, match="image_size"):
+        etlcal.Dataset((0, 480), (9, 6), 2.5)
+    with pytest.raises(etlcal.InputError, match="3 x 3"):
+        etlcal.Dataset((640, 480), (2, 6), 2.5)
+    with pytest.raises(etlcal.InputError, match="square size"):
+        etlcal.Dataset((640, 480), (9, 6), -1.0)

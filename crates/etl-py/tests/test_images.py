@@ -102,3 +102,46 @@ def test_zhang_on_rendered_lens_off_views_and_bad_input():
         etlcal.zhang(views[:2], (1936, 1458))
     with pytest.raises(etlcal.InputError):
         etlcal.zhang([(views[0][0], views[0][1][:-1])] * 3, (1936, 1458))
+
+
+def test_render_16_bit_and_bad_input(board):
+    image, corners = board
+    wide, same = etlcal.render(e_com_ma=150.0, seed=5, bit_depth=16)
+    assert wide.dtype == np.uint16 and wide.shape == image.shape and np.array_equal(same, corners)
+    # The same scene at 16 bits: 257 times the 8-bit grey levels, to the 8-bit rounding.
+    assert abs(wide.astype(float).mean() / 257.0 - image.astype(float).mean()) < 1.0
+    small, c = etlcal.render(pattern=(5, 4), square_mm=2.0, z_mm=40.0, aperture_mm=0.0, noise=0.0)
+    assert c.shape == (20, 2)
+    with pytest.raises(etlcal.InputError, match="bit_depth"):
+        etlcal.render(bit_depth=12)
+    with pytest.raises(etlcal.InputError):
+        etlcal.render(square_mm=-1.5)
+    with pytest.raises(etlcal.InputError):
+        etlcal.render(pattern="0x3")
+    with pytest.raises(etlcal.InputError):
+        etlcal.render(pattern=3.5)
+
+
+def test_sharpness_of_16_bit_images(board):
+    image, _ = board
+    wide = image.astype(np.uint16) * 257
+    # CPBD reads 16-bit images on the 8-bit scale (divided by 257): the same value.
+    assert etlcal.sharpness(wide, "cpbd") == pytest.approx(etlcal.sharpness(image, "cpbd"), abs=1e-12)
+    assert etlcal.sharpness(wide, "tenengrad") > 0.0
+    with pytest.raises(etlcal.InputError, match="uint8 or uint16"):
+        etlcal.sharpness(image.astype(np.int32), "tenengrad")
+
+
+def test_autofocus_bad_options():
+    def f(e):
+        return -abs(e - 150.0)
+
+    with pytest.raises(etlcal.InputError):
+        etlcal.autofocus(f, coarse_points=2)
+    with pytest.raises(etlcal.InputError):
+        etlcal.autofocus(f, coarse_points=7, max_evaluations=5)
+    with pytest.raises(etlcal.InputError):
+        etlcal.autofocus(f, tolerance_ma=-1.0)
+    # A callable that does not return a number: Python's own TypeError, as for float("x").
+    with pytest.raises(TypeError):
+        etlcal.autofocus(lambda e: "sharp")

@@ -1,5 +1,6 @@
 """`Lens` against `VirtualLens` through a pseudo-terminal, from Python."""
 import math
+import time
 
 import pytest
 
@@ -98,3 +99,111 @@ def test_thermal_calibration_with_a_python_camera():
             etlcal.thermal_calibration(lens, broken, set_temperature, e_in_grid_ma=[100.0], temperatures_c=[27.0, 30.0])
         with pytest.raises(etlcal.InputError):
             etlcal.thermal_calibration(lens, capture, set_temperature, temperatures_c=[27.0])
+
+
+def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
+    device = etlcal.VirtualLens()
+    with etlcal.Lens(device.port, timeout_ms=150) as lens:
+        assert lens.port == device.port and lens.limits_ma == device.limits_ma
+        device.inject_faults(silence_next=1)
+        with pytest.raises(etlcal.DeviceTimeoutError, match=r"^no reply to \w+ within 150ms$") as e:
+            lens.current_ma()
+        assert isinstance(e.value, TimeoutError) and isinstance(e.value, etlcal.DeviceError)
+        device.inject_faults(error_frame_next=3)
+        with pytest.raises(etlcal.DeviceError, match=r"answered \w+ with error 3") as e:
+            lens.current_ma()
+        assert not isinstance(e.value, etlcal.DeviceTimeoutError)
+        device.inject_faults(reply_delay_ms=400.0)
+        with pytest.raises(etlcal.DeviceTimeoutError):
+            lens.current_ma()
+        device.inject_faults()
+        # The late reply arrives after the timeout and is skipped as stray bytes.
+        time.sleep(0.3)
+        got = lens.set_current_ma(100.0)
+        assert lens.current_ma() == pytest.approx(got)
+        with pytest.raises(etlcal.InputError, match="reply_delay_ms"):
+            device.inject_faults(reply_delay_ms=-1.0)
+
+
+def test_a_pulled_cable_is_a_device_error_and_reconnect_keeps_the_current():
+    device = etlcal.VirtualLens()
+    with etlcal.Lens(device.port, timeout_ms=200) as lens:
+        got = lens.set_current_ma(120.0)
+        device.disconnect()
+        with pytest.raises(etlcal.DeviceError):
+            lens.current_ma()
+        device.reconnect()
+        lens.reconnect()
+        assert lens.current_ma() == pytest.approx(got)
+        assert device.state()["e_in_ma"] == pytest.approx(got)
+
+
+def test_hold_keeps_the_true_e_com_while_the_lens_warms():
+    # The virtual lens's true surface is the paper's, so holding with the paper's
+    # calibration must keep its true E_com at the wanted value to the DAC's resolution
+    # (292.84 / 4095 = 0.0715 mA per code: half a code), at any temperature.
+    device = etlcal.VirtualLens()
+    cal = etlcal.ThermalCalibration.paper()
+    with etlcal.Lens(device.port) as lens:
+        lens.set_current_ma(120.0)
+        e_in = []
+        for t in [27.0, 32.0, 36.5]:
+            device.set_temperature_c(t)
+            r = lens.hold(cal, 120.0, steps=3)
+            assert r["commands_sent"] == 3 and r["worst_e_com_error_ma"] < 0.036
+            assert r["last"]["index"] == 2 and not r["last"]["extrapolated"]
+            s = device.state()
+            assert abs(s["e_com_ma"] - 120.0) < 0.036 and abs(s["temperature_c"] - t) < 0.2
+            e_in.append(s["e_in_ma"])
+        # E_T grows with temperature: the held E_in rises with it.
+        assert e_in[0] < e_in[1] < e_in[2]
+
+
+def test_hold_observer_and_bad_input():
+    device = etlcal.VirtualLens()
+    cal = etlcal.ThermalCalibration.paper()
+    seen = []
+
+    def stop_after_five(step):
+        seen.append(step)
+        return step["index"] < 4
+
+    with etlcal.Lens(device.port) as lens:
+        r = lens.hold(cal, 100.0, on_step=stop_after_five)
+        assert r["commands_sent"] == 5 and [s["index"] for s in seen] == [0, 1, 2, 3, 4]
+        assert set(seen[0]) == {"index", "temperature_c", "e_in_ma", "e_com_ma", "error_ma", "extrapolated"}
+        r = lens.hold(cal, 100.0, duration_s=0.05, rate_hz=100.0)
+        assert 1 <= r["commands_sent"] <= 7 and r["elapsed_s"] >= 0.05
+
+        def broken(step):
+            raise RuntimeError("observer failed")
+
+        with pytest.raises(RuntimeError, match="observer failed"):
+            lens.hold(cal, 100.0, on_step=broken)
+        with pytest.raises(etlcal.InputError, match="steps, duration_s or on_step"):
+            lens.hold(cal, 100.0)
+        with pytest.raises(etlcal.InputError, match="steps must be >= 1"):
+            lens.hold(cal, 100.0, steps=0)
+        with pytest.raises(etlcal.InputError, match="duration_s"):
+            lens.hold(cal, 100.0, duration_s=-1.0)
+        with pytest.raises(etlcal.InputError, match="e_com_ma"):
+            lens.hold(cal, math.nan, steps=1)
+        with pytest.raises(etlcal.InputError, match="rate"):
+            lens.hold(cal, 100.0, steps=1, rate_hz=-1.0)
+    with pytest.raises(etlcal.DeviceError, match="closed"):
+        lens.hold(cal, 100.0, steps=1)
+
+
+def test_thermal_calibration_bad_input():
+    import numpy as np
+
+    device = etlcal.VirtualLens()
+    frame = np.zeros((96, 96), np.uint8)
+    with etlcal.Lens(device.port) as lens:
+        with pytest.raises(etlcal.InputError, match="uint8"):
+            etlcal.thermal_calibration(lens, lambda: frame.astype(np.float32), lambda t: None,
+                                       e_in_grid_ma=[100.0], temperatures_c=[27.0, 30.0])
+        with pytest.raises(etlcal.InputError, match="sharpest"):
+            etlcal.thermal_calibration(lens, lambda: frame, lambda t: None, metric="sharpest")
+    with pytest.raises(etlcal.DeviceError, match="closed"):
+        etlcal.thermal_calibration(lens, lambda: frame, lambda t: None)

@@ -55,7 +55,7 @@ def test_every_public_callable_has_a_docstring_with_units():
             for m, member in vars(obj).items():
                 if not m.startswith("_"):
                     assert member.__doc__, f"{name}.{m}"
-    for mod in (etlcal.physics, etlcal.simulate):
+    for mod in (etlcal.physics, etlcal.simulate, etlcal.studies):
         for name in mod.__all__:
             assert getattr(mod, name).__doc__, f"{mod.__name__}.{name}"
 
@@ -80,3 +80,17 @@ def test_quickstart_runs(tmp_path):
     out = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "measured stage move" in out.stdout
+
+
+def test_stubs_agree_with_the_runtime_signatures():
+    """mypy's stubtest over the native module (names, parameters, defaults); runs when mypy
+    is installed in the test environment."""
+    import subprocess
+    import sys
+
+    import pytest
+
+    pytest.importorskip("mypy.stubtest")
+    out = subprocess.run([sys.executable, "-m", "mypy.stubtest", "etlcal._etlcal"], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr

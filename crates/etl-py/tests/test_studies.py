@@ -27,3 +27,10 @@ def test_bad_study_input(tmp_path):
         etlcal.study("fig7")
     with pytest.raises(etlcal.InputError, match="does not exist"):
         etlcal.study("fig5", out=tmp_path / "missing")
+
+
+def test_the_studies_module_calls_the_same_studies():
+    assert etlcal.studies.fig5() == etlcal.study("fig5")
+    assert etlcal.studies.crlb(trials=20, seed=3) == etlcal.study("crlb", trials=20, seed=3)
+    with pytest.raises(etlcal.InputError, match="does not exist"):
+        etlcal.studies.fig6(trials=1, out="/no/such/dir")

@@ -11,11 +11,16 @@ Main nouns:
 - `ThermalSurface`, `ThermalCalibration`: temperature compensation (E_com = E_in - E_T).
 - `LensPhysics` and `etlcal.physics`: the lens's physical model.
 - `etlcal.simulate.paper_rig(seed)`: the paper's simulated rig.
-- Hardware: `Lens(port)` (Optotune Lens Driver 4; a context manager) and `VirtualLens()`
-  (the simulated device on a pseudo-terminal: `Lens(VirtualLens().port)`).
+- Hardware: `Lens(port)` (Optotune Lens Driver 4; a context manager; `Lens.hold(...)`
+  keeps E_com while the lens warms) and `VirtualLens()` (the simulated device on a
+  pseudo-terminal: `Lens(VirtualLens().port)`, with fault injection);
+  `thermal_calibration(lens, capture, set_temperature)` (section 4.1 with your camera).
 - Images (2-D uint8/uint16 numpy arrays): `detect_corners(image, "14x12")`,
   `sharpness(image, "cpbd")`, `render(e_com_ma=...)` (the synthetic camera),
-  `autofocus(callable)`.
+  `autofocus(callable)`; `zhang(views, image_size)` (fixed-focus calibration, e.g. A0);
+  `Dataset` (images + what was recorded; `.detect()` gives Observations).
+- `etlcal.studies.fig5()`, `.fig6(trials)`, `.subsets()`, `.baseline()`, `.crlb(trials)`
+  (also `study(name)`): the paper's simulation studies.
 
 Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 `NotConvergedError`, `BoardNotFoundError`, `FileError` (also an OSError), `DeviceError`,
@@ -51,7 +56,7 @@ from ._etlcal import (
     thermal_calibration,
     zhang,
 )
-from . import physics, simulate
+from . import physics, simulate, studies
 
 __all__ = [
     "__version__",
@@ -84,4 +89,5 @@ __all__ = [
     "zhang",
     "physics",
     "simulate",
+    "studies",
 ]

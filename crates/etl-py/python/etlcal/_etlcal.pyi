@@ -10,7 +10,38 @@ _F64 = npt.NDArray[np.float64]
 _ArrayLike = npt.ArrayLike
 _FloatOrArray = Union[float, _F64]
 
-__all__: List[str]
+__all__ = [
+    "A0",
+    "BoardNotFoundError",
+    "BoardPose",
+    "Calibration",
+    "Dataset",
+    "DeviceError",
+    "DeviceTimeoutError",
+    "Error",
+    "FileError",
+    "InputError",
+    "Lens",
+    "LensPhysics",
+    "NotConvergedError",
+    "Observations",
+    "Simulation",
+    "ThermalCalibration",
+    "ThermalSurface",
+    "VirtualLens",
+    "__version__",
+    "_raise_rust_error",
+    "autofocus",
+    "calibrate",
+    "cramer_rao_std",
+    "detect_corners",
+    "render",
+    "sharpness",
+    "simulate_paper_rig",
+    "study",
+    "thermal_calibration",
+    "zhang",
+]
 __version__: str
 
 class Error(Exception): ...
@@ -365,13 +396,30 @@ def autofocus(
 class Lens:
     """An Optotune Lens Driver 4 on `port` (or a VirtualLens's port); a context manager.
     The current never leaves the driver's limits (clamped); NaN raises InputError."""
-    def __init__(self, port: Union[str, os.PathLike], handshake: bool = False, timeout_ms: int = 500) -> None: ...
+    def __new__(cls, port: Union[str, os.PathLike], handshake: bool = False, timeout_ms: int = 500) -> Lens: ...
     def info(self) -> Dict[str, Any]: ...
     def set_current_ma(self, e_in_ma: float) -> float: ...
     def current_ma(self) -> float: ...
     def temperature_c(self) -> float: ...
     @property
     def limits_ma(self) -> Tuple[float, float]: ...
+    @property
+    def port(self) -> str: ...
+    def reconnect(self) -> None: ...
+    def hold(
+        self,
+        calibration: ThermalCalibration,
+        e_com_ma: float,
+        steps: Optional[int] = None,
+        duration_s: Optional[float] = None,
+        rate_hz: float = 0.0,
+        on_step: Optional[Callable[[Dict[str, Any]], Optional[bool]]] = None,
+    ) -> Dict[str, Any]:
+        """Holds E_com (mA) while the temperature changes (reads T, sends E_in solving
+        E_in - E_T(T, E_in) = E_com), until `steps`, `duration_s` (s) or `on_step` returns
+        False; returns commands_sent, elapsed_s, achieved_rate_hz, worst_e_com_error_ma,
+        temperature_range_c, extrapolated_steps, last."""
+        ...
     def close(self) -> None: ...
     def __enter__(self) -> "Lens": ...
     def __exit__(self, *args: Any) -> bool: ...
@@ -379,7 +427,7 @@ class Lens:
 @final
 class VirtualLens:
     """The simulated lens and driver on a pseudo-terminal (paper physics and thermal surface)."""
-    def __init__(self) -> None: ...
+    def __new__(cls) -> VirtualLens: ...
     @property
     def port(self) -> str: ...
     @property
@@ -387,6 +435,23 @@ class VirtualLens:
     def state(self) -> Dict[str, float]: ...
     def set_temperature_c(self, t_c: float) -> None: ...
     def received_current_codes(self) -> List[int]: ...
+    def set_ambient_c(self, t_c: float) -> None: ...
+    def advance_s(self, dt_s: float) -> None: ...
+    def inject_faults(
+        self,
+        reply_delay_ms: float = 0.0,
+        silence_next: int = 0,
+        corrupt_next: int = 0,
+        crc_error_next: int = 0,
+        error_frame_next: Optional[int] = None,
+        drop_rx_bytes_next: int = 0,
+        garbage_before_next: bytes = b"",
+    ) -> None:
+        """Faults on the link (replacing any before): reply delay (ms), silenced or corrupted
+        replies, commands failing their CRC, an error frame E<id>, lost host bytes, garbage."""
+        ...
+    def disconnect(self) -> None: ...
+    def reconnect(self) -> None: ...
 
 def zhang(views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]], image_size: Tuple[int, int]) -> Dict[str, Any]:
     """Zhang's monofocal calibration from (board_mm (N,2), pixels (N,2)) views: fx, fy, u0, v0
@@ -411,6 +476,43 @@ def thermal_calibration(
 class Dataset:
     """An etlcal.dataset/1 file: images with E_in, T and stage Z per view; `detect()` gives
     Observations."""
+    def __new__(
+        cls,
+        image_size: Tuple[int, int],
+        inner_corners: Tuple[int, int],
+        square_mm: float,
+        base_dir: Union[str, os.PathLike, None] = None,
+        offstate_board: Optional[Dict[str, Any]] = None,
+    ) -> Dataset: ...
+    def add_view(
+        self,
+        image: Union[str, os.PathLike],
+        e_in_ma: float,
+        temperature_c: float,
+        z_w_mm: float,
+        e_com_ma: Optional[float] = None,
+        board: Optional[Dict[str, Any]] = None,
+        first_corner: Optional[Tuple[int, int]] = None,
+    ) -> None: ...
+    def add_offstate_view(
+        self,
+        image: Union[str, os.PathLike],
+        board: Optional[Dict[str, Any]] = None,
+        first_corner: Optional[Tuple[int, int]] = None,
+    ) -> None: ...
+    def add_setting_view(
+        self,
+        image: Union[str, os.PathLike],
+        e_in_ma: float,
+        temperature_c: float,
+        e_com_ma: Optional[float] = None,
+        board: Optional[Dict[str, Any]] = None,
+        first_corner: Optional[Tuple[int, int]] = None,
+    ) -> None: ...
+    @property
+    def offstate_count(self) -> int: ...
+    @property
+    def setting_count(self) -> int: ...
     @classmethod
     def load(cls, path: Union[str, os.PathLike]) -> Dataset: ...
     def save(self, path: Union[str, os.PathLike]) -> None: ...
