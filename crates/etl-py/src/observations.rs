@@ -184,6 +184,34 @@ impl Observations {
         Ok(())
     }
 
+    /// Adds a view for the per-setting baseline (`calibrate(..., method="per-setting")`):
+    /// a planar board in a free pose at one lens setting. Views whose E_com agree within
+    /// 0.5 mA form one setting; the baseline needs >= 3 views at each of >= 3 settings.
+    ///
+    /// Args:
+    ///     world_mm: (N, 3) board points, mm (Z = 0).
+    ///     pixels: (N, 2) observed pixels, px.
+    ///     e_in_ma: driver current, mA.
+    ///     temperature_c: lens temperature, degC.
+    ///     e_com_ma: compensated current, mA (optional: used as is when given).
+    #[pyo3(signature = (world_mm, pixels, e_in_ma, temperature_c, e_com_ma=None))]
+    fn add_setting_view(
+        &mut self,
+        world_mm: &Bound<'_, PyAny>,
+        pixels: &Bound<'_, PyAny>,
+        e_in_ma: f64,
+        temperature_c: f64,
+        e_com_ma: Option<f64>,
+    ) -> PyResult<()> {
+        let pts = view_points(world_mm, pixels)?;
+        self.file.setting_views.push(ViewObs { e_in_ma, temperature_c, e_com_ma, points: pts });
+        if let Err(e) = self.file.validate() {
+            self.file.setting_views.pop();
+            return Err(crate::errors::calib_err(e));
+        }
+        Ok(())
+    }
+
     /// Number of ETL views.
     fn __len__(&self) -> usize {
         self.file.views.len()
@@ -193,6 +221,12 @@ impl Observations {
     #[getter]
     fn offstate_count(&self) -> usize {
         self.file.offstate_views.len()
+    }
+
+    /// Number of per-setting baseline views.
+    #[getter]
+    fn setting_count(&self) -> usize {
+        self.file.setting_views.len()
     }
 
     /// Total number of points over the ETL views.
@@ -221,6 +255,19 @@ impl Observations {
     ///     index: view number (negative counts from the end).
     fn offstate_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
         points_dict(py, &pick(&self.file.offstate_views, index)?.points)
+    }
+
+    /// Per-setting baseline view `index`: a dict like `view(index)`.
+    ///
+    /// Args:
+    ///     index: view number (negative counts from the end).
+    fn setting_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
+        let v = pick(&self.file.setting_views, index)?;
+        let d = points_dict(py, &v.points)?;
+        d.set_item("e_in_ma", v.e_in_ma)?;
+        d.set_item("temperature_c", v.temperature_c)?;
+        d.set_item("e_com_ma", v.e_com_ma)?;
+        Ok(d)
     }
 
     /// E_com of every view, mA: as recorded, or compensated from (e_in_ma,

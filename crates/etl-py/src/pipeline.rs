@@ -18,7 +18,8 @@ use crate::thermal::ThermalCalibration;
 ///     observations: the corners of the ETL views (an `Observations`; >= 3 distinct
 ///         currents, non-coplanar points: the board at several stage positions).
 ///     a0: the lens-off intrinsics (an `A0`: kf0x, kf0y, u0, v0 in px), e.g. from
-///         `zhang(...)` on lens-off views.
+///         `zhang(...)` on lens-off views. None: Zhang's method on the observations'
+///         lens-off views (section 4.2), as `etlcal calibrate` does without `--a0`.
 ///     thermal: the temperature compensation used for views without a recorded E_com
 ///         (a `ThermalCalibration`; default: the paper's).
 ///     estimator: "paper" (Eq. 24: recorded stage positions and currents exact) or "eiv"
@@ -30,20 +31,26 @@ use crate::thermal::ThermalCalibration;
 ///     sigma_z_mm: "eiv" prior on the stage position, mm (paper: 0.010).
 ///     sigma_e_ma: "eiv" prior on the current, mA (paper: 0.4).
 ///     sigma_px: "eiv" pixel noise, px (default: estimated from a plain solution).
+///     method: "proposed" (the paper's method, above) or "per-setting" (the paper's
+///         baseline of section 5.2.3: Zhang at each current of the observations'
+///         setting views, >= 3 views at each of >= 3 currents, then a cubic through
+///         fx(E), fy(E); R and T are not defined and are zero; a0, estimator, hold_a0
+///         and robust do not apply and must keep their defaults).
 ///
 /// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
 /// error (`rms_px`) and per-view summaries (`views`).
 ///
 /// Raises: InputError naming the unmet precondition (e.g. fewer than 3 distinct
-/// currents); NotConvergedError when the bundle adjustment fails.
+/// currents, no lens-off views when a0 is None); NotConvergedError when the bundle
+/// adjustment fails.
 #[pyfunction]
-#[pyo3(signature = (observations, a0, thermal=None, estimator="paper", hold_a0=false, robust=None,
-    robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None))]
+#[pyo3(signature = (observations, a0=None, thermal=None, estimator="paper", hold_a0=false, robust=None,
+    robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None, method="proposed"))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
     observations: &Observations,
-    a0: &A0,
+    a0: Option<&A0>,
     thermal: Option<ThermalCalibration>,
     estimator: &str,
     hold_a0: bool,
@@ -52,7 +59,23 @@ pub fn calibrate(
     sigma_z_mm: f64,
     sigma_e_ma: f64,
     sigma_px: Option<f64>,
+    method: &str,
 ) -> PyResult<Calibration> {
+    let thermal = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
+    match method {
+        "proposed" => {}
+        "per-setting" => {
+            if a0.is_some() || estimator != "paper" || hold_a0 || robust.is_some() {
+                return Err(input_error(
+                    "method=\"per-setting\" takes no a0, estimator, hold_a0 or robust: the baseline is Zhang at each current",
+                ));
+            }
+            let obs = observations.file.clone();
+            let result = py.detach(|| etl_calib::baseline::per_setting(&obs, &thermal)).py()?;
+            return Ok(Calibration::from_file(result.calibration));
+        }
+        other => return Err(input_error(format!("method must be \"proposed\" or \"per-setting\", got {other:?}"))),
+    }
     let estimator = match estimator {
         "paper" => Estimator::Paper,
         "eiv" => Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px },
@@ -65,10 +88,17 @@ pub fn calibrate(
         Some(other) => return Err(input_error(format!("robust must be None, \"huber\" or \"cauchy\", got {other:?}"))),
     };
     let options = CalibrateOptions { estimator, hold_a0, robust };
-    let thermal = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
     let obs = observations.file.clone();
-    let a0 = a0.inner;
-    let result = py.detach(|| run_pipeline(&obs, &a0, &thermal, &options)).py()?;
+    let a0 = a0.map(|a| a.inner);
+    let result = py
+        .detach(|| {
+            let a0 = match a0 {
+                Some(a0) => a0,
+                None => etl_calib::pipeline::a0_from_offstate(&obs)?.a0(),
+            };
+            run_pipeline(&obs, &a0, &thermal, &options)
+        })
+        .py()?;
     Ok(Calibration::from_file(result.calibration))
 }
 

@@ -1,7 +1,7 @@
 //! `simulate_paper_rig`: the paper rig (section 5.1.2) as synthetic observations with the
 //! paper's noise model (Python: `etlcal.simulate.paper_rig`).
 
-use etl_calib::simulate::{paper_rig, NoiseModel, Simulation as CoreSimulation};
+use etl_calib::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig, Simulation as CoreSimulation};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -15,6 +15,7 @@ pub struct Simulation {
     inner: CoreSimulation,
     seed: u64,
     noise: NoiseModel,
+    setting_views: bool,
 }
 
 #[pymethods]
@@ -71,7 +72,7 @@ impl Simulation {
     /// Pickles as the call that makes it (the simulation is deterministic).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
         let f = py.import("etlcal._etlcal")?.getattr("simulate_paper_rig")?;
-        Ok((f, (self.seed, noise_dict(py, &self.noise)?)))
+        Ok((f, (self.seed, noise_dict(py, &self.noise)?, self.setting_views)))
     }
 
     fn __repr__(&self) -> String {
@@ -80,8 +81,8 @@ impl Simulation {
     }
 }
 
-/// What `__reduce__` returns: the callable and its arguments (seed, noise).
-type Reduced<'py> = (Bound<'py, PyAny>, (u64, Bound<'py, PyDict>));
+/// What `__reduce__` returns: the callable and its arguments (seed, noise, setting_views).
+type Reduced<'py> = (Bound<'py, PyAny>, (u64, Bound<'py, PyDict>, bool));
 
 fn noise_dict<'py>(py: Python<'py>, m: &NoiseModel) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -136,12 +137,26 @@ fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {
 ///     noise: "paper" (default), "none", or a dict overriding some standard deviations:
 ///         xy_mm (corner X, Y, mm), z_mm (stage, mm), e_ma (current, mA), px (pixels, px),
 ///         kf0_rel (relative, of A0's kf0), pp_px (A0's principal point, px).
+///     setting_views: also simulate the per-setting baseline's views (section 5.2.3: 15
+///         free views at each of 80, 100, ..., 225 mA, tilted as far as the depth of
+///         field allows), for `calibrate(..., method="per-setting")`.
 ///
 /// Returns: a `Simulation` (observations, a0, truth, true_dz_mm, true_de_ma).
 #[pyfunction]
-#[pyo3(signature = (seed=0, noise=None))]
-pub fn simulate_paper_rig(py: Python<'_>, seed: u64, noise: Option<&Bound<'_, PyAny>>) -> PyResult<Simulation> {
+#[pyo3(signature = (seed=0, noise=None, setting_views=false))]
+pub fn simulate_paper_rig(
+    py: Python<'_>,
+    seed: u64,
+    noise: Option<&Bound<'_, PyAny>>,
+    setting_views: bool,
+) -> PyResult<Simulation> {
     let m = noise_model(noise)?;
-    let inner = py.detach(|| paper_rig(&m, seed));
-    Ok(Simulation { inner, seed, noise: m })
+    let inner = py.detach(|| {
+        let mut sim = paper_rig(&m, seed);
+        if setting_views {
+            add_setting_views(&mut sim.observations, &SettingRig::default(), &m, seed);
+        }
+        sim
+    });
+    Ok(Simulation { inner, seed, noise: m, setting_views })
 }

@@ -212,3 +212,53 @@ def test_cramer_rao_bound_of_the_paper_rig():
         etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2, sigma_z_mm=0.01)
     with pytest.raises(etlcal.InputError, match="sigma_px"):
         etlcal.cramer_rao_std(sim.observations, sim.truth, 0.0)
+
+
+def test_a0_from_the_lens_off_views_when_not_given(sim):
+    # Without a0, Zhang's method on the simulation's 10 lens-off views gives A0 (as
+    # `etlcal calibrate` without --a0): the fx(E) curve stays within the demo's tolerance.
+    cal = etlcal.calibrate(sim.observations)
+    e = np.linspace(80, 225, 30)
+    fx = np.polyval(cal.kf_x[::-1], e)
+    fx_true = np.polyval(sim.truth.kf_x[::-1], e)
+    assert np.max(np.abs(fx / fx_true - 1)) < 0.02
+    no_offstate = etlcal.Observations((1936, 1458))
+    for i in range(len(sim.observations)):
+        v = sim.observations.view(i)
+        no_offstate.add_view(v["world_mm"], v["pixels"], v["e_in_ma"], v["temperature_c"], v["e_com_ma"])
+    with pytest.raises(etlcal.InputError, match="no lens-off views"):
+        etlcal.calibrate(no_offstate)
+
+
+def test_per_setting_baseline_from_python():
+    sim = etlcal.simulate.paper_rig(seed=3, setting_views=True)
+    obs = sim.observations
+    assert obs.setting_count == 7 * 15 and len(obs) == 15
+    s = obs.setting_view(-1)
+    assert s["world_mm"].shape[1] == 3 and np.all(s["world_mm"][:, 2] == 0.0)
+    assert pickle.loads(pickle.dumps(sim)).observations == obs
+    base = etlcal.calibrate(obs, method="per-setting")
+    assert base.estimator == "per-setting"
+    # The baseline's fx(E) is a cubic through per-setting Zhang estimates: close to the
+    # truth over the calibrated currents, but the paper's method is closer (Fig. 12(a)).
+    e = np.linspace(80, 225, 30)
+    truth = np.polyval(sim.truth.kf_x[::-1], e)
+    base_err = np.max(np.abs(np.polyval(base.kf_x[::-1], e) / truth - 1))
+    assert base_err < 0.05
+    with pytest.raises(etlcal.InputError, match="takes no a0, estimator"):
+        etlcal.calibrate(obs, sim.a0, method="per-setting")
+    with pytest.raises(etlcal.InputError, match='method must be "proposed" or "per-setting"'):
+        etlcal.calibrate(obs, method="zhang")
+    # Too few settings: the Rust message, unchanged.
+    few = etlcal.Observations((1936, 1458))
+    for i in range(obs.setting_count):
+        v = obs.setting_view(i)
+        if v["e_com_ma"] < 110:
+            few.add_setting_view(v["world_mm"], v["pixels"], v["e_in_ma"], v["temperature_c"], v["e_com_ma"])
+    with pytest.raises(etlcal.InputError, match=r"needs views at >= 3 distinct currents, got 2"):
+        etlcal.calibrate(few, method="per-setting")
+    with pytest.raises(etlcal.InputError, match="needs setting_views"):
+        etlcal.calibrate(etlcal.simulate.paper_rig(seed=3).observations, method="per-setting")
+    with pytest.raises(etlcal.InputError, match="not finite"):
+        few.add_setting_view([[0.0, 0.0, 0.0]] * 4, [[1.0, 1.0]] * 4, math.nan, 27.0)
+    assert few.setting_count == 2 * 15

@@ -307,6 +307,17 @@ class Observations:
         e_com_ma: Optional[float] = None,
     ) -> None: ...
     def add_offstate_view(self, world_mm: _ArrayLike, pixels: _ArrayLike) -> None: ...
+    def add_setting_view(
+        self,
+        world_mm: _ArrayLike,
+        pixels: _ArrayLike,
+        e_in_ma: float,
+        temperature_c: float,
+        e_com_ma: Optional[float] = None,
+    ) -> None: ...
+    @property
+    def setting_count(self) -> int: ...
+    def setting_view(self, index: int) -> Dict[str, Any]: ...
     def __len__(self) -> int: ...
     @property
     def offstate_count(self) -> int: ...
@@ -333,10 +344,12 @@ class Simulation:
     @property
     def noise(self) -> Dict[str, float]: ...
 
-def simulate_paper_rig(seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None) -> Simulation: ...
+def simulate_paper_rig(
+    seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None, setting_views: bool = False
+) -> Simulation: ...
 def calibrate(
     observations: Observations,
-    a0: A0,
+    a0: Optional[A0] = None,
     thermal: Optional[ThermalCalibration] = None,
     estimator: str = "paper",
     hold_a0: bool = False,
@@ -345,6 +358,7 @@ def calibrate(
     sigma_z_mm: float = 0.010,
     sigma_e_ma: float = 0.4,
     sigma_px: Optional[float] = None,
+    method: str = "proposed",
 ) -> Calibration: ...
 def cramer_rao_std(
     observations: Observations,

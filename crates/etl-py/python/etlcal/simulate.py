@@ -6,7 +6,9 @@ from ._etlcal import Simulation, simulate_paper_rig
 __all__ = ["Simulation", "paper_rig"]
 
 
-def paper_rig(seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None) -> Simulation:
+def paper_rig(
+    seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None, setting_views: bool = False
+) -> Simulation:
     """The paper rig's 15 views (2311 corners of a 14 x 12 board, 1.5 mm squares, at stage
     positions 75..2 mm and E_com 80..225 mA), seeded.
 
@@ -17,9 +19,13 @@ def paper_rig(seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = 
             current, 0.2 px on pixels, 0.3 % on A0's kf0 and 1 px on its principal
             point), "none", or a dict overriding some of xy_mm, z_mm, e_ma, px, kf0_rel,
             pp_px.
+        setting_views: also simulate the per-setting baseline's views (section 5.2.3:
+            15 free views of the board at each of 80, 100, 125, ..., 225 mA, tilted as far
+            as the depth of field allows; `observations.setting_count`), for
+            `etlcal.calibrate(obs, method="per-setting")`.
 
     Returns:
         a `Simulation` with `observations`, `a0`, `truth` (a `Calibration`),
         `true_dz_mm` and `true_de_ma`.
     """
-    return simulate_paper_rig(seed, noise)
+    return simulate_paper_rig(seed, noise, setting_views)
