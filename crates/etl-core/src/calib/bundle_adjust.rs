@@ -175,6 +175,9 @@ pub struct BundleAdjustReport {
     pub rms_px: f64,
     /// LM iterations (of the final estimator).
     pub iterations: usize,
+    /// Residual evaluations of the final estimator's LM (linearisations and trial steps;
+    /// 2 iterations + 1 when every trial step was accepted).
+    pub evaluations: usize,
     /// Why the LM stopped.
     pub stop: StopReason,
     /// Pixel noise standard deviation used (errors-in-variables) or estimated (paper).
@@ -622,6 +625,7 @@ pub fn bundle_adjust(
                 initial_rms_px,
                 rms_px: rms(views, &x, None)?,
                 iterations: plain.iterations,
+                evaluations: plain.evaluations,
                 stop: plain.stop,
                 sigma_px: sigma_plain,
             });
@@ -663,6 +667,7 @@ pub fn bundle_adjust(
         initial_rms_px,
         rms_px: rms(views, &x, Some(y))?,
         iterations: r.iterations,
+        evaluations: r.evaluations,
         stop: r.stop,
         sigma_px,
     })
