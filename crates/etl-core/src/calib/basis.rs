@@ -13,9 +13,21 @@
 //! fx(E) = sum_k c_xk T_k(t),  k = 0..3        k1(w) = d_2 T_2(s) + d_1 T_1(s) + d_0
 //! ```
 //!
-//! (likewise fy, p1, p2), a linear and exactly invertible change of variables: the minimum,
-//! the model and the covariance (mapped back by dx/dz) are those of the paper's
-//! parameters; only the path of the iterations changes.
+//! (likewise fy, p1, p2), an exactly invertible change of variables: the minimum, the model
+//! and the covariance (mapped back by dx/dz) are those of the paper's parameters; only the
+//! path of the iterations changes.
+//!
+//! The w range moves with the focal lengths: w_lo and w_hi are 2 / (fx + fy) at the ends
+//! of the current range *under the parameters being evaluated*, not under the start. Why:
+//! a view's distortion depends on kf only through w_j = 2 / (fx(E_j) + fy(E_j)), and on
+//! the paper rig p1 is the small difference of a5 w and a6 (2.3e-5 against -1.9e-5), so a
+//! 1 % change of kf at fixed a moves every view's p1 by about 6 % (0.6 px at the image
+//! edge). At fixed Chebyshev coefficients d, s_j = (w_j - w_mid) / w_half barely moves
+//! when kf does (w_j and the ends move together), so the views' distortion stays where the
+//! data put it while kf moves: the bilinear coupling that made the LM crawl on six-view
+//! subsets (10 iterations on average, 20 at worst, with a truth without distortion 4) is
+//! gone from the parameterisation. The price: the map z -> x is nonlinear in the kf part,
+//! so dx/dz is evaluated at z ([`Basis::params_jacobian`]).
 
 #![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
 
@@ -74,111 +86,149 @@ fn cheb_to_mono(c: [f64; 4], n: usize, mid: f64, half: f64) -> [f64; 4] {
     a
 }
 
-/// The ranges that define the internal parameters (see the module documentation).
+/// The current range that defines the internal parameters (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Basis {
     e_mid: f64,
     e_half: f64,
-    w_mid: f64,
-    w_half: f64,
+}
+
+/// The w range (mid, half) under some focal-length coefficients, with its gradient with
+/// respect to the Chebyshev coefficients of fx and fy (internal slots 6..14).
+struct WRange {
+    mid: f64,
+    half: f64,
+    d_mid: [f64; 8],
+    d_half: [f64; 8],
 }
 
 impl Basis {
-    /// The identity-like basis on E in [-1, 1] mA and w in [-1, 1]; used when the data give
-    /// no range (a single current: the solvers refuse that anyway).
-    const UNIT: Basis = Basis { e_mid: 0.0, e_half: 1.0, w_mid: 0.0, w_half: 1.0 };
+    /// The identity-like basis on E in [-1, 1] mA; used when the data give no range (a
+    /// single current: the solvers refuse that anyway).
+    const UNIT: Basis = Basis { e_mid: 0.0, e_half: 1.0 };
 
-    /// The basis on the range of the views' currents and of w = 2 / (fx + fy) under
-    /// `model` at those currents.
-    pub fn for_views(views: &[View<'_>], model: &CameraModel) -> Self {
+    /// The basis on the range of the views' currents. (`model` is not needed any more:
+    /// the w range follows the parameters; kept so that callers read the same.)
+    pub fn for_views(views: &[View<'_>], _model: &CameraModel) -> Self {
         let (mut elo, mut ehi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let (mut wlo, mut whi) = (f64::INFINITY, f64::NEG_INFINITY);
         for v in views {
-            let e = v.e_com_ma;
-            elo = elo.min(e);
-            ehi = ehi.max(e);
-            let f = 0.5 * (cubic(&model.kf_x, e) + cubic(&model.kf_y, e));
-            if f > 0.0 {
-                wlo = wlo.min(1.0 / f);
-                whi = whi.max(1.0 / f);
-            }
+            elo = elo.min(v.e_com_ma);
+            ehi = ehi.max(v.e_com_ma);
         }
-        if !(ehi > elo && whi > wlo && (ehi - elo).is_finite() && (whi - wlo).is_finite()) {
+        if !(ehi > elo && (ehi - elo).is_finite()) {
             return Basis::UNIT;
         }
-        Basis {
-            e_mid: 0.5 * (ehi + elo),
-            e_half: 0.5 * (ehi - elo),
-            w_mid: 0.5 * (whi + wlo),
-            w_half: 0.5 * (whi - wlo),
+        Basis { e_mid: 0.5 * (ehi + elo), e_half: 0.5 * (ehi - elo) }
+    }
+
+    /// w = 2 / (fx + fy) at the ends of the current range under the monomial kf of `x`,
+    /// as (mid, half), with d(mid, half)/d(Chebyshev kf coefficients): with
+    /// fx(E_lo) = sum c_xm T_m(-1) = sum c_xm (-1)^m and fx(E_hi) = sum c_xm,
+    /// dw/dc = -w^2 / 2 dfx/dc. A degenerate range (w_lo = w_hi, or a non-positive focal
+    /// length) falls back to mid 0, half 1 (the solver's trial step is then rejected by the
+    /// projection's own checks).
+    fn w_range(&self, x: &[f64; PARAMS]) -> WRange {
+        let (lo, hi) = (self.e_mid - self.e_half, self.e_mid + self.e_half);
+        let f = |e: f64| 0.5 * (cubic(&[x[6], x[7], x[8], x[9]], e) + cubic(&[x[10], x[11], x[12], x[13]], e));
+        let (flo, fhi) = (f(lo), f(hi));
+        let (wlo, whi) = (1.0 / flo, 1.0 / fhi);
+        let half = 0.5 * (whi - wlo);
+        if !(flo > 0.0 && fhi > 0.0 && half != 0.0 && half.is_finite()) {
+            return WRange { mid: 0.0, half: 1.0, d_mid: [0.0; 8], d_half: [0.0; 8] };
         }
+        // w = 2 / (fx + fy): dw/dfx = dw/dfy = -w^2 / 2.
+        let (glo, ghi) = (-0.5 * wlo * wlo, -0.5 * whi * whi);
+        let mut d_mid = [0.0; 8];
+        let mut d_half = [0.0; 8];
+        for m in 0..4 {
+            let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
+            let (dlo, dhi) = (glo * sign, ghi);
+            for axis in 0..2 {
+                d_mid[4 * axis + m] = 0.5 * (dhi + dlo);
+                d_half[4 * axis + m] = 0.5 * (dhi - dlo);
+            }
+        }
+        WRange { mid: 0.5 * (whi + wlo), half, d_mid, d_half }
     }
 
     /// The internal parameters z of the model's parameters x.
     pub fn to_internal(&self, x: &[f64; PARAMS]) -> [f64; PARAMS] {
-        self.map(x, true)
+        let mut z = *x;
+        for start in [6, 10] {
+            let c = mono_to_cheb([x[start], x[start + 1], x[start + 2], x[start + 3]], 4, self.e_mid, self.e_half);
+            z[start..start + 4].copy_from_slice(&c);
+        }
+        let w = self.w_range(x);
+        for s in [16, 19, 22] {
+            // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
+            let m = mono_to_cheb([x[s + 2], x[s + 1], x[s], 0.0], 3, w.mid, w.half);
+            z[s..s + 3].copy_from_slice(&[m[2], m[1], m[0]]);
+        }
+        z
     }
 
     /// The model's parameters x of the internal parameters z.
     pub fn to_params(&self, z: &[f64; PARAMS]) -> [f64; PARAMS] {
-        self.map(z, false)
-    }
-
-    fn map(&self, v: &[f64; PARAMS], forward: bool) -> [f64; PARAMS] {
-        let mut out = *v;
-        let (ex, ey) = (v.get(6..10), v.get(10..14));
-        for (start, part) in [(6, ex), (10, ey)] {
-            let Some(&[a0, a1, a2, a3]) = part else { continue };
-            let a = [a0, a1, a2, a3];
-            let m = if forward {
-                mono_to_cheb(a, 4, self.e_mid, self.e_half)
-            } else {
-                cheb_to_mono(a, 4, self.e_mid, self.e_half)
-            };
-            if let Some(slot) = out.get_mut(start..start + 4) {
-                slot.copy_from_slice(&m);
-            }
+        let mut x = *z;
+        for start in [6, 10] {
+            let a = cheb_to_mono([z[start], z[start + 1], z[start + 2], z[start + 3]], 4, self.e_mid, self.e_half);
+            x[start..start + 4].copy_from_slice(&a);
         }
+        let w = self.w_range(&x);
         for s in [16, 19, 22] {
-            // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
-            let Some(&[q2, q1, q0]) = v.get(s..s + 3) else { continue };
-            let m = if forward {
-                mono_to_cheb([q0, q1, q2, 0.0], 3, self.w_mid, self.w_half)
-            } else {
-                cheb_to_mono([q0, q1, q2, 0.0], 3, self.w_mid, self.w_half)
-            };
-            if let Some(slot) = out.get_mut(s..s + 3) {
-                slot.copy_from_slice(&[m[2], m[1], m[0]]);
-            }
+            let m = cheb_to_mono([z[s + 2], z[s + 1], z[s], 0.0], 3, w.mid, w.half);
+            x[s..s + 3].copy_from_slice(&[m[2], m[1], m[0]]);
         }
-        out
+        x
     }
 
-    /// dx/dz (25 x 25): row i is the gradient of the model's parameter i with respect to
-    /// the internal ones (constant: the map is linear).
-    pub fn params_jacobian(&self) -> [[f64; PARAMS]; PARAMS] {
+    /// dx/dz (25 x 25) at internal parameters `z`: row i is the gradient of the model's
+    /// parameter i with respect to the internal ones.
+    ///
+    /// Linear parts: the identity (om, T, u0, v0), the Chebyshev-to-monomial maps of kf
+    /// and of each distortion coefficient's d at the current w range. The nonlinear part:
+    /// a distortion coefficient k(w) = sum_i d_i T_i(s), s = (w - mid) / half, at fixed w
+    /// changes with the range as dk/dmid = -k'(s) / half and dk/dhalf = -s k'(s) / half,
+    /// whose Chebyshev coefficients are -(d_1, 4 d_2, 0) / half and
+    /// -(2 d_2, d_1, 2 d_2) / half (k' = d_1 + 4 d_2 s, s k' = 2 d_2 T_0 + d_1 T_1 +
+    /// 2 d_2 T_2); the range moves with the kf coefficients ([`Basis::w_range`]).
+    pub fn params_jacobian(&self, z: &[f64; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
         let mut j = [[0.0; PARAMS]; PARAMS];
-        for col in 0..PARAMS {
-            let mut e = [0.0; PARAMS];
-            e[col] = 1.0;
-            let x = self.to_params(&e);
-            for row in 0..PARAMS {
-                j[row][col] = x[row];
+        for (i, row) in j.iter_mut().enumerate() {
+            row[i] = 1.0;
+        }
+        for start in [6, 10] {
+            for col in 0..4 {
+                let mut unit = [0.0; 4];
+                unit[col] = 1.0;
+                let a = cheb_to_mono(unit, 4, self.e_mid, self.e_half);
+                for row in 0..4 {
+                    j[start + row][start + col] = a[row];
+                }
+            }
+        }
+        let x = self.to_params(z);
+        let w = self.w_range(&x);
+        for s in [16, 19, 22] {
+            // The slots hold z (T_2, T_1, T_0) and x (w^2, w, 1): descending degree.
+            let (d1, d2) = (z[s + 1], z[s]);
+            let to_slots = |m: [f64; 4]| [m[2], m[1], m[0]];
+            for (k, unit) in [[0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]].iter().enumerate() {
+                let a = to_slots(cheb_to_mono(*unit, 3, w.mid, w.half));
+                for row in 0..3 {
+                    j[s + row][s + k] = a[row];
+                }
+            }
+            let ih = 1.0 / w.half;
+            let da_dmid = to_slots(cheb_to_mono([-d1 * ih, -4.0 * d2 * ih, 0.0, 0.0], 3, w.mid, w.half));
+            let da_dhalf = to_slots(cheb_to_mono([-2.0 * d2 * ih, -d1 * ih, -2.0 * d2 * ih, 0.0], 3, w.mid, w.half));
+            for row in 0..3 {
+                for c in 0..8 {
+                    j[s + row][6 + c] = da_dmid[row] * w.d_mid[c] + da_dhalf[row] * w.d_half[c];
+                }
             }
         }
         j
-    }
-
-    /// d fx / d c_xk at current `e_ma`: T_0..T_3 of t.
-    pub fn kf_column(&self, e_ma: f64) -> [f64; 4] {
-        let t = (e_ma - self.e_mid) / self.e_half;
-        [1.0, t, 2.0 * t * t - 1.0, 4.0 * t * t * t - 3.0 * t]
-    }
-
-    /// d k / d (d_2, d_1, d_0) at w, in the slots' order: T_2(s), T_1(s), T_0.
-    pub fn a_column(&self, w: f64) -> [f64; 3] {
-        let s = (w - self.w_mid) / self.w_half;
-        [2.0 * s * s - 1.0, s, 1.0]
     }
 }
 
@@ -202,22 +252,49 @@ mod tests {
         for i in 0..PARAMS {
             assert!((back[i] - x[i]).abs() <= 1e-9 * x[i].abs().max(1e-12), "{i}: {} vs {}", back[i], x[i]);
         }
-        // fx(E) from the Chebyshev coefficients equals the cubic.
+        // fx(E) from the Chebyshev coefficients equals the cubic; k1(w) from its Chebyshev
+        // coefficients on the w range at the ends of 80..225 mA equals the quadratic.
+        let f = |e: f64| 0.5 * (cubic(&m.kf_x, e) + cubic(&m.kf_y, e));
+        let (wlo, whi) = (1.0 / f(80.0), 1.0 / f(225.0));
         for e in [80.0, 131.0, 225.0] {
-            let col = b.kf_column(e);
+            let t = (e - 152.5) / 72.5;
+            let col = [1.0, t, 2.0 * t * t - 1.0, 4.0 * t * t * t - 3.0 * t];
             let fx: f64 = (0..4).map(|k| z[6 + k] * col[k]).sum();
             assert!((fx / cubic(&m.kf_x, e) - 1.0).abs() < 1e-12);
-            let w = 1.0 / 7000.0;
-            let aw = b.a_column(w);
-            let k1: f64 = (0..3).map(|k| z[16 + k] * aw[k]).sum();
+            let w = 1.0 / f(e);
+            let s = (w - 0.5 * (whi + wlo)) / (0.5 * (whi - wlo));
+            let k1 = z[16] * (2.0 * s * s - 1.0) + z[17] * s + z[18];
             let want = x[16] * w * w + x[17] * w + x[18];
             assert!((k1 - want).abs() <= 1e-9 * want.abs().max(1e-12), "{k1} vs {want}");
         }
-        // dx/dz maps z back to x.
-        let j = b.params_jacobian();
-        for i in 0..PARAMS {
-            let xi: f64 = (0..PARAMS).map(|k| j[i][k] * z[k]).sum();
-            assert!((xi - x[i]).abs() <= 1e-9 * x[i].abs().max(1e-12));
+    }
+
+    /// dx/dz against central differences of `to_params`, at a point where every part of
+    /// the map (kf, the moving w range, d) is exercised.
+    #[test]
+    fn params_jacobian_matches_finite_differences() {
+        let m = CameraModel::paper_rig();
+        let pts = [];
+        let views = [View { e_com_ma: 80.0, points: &pts }, View { e_com_ma: 225.0, points: &pts }];
+        let b = Basis::for_views(&views, &m);
+        let mut x = to_params(&m);
+        x[7] *= 1.03;
+        x[12] *= 0.97;
+        let z = b.to_internal(&x);
+        let j = b.params_jacobian(&z);
+        for col in 0..PARAMS {
+            let h = 1e-6 * z[col].abs().max(1e-12);
+            let (mut zp, mut zm) = (z, z);
+            zp[col] += h;
+            zm[col] -= h;
+            let (xp, xm) = (b.to_params(&zp), b.to_params(&zm));
+            for row in 0..PARAMS {
+                let fd = (xp[row] - xm[row]) / (2.0 * h);
+                let scale = (j[row][col].abs() + fd.abs()).max(1e-300);
+                let ok =
+                    (fd - j[row][col]).abs() <= 1e-5 * scale || (fd - j[row][col]).abs() * h <= 1e-12 * x[row].abs();
+                assert!(ok, "dx{row}/dz{col}: analytic {} vs {fd}", j[row][col]);
+            }
         }
     }
 }

@@ -195,60 +195,64 @@ pub const fn bundle_adjust_scratch(views: usize, estimator: &Estimator) -> usize
 
 const HOLD_WEIGHT: f64 = 1e8;
 
-fn hold_rows(x: &[f64; PARAMS], x0: &[f64; PARAMS], internal: &Internal, mut push: impl FnMut(f64, &[f64; PARAMS])) {
+fn hold_rows(
+    x: &[f64; PARAMS],
+    x0: &[f64; PARAMS],
+    dxdz: &[[f64; PARAMS]; PARAMS],
+    mut push: impl FnMut(f64, &[f64; PARAMS]),
+) {
     for i in A0_INDICES {
-        let (Some(&xi), Some(&x0i), Some(row)) = (x.get(i), x0.get(i), internal.dxdz.get(i)) else { continue };
+        let (Some(&xi), Some(&x0i), Some(row)) = (x.get(i), x0.get(i), dxdz.get(i)) else { continue };
         let w = HOLD_WEIGHT / x0i.abs().max(1.0);
         let j: [f64; PARAMS] = core::array::from_fn(|k| w * row.get(k).copied().unwrap_or(0.0));
         push((xi - x0i) * w, &j);
     }
 }
 
-/// The solver's parameters ([`Basis`]) and the constant dx/dz that maps their gradients.
+/// The solver's parameters ([`Basis`]): x = to_params(z), with dx/dz evaluated at z (the
+/// map is nonlinear in the kf part, see basis.rs).
 struct Internal {
     basis: Basis,
-    dxdz: [[f64; PARAMS]; PARAMS],
 }
 
 impl Internal {
     fn new(views: &[View<'_>], init: &CameraModel) -> Self {
-        let basis = Basis::for_views(views, init);
-        Internal { basis, dxdz: basis.params_jacobian() }
+        Internal { basis: Basis::for_views(views, init) }
     }
+}
 
-    /// A gradient row with respect to x as one with respect to z: j_z = j_x dx/dz.
-    fn row(&self, jx: &[f64; PARAMS]) -> [f64; PARAMS] {
-        let mut jz = [0.0; PARAMS];
-        for (&ji, di) in jx.iter().zip(self.dxdz.iter()) {
-            if ji != 0.0 {
-                for (jzk, &dik) in jz.iter_mut().zip(di.iter()) {
-                    *jzk += ji * dik;
+/// A gradient row with respect to x as one with respect to z: j_z = j_x dx/dz.
+fn row_in(dxdz: &[[f64; PARAMS]; PARAMS], jx: &[f64; PARAMS]) -> [f64; PARAMS] {
+    let mut jz = [0.0; PARAMS];
+    for (&ji, di) in jx.iter().zip(dxdz.iter()) {
+        if ji != 0.0 {
+            for (jzk, &dik) in jz.iter_mut().zip(di.iter()) {
+                *jzk += ji * dik;
+            }
+        }
+    }
+    jz
+}
+
+/// cov_x = dx/dz cov_z (dx/dz)^T.
+fn covariance_in_params(dxdz: &[[f64; PARAMS]; PARAMS], cov_z: &[[f64; PARAMS]; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
+    let mut t = [[0.0; PARAMS]; PARAMS];
+    for (ti, di) in t.iter_mut().zip(dxdz.iter()) {
+        for (dik, ck) in di.iter().zip(cov_z.iter()) {
+            if *dik != 0.0 {
+                for (tij, &ckj) in ti.iter_mut().zip(ck.iter()) {
+                    *tij += dik * ckj;
                 }
             }
         }
-        jz
     }
-
-    /// cov_x = dx/dz cov_z (dx/dz)^T.
-    fn covariance(&self, cov_z: &[[f64; PARAMS]; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
-        let mut t = [[0.0; PARAMS]; PARAMS];
-        for (ti, di) in t.iter_mut().zip(self.dxdz.iter()) {
-            for (k, &dik) in di.iter().enumerate() {
-                if dik != 0.0 {
-                    for (tij, &ckj) in ti.iter_mut().zip(cov_z[k].iter()) {
-                        *tij += dik * ckj;
-                    }
-                }
-            }
+    let mut out = [[0.0; PARAMS]; PARAMS];
+    for (oi, ti) in out.iter_mut().zip(t.iter()) {
+        for (oij, dj) in oi.iter_mut().zip(dxdz.iter()) {
+            *oij = ti.iter().zip(dj.iter()).map(|(a, b)| a * b).sum();
         }
-        let mut out = [[0.0; PARAMS]; PARAMS];
-        for (oi, ti) in out.iter_mut().zip(t.iter()) {
-            for (oij, dj) in oi.iter_mut().zip(self.dxdz.iter()) {
-                *oij = ti.iter().zip(dj.iter()).map(|(a, b)| a * b).sum();
-            }
-        }
-        out
     }
+    out
 }
 
 /// The paper's problem over the internal parameters z ([`Basis`]).
@@ -264,6 +268,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
     fn eval(&mut self, z: &[f64; PARAMS], jacobian: bool, sink: &mut dyn RowSink<PARAMS>) -> Result<()> {
         let x = &self.internal.basis.to_params(z);
         let proj = Projector::new(x);
+        let dxdz = self.internal.basis.params_jacobian(z);
         for view in self.views {
             for p in view.points {
                 let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
@@ -277,7 +282,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
                 let pr = proj.project(p.world_mm, view.e_com_ma, jacobian)?;
                 let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
                 for row in 0..2 {
-                    let mut j = self.internal.row(&pr.d_params[row]);
+                    let mut j = row_in(&dxdz, &pr.d_params[row]);
                     if f != 1.0 {
                         j.iter_mut().for_each(|v| *v *= f);
                     }
@@ -286,7 +291,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
             }
         }
         if self.options.hold_a0 {
-            hold_rows(x, &self.x0, self.internal, |r, j| sink.push(r, j));
+            hold_rows(x, &self.x0, &dxdz, |r, j| sink.push(r, j));
         }
         Ok(())
     }
@@ -297,6 +302,7 @@ impl Problem<PARAMS> for Plain<'_, '_> {
     fn normal_equations(&mut self, z: &[f64; PARAMS], out: &mut NormalEquations<PARAMS>) -> Result<bool> {
         let x = &self.internal.basis.to_params(z);
         let proj = Projector::new(x);
+        let dxdz = self.internal.basis.params_jacobian(z);
         for view in self.views {
             let mut normal = ViewNormal::ZERO;
             for p in view.points {
@@ -308,10 +314,10 @@ impl Problem<PARAMS> for Plain<'_, '_> {
                 normal.add_point(&pr.d_reduced, f, r);
             }
             let (a, g) = normal.expand();
-            fold_view(&a, &g, &proj.chain_in(view.e_com_ma, &self.internal.basis)?, &mut out.a, &mut out.g);
+            fold_view(&a, &g, &proj.chain_in(view.e_com_ma, &dxdz)?, &mut out.a, &mut out.g);
         }
         if self.options.hold_a0 {
-            hold_rows(x, &self.x0, self.internal, |r, j| out.push(r, j));
+            hold_rows(x, &self.x0, &dxdz, |r, j| out.push(r, j));
         }
         Ok(true)
     }
@@ -456,6 +462,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
         sink: &mut dyn BlockRowSink<PARAMS, 2>,
     ) -> Result<()> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
+        let dxdz = self.internal.basis.params_jacobian(x);
         let x = &self.internal.basis.to_params(x);
         let proj = Projector::new(x);
         let is = 1.0 / self.sigma_px;
@@ -466,12 +473,12 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
             let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
             let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
             for row in 0..2 {
-                let mut j = self.internal.row(&pr.d_params[row]);
+                let mut j = row_in(&dxdz, &pr.d_params[row]);
                 j.iter_mut().for_each(|v| *v *= f);
                 sink.push(f * e[row], &j, &[f * pr.d_z_w[row], f * pr.d_e[row]]);
             }
         }
-        self.prior_rows(block, x, y, sink);
+        self.prior_rows(block, x, &dxdz, y, sink);
         Ok(())
     }
 
@@ -486,6 +493,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
         out: &mut BlockNormal<'_, PARAMS, 2>,
     ) -> Result<bool> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
+        let dxdz = self.internal.basis.params_jacobian(x);
         let x = &self.internal.basis.to_params(x);
         let proj = Projector::new(x);
         let is = 1.0 / self.sigma_px;
@@ -501,7 +509,7 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
             normal.add_point(&pr.d_reduced, f, r);
         }
         let (a, g) = normal.expand();
-        let c = proj.chain_in(e_ma, &self.internal.basis)?;
+        let c = proj.chain_in(e_ma, &dxdz)?;
         fold_view(&a, &g, &c, out.u, out.gx);
         // W = C^T a C_y, V = C_y^T a C_y, g_y = C_y^T g.
         let cy = proj.shift_chain(e_ma);
@@ -526,19 +534,26 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
                 }
             }
         }
-        self.prior_rows(block, x, y, out);
+        self.prior_rows(block, x, &dxdz, y, out);
         Ok(true)
     }
 }
 
 impl Eiv<'_, '_> {
     /// The rows of the priors on the view's corrections, and (once) the hold-A0 rows.
-    fn prior_rows(&self, block: usize, x: &[f64; PARAMS], y: &[f64; 2], sink: &mut dyn BlockRowSink<PARAMS, 2>) {
+    fn prior_rows(
+        &self,
+        block: usize,
+        x: &[f64; PARAMS],
+        dxdz: &[[f64; PARAMS]; PARAMS],
+        y: &[f64; 2],
+        sink: &mut dyn BlockRowSink<PARAMS, 2>,
+    ) {
         let zero = [0.0; PARAMS];
         sink.push(y[0] / self.sigma_z_mm, &zero, &[1.0 / self.sigma_z_mm, 0.0]);
         sink.push(y[1] / self.sigma_e_ma, &zero, &[0.0, 1.0 / self.sigma_e_ma]);
         if self.options.hold_a0 && block == 0 {
-            hold_rows(x, &self.x0, self.internal, |r, j| sink.push(r, j, &[0.0, 0.0]));
+            hold_rows(x, &self.x0, dxdz, |r, j| sink.push(r, j, &[0.0, 0.0]));
         }
     }
 }
@@ -617,7 +632,7 @@ pub fn bundle_adjust(
     let (sigma_z_mm, sigma_e_ma, sigma_px) = match options.estimator {
         Estimator::Paper => {
             let x = basis.to_params(&plain.x);
-            let covariance = internal.covariance(&plain.covariance);
+            let covariance = covariance_in_params(&basis.params_jacobian(&plain.x), &plain.covariance);
             return Ok(BundleAdjustReport {
                 model: from_params(&x),
                 std: std_of(&covariance),
@@ -659,7 +674,7 @@ pub fn bundle_adjust(
         *c = ViewCorrection { dz_mm: yj[0], de_ma: yj[1] };
     }
     let x = basis.to_params(&r.x);
-    let covariance = internal.covariance(&r.covariance);
+    let covariance = covariance_in_params(&basis.params_jacobian(&r.x), &r.covariance);
     Ok(BundleAdjustReport {
         model: from_params(&x),
         std: std_of(&covariance),

@@ -6,7 +6,6 @@
 
 #![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
 
-use super::basis::Basis;
 use crate::error::{Error, Result};
 use crate::model::camera::cubic;
 use crate::model::rotation::{mat_vec, rodrigues_to_matrix, Mat3};
@@ -189,23 +188,22 @@ impl Projector {
     }
 
     /// The chain matrix of [`Projector::chain`] with respect to the bundle adjustment's
-    /// internal parameters ([`Basis`]): fx, fy through Chebyshev coefficients in the
-    /// current, the distortion coefficients through Chebyshev coefficients in w.
-    pub fn chain_in(&self, e_ma: f64, basis: &Basis) -> Result<[[f64; PARAMS]; REDUCED]> {
-        let mut c = self.chain(e_ma)?;
-        let (fx, fy) = self.focal(e_ma)?;
-        let kc = basis.kf_column(e_ma);
-        let ac = basis.a_column(2.0 / (fx + fy));
-        for i in 0..4 {
-            c[R_FX][KF0X + i] = kc[i];
-            c[R_FX + 1][KF0X + 4 + i] = kc[i];
-        }
-        for k in 0..3 {
-            for i in 0..3 {
-                c[R_K1 + k][16 + 3 * k + i] = ac[i];
+    /// internal parameters ([`super::basis::Basis`]): C dx/dz, with `dxdz` =
+    /// [`super::basis::Basis::params_jacobian`]
+    /// at the internal parameters of this projector.
+    pub fn chain_in(&self, e_ma: f64, dxdz: &[[f64; PARAMS]; PARAMS]) -> Result<[[f64; PARAMS]; REDUCED]> {
+        let c = self.chain(e_ma)?;
+        let mut out = [[0.0; PARAMS]; REDUCED];
+        for (orow, crow) in out.iter_mut().zip(c.iter()) {
+            for (&cik, drow) in crow.iter().zip(dxdz.iter()) {
+                if cik != 0.0 {
+                    for (o, &d) in orow.iter_mut().zip(drow.iter()) {
+                        *o += cik * d;
+                    }
+                }
             }
         }
-        Ok(c)
+        Ok(out)
     }
 
     /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the 13
