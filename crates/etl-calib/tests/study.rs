@@ -67,7 +67,7 @@ fn fig6_images_errors_fall_with_more_images() {
 use etl_calib::study::fig6;
 
 #[test]
-fn subsets_eiv_reprojection_is_the_noise_and_nine_views_converge_in_5() {
+fn subsets_eiv_reprojection_is_the_noise_and_every_subset_converges_in_5() {
     let s = subsets::subsets(&opts(1)).unwrap();
     assert!(s.failures.is_empty(), "{:?}", s.failures);
     assert_eq!(s.fits[0].len(), 88);
@@ -75,10 +75,12 @@ fn subsets_eiv_reprojection_is_the_noise_and_nine_views_converge_in_5() {
     assert!(lo >= 0.9 * s.noise_px && hi <= 1.1 * s.noise_px, "eiv RMS {lo} .. {hi}");
     // The plain BA keeps the per-view Z_W, E errors in its residuals.
     assert!(plain_hi > hi);
-    // With all 9 views the paper's BA is at its minimum after 5 iterations.
+    // Issue 8: every subset's paper BA is at its minimum after 5 iterations (parameters
+    // within 0.05 formal std, RMS within 1e-4), and stops (ftol 1e-10) within 8.
     let nine = &s.fits[0][3];
     assert_eq!(nine.mask, 0x1ff);
-    assert!(nine.shift_after_5_std < subsets::CONVERGED_WITHIN.0, "{nine:?}");
+    assert!(s.converged_within_5(), "{:?}", s.worst_after_5());
+    assert!(s.max_iterations() <= 8, "{}", s.max_iterations());
     let stats = s.six_view_stats(0);
     // kf0x over the 84 subsets: within 1 % of the truth, spread below 1 %.
     assert!((stats[6].0 / 5380.0 - 1.0).abs() < 0.01 && stats[6].1 > 0.1 && stats[6].1 < 54.0, "{:?}", stats[6]);
