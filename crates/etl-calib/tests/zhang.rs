@@ -21,10 +21,15 @@ fn noise_free_lens_off_views_give_the_exact_intrinsics() {
 #[test]
 fn noisy_lens_off_views_meet_the_acceptance_levels() {
     // Issue 5 asks for fx, fy within 0.1 % and the principal point within 0.5 px. The focal
-    // lengths meet it; the principal point does not (about 5 px): at a 5400 px focal length
-    // with tilts of at most 25 degrees it is nearly confounded with the decentering terms
-    // p1, p2 that Zhang's model estimates with it. Asserted here: what is achieved.
+    // lengths meet it. The principal point cannot: at a 5400 px focal length it is nearly
+    // confounded with the decentering terms p1, p2 estimated with it, and the Cramer-Rao
+    // bound of this design (the formal std of the maximum-likelihood estimate) is about
+    // 3 px in u0 and 2 px in v0; more tilt does not help (45 degrees over 20 views: 2.4 and
+    // 1.7 px). Asserted: the bound exceeds the target, and the errors are the bound's size
+    // (within 4 sigma in every seed, RMS z-score near 1): the estimator is efficient, the
+    // target is below what the data allow.
     let mut worst = [0.0f64; 2];
+    let mut z2 = 0.0;
     for seed in 0..10 {
         let sim = paper_rig(&NoiseModel::PAPER, 200 + seed);
         let z = a0_from_offstate(&sim.observations).unwrap();
@@ -32,9 +37,15 @@ fn noisy_lens_off_views_meet_the_acceptance_levels() {
         let pp = (z.u0 - 900.0).hypot(z.v0 - 550.0);
         worst = [worst[0].max(f), worst[1].max(pp)];
         assert!((z.rms_px - 0.2 * 2f64.sqrt()).abs() < 0.05, "rms {}", z.rms_px);
+        assert!(z.std[2] > 0.5 && z.std[3] > 0.5, "bound {:?}", &z.std[2..4]);
+        let (zu, zv) = ((z.u0 - 900.0) / z.std[2], (z.v0 - 550.0) / z.std[3]);
+        assert!(zu.abs() < 4.0 && zv.abs() < 4.0, "z-scores {zu} {zv}");
+        z2 += zu * zu + zv * zv;
     }
-    println!("worst over 10 seeds: focal {:.4} %, principal point {:.3} px", 100.0 * worst[0], worst[1]);
+    let z_rms = (z2 / 20.0).sqrt();
+    println!("worst over 10 seeds: focal {:.4} %, principal point {:.3} px; RMS z-score {z_rms:.2}", 100.0 * worst[0], worst[1]);
     assert!(worst[0] < 1e-3 && worst[1] < 8.0, "{worst:?}");
+    assert!(z_rms > 0.5 && z_rms < 1.6, "RMS z-score {z_rms}");
 }
 
 #[test]
@@ -58,4 +69,35 @@ fn too_few_or_parallel_views_are_errors() {
     short[0].pixels.truncate(2);
     short[0].board_mm.truncate(2);
     assert!(zhang(&short, [1936, 1458]).unwrap_err().to_string().contains("at least 4 points"));
+}
+
+/// Issue 5: on a real image set (fixtures/zhang, 25 views of a 9x6 board), the same
+/// numbers as OpenCV's calibrateCamera with k2 = k3 = 0 to 0.5 %. The reference values are
+/// OpenCV 5.0.0's on its own corners (findChessboardCorners + cornerSubPix 11x11) and on
+/// etlcal's corners, from `benches/zhang_opencv.py`: with the same corners the two
+/// calibrations agree to 3e-5 (the models differ only in k1's normalisation when
+/// fx != fy); end to end the difference is the detectors' (etlcal's RMS is lower).
+#[test]
+fn real_image_set_agrees_with_opencv() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/zhang");
+    let mut images: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "jpg"))
+        .collect();
+    images.sort();
+    assert_eq!(images.len(), 25);
+    let board = etl_calib::formats::dataset::Board { inner_corners: [9, 6], square_mm: 1.0 };
+    let (views, size) = etl_calib::cli::zhang::detect_views(&images, &board, false).unwrap();
+    assert_eq!((views.len(), size), (25, [640, 512]));
+    let z = zhang(&views, size).unwrap();
+    // OpenCV end to end, and OpenCV on etlcal's corners.
+    let opencv = [520.5071683788558, 520.9965012276165, 314.7340743388873, 248.61725959522127];
+    let same_corners = [520.19, 520.63, 313.59, 249.17];
+    let got = [z.fx, z.fy, z.u0, z.v0];
+    for k in 0..4 {
+        assert!((got[k] / opencv[k] - 1.0).abs() < 0.005, "{k}: {} vs OpenCV {}", got[k], opencv[k]);
+        assert!((got[k] - same_corners[k]).abs() < 0.02, "{k}: {} vs OpenCV on the same corners {}", got[k], same_corners[k]);
+    }
+    assert!(z.rms_px < 0.16, "rms {} (OpenCV's own corners: 0.160 px)", z.rms_px);
 }
