@@ -332,7 +332,7 @@ const PADDED: usize = 12;
 const OTHER: [usize; 11] = [0, 1, 2, 3, 4, 5, R_FX, R_FX + 1, R_K1, R_K1 + 1, R_K1 + 2];
 
 /// A view's reduced normal equations: the 11 x 11 block of the variables in [`OTHER`]
-/// (full square, padded), their cross terms with u0 and v0 (column sums of the two rows),
+/// (upper triangle: row i holds columns i.., padded), their cross terms with u0 and v0 (column sums of the two rows),
 /// and the right-hand sides.
 struct ViewNormal {
     a: [[f64; PADDED]; 11],
@@ -357,8 +357,11 @@ impl ViewNormal {
             }
             v
         });
-        for (ai, (&u, &v)) in self.a.iter_mut().zip(fj[0].iter().zip(fj[1].iter())) {
-            for ((aik, &uk), &vk) in ai.iter_mut().zip(fj[0].iter()).zip(fj[1].iter()) {
+        // The upper triangle only: the rank-2 update is the hot loop of the bundle
+        // adjustment (half its instructions with the full square).
+        for (i, (ai, (&u, &v))) in self.a.iter_mut().zip(fj[0].iter().zip(fj[1].iter())).enumerate() {
+            let (Some(ai), Some(uk), Some(vk)) = (ai.get_mut(i..), fj[0].get(i..), fj[1].get(i..)) else { continue };
+            for ((aik, &uk), &vk) in ai.iter_mut().zip(uk.iter()).zip(vk.iter()) {
                 *aik += u * uk + v * vk;
             }
         }
@@ -379,7 +382,10 @@ impl ViewNormal {
         let mut g = [0.0; REDUCED];
         for (p, &op) in OTHER.iter().enumerate() {
             for (q, &oq) in OTHER.iter().enumerate() {
-                if let (Some(v), Some(&w)) = (a.get_mut(op).and_then(|r| r.get_mut(oq)), self.a[p].get(q)) {
+                // Stored: the upper triangle (q >= p).
+                let w =
+                    if q >= p { self.a.get(p).and_then(|r| r.get(q)) } else { self.a.get(q).and_then(|r| r.get(p)) };
+                if let (Some(v), Some(&w)) = (a.get_mut(op).and_then(|r| r.get_mut(oq)), w) {
                     *v = w;
                 }
             }
