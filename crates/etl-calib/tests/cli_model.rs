@@ -212,3 +212,23 @@ fn thermal_fit_bad_input_writes_nothing() {
     // A missing table.
     fails(&["thermal", "fit", dir.path().join("nope.csv").to_str().unwrap(), "--out", o]);
 }
+
+/// `etlcal ... | head`: a closed stdout is not a crash. Every verb's human-readable output
+/// goes through `outln!`, which ignores the write error as `--json` output does; the read
+/// end of the pipe is closed before the process starts, so every write fails.
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    for args in [&["model"][..], &["model", "--json"][..]] {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_etlcal"))
+            .args(args)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .expect("run etlcal");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+    }
+}

@@ -143,7 +143,7 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&serde_json::to_value(&calibration).map_err(|e| Error::InvalidInput(e.to_string()))?);
     } else {
         let c = &calibration;
-        println!(
+        outln!(
             "calibrated {} views: rms {:.4} px (before BA {:.4} px), {} iterations, estimator {}",
             c.views.len(),
             c.rms_reprojection_px,
@@ -151,7 +151,7 @@ pub fn run(args: Args) -> Result<()> {
             c.iterations,
             c.estimator
         );
-        println!("wrote {}", args.out.display());
+        outln!("wrote {}", args.out.display());
     }
     Ok(())
 }

@@ -265,8 +265,8 @@ pub fn run(args: Args) -> Result<()> {
         j["out"] = json!(args.out);
         print_json(&j);
     } else {
-        println!("{summary}");
-        println!(
+        outln!("{summary}");
+        outln!(
             "wrote {}observations.json, a0.json, truth.json, calibration.json, calibration-eiv.json, summary.md, \
              report/index.html, report-eiv/index.html to {}",
             if images { "views/*.png, offstate/*.png, dataset.json, " } else { "" },

@@ -47,9 +47,9 @@ pub fn run(args: Args) -> Result<()> {
                 if args.json {
                     entries.push(json!({"path": path, "found": true, "corners_px": d.corners_px}));
                 } else {
-                    println!("{}: found {} corners", path.display(), d.corners_px.len());
+                    outln!("{}: found {} corners", path.display(), d.corners_px.len());
                     for ([i, j], [u, v]) in d.indexed() {
-                        println!("{i} {j} {u:.4} {v:.4}");
+                        outln!("{i} {j} {u:.4} {v:.4}");
                     }
                 }
             }
@@ -57,7 +57,7 @@ pub fn run(args: Args) -> Result<()> {
                 if args.json {
                     entries.push(json!({"path": path, "found": false, "error": e.to_string(), "corners_px": []}));
                 } else {
-                    println!("{}: not found: {e}", path.display());
+                    outln!("{}: not found: {e}", path.display());
                 }
                 if matches!(e, Error::Io { .. } | Error::Image { .. }) && first_unreadable.is_none() {
                     first_unreadable = Some(e);

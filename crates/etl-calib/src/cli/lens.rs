@@ -141,14 +141,14 @@ pub fn run(args: Args) -> Result<()> {
                     "temperature_c": t,
                 }));
             } else {
-                println!("port:             {}", path.display());
-                println!("firmware:         type {} version {}", info.firmware_type.letter(), info.firmware_version);
-                println!("lens serial:      {}", info.lens_serial);
-                println!("max current:      {:.2} mA", info.max_current_ma);
-                println!("limits:           [{:.3}, {:.3}] mA", info.lower_limit_ma, info.upper_limit_ma);
+                outln!("port:             {}", path.display());
+                outln!("firmware:         type {} version {}", info.firmware_type.letter(), info.firmware_version);
+                outln!("lens serial:      {}", info.lens_serial);
+                outln!("max current:      {:.2} mA", info.max_current_ma);
+                outln!("limits:           [{:.3}, {:.3}] mA", info.lower_limit_ma, info.upper_limit_ma);
                 match t {
-                    Some(t) => println!("temperature:      {t:.4} degC"),
-                    None => println!("temperature:      no sensor"),
+                    Some(t) => outln!("temperature:      {t:.4} degC"),
+                    None => outln!("temperature:      no sensor"),
                 }
             }
         }
@@ -175,7 +175,7 @@ pub fn run(args: Args) -> Result<()> {
                     "current_ma": now,
                 }));
             } else {
-                println!("current set to {:.4} mA (code {})", r.commanded_ma, r.code);
+                outln!("current set to {:.4} mA (code {})", r.commanded_ma, r.code);
             }
         }
         LensCommand::GetCurrent => {
@@ -183,7 +183,7 @@ pub fn run(args: Args) -> Result<()> {
             if args.json {
                 print_json(&json!({ "current_ma": ma }));
             } else {
-                println!("{ma:.4} mA");
+                outln!("{ma:.4} mA");
             }
         }
         LensCommand::Temperature => {
@@ -191,7 +191,7 @@ pub fn run(args: Args) -> Result<()> {
             if args.json {
                 print_json(&json!({ "temperature_c": t }));
             } else {
-                println!("{t:.4} degC");
+                outln!("{t:.4} degC");
             }
         }
         LensCommand::Hold(h) => run_hold(&client, device.as_ref(), h, args.json)?,
@@ -251,7 +251,7 @@ fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json
             "unsolicited_errors": unsolicited,
         }));
     } else {
-        println!(
+        outln!(
             "held E_com = {} mA: {} commands in {:.2} s ({:.1} Hz), worst E_com error {:.4} mA, T {:.3}..{:.3} degC{}",
             h.e_com_ma,
             report.commands_sent,

@@ -51,7 +51,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&json!({ "port": lens.path().display().to_string() }));
     } else {
-        println!("{}", lens.path().display());
+        outln!("{}", lens.path().display());
         eprintln!("etlcal: virtual lens serving on {} (kill to stop)", lens.path().display());
     }
     let _ = std::io::stdout().flush();

@@ -86,12 +86,12 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&json!({"e_com_ma": e_com, "pose_a": pose_json(&poses[0]), "pose_b": pose_json(&poses[1]),
             "displacement_mm": d, "distance_mm": dist}));
     } else {
-        println!("E_com {e_com:.3} mA");
+        outln!("E_com {e_com:.3} mA");
         for (name, p) in ["A", "B"].iter().zip(&poses) {
             let t = p.translation_mm;
-            println!("pose {name}: T = [{:.4}, {:.4}, {:.4}] mm, rms {:.3} px", t[0], t[1], t[2], p.rms_px);
+            outln!("pose {name}: T = [{:.4}, {:.4}, {:.4}] mm, rms {:.3} px", t[0], t[1], t[2], p.rms_px);
         }
-        println!("displacement [{:.4}, {:.4}, {:.4}] mm, distance {dist:.4} mm", d[0], d[1], d[2]);
+        outln!("displacement [{:.4}, {:.4}, {:.4}] mm, distance {dist:.4} mm", d[0], d[1], d[2]);
     }
     Ok(())
 }

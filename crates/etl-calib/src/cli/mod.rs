@@ -5,6 +5,15 @@ use clap::{Parser, Subcommand};
 
 use crate::error::Result;
 
+/// `println!` for the verbs' human-readable output, ignoring a closed stdout (`etlcal ... |
+/// head`): `println!` panics there. Same policy as [`print_json`].
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 pub mod calibrate;
 pub mod demo;
 pub mod detect;

@@ -135,15 +135,15 @@ pub fn run(args: Args) -> Result<()> {
                 "samples": es.len(),
             }));
         } else {
-            println!(
+            outln!(
                 "Polynomial fits of the physics f_com(E) over {} .. {} mA ({} samples, Fig. 5):",
                 args.from,
                 args.to,
                 es.len()
             );
-            println!("degree  RMSE (mm)");
+            outln!("degree  RMSE (mm)");
             for (d, r) in rmse.iter().enumerate() {
-                println!("{:>6}  {:.4e}", d + 1, r);
+                outln!("{:>6}  {:.4e}", d + 1, r);
             }
         }
         return Ok(());
@@ -153,15 +153,29 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&json!({ "rig": "paper", "rows": rows }));
     } else {
-        println!("Paper rig (section 5.1.2) and lens physics (section 5.1.1):");
-        println!(
+        outln!("Paper rig (section 5.1.2) and lens physics (section 5.1.1):");
+        outln!(
             "{:>8} {:>10} {:>10} {:>12} {:>12} {:>12} {:>10} {:>10}",
-            "E (mA)", "fx (px)", "fy (px)", "k1 (1/px2)", "p1 (1/px)", "p2 (1/px)", "f_liq(mm)", "f_com(mm)"
+            "E (mA)",
+            "fx (px)",
+            "fy (px)",
+            "k1 (1/px2)",
+            "p1 (1/px)",
+            "p2 (1/px)",
+            "f_liq(mm)",
+            "f_com(mm)"
         );
         for r in &rows {
-            println!(
+            outln!(
                 "{:>8.2} {:>10.3} {:>10.3} {:>12.4e} {:>12.4e} {:>12.4e} {:>10.4} {:>10.5}",
-                r.e_ma, r.fx_px, r.fy_px, r.k1, r.p1, r.p2, r.f_liq_mm, r.f_com_mm
+                r.e_ma,
+                r.fx_px,
+                r.fy_px,
+                r.k1,
+                r.p1,
+                r.p2,
+                r.f_liq_mm,
+                r.f_com_mm
             );
         }
     }

@@ -104,7 +104,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&corners);
     } else {
-        println!(
+        outln!(
             "wrote {} ({} x {} px, blur sigma {:.2} px at the board's centre) and its corners",
             args.out.display(),
             scene.image_size[0],

@@ -69,7 +69,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&json!({"files": r.files, "text": r.text}));
     } else {
-        println!("wrote {} files to {} (open index.html)", r.files.len(), args.out.display());
+        outln!("wrote {} files to {} (open index.html)", r.files.len(), args.out.display());
     }
     Ok(())
 }

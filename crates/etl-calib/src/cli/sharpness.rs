@@ -70,7 +70,7 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&json!({"metric": args.metric.name(), "images": images}));
     } else {
         for (p, v) in args.images.iter().zip(&values) {
-            println!("{}\t{v}", p.display());
+            outln!("{}\t{v}", p.display());
         }
     }
     Ok(())

@@ -137,7 +137,7 @@ pub fn run(args: Args) -> Result<()> {
             "setting_views": sim.observations.setting_views.len(), "images": images, "out": args.out}));
     } else {
         let rendered = if images > 0 { format!("{images} images, dataset.json, ") } else { String::new() };
-        println!(
+        outln!(
             "wrote {rendered}observations.json, a0.json, truth.json ({} views, {points} points, {} setting views) to {}",
             sim.observations.views.len(),
             sim.observations.setting_views.len(),

@@ -83,7 +83,7 @@ pub fn run(args: Args) -> Result<()> {
         if args.json {
             all.insert(out.name.clone(), out.json.clone());
         } else {
-            println!("{}", out.markdown);
+            outln!("{}", out.markdown);
         }
     }
     if args.json {
@@ -95,7 +95,7 @@ pub fn run(args: Args) -> Result<()> {
             print_json(&json!(all));
         }
     } else {
-        println!("wrote the studies' .json, .md and plots to {}", args.out.display());
+        outln!("wrote the studies' .json, .md and plots to {}", args.out.display());
     }
     Ok(())
 }

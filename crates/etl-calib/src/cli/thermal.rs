@@ -157,7 +157,7 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
             "table": table.display().to_string(),
         }));
     } else {
-        println!(
+        outln!(
             "{} samples from {} frames; fit RMS {:.3} mA; against the virtual lens's true surface: {:.3} mA RMS \
              (referenced to {t0} degC as the procedure is), {:.3} mA absolute; wrote {} and {}",
             r.samples.len(),
@@ -194,7 +194,7 @@ pub fn run_eval(args: EvalArgs) -> Result<()> {
                 args.t_c, args.e_in_ma, cal.t_range_c, cal.e_in_range_ma
             );
         }
-        println!("E_T = {:.6} mA, E_com = {:.6} mA", c.e_t_ma, c.e_com_ma);
+        outln!("E_T = {:.6} mA, E_com = {:.6} mA", c.e_t_ma, c.e_com_ma);
     }
     Ok(())
 }
@@ -217,7 +217,7 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
             "out": args.out.display().to_string(),
         }));
     } else {
-        println!(
+        outln!(
             "Fitted E_T(T, E_in) to {} samples: RMS {:.4} mA over {:?} degC x {:?} mA; wrote {}",
             rows.len(),
             rms_ma,

@@ -104,14 +104,18 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&j);
     } else {
-        println!(
+        outln!(
             "fx {:.3} +- {:.3}, fy {:.3} +- {:.3}, u0 {:.3} +- {:.3}, v0 {:.3} +- {:.3} px",
-            z.fx, z.std[0], z.fy, z.std[1], z.u0, z.std[2], z.v0, z.std[3]
+            z.fx,
+            z.std[0],
+            z.fy,
+            z.std[1],
+            z.u0,
+            z.std[2],
+            z.v0,
+            z.std[3]
         );
-        println!(
-            "k1 {:.4e}, p1 {:.4e}, p2 {:.4e}; rms {:.4} px over {} views",
-            z.k1, z.p1, z.p2, z.rms_px, z.views_used
-        );
+        outln!("k1 {:.4e}, p1 {:.4e}, p2 {:.4e}; rms {:.4} px over {} views", z.k1, z.p1, z.p2, z.rms_px, z.views_used);
     }
     Ok(())
 }
