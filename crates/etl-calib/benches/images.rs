@@ -16,6 +16,11 @@ fn bench(c: &mut Criterion) {
     for (name, m) in [("cpbd", Metric::Cpbd), ("tenengrad", Metric::Tenengrad), ("laplacian", Metric::Laplacian)] {
         c.bench_function(&format!("sharpness_{name}_1936x1458"), |b| b.iter(|| sharpness(black_box(&img), m).unwrap()));
     }
+    // CPBD's slowest case: without noise, blocks along the board's edges need many rows
+    // of Canny classes before their edge-block test is decided.
+    let clean = RenderOptions { photometry: opts.photometry.noise_free(), ..opts };
+    let img = render(&scene, &clean).unwrap().image.to_dynamic().to_luma8();
+    c.bench_function("sharpness_cpbd_1936x1458_noise_free", |b| b.iter(|| sharpness(black_box(&img), Metric::Cpbd).unwrap()));
 }
 
 criterion_group! {

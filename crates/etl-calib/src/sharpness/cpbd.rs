@@ -10,12 +10,26 @@
 //! `round(100 P_blur)`, normalised, summed over bins 0..=63 with NumPy's pairwise sum.
 //! The result equals the package's bit for bit on every fixture (tests/sharpness.rs).
 //!
+//! The package computes full-image maps (Canny, Sobel strength, angles, widths) and then
+//! pools them; here everything is computed block by block in parallel, and only as far
+//! as the pooling needs it, with the same floating-point operations where floats are
+//! involved, so the counts and hence the result are the same:
+//! * the Sobel threshold needs the mean strength of the whole image, an exact integer
+//!   sum ([`strength_threshold`](super::marziliano::strength_threshold));
+//! * the edge-block test stops classifying a block's Canny pixels as soon as it has 9
+//!   strong ones (`hysteresis.rs`, `canny.rs`), usually within the block's first rows;
+//! * widths are measured only in edge blocks, and each side of a width only as far as
+//!   the block's just-noticeable width (`marziliano.rs`).
+//!
 //! What CPBD does not see: horizontal edges (widths are measured along rows only) and,
 //! on a checkerboard, blur beyond about 1 px (all widths exceed 3 px), where it falls to
 //! 0. Use a gradient measure for a coarse focus search.
 
-use super::canny::canny;
-use super::marziliano::edge_widths;
+use rayon::prelude::*;
+
+use super::canny::{Bleed, Scratch as CannyScratch};
+use super::hysteresis::{decide, Classes, Decision};
+use super::marziliano::{any_nonzero_angle, block_widths, strength_threshold, BlockWidths};
 use crate::error::{Error, Result};
 
 /// Block side, px.
@@ -69,48 +83,90 @@ pub fn cpbd(data: &[u8], width: usize, height: usize) -> Result<f64> {
             "CPBD needs at least one 64 x 64 block; the image is {width} x {height} px"
         )));
     }
-    let as_f64: Vec<f64> = data.iter().map(|&v| v as f64).collect();
-    let edges = canny(&as_f64, width, height);
-    drop(as_f64);
-    let widths = edge_widths(data, width, height);
-    Ok(pool(data, &edges, &widths, width, height))
+    if !any_nonzero_angle(data, width, height) {
+        // The package measures no width at all (compute.py L88): CPBD 0.
+        return Ok(0.0);
+    }
+    Ok(pool(data, width, height))
 }
 
-/// The package's `_calculate_sharpness_metric` (SPEC.md A.5).
-fn pool(data: &[u8], edges: &[bool], widths: &[u8], w: usize, h: usize) -> f64 {
+/// Per-thread working memory of the block loop.
+#[derive(Default)]
+struct Scratch {
+    canny: CannyScratch,
+    classes: Vec<u8>,
+    strength: Vec<i32>,
+}
+
+/// What a block contributes to the pooling.
+enum Block {
+    /// Measured: the block's just-noticeable width and its width counts.
+    Measured(usize, BlockWidths),
+    /// Not an edge block; its classes.
+    Skipped(Vec<u8>),
+    /// Depends on the hysteresis; its classes.
+    Undecided(Vec<u8>),
+}
+
+/// The package's `_calculate_sharpness_metric` (SPEC.md A.5, compute.py L149-194), block
+/// by block in parallel: the edge-block test ([`decide`], then the hysteresis for the
+/// few blocks it leaves open), the contrast, the widths; the histogram is a sum of
+/// integer counts, so the order the blocks finish in does not matter.
+fn pool(data: &[u8], w: usize, h: usize) -> f64 {
+    let min_edges_f = (BLOCK_PX * BLOCK_PX) as f64 * EDGE_BLOCK_FRACTION;
+    // The package tests `count > 8.192`: the least integer count that passes.
+    let min_edges = min_edges_f.floor() as usize + 1;
+    let thresh2 = strength_threshold(data, w, h);
+    let bleed = Bleed::new(w, h);
+    let (bw, bh) = (w / BLOCK_PX, h / BLOCK_PX);
+    let measure = |bi: usize, bj: usize, strength: &mut Vec<i32>| {
+        let (rows, cols) = (bi * BLOCK_PX..(bi + 1) * BLOCK_PX, bj * BLOCK_PX..(bj + 1) * BLOCK_PX);
+        let jnb = if contrast(data, w, &rows, &cols) <= JNB_CONTRAST_SPLIT { 5 } else { 3 };
+        (jnb, block_widths(data, w, h, (rows, cols), thresh2, jnb, strength))
+    };
+    let blocks: Vec<Block> = (0..bw * bh)
+        .into_par_iter()
+        .map_init(Scratch::default, |s, k| {
+            let (bi, bj) = (k / bw, k % bw);
+            match decide(data, w, h, &bleed, (bi, bj), min_edges, &mut s.canny, &mut s.classes) {
+                Decision::Edge => {
+                    let (jnb, widths) = measure(bi, bj, &mut s.strength);
+                    Block::Measured(jnb, widths)
+                }
+                // Kept: the hysteresis of an open block may reach into it.
+                Decision::NotEdge(classes) => Block::Skipped(classes),
+                Decision::Undecided(classes) => Block::Undecided(classes),
+            }
+        })
+        .collect();
+
     let mut hist = [0u64; 64];
     let mut total: u64 = 0;
-    let min_edges = (BLOCK_PX * BLOCK_PX) as f64 * EDGE_BLOCK_FRACTION;
-    for bi in 0..h / BLOCK_PX {
-        for bj in 0..w / BLOCK_PX {
-            let rows = bi * BLOCK_PX..(bi + 1) * BLOCK_PX;
-            let cols = bj * BLOCK_PX..(bj + 1) * BLOCK_PX;
-            let mut n_edges = 0usize;
-            for r in rows.clone() {
-                n_edges += edges[r * w + cols.start..r * w + cols.end].iter().filter(|&&e| e).count();
+    let mut add = |jnb: usize, widths: &BlockWidths| {
+        total += widths.total;
+        let bins: &[(u8, usize)] = if jnb == 5 { &SHARP_BINS_JNB5 } else { &SHARP_BINS_JNB3 };
+        for &(wd, bin) in bins {
+            hist[bin] += widths.by_width[wd as usize];
+        }
+    };
+    let mut open = Vec::new();
+    let mut classes = Classes::new(data, w, h, &bleed);
+    for (k, b) in blocks.into_iter().enumerate() {
+        match b {
+            Block::Measured(jnb, widths) => add(jnb, &widths),
+            Block::Skipped(c) => classes.insert((k / bw, k % bw), c),
+            Block::Undecided(c) => {
+                classes.insert((k / bw, k % bw), c);
+                open.push(k);
             }
-            if !(n_edges as f64 > min_edges) {
-                continue;
-            }
-            let (mut lo, mut hi) = (u8::MAX, u8::MIN);
-            let mut count_by_width = [0u64; 6];
-            for r in rows {
-                for k in r * w + cols.start..r * w + cols.end {
-                    lo = lo.min(data[k]);
-                    hi = hi.max(data[k]);
-                    let wd = widths[k];
-                    if wd != 0 {
-                        total += 1;
-                        if wd <= 5 {
-                            count_by_width[wd as usize] += 1;
-                        }
-                    }
-                }
-            }
-            let bins: &[(u8, usize)] = if hi - lo <= JNB_CONTRAST_SPLIT { &SHARP_BINS_JNB5 } else { &SHARP_BINS_JNB3 };
-            for &(wd, bin) in bins {
-                hist[bin] += count_by_width[wd as usize];
-            }
+        }
+    }
+    let mut strength = Vec::new();
+    for k in open {
+        let (bi, bj) = (k / bw, k % bw);
+        if classes.edges_in_block((bi, bj)) >= min_edges {
+            let (jnb, widths) = measure(bi, bj, &mut strength);
+            add(jnb, &widths);
         }
     }
     if total == 0 {
@@ -118,6 +174,18 @@ fn pool(data: &[u8], edges: &[bool], widths: &[u8], w: usize, h: usize) -> f64 {
     }
     let p: Vec<f64> = hist.iter().map(|&c| c as f64 / total as f64).collect();
     numpy_sum_64(&p)
+}
+
+/// `int(max - min)` of the block's grey levels (compute.py L203-205).
+fn contrast(data: &[u8], w: usize, rows: &std::ops::Range<usize>, cols: &std::ops::Range<usize>) -> u8 {
+    let (mut lo, mut hi) = (u8::MAX, u8::MIN);
+    for r in rows.clone() {
+        for &v in &data[r * w..][cols.clone()] {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    hi.saturating_sub(lo)
 }
 
 /// NumPy's pairwise float64 sum of exactly 64 values (`pairwise_sum` with 8 accumulators

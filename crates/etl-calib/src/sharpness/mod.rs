@@ -18,6 +18,7 @@ use crate::error::{Error, Result};
 
 mod canny;
 pub mod cpbd;
+mod hysteresis;
 mod marziliano;
 
 /// A 16-bit grayscale image.
