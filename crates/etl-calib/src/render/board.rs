@@ -170,6 +170,31 @@ impl BoardLayout {
         self.level(self.region(x_mm, y_mm))
     }
 
+    /// The grey level over the rectangle [lo[0], hi[0]] x [lo[1], hi[1]] (mm) when it is
+    /// the same all over it: the rectangle lies in one square, or in the background, or in
+    /// the white margin's frame; `None` otherwise (it may still be uniform, e.g. when the
+    /// background is as light as the margin).
+    pub fn level_over(&self, lo: [f64; 2], hi: [f64; 2]) -> Option<f64> {
+        let (sx0, sy0) = self.region(lo[0], lo[1]);
+        let (sx1, sy1) = self.region(hi[0], hi[1]);
+        if sx0 == sx1 && sy0 == sy1 {
+            return Some(self.level((sx0, sy0)));
+        }
+        // Slabs are monotone in the coordinate: [s0, s1] are all the slabs met.
+        let beyond = |a: &Axis, s0: i32, s1: i32| s1 <= -2 || s0 > a.squares;
+        if beyond(&self.x, sx0, sx1) || beyond(&self.y, sy0, sy1) {
+            return Some(self.levels.background);
+        }
+        let margin_strip = |a: &Axis, s0: i32, s1: i32| s0 == s1 && (s0 == -1 || s0 == a.squares);
+        let inside = |a: &Axis, s0: i32, s1: i32| s0 >= -1 && s1 <= a.squares;
+        if (margin_strip(&self.x, sx0, sx1) && inside(&self.y, sy0, sy1))
+            || (margin_strip(&self.y, sy0, sy1) && inside(&self.x, sx0, sx1))
+        {
+            return Some(self.levels.light);
+        }
+        None
+    }
+
     /// Exact mean grey level over the quadrilateral `quad` (board frame, mm; vertices in
     /// order around it).
     pub fn mean_over(&self, quad: &[[f64; 2]; 4]) -> f64 {
@@ -223,6 +248,23 @@ mod tests {
         assert_eq!(b.level_at(21.5, 3.0), 210.0);
         assert_eq!(b.level_at(-2.6, 3.0), 100.0); // background
         assert_eq!(b.level_at(3.0, 19.6), 100.0);
+    }
+
+    #[test]
+    fn uniform_rectangles() {
+        // Pattern [-1.5, 7.5] x [-1.5, 6], margin 0.5 wide.
+        let b = BoardLayout::new([5, 4], 1.5, 0.5, L);
+        assert_eq!(b.level_over([1.6, 0.1], [2.9, 1.4]), Some(210.0)); // square (1, 0)
+        assert_eq!(b.level_over([-1.4, -1.4], [-0.1, -0.1]), Some(40.0)); // square (-1, -1)
+        assert_eq!(b.level_over([0.1, 0.1], [1.6, 1.4]), None); // two squares
+        assert_eq!(b.level_over([-9.0, -9.0], [-2.1, 20.0]), Some(100.0)); // left of the board
+        assert_eq!(b.level_over([-9.0, 6.6], [20.0, 9.0]), Some(100.0)); // above it
+        assert_eq!(b.level_over([-9.0, -9.0], [-1.9, 20.0]), None); // reaches the margin
+        assert_eq!(b.level_over([-1.9, -1.9], [-1.6, 6.4]), Some(210.0)); // left margin strip
+        assert_eq!(b.level_over([-1.9, 6.1], [7.9, 6.4]), Some(210.0)); // top margin strip
+        assert_eq!(b.level_over([-1.9, 6.1], [7.9, 6.6]), None); // into the background
+        assert_eq!(b.level_over([-1.9, 5.9], [-1.6, 6.4]), Some(210.0)); // a margin corner
+        assert_eq!(b.level_over([-1.9, 0.0], [-1.4, 0.2]), None); // margin and a square
     }
 
     #[test]

@@ -136,14 +136,31 @@ impl PixelToBoard {
     /// Board points of the pixel positions (x0 + k, y), k = 0..out.len(), continuing the
     /// undistortion along the row.
     pub fn map_row(&self, x0: f64, y: f64, out: &mut [Option<BoardPoint>]) {
-        let mut prev: Option<[f64; 2]> = None;
-        for (k, o) in out.iter_mut().enumerate() {
-            let x = x0 + k as f64;
-            let und = match prev {
-                Some([u, v]) => self.undistort_from(x, y, [u + 1.0, v]),
-                None => self.undistort_exact(x, y),
+        self.map_positions(y, (0..out.len()).map(|k| x0 + k as f64), out);
+    }
+
+    /// Board points of the pixel positions (x, y) for the increasing `xs`, one per entry of
+    /// `out`. Newton starts from the linear extrapolation of the two previous solutions (the
+    /// undistortion is smooth along a row), which usually meets the tolerance after one
+    /// step.
+    pub fn map_positions(&self, y: f64, xs: impl Iterator<Item = f64>, out: &mut [Option<BoardPoint>]) {
+        // (x, undistorted) of the last two solved positions.
+        let mut prev: Option<(f64, [f64; 2])> = None;
+        let mut prev2: Option<(f64, [f64; 2])> = None;
+        for (x, o) in xs.zip(out.iter_mut()) {
+            let und = match (prev, prev2) {
+                (Some((xa, a)), Some((xb, b))) if xa > xb => {
+                    let t = (x - xa) / (xa - xb);
+                    self.undistort_from(x, y, [a[0] + t * (a[0] - b[0]), a[1] + t * (a[1] - b[1])])
+                }
+                (Some((xa, a)), _) => self.undistort_from(x, y, [a[0] + (x - xa), a[1]]),
+                (None, _) => self.undistort_exact(x, y),
             };
-            prev = und;
+            prev2 = prev;
+            prev = und.map(|u| (x, u));
+            if prev.is_none() {
+                prev2 = None;
+            }
             *o = und.and_then(|[u, v]| self.board_of_undistorted(u, v));
         }
     }

@@ -3,22 +3,29 @@
 //! photon and read noise, and returns the true pixel of every inner corner.
 //!
 //! Pipeline of [`render`]:
-//! 1. Geometry ([`mapping`]): every pixel corner (x +- 0.5, y +- 0.5) is mapped back to the
+//! 1. Geometry ([`mapping`]): pixel corners (x +- 0.5, y +- 0.5) are mapped back to the
 //!    board plane through the model's inverse (undistortion of Eq. 17, A(E)^-1, the plane's
 //!    homography), exactly (Newton to 1e-10 px).
-//! 2. Coverage ([`board`]): a pixel's grey level is the exact mean of the printed board over
-//!    its footprint, the quadrilateral through its four mapped corners (polygon clipping
-//!    against the squares). The footprint's edges are straight on the board while the true
-//!    images of the pixel's edges bend with the distortion and perspective by far less than
-//!    1e-4 px over one pixel; that is the only approximation of the coverage.
+//! 2. Coverage ([`coverage`], [`board`]): a pixel's grey level is the exact mean of the
+//!    printed board over its footprint, the quadrilateral through its four mapped corners
+//!    (polygon clipping against the squares). The footprint's edges are straight on the
+//!    board while the true images of the pixel's edges bend with the distortion and
+//!    perspective by far less than 1e-4 px over one pixel; that is the only approximation
+//!    of the coverage. Tiles of 8 x 8 pixels that provably lie inside one square are
+//!    filled without mapping their pixels; only the tiles along the squares' edges are
+//!    done pixel by pixel.
 //! 3. Defocus ([`defocus`]): each pixel is blurred by the Gaussian of the thin-lens circle
 //!    of confusion of the board point it sees ([`defocus_sigma_px`]), combined in
 //!    quadrature with a fixed optical blur; a separable Gaussian whose sigma varies per
-//!    pixel (the board is planar, so the blur varies smoothly). The image is rendered with a
-//!    border of the kernel's radius so that the blur near the edges sees the scene beyond.
+//!    pixel (the board is planar, so the blur varies smoothly; it is interpolated from the
+//!    tile corners). Pixels whose neighbourhood is flat are left as they are (the blur
+//!    would not change them), so the convolutions are paid only near the edges. The image
+//!    is rendered with a border of the largest kernel radius so that the blur near the
+//!    edges sees the scene beyond.
 //! 4. Photometry ([`Photometry`]): vignetting and illumination gradient, Poisson photon
-//!    noise, Gaussian read noise (ChaCha8, seeded per row: the result does not depend on
-//!    the thread count) and quantisation to 8 or 16 bits.
+//!    noise, Gaussian read noise (SplitMix64 seeded per row: the result does not depend on
+//!    the thread count) and quantisation to 8 or 16 bits; fused with the vertical blur,
+//!    row by row.
 //!
 //! Conventions: pixel (x, y) has its centre at pixel coordinates (x, y), those of
 //! [`CameraModel::project`]. The board layout (colours, margin) is in [`board`].
@@ -30,6 +37,7 @@ use crate::error::{Error, Result};
 use crate::simulate::{focused_z_mm, SettingRig, PAPER_BOARD};
 
 pub mod board;
+pub mod coverage;
 pub mod defocus;
 pub mod image;
 pub mod mapping;
@@ -41,7 +49,9 @@ pub use image::{BitDepth, Image};
 pub use photometry::Photometry;
 
 use board::{BoardLayout, Levels};
-use mapping::{BoardPoint, PixelToBoard};
+use coverage::Nodes;
+use defocus::{Blur, BlurField};
+use mapping::PixelToBoard;
 
 /// Largest image side accepted, px.
 pub const MAX_IMAGE_SIDE_PX: u32 = 1 << 15;
@@ -223,9 +233,6 @@ pub struct Rendered {
     pub blur_sigma_px: f64,
 }
 
-/// Rows of the padded image rendered per parallel task.
-const BAND_ROWS: usize = 16;
-
 /// Renders `scene` with `opts`.
 ///
 /// Errors ([`Error::InvalidInput`] or the core's): an invalid scene or options
@@ -275,8 +282,6 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
     let centre = scene.board_centre_world_mm();
     let blur_sigma_px = opts.optics.sigma_px(f_px, map.depth_mm(centre[0], centre[1]));
 
-    let pad = border_px(&map, &opts.optics, f_px, (w, h));
-    let (pw, ph) = (w + 2 * pad, h + 2 * pad);
     let p = &opts.photometry;
     let layout = BoardLayout::new(
         scene.board.inner_corners,
@@ -285,22 +290,31 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
         Levels { dark: p.dark, light: p.light, background: p.background },
     );
 
-    let mut sharp = vec![0.0f32; pw * ph];
-    let mut levels = vec![0u16; pw * ph];
-    let chunk = pw * BAND_ROWS;
-    sharp.par_chunks_mut(chunk).zip(levels.par_chunks_mut(chunk)).enumerate().for_each(|(b, (s, l))| {
-        render_band(&map, &layout, &opts.optics, f_px, (pw, pad), b * BAND_ROWS, s, l);
-    });
+    // The border must hold every kernel radius; the probe of `border_px` is refined by the
+    // tile nodes' own blur (the border grows the image, so repeat until it holds: sigma
+    // is clamped, so this ends).
+    let mut pad = border_px(&map, &opts.optics, f_px, (w, h));
+    let (nodes, field) = loop {
+        let nodes = Nodes::new(&map, (w + 2 * pad, h + 2 * pad), pad);
+        let field = BlurField::new(&nodes, &opts.optics, f_px);
+        let needed = defocus::kernel_radius(f64::from(field.max_level()) * defocus::SIGMA_STEP_PX);
+        if needed <= pad {
+            break (nodes, field);
+        }
+        pad = needed;
+    };
+    let (pw, ph) = (w + 2 * pad, h + 2 * pad);
 
-    let mut radiance = vec![0.0f32; w * h];
-    defocus::blur_varying(&sharp, &levels, (pw, ph), pad, (w, h), &mut radiance);
-    drop(sharp);
-    drop(levels);
-
+    let sharp = coverage::render_sharp(&map, &layout, &nodes, (pw, ph), pad);
+    let blur = Blur::new(sharp, &field, (pw, ph), pad, w);
     let mut data = vec![0u16; w * h];
-    data.par_chunks_mut(w).zip(radiance.par_chunks(w)).enumerate().for_each(|(y, (out, r))| {
-        p.finish_row(r, y, (w, h), opts.bit_depth, opts.seed, out);
-    });
+    data.par_chunks_mut(w).enumerate().for_each_init(
+        || vec![0.0f32; w],
+        |radiance, (y, out)| {
+            blur.row(y, radiance);
+            p.finish_row(radiance, y, (w, h), opts.bit_depth, opts.seed, out);
+        },
+    );
     let image = Image { width: scene.image_size[0], height: scene.image_size[1], bit_depth: opts.bit_depth, data };
     Ok(Rendered { image, corners_px, corners_in_image, blur_sigma_px })
 }
@@ -324,59 +338,4 @@ fn border_px(map: &PixelToBoard, optics: &Optics, f_px: f64, (w, h): (usize, usi
         }
     }
     defocus::kernel_radius(smax.min(MAX_SIGMA_PX) * 1.02) + 2
-}
-
-/// Renders the sharp radiance and the blur levels of padded rows `row0..` (as many as
-/// `sharp` holds) of a padded image `pw` wide with border `pad`.
-#[allow(clippy::too_many_arguments)]
-fn render_band(
-    map: &PixelToBoard,
-    layout: &BoardLayout,
-    optics: &Optics,
-    f_px: f64,
-    (pw, pad): (usize, usize),
-    row0: usize,
-    sharp: &mut [f32],
-    levels: &mut [u16],
-) {
-    let nrows = sharp.len() / pw;
-    // Pixel-corner grid: rows y - 0.5 for the band's rows and one more, columns x - 0.5
-    // for every padded column and one more.
-    let mut grid = vec![None; (nrows + 1) * (pw + 1)];
-    let x0 = -(pad as f64) - 0.5;
-    for (r, g) in grid.chunks_mut(pw + 1).enumerate() {
-        let y = (row0 + r) as f64 - pad as f64 - 0.5;
-        map.map_row(x0, y, g);
-    }
-    let background = layout.level_at(f64::INFINITY, f64::INFINITY) as f32;
-    let blur_free = defocus::sigma_level(optics.sigma_px(f_px, f64::NAN));
-    let has_defocus = optics.focus_depth_mm.is_some() && optics.aperture_mm > 0.0;
-    for r in 0..nrows {
-        let (top, bottom) = (&grid[r * (pw + 1)..(r + 1) * (pw + 1)], &grid[(r + 1) * (pw + 1)..(r + 2) * (pw + 1)]);
-        for x in 0..pw {
-            let quad: [Option<BoardPoint>; 4] = [top[x], top[x + 1], bottom[x + 1], bottom[x]];
-            let i = r * pw + x;
-            let (Some(a), Some(b), Some(c), Some(d)) = (quad[0], quad[1], quad[2], quad[3]) else {
-                sharp[i] = background;
-                levels[i] = blur_free;
-                continue;
-            };
-            let ra = layout.region(a.x_mm, a.y_mm);
-            sharp[i] = if ra == layout.region(b.x_mm, b.y_mm)
-                && ra == layout.region(c.x_mm, c.y_mm)
-                && ra == layout.region(d.x_mm, d.y_mm)
-            {
-                layout.level(ra) as f32
-            } else {
-                let q = [[a.x_mm, a.y_mm], [b.x_mm, b.y_mm], [c.x_mm, c.y_mm], [d.x_mm, d.y_mm]];
-                layout.mean_over(&q) as f32
-            };
-            levels[i] = if has_defocus {
-                let inv_depth = 0.25 * (a.inv_depth + b.inv_depth + c.inv_depth + d.inv_depth);
-                defocus::sigma_level(optics.sigma_px(f_px, 1.0 / inv_depth))
-            } else {
-                blur_free
-            };
-        }
-    }
 }
