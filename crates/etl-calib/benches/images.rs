@@ -20,7 +20,9 @@ fn bench(c: &mut Criterion) {
     // of Canny classes before their edge-block test is decided.
     let clean = RenderOptions { photometry: opts.photometry.noise_free(), ..opts };
     let img = render(&scene, &clean).unwrap().image.to_dynamic().to_luma8();
-    c.bench_function("sharpness_cpbd_1936x1458_noise_free", |b| b.iter(|| sharpness(black_box(&img), Metric::Cpbd).unwrap()));
+    c.bench_function("sharpness_cpbd_1936x1458_noise_free", |b| {
+        b.iter(|| sharpness(black_box(&img), Metric::Cpbd).unwrap())
+    });
 }
 
 criterion_group! {

@@ -43,7 +43,11 @@ fn noisy_lens_off_views_meet_the_acceptance_levels() {
         z2 += zu * zu + zv * zv;
     }
     let z_rms = (z2 / 20.0).sqrt();
-    println!("worst over 10 seeds: focal {:.4} %, principal point {:.3} px; RMS z-score {z_rms:.2}", 100.0 * worst[0], worst[1]);
+    println!(
+        "worst over 10 seeds: focal {:.4} %, principal point {:.3} px; RMS z-score {z_rms:.2}",
+        100.0 * worst[0],
+        worst[1]
+    );
     assert!(worst[0] < 1e-3 && worst[1] < 8.0, "{worst:?}");
     assert!(z_rms > 0.5 && z_rms < 1.6, "RMS z-score {z_rms}");
 }
@@ -97,7 +101,12 @@ fn real_image_set_agrees_with_opencv() {
     let got = [z.fx, z.fy, z.u0, z.v0];
     for k in 0..4 {
         assert!((got[k] / opencv[k] - 1.0).abs() < 0.005, "{k}: {} vs OpenCV {}", got[k], opencv[k]);
-        assert!((got[k] - same_corners[k]).abs() < 0.02, "{k}: {} vs OpenCV on the same corners {}", got[k], same_corners[k]);
+        assert!(
+            (got[k] - same_corners[k]).abs() < 0.02,
+            "{k}: {} vs OpenCV on the same corners {}",
+            got[k],
+            same_corners[k]
+        );
     }
     assert!(z.rms_px < 0.16, "rms {} (OpenCV's own corners: 0.160 px)", z.rms_px);
 }
