@@ -50,6 +50,19 @@ pub struct Observations {
     pub(crate) file: ObsFile,
 }
 
+impl Observations {
+    /// Appends `v` to the list `list` picks, keeping it only if the file still validates
+    /// (checked in place so that the message names the view's index).
+    fn push_checked(&mut self, list: impl Fn(&mut ObsFile) -> &mut Vec<ViewObs>, v: ViewObs) -> PyResult<()> {
+        list(&mut self.file).push(v);
+        if let Err(e) = self.file.validate() {
+            list(&mut self.file).pop();
+            return Err(crate::errors::calib_err(e));
+        }
+        Ok(())
+    }
+}
+
 #[pymethods]
 impl Observations {
     #[new]
@@ -159,15 +172,8 @@ impl Observations {
         temperature_c: f64,
         e_com_ma: Option<f64>,
     ) -> PyResult<()> {
-        let pts = view_points(world_mm, pixels)?;
-        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: pts };
-        // Checked in place so that the message names the view's index.
-        self.file.views.push(v);
-        if let Err(e) = self.file.validate() {
-            self.file.views.pop();
-            return Err(crate::errors::calib_err(e));
-        }
-        Ok(())
+        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: view_points(world_mm, pixels)? };
+        self.push_checked(|f| &mut f.views, v)
     }
 
     /// Adds a lens-off view of a planar board (points with Z = 0), for A0.
@@ -203,13 +209,8 @@ impl Observations {
         temperature_c: f64,
         e_com_ma: Option<f64>,
     ) -> PyResult<()> {
-        let pts = view_points(world_mm, pixels)?;
-        self.file.setting_views.push(ViewObs { e_in_ma, temperature_c, e_com_ma, points: pts });
-        if let Err(e) = self.file.validate() {
-            self.file.setting_views.pop();
-            return Err(crate::errors::calib_err(e));
-        }
-        Ok(())
+        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: view_points(world_mm, pixels)? };
+        self.push_checked(|f| &mut f.setting_views, v)
     }
 
     /// Number of ETL views.
@@ -241,12 +242,7 @@ impl Observations {
     /// Args:
     ///     index: view number (negative counts from the end).
     fn view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
-        let v = pick(&self.file.views, index)?;
-        let d = points_dict(py, &v.points)?;
-        d.set_item("e_in_ma", v.e_in_ma)?;
-        d.set_item("temperature_c", v.temperature_c)?;
-        d.set_item("e_com_ma", v.e_com_ma)?;
-        Ok(d)
+        view_dict(py, pick(&self.file.views, index)?)
     }
 
     /// Lens-off view `index`: a dict with world_mm ((N, 3), mm) and pixels ((N, 2), px).
@@ -262,12 +258,7 @@ impl Observations {
     /// Args:
     ///     index: view number (negative counts from the end).
     fn setting_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
-        let v = pick(&self.file.setting_views, index)?;
-        let d = points_dict(py, &v.points)?;
-        d.set_item("e_in_ma", v.e_in_ma)?;
-        d.set_item("temperature_c", v.temperature_c)?;
-        d.set_item("e_com_ma", v.e_com_ma)?;
-        Ok(d)
+        view_dict(py, pick(&self.file.setting_views, index)?)
     }
 
     /// E_com of every view, mA: as recorded, or compensated from (e_in_ma,
@@ -297,6 +288,15 @@ impl Observations {
         let ctor = py.get_type::<Observations>().getattr("from_json")?;
         Ok((ctor, PyTuple::new(py, [text])?))
     }
+}
+
+/// A view as the dict `Observations.view` returns.
+fn view_dict<'py>(py: Python<'py>, v: &ViewObs) -> PyResult<Bound<'py, PyDict>> {
+    let d = points_dict(py, &v.points)?;
+    d.set_item("e_in_ma", v.e_in_ma)?;
+    d.set_item("temperature_c", v.temperature_c)?;
+    d.set_item("e_com_ma", v.e_com_ma)?;
+    Ok(d)
 }
 
 fn pick<T>(xs: &[T], index: isize) -> PyResult<&T> {
