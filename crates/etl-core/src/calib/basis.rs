@@ -102,6 +102,25 @@ struct WRange {
     d_half: [f64; 8],
 }
 
+/// `N` numbers of `v` from `at` (0 past the end: the callers' ranges lie inside).
+fn read<const N: usize>(v: &[f64; PARAMS], at: usize) -> [f64; N] {
+    core::array::from_fn(|k| v.get(at + k).copied().unwrap_or(0.0))
+}
+
+/// Writes `vals` into `v` from `at`.
+fn write(v: &mut [f64; PARAMS], at: usize, vals: &[f64]) {
+    for (slot, &val) in v.iter_mut().skip(at).zip(vals) {
+        *slot = val;
+    }
+}
+
+/// Sets entry (row, col) of a 25 x 25 matrix.
+fn set(j: &mut [[f64; PARAMS]; PARAMS], row: usize, col: usize, val: f64) {
+    if let Some(x) = j.get_mut(row).and_then(|r| r.get_mut(col)) {
+        *x = val;
+    }
+}
+
 impl Basis {
     /// The identity-like basis on E in [-1, 1] mA; used when the data give no range (a
     /// single current: the solvers refuse that anyway).
@@ -129,7 +148,8 @@ impl Basis {
     /// projection's own checks).
     fn w_range(&self, x: &[f64; PARAMS]) -> WRange {
         let (lo, hi) = (self.e_mid - self.e_half, self.e_mid + self.e_half);
-        let f = |e: f64| 0.5 * (cubic(&[x[6], x[7], x[8], x[9]], e) + cubic(&[x[10], x[11], x[12], x[13]], e));
+        let (kx, ky) = (read::<4>(x, 6), read::<4>(x, 10));
+        let f = |e: f64| 0.5 * (cubic(&kx, e) + cubic(&ky, e));
         let (flo, fhi) = (f(lo), f(hi));
         let (wlo, whi) = (1.0 / flo, 1.0 / fhi);
         let half = 0.5 * (whi - wlo);
@@ -138,16 +158,10 @@ impl Basis {
         }
         // w = 2 / (fx + fy): dw/dfx = dw/dfy = -w^2 / 2.
         let (glo, ghi) = (-0.5 * wlo * wlo, -0.5 * whi * whi);
-        let mut d_mid = [0.0; 8];
-        let mut d_half = [0.0; 8];
-        for m in 0..4 {
-            let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
-            let (dlo, dhi) = (glo * sign, ghi);
-            for axis in 0..2 {
-                d_mid[4 * axis + m] = 0.5 * (dhi + dlo);
-                d_half[4 * axis + m] = 0.5 * (dhi - dlo);
-            }
-        }
+        // Slot c: coefficient m = c % 4 of fx (c < 4) or fy; T_m(-1) = (-1)^m, T_m(1) = 1.
+        let dlo = |c: usize| if c % 2 == 0 { glo } else { -glo };
+        let d_mid: [f64; 8] = core::array::from_fn(|c| 0.5 * (ghi + dlo(c)));
+        let d_half: [f64; 8] = core::array::from_fn(|c| 0.5 * (ghi - dlo(c)));
         WRange { mid: 0.5 * (whi + wlo), half, d_mid, d_half }
     }
 
@@ -155,14 +169,14 @@ impl Basis {
     pub fn to_internal(&self, x: &[f64; PARAMS]) -> [f64; PARAMS] {
         let mut z = *x;
         for start in [6, 10] {
-            let c = mono_to_cheb([x[start], x[start + 1], x[start + 2], x[start + 3]], 4, self.e_mid, self.e_half);
-            z[start..start + 4].copy_from_slice(&c);
+            write(&mut z, start, &mono_to_cheb(read(x, start), 4, self.e_mid, self.e_half));
         }
         let w = self.w_range(x);
         for s in [16, 19, 22] {
             // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
-            let m = mono_to_cheb([x[s + 2], x[s + 1], x[s], 0.0], 3, w.mid, w.half);
-            z[s..s + 3].copy_from_slice(&[m[2], m[1], m[0]]);
+            let [q2, q1, q0] = read::<3>(x, s);
+            let m = mono_to_cheb([q0, q1, q2, 0.0], 3, w.mid, w.half);
+            write(&mut z, s, &[m[2], m[1], m[0]]);
         }
         z
     }
@@ -171,13 +185,13 @@ impl Basis {
     pub fn to_params(&self, z: &[f64; PARAMS]) -> [f64; PARAMS] {
         let mut x = *z;
         for start in [6, 10] {
-            let a = cheb_to_mono([z[start], z[start + 1], z[start + 2], z[start + 3]], 4, self.e_mid, self.e_half);
-            x[start..start + 4].copy_from_slice(&a);
+            write(&mut x, start, &cheb_to_mono(read(z, start), 4, self.e_mid, self.e_half));
         }
         let w = self.w_range(&x);
         for s in [16, 19, 22] {
-            let m = cheb_to_mono([z[s + 2], z[s + 1], z[s], 0.0], 3, w.mid, w.half);
-            x[s..s + 3].copy_from_slice(&[m[2], m[1], m[0]]);
+            let [d2, d1, d0] = read::<3>(z, s);
+            let m = cheb_to_mono([d0, d1, d2, 0.0], 3, w.mid, w.half);
+            write(&mut x, s, &[m[2], m[1], m[0]]);
         }
         x
     }
@@ -194,16 +208,14 @@ impl Basis {
     /// 2 d_2 T_2); the range moves with the kf coefficients ([`Basis::w_range`]).
     pub fn params_jacobian(&self, z: &[f64; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
         let mut j = [[0.0; PARAMS]; PARAMS];
-        for (i, row) in j.iter_mut().enumerate() {
-            row[i] = 1.0;
+        for i in 0..PARAMS {
+            set(&mut j, i, i, 1.0);
         }
         for start in [6, 10] {
             for col in 0..4 {
-                let mut unit = [0.0; 4];
-                unit[col] = 1.0;
-                let a = cheb_to_mono(unit, 4, self.e_mid, self.e_half);
-                for row in 0..4 {
-                    j[start + row][start + col] = a[row];
+                let unit: [f64; 4] = core::array::from_fn(|k| if k == col { 1.0 } else { 0.0 });
+                for (row, a) in cheb_to_mono(unit, 4, self.e_mid, self.e_half).into_iter().enumerate() {
+                    set(&mut j, start + row, start + col, a);
                 }
             }
         }
@@ -211,20 +223,20 @@ impl Basis {
         let w = self.w_range(&x);
         for s in [16, 19, 22] {
             // The slots hold z (T_2, T_1, T_0) and x (w^2, w, 1): descending degree.
-            let (d1, d2) = (z[s + 1], z[s]);
+            let [d2, d1, _] = read::<3>(z, s);
             let to_slots = |m: [f64; 4]| [m[2], m[1], m[0]];
-            for (k, unit) in [[0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]].iter().enumerate() {
-                let a = to_slots(cheb_to_mono(*unit, 3, w.mid, w.half));
-                for row in 0..3 {
-                    j[s + row][s + k] = a[row];
+            for (k, unit) in [[0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]].into_iter().enumerate()
+            {
+                for (row, a) in to_slots(cheb_to_mono(unit, 3, w.mid, w.half)).into_iter().enumerate() {
+                    set(&mut j, s + row, s + k, a);
                 }
             }
             let ih = 1.0 / w.half;
             let da_dmid = to_slots(cheb_to_mono([-d1 * ih, -4.0 * d2 * ih, 0.0, 0.0], 3, w.mid, w.half));
             let da_dhalf = to_slots(cheb_to_mono([-2.0 * d2 * ih, -d1 * ih, -2.0 * d2 * ih, 0.0], 3, w.mid, w.half));
-            for row in 0..3 {
-                for c in 0..8 {
-                    j[s + row][6 + c] = da_dmid[row] * w.d_mid[c] + da_dhalf[row] * w.d_half[c];
+            for (row, (dm, dh)) in da_dmid.into_iter().zip(da_dhalf).enumerate() {
+                for (c, (&gm, &gh)) in w.d_mid.iter().zip(w.d_half.iter()).enumerate() {
+                    set(&mut j, s + row, 6 + c, dm * gm + dh * gh);
                 }
             }
         }
