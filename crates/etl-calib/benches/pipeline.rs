@@ -1,0 +1,36 @@
+//! From observations to calibration file for the paper rig (issue 5: under 10 ms, process
+//! start excluded): read `observations.json`, compensate E, initialise, bundle-adjust (the
+//! paper's estimator), write `calibration.json` atomically. Also errors-in-variables.
+use criterion::{criterion_group, criterion_main, Criterion};
+use etl_calib::formats::observations::Observations;
+use etl_calib::pipeline::{calibrate, CalibrateOptions};
+use etl_calib::simulate::{paper_rig, NoiseModel};
+use etl_core::calib::Estimator;
+use etl_core::thermal::ThermalCalibration;
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let sim = paper_rig(&NoiseModel::PAPER, 1);
+    let dir = std::env::temp_dir().join(format!("etlcal-bench-pipeline-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (obs_path, cal_path) = (dir.join("observations.json"), dir.join("calibration.json"));
+    sim.observations.save(&obs_path).unwrap();
+    for (name, estimator) in [("paper", Estimator::Paper), ("eiv", Estimator::EIV_PAPER)] {
+        let options = CalibrateOptions { estimator, ..CalibrateOptions::default() };
+        c.bench_function(&format!("observations_to_calibration_file_{name}"), |b| {
+            b.iter(|| {
+                let obs = Observations::load(black_box(&obs_path)).unwrap();
+                let r = calibrate(&obs, &sim.a0, &ThermalCalibration::PAPER, &options).unwrap();
+                r.calibration.save(&cal_path).unwrap();
+            })
+        });
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(20);
+    targets = bench
+}
+criterion_main!(benches);
