@@ -34,7 +34,6 @@
 use super::jacobian::{PARAMS, U0};
 use super::observations::View;
 use crate::model::camera::cubic;
-use crate::model::CameraModel;
 
 /// Monomial coefficients (t^0..t^3) of T_0..T_3.
 const MONO_OF_CHEB: [[f64; 4]; 4] =
@@ -126,9 +125,9 @@ impl Basis {
     /// single current: the solvers refuse that anyway).
     const UNIT: Basis = Basis { e_mid: 0.0, e_half: 1.0 };
 
-    /// The basis on the range of the views' currents. (`model` is not needed any more:
-    /// the w range follows the parameters; kept so that callers read the same.)
-    pub fn for_views(views: &[View<'_>], _model: &CameraModel) -> Self {
+    /// The basis on the range of the views' currents (the w range follows the parameters,
+    /// see [`Basis::params_jacobian`]).
+    pub fn for_views(views: &[View<'_>]) -> Self {
         let (mut elo, mut ehi) = (f64::INFINITY, f64::NEG_INFINITY);
         for v in views {
             elo = elo.min(v.e_com_ma);
@@ -251,13 +250,14 @@ pub(crate) const A0_INDICES: [usize; 4] = [6, 10, U0, U0 + 1];
 mod tests {
     use super::*;
     use crate::calib::jacobian::to_params;
+    use crate::model::CameraModel;
 
     #[test]
     fn round_trip_and_the_same_curves() {
         let m = CameraModel::paper_rig();
         let pts = [];
         let views = [View { e_com_ma: 80.0, points: &pts }, View { e_com_ma: 225.0, points: &pts }];
-        let b = Basis::for_views(&views, &m);
+        let b = Basis::for_views(&views);
         let x = to_params(&m);
         let z = b.to_internal(&x);
         let back = b.to_params(&z);
@@ -288,7 +288,7 @@ mod tests {
         let m = CameraModel::paper_rig();
         let pts = [];
         let views = [View { e_com_ma: 80.0, points: &pts }, View { e_com_ma: 225.0, points: &pts }];
-        let b = Basis::for_views(&views, &m);
+        let b = Basis::for_views(&views);
         let mut x = to_params(&m);
         x[7] *= 1.03;
         x[12] *= 0.97;

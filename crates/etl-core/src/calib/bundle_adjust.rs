@@ -209,18 +209,6 @@ fn hold_rows(
     }
 }
 
-/// The solver's parameters ([`Basis`]): x = to_params(z), with dx/dz evaluated at z (the
-/// map is nonlinear in the kf part, see basis.rs).
-struct Internal {
-    basis: Basis,
-}
-
-impl Internal {
-    fn new(views: &[View<'_>], init: &CameraModel) -> Self {
-        Internal { basis: Basis::for_views(views, init) }
-    }
-}
-
 /// A gradient row with respect to x as one with respect to z: j_z = j_x dx/dz.
 fn row_in(dxdz: &[[f64; PARAMS]; PARAMS], jx: &[f64; PARAMS]) -> [f64; PARAMS] {
     let mut jz = [0.0; PARAMS];
@@ -261,14 +249,15 @@ struct Plain<'a, 'b> {
     x0: [f64; PARAMS],
     options: &'a BundleAdjustOptions,
     reference: Option<Projector>,
-    internal: &'a Internal,
+    /// The solver's parameters: x = to_params(z), dx/dz evaluated at z (basis.rs).
+    basis: &'a Basis,
 }
 
 impl Problem<PARAMS> for Plain<'_, '_> {
     fn eval(&mut self, z: &[f64; PARAMS], jacobian: bool, sink: &mut dyn RowSink<PARAMS>) -> Result<()> {
-        let x = &self.internal.basis.to_params(z);
+        let x = &self.basis.to_params(z);
         let proj = Projector::new(x);
-        let dxdz = self.internal.basis.params_jacobian(z);
+        let dxdz = self.basis.params_jacobian(z);
         for view in self.views {
             for p in view.points {
                 let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
@@ -300,9 +289,9 @@ impl Problem<PARAMS> for Plain<'_, '_> {
     /// variables: J_view = J_reduced C_view, so J_view^T J_view = C^T (J_reduced^T
     /// J_reduced) C costs 13 x 13 per point instead of 25 x 25.
     fn normal_equations(&mut self, z: &[f64; PARAMS], out: &mut NormalEquations<PARAMS>) -> Result<bool> {
-        let x = &self.internal.basis.to_params(z);
+        let x = &self.basis.to_params(z);
         let proj = Projector::new(x);
-        let dxdz = self.internal.basis.params_jacobian(z);
+        let dxdz = self.basis.params_jacobian(z);
         for view in self.views {
             let mut normal = ViewNormal::ZERO;
             for p in view.points {
@@ -445,7 +434,8 @@ fn fold_view(
 
 struct Eiv<'a, 'b> {
     views: &'a [View<'b>],
-    internal: &'a Internal,
+    /// The solver's parameters: x = to_params(z), dx/dz evaluated at z (basis.rs).
+    basis: &'a Basis,
     x0: [f64; PARAMS],
     options: &'a BundleAdjustOptions,
     sigma_px: f64,
@@ -468,8 +458,8 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
         sink: &mut dyn BlockRowSink<PARAMS, 2>,
     ) -> Result<()> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
-        let dxdz = self.internal.basis.params_jacobian(x);
-        let x = &self.internal.basis.to_params(x);
+        let dxdz = self.basis.params_jacobian(x);
+        let x = &self.basis.to_params(x);
         let proj = Projector::new(x);
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
@@ -499,8 +489,8 @@ impl BlockProblem<PARAMS, 2> for Eiv<'_, '_> {
         out: &mut BlockNormal<'_, PARAMS, 2>,
     ) -> Result<bool> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
-        let dxdz = self.internal.basis.params_jacobian(x);
-        let x = &self.internal.basis.to_params(x);
+        let dxdz = self.basis.params_jacobian(x);
+        let x = &self.basis.to_params(x);
         let proj = Projector::new(x);
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
@@ -616,16 +606,14 @@ pub fn bundle_adjust(
     let x0 = to_params(init);
     let initial_rms_px = rms(views, &x0, None)?;
     // The solver works in the well-conditioned internal parameters z (basis.rs).
-    let internal = Internal::new(views, init);
-    let basis = internal.basis;
+    let basis = &Basis::for_views(views);
     let z0 = basis.to_internal(&x0);
-    let internal = &internal;
-    let mut plain = lm::solve(&mut Plain { views, x0, options, reference: None, internal }, z0, &options.lm)?;
+    let mut plain = lm::solve(&mut Plain { views, x0, options, reference: None, basis }, z0, &options.lm)?;
     if options.robust.is_some() {
         // IRLS: reweight around the latest estimate until it stops moving.
         for _ in 0..IRLS_MAX_ROUNDS {
             let reference = Some(Projector::new(&basis.to_params(&plain.x)));
-            let next = lm::solve(&mut Plain { views, x0, options, reference, internal }, plain.x, &options.lm)?;
+            let next = lm::solve(&mut Plain { views, x0, options, reference, basis }, plain.x, &options.lm)?;
             let moved = next.x.iter().zip(plain.x.iter()).any(|(a, b)| (a - b).abs() > 1e-9 * b.abs().max(1e-12));
             plain = next;
             if !moved {
@@ -674,7 +662,7 @@ pub fn bundle_adjust(
         got: MAX_EIV_VIEWS,
     })?;
     let reference = options.robust.map(|_| Projector::new(&basis.to_params(&plain.x)));
-    let mut problem = Eiv { views, internal, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
+    let mut problem = Eiv { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
     let r = lm::solve_blocks(&mut problem, plain.x, y, &options.lm, scratch)?;
     for (c, yj) in corrections.iter_mut().zip(y.iter()) {
         *c = ViewCorrection { dz_mm: yj[0], de_ma: yj[1] };
@@ -737,10 +725,10 @@ mod tests {
         let options =
             BundleAdjustOptions { hold_a0: true, robust: Some(RobustLoss::Huber { k_px: 1.0 }), ..Default::default() };
         let x0 = to_params(&truth);
-        let internal = Internal::new(&views, &truth);
+        let basis = Basis::for_views(&views);
         let mut plain =
-            Plain { views: &views, x0, options: &options, reference: Some(Projector::new(&x0)), internal: &internal };
-        let x = internal.basis.to_internal(&x);
+            Plain { views: &views, x0, options: &options, reference: Some(Projector::new(&x0)), basis: &basis };
+        let x = basis.to_internal(&x);
         let mut folded = NormalEquations::<PARAMS>::ZERO;
         assert!(plain.normal_equations(&x, &mut folded).unwrap());
         let mut streamed = NormalEquations::<PARAMS>::ZERO;
@@ -770,11 +758,11 @@ mod tests {
         let options =
             BundleAdjustOptions { hold_a0: true, robust: Some(RobustLoss::Cauchy { k_px: 1.0 }), ..Default::default() };
         let x0 = to_params(&truth);
-        let internal = Internal::new(&views, &truth);
-        let x = internal.basis.to_internal(&x);
+        let basis = Basis::for_views(&views);
+        let x = basis.to_internal(&x);
         let mut eiv = Eiv {
             views: &views,
-            internal: &internal,
+            basis: &basis,
             x0,
             options: &options,
             sigma_px: 0.3,
