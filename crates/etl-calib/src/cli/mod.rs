@@ -5,8 +5,8 @@ use clap::{Parser, Subcommand};
 
 use crate::error::Result;
 
-/// `println!` for the verbs' human-readable output, ignoring a closed stdout (`etlcal ... |
-/// head`): `println!` panics there. Same policy as [`print_json`].
+/// `println!` for everything the verbs print on stdout (human-readable lines and
+/// [`print_json`]), ignoring a closed stdout (`etlcal ... | head`): `println!` panics there.
 macro_rules! outln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
@@ -77,8 +77,7 @@ enum Command {
 /// A closed stdout (`etlcal ... --json | head`) is not an error worth a panic: the write
 /// is dropped.
 pub fn print_json(value: &serde_json::Value) {
-    use std::io::Write as _;
-    let _ = writeln!(std::io::stdout().lock(), "{value}");
+    outln!("{value}");
 }
 
 fn run(cli: Cli) -> Result<()> {
