@@ -171,6 +171,51 @@ impl Optics {
         Optics { focus_depth_mm: Some(SettingRig::focus_depth_mm(truth, e_com_ma)), aperture_mm, base_sigma_px: 0.0 }
     }
 
+    /// The paper rig's lens with a focus law smooth in the current, for focus searches: the
+    /// dioptric distance of the plane in focus is affine in the current,
+    ///
+    /// ```text
+    /// 1/Z_f(E) = 1/Z_80 + (1/Z_225 - 1/Z_80) (E - 80) / 145,
+    /// ```
+    ///
+    /// through the in-focus depths Z_80, Z_225 of [`Optics::paper_focus`] at 80 and 225 mA
+    /// (an ETL's optical power is close to affine in its current, and with the sensor fixed
+    /// so is 1/Z_f), plus a fixed blur `base_sigma_px` for diffraction and aberrations.
+    ///
+    /// Why not `paper_focus` for autofocus: it interpolates the paper's stage positions,
+    /// whole millimetres, piecewise linearly, so its dioptric slope jumps at every view (by
+    /// a factor of 1.8 at 150 mA) and the blur grows at different rates on the two sides of
+    /// focus. And without a base blur the renderer leaves blurs under
+    /// [`defocus::MIN_SIGMA_PX`] unapplied, which gives the sharpness curve a flat top 1.5
+    /// to 3 mA wide; a real lens is never sharper than its diffraction limit (about 0.5 px for
+    /// the paper rig: f/7.5, 550 nm, 3.45 um pixels, Airy sigma 0.42 lambda N).
+    ///
+    /// ```
+    /// use etl_calib::render::Optics;
+    /// use etl_core::model::CameraModel;
+    /// let truth = CameraModel::paper_rig();
+    /// let z = |e| Optics::smooth_focus(&truth, e, 2.5, 0.5).focus_depth_mm.unwrap();
+    /// let p = |e| Optics::paper_focus(&truth, e, 2.5).focus_depth_mm.unwrap();
+    /// assert!((z(80.0) - p(80.0)).abs() < 1e-9 && (z(225.0) - p(225.0)).abs() < 1e-9);
+    /// assert!((1.0 / z(150.0) - 0.5 * (1.0 / z(80.0) + 1.0 / z(220.0))).abs() < 1e-12);
+    /// ```
+    pub fn smooth_focus(truth: &CameraModel, e_com_ma: f64, aperture_mm: f64, base_sigma_px: f64) -> Self {
+        let (e0, e1) = (80.0, 225.0);
+        let d0 = 1.0 / SettingRig::focus_depth_mm(truth, e0);
+        let d1 = 1.0 / SettingRig::focus_depth_mm(truth, e1);
+        let dioptric = d0 + (d1 - d0) * (e_com_ma - e0) / (e1 - e0);
+        Optics { focus_depth_mm: Some(1.0 / dioptric), aperture_mm, base_sigma_px }
+    }
+
+    /// The current (mA) at which [`Optics::smooth_focus`] is in focus at camera depth `z_mm`
+    /// (the inverse of its focus law).
+    pub fn smooth_focus_current_ma(truth: &CameraModel, z_mm: f64) -> f64 {
+        let (e0, e1) = (80.0, 225.0);
+        let d0 = 1.0 / SettingRig::focus_depth_mm(truth, e0);
+        let d1 = 1.0 / SettingRig::focus_depth_mm(truth, e1);
+        e0 + (e1 - e0) * (1.0 / z_mm - d0) / (d1 - d0)
+    }
+
     /// Checks: focus depth positive and finite when given, aperture and base blur finite
     /// and not negative.
     pub fn validate(&self) -> Result<()> {

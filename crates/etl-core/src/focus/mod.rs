@@ -8,12 +8,14 @@
 //! fixed number of frames. CPBD, the perceptual measure the paper's temperature procedure
 //! maximises, needs buffers and lives in `etl-calib` (`sharpness::cpbd`).
 //!
-//! Which measure to focus with (measured on the synthetic camera, see
-//! docs/BENCHMARKS.md, "Sharpness and autofocus"): CPBD falls to 0 beyond about 1 px of
-//! blur on a checkerboard, so it cannot drive a coarse search. The gradient measures
-//! (Tenengrad, Brenner, variance of the Laplacian) fall steadily with blur over several
-//! pixels and are the ones to use; normalised variance has the widest capture range but
-//! the flattest peak.
+//! Which measure to focus with (measured on the synthetic camera over noise realisations,
+//! docs/RESULTS.md, "Sharpness and autofocus"): [`tenengrad`]. It falls as 1/blur, so it
+//! still ranks images several pixels out of focus, and its peak was found within 0.3 mA
+//! of the true best focus in every search, at read noise 2 and 8 grey levels. [`brenner`]
+//! does as well; [`normalised_variance`] is as accurate with the flattest peak;
+//! [`laplacian_variance`] falls as blur^-3 into the noise floor and misled one noisy
+//! search in eight. CPBD cannot drive a search: far from focus it sees only noise edges,
+//! which it calls sharp.
 //!
 //! ```
 //! use etl_core::focus::{autofocus, tenengrad, AutofocusOptions, ImageView};
