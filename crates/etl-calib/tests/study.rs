@@ -97,8 +97,13 @@ fn baseline_is_worse_at_high_current() {
     assert!(b.pnp(2, 5).0 > 2.0 * b.pnp(2, 1).0);
     // The depth of field shrinks the tilt with the current.
     assert!(b.tilt_limit_deg.windows(2).all(|w| w[1].1 <= w[0].1));
+    // The ratio's standard error (delta method over paired trials) is reported with it.
+    let (r, se) = b.ratio_at_highest_with_se(true);
+    assert!(se > 0.0 && se < r, "{r} ± {se}");
     let j = b.output().json;
     assert_eq!(j["pnp"].as_array().unwrap().len(), 6);
+    assert_eq!(j["baseline_over_eiv_at_250ma_se"].as_f64(), Some(se));
+    assert_eq!(j["default_estimator"], "eiv");
 }
 
 #[test]

@@ -38,7 +38,7 @@ pub struct Args {
     #[arg(value_enum)]
     pub name: Name,
     /// Monte Carlo trials (per level where the study has levels) [default: the study's:
-    /// fig6 100, subsets 5 data sets, baseline 20, crlb 300].
+    /// fig6 100, subsets 5 data sets, baseline 200, crlb 300].
     #[arg(long)]
     pub trials: Option<usize>,
     /// Base random seed.
