@@ -48,6 +48,15 @@ fn fig6_current_noise_shape_and_eiv_gain() {
     let out = r.output();
     assert_eq!(out.json["current_noise"].as_array().unwrap().len(), 9);
     assert!(out.json["current_noise"][3]["eiv"]["kf3y_rel"].is_f64());
+    // Every mean carries its standard error: positive, below the mean (errors are positive
+    // and spread), and the same in the JSON.
+    let l = &levels[4].paper;
+    assert!(l.se.fx_curve_max_rel > 0.0 && l.se.fx_curve_max_rel < l.mean.fx_curve_max_rel, "{l:?}");
+    assert!(l.pnp_um_se > 0.0 && l.pnp_um_se < l.pnp_um, "{l:?}");
+    let j = &out.json["current_noise"][4]["paper"];
+    assert_eq!(j["fx_curve_max_rel_se"].as_f64(), Some(l.se.fx_curve_max_rel));
+    assert_eq!(j["kf3x_rel_se"].as_f64(), Some(l.se.kf_rel[2]));
+    assert_eq!(j["pnp_225ma_um_se"].as_f64(), Some(l.pnp_um_se));
 }
 
 #[test]

@@ -505,6 +505,15 @@ pub fn pct(v: f64) -> String {
     }
 }
 
+/// A mean and its standard error as percentages, "0.750 ± 0.031 %" ("-" when not finite).
+pub fn pct_se(mean: f64, se: f64) -> String {
+    if mean.is_finite() && se.is_finite() {
+        format!("{:.3} ± {:.3} %", 100.0 * mean, 100.0 * se)
+    } else {
+        pct(mean)
+    }
+}
+
 /// A number in scientific notation with 3 decimals ("-" when not finite).
 pub fn sci(v: f64) -> String {
     if v.is_finite() {

@@ -29,8 +29,8 @@ use rayon::prelude::*;
 use serde_json::{json, Value};
 
 use super::common::{
-    calibrate_pair, fx_curve_rel_std, md_table, model_errors, move_observations, pct, pnp_move_error_um, run_jobs,
-    stat, Chart, Figure, ModelErrors, Series, StudyOptions, StudyOutput, KF_NAMES, MEAN_ABS_OF_STD,
+    calibrate_pair, fx_curve_rel_std, md_table, model_errors, move_observations, pct, pct_se, pnp_move_error_um,
+    run_jobs, stat, Chart, Figure, ModelErrors, Series, StudyOptions, StudyOutput, KF_NAMES, MEAN_ABS_OF_STD,
 };
 use crate::error::Result;
 use crate::simulate::{core_points, paper_rig, NoiseModel, PAPER_E_COM_MA};
@@ -101,10 +101,14 @@ pub struct LevelSummary {
     pub failures: usize,
     /// Mean errors (every field of [`ModelErrors`]).
     pub mean: ModelErrors,
+    /// Standard error of each mean: the trials' sample std / sqrt(trials).
+    pub se: ModelErrors,
     /// 95th percentile of the max relative error of fx(E).
     pub fx_curve_max_rel_p95: f64,
     /// Mean PnP error of the 2 mm move at [`PNP_E_MA`], um.
     pub pnp_um: f64,
+    /// Standard error of `pnp_um`, um.
+    pub pnp_um_se: f64,
     /// Mean LM iterations.
     pub iterations: f64,
 }
@@ -182,22 +186,35 @@ fn trial(study: Fig6Study, level: f64, seed: u64) -> Result<TrialOut> {
 fn summarise(outs: &[&Result<TrialOut>], pick: impl Fn(&TrialOut) -> (ModelErrors, f64, usize)) -> LevelSummary {
     let ok: Vec<(ModelErrors, f64, usize)> = outs.iter().filter_map(|r| r.as_ref().ok()).map(&pick).collect();
     let n = ok.len().max(1) as f64;
-    let mean_of = |f: &dyn Fn(&ModelErrors) -> f64| ok.iter().map(|o| f(&o.0)).sum::<f64>() / n;
-    let mean = ModelErrors {
-        kf_rel: core::array::from_fn(|k| mean_of(&|m| m.kf_rel[k])),
-        om_rel: mean_of(&|m| m.om_rel),
-        t_rel: mean_of(&|m| m.t_rel),
-        fx_curve_max_rel: mean_of(&|m| m.fx_curve_max_rel),
-        fy_curve_max_rel: mean_of(&|m| m.fy_curve_max_rel),
-        principal_point_px: mean_of(&|m| m.principal_point_px),
+    // Each field's mean, or its standard error (sample std / sqrt(n)) with `se`.
+    let moment = |f: &dyn Fn(&ModelErrors) -> f64, se: bool| {
+        let values: Vec<f64> = ok.iter().map(|o| f(&o.0)).collect();
+        let s = stat(&values);
+        if se {
+            s.std / n.sqrt()
+        } else {
+            s.mean
+        }
     };
+    let errors = |se: bool| ModelErrors {
+        kf_rel: core::array::from_fn(|k| moment(&|m| m.kf_rel[k], se)),
+        om_rel: moment(&|m| m.om_rel, se),
+        t_rel: moment(&|m| m.t_rel, se),
+        fx_curve_max_rel: moment(&|m| m.fx_curve_max_rel, se),
+        fy_curve_max_rel: moment(&|m| m.fy_curve_max_rel, se),
+        principal_point_px: moment(&|m| m.principal_point_px, se),
+    };
+    let (mean, se) = (errors(false), errors(true));
+    let pnp = stat(&ok.iter().map(|o| o.1).collect::<Vec<_>>());
     let fx: Vec<f64> = ok.iter().map(|o| o.0.fx_curve_max_rel).collect();
     LevelSummary {
         trials: ok.len(),
         failures: outs.len() - ok.len(),
         mean,
+        se,
         fx_curve_max_rel_p95: stat(&fx).p95,
-        pnp_um: ok.iter().map(|o| o.1).sum::<f64>() / n,
+        pnp_um: pnp.mean,
+        pnp_um_se: pnp.std / n.sqrt(),
         iterations: ok.iter().map(|o| o.2 as f64).sum::<f64>() / n,
     }
 }
@@ -302,6 +319,18 @@ fn summary_json(s: &LevelSummary) -> Value {
     });
     for (k, name) in KF_NAMES.iter().enumerate() {
         j[format!("{name}_rel")] = json!(s.mean.kf_rel[k]);
+        j[format!("{name}_rel_se")] = json!(s.se.kf_rel[k]);
+    }
+    // The standard error of every mean, as `<key>_se`.
+    for (key, se) in [
+        ("om_rel_se", s.se.om_rel),
+        ("t_rel_se", s.se.t_rel),
+        ("fx_curve_max_rel_se", s.se.fx_curve_max_rel),
+        ("fy_curve_max_rel_se", s.se.fy_curve_max_rel),
+        ("principal_point_px_se", s.se.principal_point_px),
+        ("pnp_225ma_um_se", s.pnp_um_se),
+    ] {
+        j[key] = json!(se);
     }
     j
 }
@@ -327,7 +356,9 @@ impl Fig6 {
              {} trials per level, the paper's noise model otherwise (NOTES.md); each trial a full calibration from the \
              linear initialisation. Coefficient columns: mean relative error (the paper's measure); CRLB rows: the mean \
              absolute relative error the Cramer-Rao bound implies (Gaussian), with pixel noise only (Z_W, E exact) and \
-             with the full model (per-view dZ, dE unknown). Curve errors: max over 80..225 mA; PnP: a 2 mm move at 225 mA.\n",
+             with the full model (per-view dZ, dE unknown). Curve errors: max over 80..225 mA; PnP: a 2 mm move at 225 mA. \
+             Uncertainty: every estimator's number is a mean over the trials; the tables of errors users feel give its \
+             standard error (± std / sqrt(trials)), and fig6.json gives it for every mean (keys `*_se`).\n",
             self.trials
         );
         let mut figures = vec![];
@@ -365,13 +396,22 @@ impl Fig6 {
                 .map(|l| {
                     vec![
                         format!("{:.1}", l.level),
-                        pct(l.paper.mean.fx_curve_max_rel),
-                        pct(l.eiv.mean.fx_curve_max_rel),
+                        pct_se(l.paper.mean.fx_curve_max_rel, l.paper.se.fx_curve_max_rel),
+                        pct_se(l.eiv.mean.fx_curve_max_rel, l.eiv.se.fx_curve_max_rel),
                         pct(l.bound.fx_curve_rel_full),
-                        pct(l.paper.mean.fy_curve_max_rel),
-                        pct(l.eiv.mean.fy_curve_max_rel),
-                        format!("{:.2} / {:.2}", l.paper.mean.principal_point_px, l.eiv.mean.principal_point_px),
-                        format!("{:.1} / {:.1}", l.paper.pnp_um, l.eiv.pnp_um),
+                        pct_se(l.paper.mean.fy_curve_max_rel, l.paper.se.fy_curve_max_rel),
+                        pct_se(l.eiv.mean.fy_curve_max_rel, l.eiv.se.fy_curve_max_rel),
+                        format!(
+                            "{:.2} ± {:.2} / {:.2} ± {:.2}",
+                            l.paper.mean.principal_point_px,
+                            l.paper.se.principal_point_px,
+                            l.eiv.mean.principal_point_px,
+                            l.eiv.se.principal_point_px
+                        ),
+                        format!(
+                            "{:.1} ± {:.1} / {:.1} ± {:.1}",
+                            l.paper.pnp_um, l.paper.pnp_um_se, l.eiv.pnp_um, l.eiv.pnp_um_se
+                        ),
                         format!("{} / {}", l.paper.failures, l.eiv.failures),
                     ]
                 })
