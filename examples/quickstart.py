@@ -13,9 +13,9 @@ sim = etlcal.simulate.paper_rig(seed=7)
 obs = sim.observations
 print(f"simulated {len(obs)} views, {obs.point_count} corners; A0 = {sim.a0}")
 
-# 2. Calibrate: the paper's estimator and the errors-in-variables one.
-paper = etlcal.calibrate(obs, sim.a0)
-eiv = etlcal.calibrate(obs, sim.a0, estimator="eiv")
+# 2. Calibrate: errors-in-variables (the default) and the paper's estimator (Eq. 24).
+paper = etlcal.calibrate(obs, sim.a0, estimator="paper")
+eiv = etlcal.calibrate(obs, sim.a0)
 e = np.linspace(80.0, 225.0, 59)
 fx_true = np.polyval(sim.truth.kf_x[::-1], e)
 for name, cal in (("paper", paper), ("eiv", eiv)):

@@ -1,6 +1,7 @@
 //! From observations to calibration file for the paper rig (issue 5: under 10 ms, process
-//! start excluded): read `observations.json`, compensate E, initialise, bundle-adjust (the
-//! paper's estimator), write `calibration.json` atomically. Also errors-in-variables.
+//! start excluded): read `observations.json`, compensate E, initialise, bundle-adjust,
+//! write `calibration.json` atomically; with errors-in-variables (the default estimator)
+//! and with the paper's Eq. 24.
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_calib::formats::observations::Observations;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};

@@ -49,7 +49,8 @@ fn main() {
         .map(|seed| {
             let sim = paper_rig(&NoiseModel::PAPER, 50_000 + seed);
             let th = ThermalCalibration::PAPER;
-            let p = calibrate(&sim.observations, &sim.a0, &th, &CalibrateOptions::default()).expect("paper BA");
+            let paper = CalibrateOptions { estimator: Estimator::Paper, ..Default::default() };
+            let p = calibrate(&sim.observations, &sim.a0, &th, &paper).expect("paper BA");
             let eiv = CalibrateOptions { estimator: Estimator::EIV_PAPER, ..Default::default() };
             let e = calibrate(&sim.observations, &sim.a0, &th, &eiv).expect("eiv BA");
             (errors(&p.report.model, &sim.truth), errors(&e.report.model, &sim.truth))

@@ -64,6 +64,35 @@ fn simulate_then_calibrate_recovers_the_paper_rig() {
 }
 
 #[test]
+fn the_default_estimator_is_errors_in_variables() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate(dir.path());
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    let (obs, a0) = (p("observations.json"), p("a0.json"));
+    let calibrate = |out: &str, extra: &[&str]| {
+        let mut args = vec!["calibrate", "--observations", &obs, "--a0", &a0, "--out", out];
+        args.extend_from_slice(extra);
+        let (code, _, err) = etlcal(&args);
+        assert_eq!(code, 0, "{err}");
+        serde_json::from_str::<Value>(&std::fs::read_to_string(out).unwrap()).unwrap()
+    };
+    let default = calibrate(&p("default.json"), &[]);
+    assert_eq!(default["estimator"], "eiv");
+    // The same run as --estimator eiv with its default priors (10 um, 0.4 mA), number for number.
+    let eiv = calibrate(&p("eiv.json"), &["--estimator", "eiv", "--sigma-z-um", "10", "--sigma-e-ma", "0.4"]);
+    assert_eq!(default, eiv);
+    // The paper's Eq. 24 stays one flag away, and is a different solution.
+    let paper = calibrate(&p("paper.json"), &["--estimator", "paper"]);
+    assert_eq!(paper["estimator"], "paper");
+    assert_ne!(paper["kf_x"], default["kf_x"]);
+    assert!(default["views"].as_array().unwrap().iter().any(|v| v["dz_mm"].as_f64().unwrap() != 0.0));
+    assert!(paper["views"].as_array().unwrap().iter().all(|v| v["dz_mm"].as_f64().unwrap() == 0.0));
+    let (code, help, _) = etlcal(&["calibrate", "--help"]);
+    assert_eq!(code, 0);
+    assert!(help.contains("[default: eiv]"), "{help}");
+}
+
+#[test]
 fn demo_meets_the_acceptance_figures() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().join("demo");

@@ -22,9 +22,10 @@ use crate::thermal::ThermalCalibration;
 ///         lens-off views (section 4.2), as `etlcal calibrate` does without `--a0`.
 ///     thermal: the temperature compensation used for views without a recorded E_com
 ///         (a `ThermalCalibration`; default: the paper's).
-///     estimator: "paper" (Eq. 24: recorded stage positions and currents exact) or "eiv"
-///         (errors-in-variables: a stage and a current correction per view with
-///         Gaussian priors sigma_z_mm and sigma_e_ma).
+///     estimator: "eiv" (errors-in-variables: a stage and a current correction per view
+///         with Gaussian priors sigma_z_mm and sigma_e_ma; under the paper's noise model
+///         it reaches the Cramer-Rao bound) or "paper" (Eq. 24: recorded stage positions
+///         and currents exact). None (the default): "eiv".
 ///     hold_a0: hold kf0x, kf0y, u0, v0 at A0 in the bundle adjustment.
 ///     robust: None, "huber" or "cauchy" (a robust loss on each point's error).
 ///     robust_k_px: threshold / scale of the robust loss, px.
@@ -35,7 +36,7 @@ use crate::thermal::ThermalCalibration;
 ///         baseline of section 5.2.3: Zhang at each current of the observations'
 ///         setting views, >= 3 views at each of >= 3 currents, then a cubic through
 ///         fx(E), fy(E); R and T are not defined and are zero; a0, estimator, hold_a0
-///         and robust do not apply and must keep their defaults).
+///         and robust do not apply and must be left at their defaults, None / False).
 ///
 /// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
 /// error (`rms_px`) and per-view summaries (`views`).
@@ -44,7 +45,7 @@ use crate::thermal::ThermalCalibration;
 /// currents, no lens-off views when a0 is None); NotConvergedError when the bundle
 /// adjustment fails.
 #[pyfunction]
-#[pyo3(signature = (observations, a0=None, thermal=None, estimator="paper", hold_a0=false, robust=None,
+#[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None, method="proposed"))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
@@ -52,7 +53,7 @@ pub fn calibrate(
     observations: &Observations,
     a0: Option<&A0>,
     thermal: Option<ThermalCalibration>,
-    estimator: &str,
+    estimator: Option<&str>,
     hold_a0: bool,
     robust: Option<&str>,
     robust_k_px: f64,
@@ -65,7 +66,9 @@ pub fn calibrate(
     match method {
         "proposed" => {}
         "per-setting" => {
-            if a0.is_some() || estimator != "paper" || hold_a0 || robust.is_some() {
+            // An estimator given at all is refused, "eiv" and "paper" alike: the baseline
+            // has no bundle adjustment.
+            if a0.is_some() || estimator.is_some() || hold_a0 || robust.is_some() {
                 return Err(input_error(
                     "method=\"per-setting\" takes no a0, estimator, hold_a0 or robust: the baseline is Zhang at each current",
                 ));
@@ -76,7 +79,7 @@ pub fn calibrate(
         }
         other => return Err(input_error(format!("method must be \"proposed\" or \"per-setting\", got {other:?}"))),
     }
-    let estimator = match estimator {
+    let estimator = match estimator.unwrap_or("eiv") {
         "paper" => Estimator::Paper,
         "eiv" => Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px },
         other => return Err(input_error(format!("estimator must be \"paper\" or \"eiv\", got {other:?}"))),

@@ -63,7 +63,8 @@ def test_every_public_callable_has_a_docstring_with_units():
 def test_help_of_calibrate_reads_well():
     doc = etlcal.calibrate.__doc__
     assert "observations" in doc and "Raises" in doc and "mA" in doc and "px" in doc
-    assert inspect.signature(etlcal.calibrate).parameters["estimator"].default == "paper"
+    assert inspect.signature(etlcal.calibrate).parameters["estimator"].default is None
+    assert '"eiv"' in doc and "None (the default)" in doc
     assert "e_com_ma" in inspect.signature(etlcal.Calibration.project).parameters
 
 

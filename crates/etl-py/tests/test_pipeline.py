@@ -41,7 +41,7 @@ def test_simulation_matches_the_paper_rig(sim):
 
 
 def test_calibrate_recovers_the_rig(sim):
-    cal = etlcal.calibrate(sim.observations, sim.a0)
+    cal = etlcal.calibrate(sim.observations, sim.a0, estimator="paper")
     assert cal.estimator == "paper" and cal.iterations > 0
     assert 0.25 < cal.rms_px < 0.5 and cal.initial_rms_px > cal.rms_px
     truth = sim.truth
@@ -55,9 +55,22 @@ def test_calibrate_recovers_the_rig(sim):
     assert eiv.estimator == "eiv"
     dz = [v["dz_mm"] for v in eiv.views]
     assert np.corrcoef(dz, sim.true_dz_mm)[0, 1] > 0.5
+    assert np.max(np.abs(np.polyval(eiv.kf_x[::-1], e) / fx_true - 1)) < 0.005
     held = etlcal.calibrate(sim.observations, sim.a0, hold_a0=True, robust="huber", robust_k_px=1.0)
     assert abs(held.kf_x[0] - sim.a0.kf0x) < 1e-3
     assert etlcal.Calibration.from_json(cal.to_json()) == cal
+
+
+def test_the_default_estimator_is_errors_in_variables(sim):
+    # No estimator: errors-in-variables with the paper's priors (10 um, 0.4 mA), the same
+    # calibration as asking for it; "paper" (Eq. 24) stays available and differs.
+    default = etlcal.calibrate(sim.observations, sim.a0)
+    assert default.estimator == "eiv"
+    assert default == etlcal.calibrate(sim.observations, sim.a0, estimator="eiv", sigma_z_mm=0.010, sigma_e_ma=0.4)
+    assert any(v["dz_mm"] != 0.0 for v in default.views)
+    paper = etlcal.calibrate(sim.observations, sim.a0, estimator="paper")
+    assert paper.estimator == "paper" and paper != default
+    assert all(v["dz_mm"] == 0.0 for v in paper.views)
 
 
 def test_calibrate_bad_inputs(sim):
@@ -247,6 +260,12 @@ def test_per_setting_baseline_from_python():
     assert base_err < 0.05
     with pytest.raises(etlcal.InputError, match="takes no a0, estimator"):
         etlcal.calibrate(obs, sim.a0, method="per-setting")
+    # The estimator left at its default (None) is accepted above; one passed explicitly,
+    # even the proposed method's default "eiv", is refused: the baseline has no BA.
+    for est in ("paper", "eiv"):
+        with pytest.raises(etlcal.InputError, match="takes no a0, estimator"):
+            etlcal.calibrate(obs, estimator=est, method="per-setting")
+    assert etlcal.calibrate(obs, estimator=None, method="per-setting") == base
     with pytest.raises(etlcal.InputError, match='method must be "proposed" or "per-setting"'):
         etlcal.calibrate(obs, method="zhang")
     # Too few settings: the Rust message, unchanged.

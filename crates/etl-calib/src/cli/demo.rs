@@ -188,7 +188,8 @@ pub fn run(args: Args) -> Result<()> {
     let thermal = ThermalCalibration::PAPER;
     // A0 from the lens-off views by Zhang's method (section 4.2).
     let a0 = crate::pipeline::a0_from_offstate(&observations)?.a0();
-    let paper = calibrate(&observations, &a0, &thermal, &CalibrateOptions::default())?;
+    let paper_options = CalibrateOptions { estimator: Estimator::Paper, ..Default::default() };
+    let paper = calibrate(&observations, &a0, &thermal, &paper_options)?;
     let eiv_est = Estimator::Eiv { sigma_z_mm: noise.z_mm.max(1e-4), sigma_e_ma: 0.4, sigma_px: None };
     let eiv = calibrate(&observations, &a0, &thermal, &CalibrateOptions { estimator: eiv_est, ..Default::default() })?;
     paper.calibration.save(&args.out.join("calibration.json"))?;

@@ -2,15 +2,12 @@
 //! the curve): fx, fy refitted to one view's points with R, T, the principal point and
 //! the distortion of the calibration held.
 
-use etl_core::calib::jacobian::{to_params, Projector, KF0X};
+use etl_core::calib::jacobian::{to_params, Projector, R_FX};
 use etl_core::calib::View;
 use etl_core::lm::{solve, Options, Problem, RowSink};
 use etl_core::model::CameraModel;
 
 use crate::error::Result;
-
-/// Index of kf0y in the 25-number vector (kf_x occupies four slots after kf0x).
-const KF0Y: usize = KF0X + 4;
 
 struct OneView<'a> {
     model: CameraModel,
@@ -31,9 +28,12 @@ impl Problem<2> for OneView<'_> {
         let proj = Projector::new(&to_params(&self.at(x)));
         for p in self.view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + self.dz_mm];
-            let q = proj.project(w, self.view.e_com_ma, jacobian)?;
+            // With a constant cubic, d pixel / d kf0x is the per-view d pixel / d fx (the
+            // chain's only entry in that column is 1), so the 13 per-view derivatives
+            // suffice: the same numbers as the full 25-number Jacobian at a fifth of the cost.
+            let q = proj.project_reduced(w, self.view.e_com_ma, jacobian)?;
             for row in 0..2 {
-                sink.push(q.pixel[row] - p.pixel[row], &[q.d_params[row][KF0X], q.d_params[row][KF0Y]]);
+                sink.push(q.pixel[row] - p.pixel[row], &[q.d_reduced[row][R_FX], q.d_reduced[row][R_FX + 1]]);
             }
         }
         Ok(())

@@ -351,7 +351,7 @@ def calibrate(
     observations: Observations,
     a0: Optional[A0] = None,
     thermal: Optional[ThermalCalibration] = None,
-    estimator: str = "paper",
+    estimator: Optional[str] = None,
     hold_a0: bool = False,
     robust: Optional[str] = None,
     robust_k_px: float = 1.0,
