@@ -34,7 +34,7 @@ use etl_core::model::CameraModel;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::simulate::{focused_z_mm, SettingRig, PAPER_BOARD};
+use crate::simulate::{SettingRig, PAPER_BOARD};
 
 pub mod board;
 pub mod coverage;
@@ -164,10 +164,9 @@ impl Optics {
 
     /// The paper rig's lens at current `e_com_ma` with aperture `aperture_mm`: in focus at
     /// the camera depth of the board's centre when the stage stands where the paper's views
-    /// are sharp at that current (`simulate::focused_z_mm`, piecewise linear through the 15
-    /// views; the depth is that of `SettingRig::focus_depth_mm`).
+    /// are sharp at that current ([`crate::simulate::focused_z_mm`], piecewise linear through
+    /// the 15 views; the depth is that of [`SettingRig::focus_depth_mm`]).
     pub fn paper_focus(truth: &CameraModel, e_com_ma: f64, aperture_mm: f64) -> Self {
-        let _ = focused_z_mm; // the stage position behind SettingRig::focus_depth_mm
         Optics { focus_depth_mm: Some(SettingRig::focus_depth_mm(truth, e_com_ma)), aperture_mm, base_sigma_px: 0.0 }
     }
 
