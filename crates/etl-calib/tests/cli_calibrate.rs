@@ -93,6 +93,37 @@ fn the_default_estimator_is_errors_in_variables() {
 }
 
 #[test]
+fn per_setting_baseline_from_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let (code, _, err) = etlcal(&["simulate", "--out", d, "--observations-only", "--setting-views", "--seed", "7"]);
+    assert_eq!(code, 0, "{err}");
+    let obs = dir.path().join("observations.json");
+    let out = dir.path().join("baseline.json");
+    let (code, stdout, err) = etlcal(&[
+        "calibrate",
+        "--observations",
+        obs.to_str().unwrap(),
+        "--method",
+        "per-setting",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let printed: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(printed["estimator"], "per-setting");
+    assert_eq!(printed, serde_json::from_str::<Value>(&std::fs::read_to_string(&out).unwrap()).unwrap());
+    // The cubic through the per-setting focal lengths, against the truth over 80..225 mA.
+    let truth: Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("truth.json")).unwrap()).unwrap();
+    let cubic = |k: &Value, e: f64| (0..4).map(|i| k[i].as_f64().unwrap() * e.powi(i as i32)).sum::<f64>();
+    for e in [80.0, 150.0, 225.0] {
+        let rel = cubic(&printed["kf_x"], e) / cubic(&truth["model"]["kf_x"], e) - 1.0;
+        assert!(rel.abs() < 0.03, "fx at {e} mA off by {rel}");
+    }
+}
+
+#[test]
 fn demo_meets_the_acceptance_figures() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().join("demo");
@@ -193,6 +224,15 @@ fn bad_inputs_fail_with_one_line_and_write_nothing() {
     assert_eq!(code, 1);
     assert!(err.contains("does not exist"), "{err}");
     assert!(!dir.path().join("missing").exists());
+    // The per-setting baseline has no bundle adjustment: its flags are refused, even the
+    // proposed method's default estimator given explicitly, before anything is read.
+    for extra in
+        [&["--estimator", "eiv"][..], &["--estimator", "paper"], &["--a0", &a0], &["--hold-a0"], &["--huber-px", "1"]]
+    {
+        let mut args = vec!["calibrate", "--observations", &obs, "--method", "per-setting", "--out", &out];
+        args.extend_from_slice(extra);
+        fails_without_writing(&args, Path::new(&out), "--method per-setting takes no --a0, --estimator");
+    }
     // Negative noise in simulate.
     let (code, _, err) = etlcal(&["simulate", "--out", &p(""), "--observations-only", "--pixel-noise-px", "-1"]);
     assert_eq!(code, 1);

@@ -9,8 +9,9 @@
 //! skipped, and the run fails only if what remains breaks a precondition.
 //! `--json` prints the object written. Without `--a0`, A0 comes from the lens-off views
 //! by Zhang's method. The bundle adjustment is errors-in-variables unless `--estimator
-//! paper` asks for the paper's Eq. 24. `--method per-setting` is the paper's baseline (Zhang at each
-//! current, a cubic through fx(E), fy(E); needs `setting_views`).
+//! paper` asks for the paper's Eq. 24. `--method per-setting` is the paper's baseline (Zhang
+//! at each current, a cubic through fx(E), fy(E); needs `setting_views`); it refuses the
+//! flags of the bundle adjustment (`--a0`, `--estimator`, `--hold-a0`, `--huber-px`).
 
 use std::path::PathBuf;
 
@@ -68,10 +69,12 @@ pub struct Args {
     /// Where to write etlcal.calibration/1 (its directory must exist).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Bundle-adjustment estimator; default eiv: under the paper's noise model it reaches
+    /// Bundle-adjustment estimator [default: eiv]: under the paper's noise model it reaches
     /// the Cramer-Rao bound and beats the paper's Eq. 24 (docs/RESULTS.md).
-    #[arg(long, value_enum, default_value = "eiv")]
-    pub estimator: EstimatorArg,
+    // An Option, not a clap default, so that `--method per-setting` can refuse an
+    // estimator the user gave (the baseline has no bundle adjustment), as Python does.
+    #[arg(long, value_enum)]
+    pub estimator: Option<EstimatorArg>,
     /// Prior standard deviation of the stage position for --estimator eiv, um.
     #[arg(long, default_value_t = 10.0)]
     pub sigma_z_um: f64,
@@ -119,6 +122,15 @@ pub fn run(args: Args) -> Result<()> {
     // Cheap checks first: a bad flag or output path must not cost a detection run.
     if !(args.sigma_z_um > 0.0 && args.sigma_e_ma > 0.0) {
         return Err(Error::InvalidInput("--sigma-z-um and --sigma-e-ma must be positive".into()));
+    }
+    if args.method == MethodArg::PerSetting
+        && (args.a0.is_some() || args.estimator.is_some() || args.hold_a0 || args.huber_px.is_some())
+    {
+        return Err(Error::InvalidInput(
+            "--method per-setting takes no --a0, --estimator, --hold-a0 or --huber-px: the baseline is Zhang at \
+             each current, with no bundle adjustment; drop those flags or use --method proposed"
+                .into(),
+        ));
     }
     for out in std::iter::once(&args.out).chain(&args.observations_out) {
         let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
@@ -169,7 +181,7 @@ fn calibrate_proposed(args: &Args, obs: &Observations, thermal: &ThermalCalibrat
         Some(_) => return Err(Error::InvalidInput("--huber-px must be positive".into())),
         None => None,
     };
-    let estimator = match args.estimator {
+    let estimator = match args.estimator.unwrap_or(EstimatorArg::Eiv) {
         EstimatorArg::Paper => Estimator::Paper,
         EstimatorArg::Eiv => {
             Estimator::Eiv { sigma_z_mm: args.sigma_z_um / 1000.0, sigma_e_ma: args.sigma_e_ma, sigma_px: None }
