@@ -41,6 +41,9 @@ fn errors(m: &CameraModel, t: &CameraModel) -> [f64; 11] {
     ]
 }
 
+/// One trial's 11 errors: (paper BA, eiv BA).
+type TrialErrors = ([f64; 11], [f64; 11]);
+
 fn main() {
     let trials: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(100);
     let start = std::time::Instant::now();
@@ -75,7 +78,7 @@ fn main() {
     );
     println!("| error | paper BA mean | paper BA p95 | eiv BA mean | eiv BA p95 |\n|---|---|---|---|---|");
     for (k, name) in names.iter().enumerate() {
-        let stats = |pick: &dyn Fn(&([f64; 11], [f64; 11])) -> f64| {
+        let stats = |pick: &dyn Fn(&TrialErrors) -> f64| {
             let mut v: Vec<f64> = rows.iter().map(pick).collect();
             v.sort_by(f64::total_cmp);
             let mean = v.iter().sum::<f64>() / v.len() as f64;

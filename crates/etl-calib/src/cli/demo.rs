@@ -85,7 +85,7 @@ pub fn validate(result: &CalibrationResult, truth: &CameraModel, seed: u64, imag
     let m = result.calibration.model();
     let (ex, ey) = curve_errors(&m, truth, result.calibration.e_com_range_ma);
     let pp = (m.principal_point[0] - truth.principal_point[0]).hypot(m.principal_point[1] - truth.principal_point[1]);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0f_9a11);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5e_ed0f_9a11);
     let noise = crate::simulate::NoiseModel::PAPER;
     let mut pnp = vec![];
     for (k, e) in VALIDATION_E_MA.into_iter().enumerate() {
@@ -113,14 +113,12 @@ pub fn validate(result: &CalibrationResult, truth: &CameraModel, seed: u64, imag
     })
 }
 
+/// (board X, Y in mm; detected pixel) of each corner of one view.
+type BoardPixelPairs = Vec<([f64; 2], [f64; 2])>;
+
 /// The board at stage positions `z_mm` and `z_mm + 2` at current `e_ma`, rendered and
 /// detected: (board X, Y; detected pixel) of the block of corners visible in both.
-fn rendered_move(
-    truth: &CameraModel,
-    e_ma: f64,
-    z_mm: f64,
-    seed: u64,
-) -> Result<(Vec<([f64; 2], [f64; 2])>, Vec<([f64; 2], [f64; 2])>)> {
+fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result<(BoardPixelPairs, BoardPixelPairs)> {
     use crate::render::{render, Optics, RenderOptions, Scene};
     use crate::simulate::images::{visible_block, ImageOptions};
     let (inner_corners, square_mm) = crate::simulate::PAPER_BOARD;

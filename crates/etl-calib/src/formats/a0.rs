@@ -41,7 +41,7 @@ impl A0File {
     /// Reads and checks a file (positive focal lengths, finite numbers).
     pub fn load(path: &Path) -> Result<Self> {
         let r: A0File = read_json(path, FORMAT)?;
-        if ![r.kf0x, r.kf0y, r.u0, r.v0].iter().all(|x| x.is_finite()) || !(r.kf0x > 0.0 && r.kf0y > 0.0) {
+        if !([r.kf0x, r.kf0y, r.u0, r.v0].iter().all(|x| x.is_finite()) && r.kf0x > 0.0 && r.kf0y > 0.0) {
             return Err(Error::Parse {
                 path: path.to_owned(),
                 message: "kf0x, kf0y must be positive and u0, v0 finite".into(),

@@ -225,7 +225,10 @@ impl CornerDetector for ImageDetector {
     }
 }
 
-fn find_corners(img: &image::GrayImage, inner: [usize; 2]) -> std::result::Result<Vec<([usize; 2], [f64; 2])>, String> {
+/// ((column, row) of the inner corner; pixel) of each corner found.
+type GridCorners = Vec<([usize; 2], [f64; 2])>;
+
+fn find_corners(img: &image::GrayImage, inner: [usize; 2]) -> std::result::Result<GridCorners, String> {
     let pattern = crate::detect::Pattern::new(inner[0], inner[1]).map_err(|e| e.to_string())?;
     let det = crate::detect::detect_corners(img, pattern).map_err(|e| match e {
         Error::BoardNotFound(m) => m,

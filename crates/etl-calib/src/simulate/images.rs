@@ -202,7 +202,6 @@ pub fn render_rig(sim: &Simulation, dir: &Path, options: &ImageOptions, seed: u6
                 photometry: options.photometry,
                 bit_depth: BitDepth::Eight,
                 seed: job.seed,
-                ..RenderOptions::default()
             };
             let r = render(&job.scene, &opts)?.image.save_png(&job.path);
             bar.inc(1);

@@ -76,10 +76,8 @@ pub fn scan_reply(buf: &[u8], expected: &[u8]) -> Scan {
             continue;
         }
         match Reply::decode(rest) {
-            Ok((reply, n)) => {
-                if rest.starts_with(expected) || matches!(reply, Reply::Error(_) | Reply::Nack) {
-                    return Scan::Found { reply, start, end: start + n };
-                }
+            Ok((reply, n)) if rest.starts_with(expected) || matches!(reply, Reply::Error(_) | Reply::Nack) => {
+                return Scan::Found { reply, start, end: start + n };
             }
             Err(DecodeError::Crc { len }) if rest.starts_with(expected) && corrupted.is_none() => {
                 corrupted = Some(start + len);

@@ -514,7 +514,7 @@ fn process(shared: &Mutex<Shared>, buf: &mut Vec<u8>, out: &mut File) {
                         Some(Reply::Error(id))
                     } else {
                         s.sync();
-                        execute(&mut *s, cmd, buf)
+                        execute(&mut s, cmd, buf)
                     }
                 }
             }
