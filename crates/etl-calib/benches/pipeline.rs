@@ -12,9 +12,8 @@ use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let sim = paper_rig(&NoiseModel::PAPER, 1);
-    let dir = std::env::temp_dir().join(format!("etlcal-bench-pipeline-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let (obs_path, cal_path) = (dir.join("observations.json"), dir.join("calibration.json"));
+    let dir = tempfile::tempdir().unwrap();
+    let (obs_path, cal_path) = (dir.path().join("observations.json"), dir.path().join("calibration.json"));
     sim.observations.save(&obs_path).unwrap();
     for (name, estimator) in [("paper", Estimator::Paper), ("eiv", Estimator::EIV_PAPER)] {
         let options = CalibrateOptions { estimator, ..CalibrateOptions::default() };
@@ -26,7 +25,6 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 criterion_group! {

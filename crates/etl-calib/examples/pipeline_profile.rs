@@ -22,8 +22,8 @@ fn main() {
     };
     let runs: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(20);
     let sim = paper_rig(&NoiseModel::PAPER, 1);
-    let dir = tempfile_dir();
-    let (obs_path, cal_path) = (dir.join("observations.json"), dir.join("calibration.json"));
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (obs_path, cal_path) = (dir.path().join("observations.json"), dir.path().join("calibration.json"));
     sim.observations.save(&obs_path).expect("write observations");
     let options = CalibrateOptions { estimator, ..CalibrateOptions::default() };
     let start = Instant::now();
@@ -34,11 +34,4 @@ fn main() {
     }
     let per_run_ms = start.elapsed().as_secs_f64() * 1e3 / runs.max(1) as f64;
     println!("{per_run_ms:.3} ms per run ({runs} runs)");
-    std::fs::remove_dir_all(&dir).ok();
-}
-
-fn tempfile_dir() -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("etlcal-pipeline-profile-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
 }
