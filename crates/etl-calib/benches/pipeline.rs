@@ -3,11 +3,11 @@
 //! write `calibration.json` atomically; with errors-in-variables (the default estimator)
 //! and with the paper's Eq. 24.
 use criterion::{criterion_group, criterion_main, Criterion};
-use etl_calib::formats::observations::Observations;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
-use etl_calib::simulate::{paper_rig, NoiseModel};
 use etl_core::calib::Estimator;
 use etl_core::thermal::ThermalCalibration;
+use etl_formats::observations::Observations;
+use etl_sim::simulate::{paper_rig, NoiseModel};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

@@ -4,11 +4,11 @@
 //! (default 20). Prints the mean time per run.
 use std::time::Instant;
 
-use etl_calib::formats::observations::Observations;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
-use etl_calib::simulate::{paper_rig, NoiseModel};
 use etl_core::calib::Estimator;
 use etl_core::thermal::ThermalCalibration;
+use etl_formats::observations::Observations;
+use etl_sim::simulate::{paper_rig, NoiseModel};
 
 fn main() {
     let mut args = std::env::args().skip(1);

@@ -1,19 +1,11 @@
-//! etl-calib: images, detection, Zhang's method, the calibration pipeline, studies,
-//! reports and the `etlcal` command line.
+//! etl-calib: calibration. Zhang's method for the lens-off (monofocal) intrinsics
+//! ([`zhang`]), the pipeline from a dataset or observations to a calibration file
+//! ([`pipeline`]), the per-setting baseline of the paper's section 5.2.3 ([`baseline`]) and
+//! the temperature-calibration procedure ([`thermal_calibration`]).
 
 pub mod baseline;
-pub mod cli;
-pub mod detect;
-pub mod error;
-pub mod formats;
 pub mod pipeline;
-pub mod progress;
-pub mod render;
-pub mod report;
-pub mod sharpness;
-pub mod simulate;
-pub mod study;
 pub mod thermal_calibration;
 pub mod zhang;
 
-pub use error::{Error, Result};
+pub use etl_formats::{Error, Result};

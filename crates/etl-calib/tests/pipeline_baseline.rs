@@ -3,10 +3,10 @@
 
 use etl_calib::baseline::per_setting;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
-use etl_calib::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig};
 use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalCalibration;
+use etl_sim::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig};
 
 fn rel_err(m: &CameraModel, e: f64) -> f64 {
     let t = CameraModel::paper_rig();

@@ -2,9 +2,9 @@
 //! 11 x 8 board with 4 mm squares, tilted up to ~25 degrees, at E = 0).
 
 use etl_calib::pipeline::a0_from_offstate;
-use etl_calib::simulate::{paper_rig, NoiseModel};
 use etl_calib::zhang::{zhang, PlanarView};
 use etl_core::model::CameraModel;
+use etl_sim::simulate::{paper_rig, NoiseModel};
 
 #[test]
 fn noise_free_lens_off_views_give_the_exact_intrinsics() {
@@ -91,8 +91,8 @@ fn real_image_set_agrees_with_opencv() {
         .collect();
     images.sort();
     assert_eq!(images.len(), 25);
-    let board = etl_calib::formats::dataset::Board { inner_corners: [9, 6], square_mm: 1.0 };
-    let (views, size) = etl_calib::cli::zhang::detect_views(&images, &board, false).unwrap();
+    let board = etl_formats::dataset::Board { inner_corners: [9, 6], square_mm: 1.0 };
+    let (views, size) = etl_calib::zhang::detect_views(&images, &board, &etl_core::progress::NoProgress).unwrap();
     assert_eq!((views.len(), size), (25, [640, 512]));
     let z = zhang(&views, size).unwrap();
     // OpenCV end to end, and OpenCV on etlcal's corners.

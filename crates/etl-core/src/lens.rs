@@ -4,8 +4,41 @@
 //!
 //! Implemented by `etl_hw::client::LensClient` (a real Optotune Lens Driver 4) and by
 //! `etl_hw::virtual_lens::VirtualLens` (the simulated device). The error type is
-//! associated, so that a driver keeps its own rich errors (timeouts, CRC, unplugged port)
-//! while generic code only needs to display them.
+//! associated, so that a driver keeps its own rich errors (timeouts, CRC, unplugged port);
+//! its [`LensError::kind`] tells generic code (the `hold` loop, the temperature procedure,
+//! the Python mapping) what happened without downcasting, as embedded-hal's
+//! `Error::kind()` does.
+
+/// What kind of failure a lens call met.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum LensErrorKind {
+    /// The driver did not answer within the timeout.
+    Timeout,
+    /// The driver answered with an error: it refused the command (or has no such sensor).
+    Refused,
+    /// The link is gone: the port cannot be opened or its I/O failed (unplugged device).
+    LinkLost,
+    /// The driver's reply could not be understood (CRC failure, NACK, malformed reply).
+    Protocol,
+    /// The caller's value was refused before anything was sent (e.g. a NaN current).
+    InvalidInput,
+    /// Any other failure (e.g. of a simulated device).
+    Other,
+}
+
+/// The error of a [`Lens`]: displayable, and of a [`LensErrorKind`].
+pub trait LensError: core::fmt::Debug + core::fmt::Display {
+    /// What kind of failure this is.
+    fn kind(&self) -> LensErrorKind;
+}
+
+/// The core's own errors reach a lens only as refused input (a NaN or out-of-range value).
+impl LensError for crate::Error {
+    fn kind(&self) -> LensErrorKind {
+        LensErrorKind::InvalidInput
+    }
+}
 
 /// A tunable lens with its driver.
 ///
@@ -33,7 +66,7 @@
 /// ```
 pub trait Lens {
     /// The driver's error type.
-    type Error: core::fmt::Debug + core::fmt::Display;
+    type Error: LensError;
 
     /// Commands the driver current E_in, mA; returns the current actually commanded
     /// (clamped to the driver's limits and quantised). Errors on NaN/infinite input and on

@@ -34,6 +34,7 @@ pub mod lm;
 pub mod model;
 pub mod physics;
 pub mod pnp;
+pub mod progress;
 pub mod thermal;
 
 pub use error::{Error, Result};

@@ -70,3 +70,17 @@ pub enum HwError {
     #[error("virtual lens: {0}")]
     Virtual(String),
 }
+
+impl etl_core::lens::LensError for HwError {
+    fn kind(&self) -> etl_core::lens::LensErrorKind {
+        use etl_core::lens::LensErrorKind as K;
+        match self {
+            HwError::Open { .. } | HwError::Io { .. } => K::LinkLost,
+            HwError::Timeout { .. } => K::Timeout,
+            HwError::Crc { .. } | HwError::Nack { .. } | HwError::Protocol(_) => K::Protocol,
+            HwError::Device { .. } | HwError::NoSensor { .. } => K::Refused,
+            HwError::Core(_) => K::InvalidInput,
+            HwError::Virtual(_) => K::Other,
+        }
+    }
+}

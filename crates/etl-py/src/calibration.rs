@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use etl_calib::formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef, FORMAT};
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface as CoreSurface;
+use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef, FORMAT};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
@@ -21,7 +21,7 @@ const DETACH_POINTS: usize = 4096;
 
 /// Parses and checks `etlcal.calibration/1` text as `CalFile::load` checks a file.
 fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
-    let f: CalFile = etl_calib::formats::parse_json(text, path, FORMAT).py()?;
+    let f: CalFile = etl_formats::parse_json(text, path, FORMAT).py()?;
     check_file(&f, path)?;
     Ok(f)
 }

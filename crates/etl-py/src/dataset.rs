@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use etl_calib::formats::dataset::{Board, Dataset as DatasetFile, DatasetView, OffstateImage, SettingImage, FORMAT};
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
+use etl_formats::dataset::{Board, Dataset as DatasetFile, DatasetView, OffstateImage, SettingImage, FORMAT};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
@@ -224,7 +224,7 @@ impl Dataset {
     #[pyo3(signature = (text, base_dir=None))]
     fn from_json(text: &str, base_dir: Option<PathBuf>) -> PyResult<Self> {
         let p = Path::new("<json>");
-        let f: DatasetFile = etl_calib::formats::parse_json(text, p, FORMAT).py()?;
+        let f: DatasetFile = etl_formats::parse_json(text, p, FORMAT).py()?;
         f.validate().py()?;
         Ok(Dataset { file: f, path: base_dir.map(|d| d.join("dataset.json")) })
     }
@@ -264,7 +264,9 @@ impl Dataset {
     fn detect<'py>(&self, py: Python<'py>) -> PyResult<(Observations, Bound<'py, PyDict>)> {
         let base = self.path.clone().unwrap_or_else(|| PathBuf::from("dataset.json"));
         let file = self.file.clone();
-        let (obs, summary) = py.detach(|| observations_from_dataset(&file, &base, &default_detector(), false)).py()?;
+        let (obs, summary) = py
+            .detach(|| observations_from_dataset(&file, &base, &default_detector(), &etl_core::progress::NoProgress))
+            .py()?;
         let d = PyDict::new(py);
         d.set_item("images", summary.images)?;
         d.set_item("detected", summary.detected)?;

@@ -16,6 +16,7 @@
 //! The classes are made with `type(name, bases, namespace)` because two of them have two
 //! bases (pyo3's `create_exception!` takes one).
 
+use etl_core::lens::LensErrorKind;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
@@ -150,12 +151,25 @@ pub fn core_err(e: etl_core::Error) -> PyErr {
     raise(core_kind(&e), e.to_string())
 }
 
-/// An etl-calib error as a Python exception (same message).
-pub fn calib_err(e: etl_calib::Error) -> PyErr {
-    let kind = match &e {
-        etl_calib::Error::Io { .. } => Kind::File,
-        etl_calib::Error::BoardNotFound(_) => Kind::BoardNotFound,
-        etl_calib::Error::Core(c) => core_kind(c),
+/// The class of a lens error, from its kind: one mapping for every lens failure, whether
+/// it comes straight from a `Lens` or through a library procedure.
+pub fn lens_kind(kind: LensErrorKind) -> Kind {
+    match kind {
+        LensErrorKind::Timeout => Kind::DeviceTimeout,
+        LensErrorKind::InvalidInput => Kind::Input,
+        _ => Kind::Device,
+    }
+}
+
+/// An error of the std library crates as a Python exception (same message), the class
+/// from its kind.
+pub fn calib_err(e: etl_formats::Error) -> PyErr {
+    use etl_formats::ErrorKind as K;
+    let kind = match (&e, e.kind()) {
+        (etl_formats::Error::Core(c), _) => core_kind(c),
+        (etl_formats::Error::Lens { kind, .. }, _) => lens_kind(*kind),
+        (_, K::Io) => Kind::File,
+        (_, K::BoardNotFound) => Kind::BoardNotFound,
         _ => Kind::Input,
     };
     raise(kind, e.to_string())
@@ -200,7 +214,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// `kind` names the variant: `core:NotFinite`, `core:OutOfRange`, `core:TooFew`,
 /// `core:Degenerate`, `core:BehindCamera`, `core:NotConverged`, `core:BufferTooSmall`,
 /// `core:InvalidArgument`, `calib:Io`, `calib:Parse`, `calib:Format`, `calib:Image`,
-/// `calib:BoardNotFound`, `calib:InvalidInput`, `calib:Core`.
+/// `calib:BoardNotFound`, `calib:InvalidInput`, `calib:Core`, `calib:LensTimeout`.
 /// Returns the message the Rust side formats, after raising it.
 #[pyfunction]
 pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
@@ -227,6 +241,10 @@ pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
         "calib:BoardNotFound" => calib(etl_calib::Error::BoardNotFound("img.png".into())),
         "calib:InvalidInput" => calib(etl_calib::Error::InvalidInput("negative".into())),
         "calib:Core" => calib(etl_calib::Error::Core(C::NotConverged { what: "ba", iterations: 3 })),
+        "calib:LensTimeout" => calib(etl_calib::Error::Lens {
+            kind: LensErrorKind::Timeout,
+            message: "no reply to GetTemperature within 500ms".into(),
+        }),
         _ => Err(input_error(format!("unknown error kind {kind:?}"))),
     }
 }

@@ -4,12 +4,12 @@
 //! a C-contiguous uint8/uint16 array is read in place (detection and sharpness; CPBD of a
 //! 16-bit image converts to 8 bits), anything else is copied once.
 
-use etl_calib::detect::{detect_view, GrayView, Pattern};
-use etl_calib::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};
-use etl_calib::sharpness::cpbd::cpbd;
-use etl_calib::sharpness::{sharpness_u16, Gray16Image, Metric};
 use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView, Pixel};
 use etl_core::model::CameraModel;
+use etl_image::detect::{detect_view, GrayView, Pattern};
+use etl_image::sharpness::cpbd::cpbd;
+use etl_image::sharpness::{sharpness_u16, Gray16Image, Metric};
+use etl_sim::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -194,8 +194,8 @@ pub fn render<'py>(
         b => return Err(input_error(format!("bit_depth must be 8 or 16, got {b}"))),
     };
     let truth = CameraModel::paper_rig();
-    let z = z_mm.unwrap_or_else(|| etl_calib::simulate::focused_z_mm(e_com_ma));
-    let board = etl_calib::formats::dataset::Board { inner_corners: [pattern.cols, pattern.rows], square_mm };
+    let z = z_mm.unwrap_or_else(|| etl_sim::simulate::focused_z_mm(e_com_ma));
+    let board = etl_formats::dataset::Board { inner_corners: [pattern.cols, pattern.rows], square_mm };
     board.validate().py()?;
     let scene = Scene::new(truth, e_com_ma, board, z, CameraModel::PAPER_IMAGE_SIZE);
     let focus = if aperture_mm > 0.0 { Optics::paper_focus(&truth, e_com_ma, aperture_mm) } else { Optics::sharp() };

@@ -13,16 +13,13 @@ use etl_hw::HwError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::{raise, Kind};
+use etl_core::lens::LensError as _;
+
+use crate::errors::{lens_kind, raise, Kind};
 use crate::thermal::ThermalCalibration;
 
 fn hw_err(e: HwError) -> PyErr {
-    let kind = match &e {
-        HwError::Timeout { .. } => Kind::DeviceTimeout,
-        HwError::Core(_) => Kind::Input,
-        _ => Kind::Device,
-    };
-    raise(kind, e.to_string())
+    raise(lens_kind(e.kind()), e.to_string())
 }
 
 /// A lens on an Optotune Lens Driver 4 (USB serial port), or on a `VirtualLens`'s port.
@@ -56,9 +53,8 @@ impl Lens {
 /// from what failed.
 fn hold_err(e: HoldError<HwError>) -> PyErr {
     let kind = match &e {
-        HoldError::Lens(HwError::Timeout { .. }) => Kind::DeviceTimeout,
-        HoldError::Lens(HwError::Core(_)) | HoldError::Core(_) => Kind::Input,
-        HoldError::Lens(_) => Kind::Device,
+        HoldError::Lens(l) => lens_kind(l.kind()),
+        HoldError::Core(_) => Kind::Input,
     };
     raise(kind, e.to_string())
 }

@@ -3,9 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use etl_calib::formats::a0::{A0File, FORMAT as A0_FORMAT};
-use etl_calib::formats::observations::{Observations as ObsFile, OffstateView, PointObs, ViewObs, FORMAT};
 use etl_core::calib::A0 as CoreA0;
+use etl_formats::a0::{A0File, FORMAT as A0_FORMAT};
+use etl_formats::observations::{Observations as ObsFile, OffstateView, PointObs, ViewObs, FORMAT};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
@@ -144,7 +144,7 @@ impl Observations {
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
         let p = Path::new("<json>");
-        let f: ObsFile = etl_calib::formats::parse_json(text, p, FORMAT).py()?;
+        let f: ObsFile = etl_formats::parse_json(text, p, FORMAT).py()?;
         f.validate().map_err(|e| etl_calib::Error::Parse { path: p.to_owned(), message: e.to_string() }).py()?;
         Ok(Observations { file: f })
     }
@@ -367,7 +367,7 @@ impl A0 {
     ///     text: the JSON text.
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
-        let f: A0File = etl_calib::formats::parse_json(text, Path::new("<json>"), A0_FORMAT).py()?;
+        let f: A0File = etl_formats::parse_json(text, Path::new("<json>"), A0_FORMAT).py()?;
         A0::new(f.kf0x, f.kf0y, f.u0, f.v0)
     }
 

@@ -156,6 +156,6 @@ pub fn cramer_rao_std<'py>(
         })
         .py()?;
     let sd: [f64; 25] = core::array::from_fn(|i| if cov[i][i] >= 0.0 { cov[i][i].sqrt() } else { f64::NAN });
-    let std = etl_calib::formats::calibration::ModelStd::from_params(&sd);
+    let std = etl_formats::calibration::ModelStd::from_params(&sd);
     crate::calibration::std_dict(py, &std)
 }

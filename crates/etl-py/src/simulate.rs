@@ -1,7 +1,7 @@
 //! `simulate_paper_rig`: the paper rig (section 5.1.2) as synthetic observations with the
 //! paper's noise model (Python: `etlcal.simulate.paper_rig`).
 
-use etl_calib::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig, Simulation as CoreSimulation};
+use etl_sim::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig, Simulation as CoreSimulation};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -38,7 +38,7 @@ impl Simulation {
     fn truth(&self) -> Calibration {
         let [w, h] = self.inner.observations.image_size;
         let mut c = Calibration::from_model(self.inner.truth, [w, h], [80.0, 225.0]);
-        c.file.thermal = Some(etl_calib::formats::calibration::ThermalRef {
+        c.file.thermal = Some(etl_formats::calibration::ThermalRef {
             coefficients: etl_core::thermal::ThermalSurface::PAPER.coefficients,
         });
         c

@@ -2,8 +2,7 @@
 
 use std::path::PathBuf;
 
-use etl_calib::cli::study::{run_one, Name};
-use etl_calib::study::common::StudyOptions;
+use etl_studies::{Study, StudyOptions};
 use pyo3::prelude::*;
 
 use crate::errors::{input_error, CoreResultExt};
@@ -33,23 +32,14 @@ pub fn study<'py>(
     seed: u64,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let which = match name {
-        "fig5" => Name::Fig5,
-        "fig6" => Name::Fig6,
-        "subsets" => Name::Subsets,
-        "baseline" => Name::Baseline,
-        "crlb" => Name::Crlb,
-        other => {
-            return Err(input_error(format!("study must be one of fig5, fig6, subsets, baseline, crlb; got {other:?}")))
-        }
-    };
+    let which = Study::from_name(name).py()?;
     if let Some(dir) = &out {
         if !dir.is_dir() {
             return Err(input_error(format!("{}: output directory does not exist", dir.display())));
         }
     }
-    let opts = StudyOptions { trials, seed, progress: false };
-    let result = py.detach(|| run_one(which, &opts)).py()?;
+    let opts = StudyOptions { trials, seed, ..Default::default() };
+    let result = py.detach(|| which.run(&opts)).py()?;
     if let Some(dir) = &out {
         result.write(dir).py()?;
     }

@@ -6,8 +6,8 @@
 
 use std::path::PathBuf;
 
-use etl_calib::formats::thermal::ThermalFile;
 use etl_core::thermal::{ThermalCalibration as CoreThermalCal, ThermalFit, ThermalSurface as CoreSurface};
+use etl_formats::thermal::ThermalFile;
 use pyo3::prelude::*;
 use pyo3::types::{PyTuple, PyType};
 
@@ -243,8 +243,7 @@ impl ThermalCalibration {
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
         let p = std::path::Path::new("<json>");
-        let f: ThermalFile =
-            etl_calib::formats::parse_json(text, p, etl_calib::formats::thermal::THERMAL_FORMAT).py()?;
+        let f: ThermalFile = etl_formats::parse_json(text, p, etl_formats::thermal::THERMAL_FORMAT).py()?;
         f.validate(p).py()?;
         Ok(ThermalCalibration { inner: f.calibration(), rms_ma: f.rms_ma })
     }

@@ -99,7 +99,7 @@ pub fn thermal_calibration<'py>(
     use etl_calib::thermal_calibration::{run_procedure, ProcedureOptions};
     let mut options = ProcedureOptions {
         search_half_width_ma: search_ma,
-        metric: metric.parse::<etl_calib::sharpness::Metric>().py()?,
+        metric: metric.parse::<etl_image::sharpness::Metric>().py()?,
         ..ProcedureOptions::default()
     };
     if let Some(g) = e_in_grid_ma {
@@ -112,7 +112,7 @@ pub fn thermal_calibration<'py>(
     // The camera and climate are Python callables: the procedure runs with the GIL held.
     let mut camera = PyCamera { capture, place_board, raised: None };
     let mut climate = PyClimate { set_temperature, raised: None };
-    let result = run_procedure(client, &mut camera, &mut climate, &options, false);
+    let result = run_procedure(client, &mut camera, &mut climate, &options, &etl_core::progress::NoProgress);
     if let Some(e) = camera.raised.take().or(climate.raised.take()) {
         return Err(e);
     }

@@ -49,6 +49,8 @@ RUST_ERRORS = [
     ("calib:BoardNotFound", "BoardNotFoundError", "board not found: img.png"),
     ("calib:InvalidInput", "InputError", "invalid input: negative"),
     ("calib:Core", "NotConvergedError", "ba did not converge in 3 iterations"),
+    # A lens timeout inside a library procedure keeps its class (issue 14).
+    ("calib:LensTimeout", "DeviceTimeoutError", "lens: no reply to GetTemperature within 500ms"),
 ]
 
 

@@ -14,10 +14,10 @@
 use etl_core::lm::svd::sym_pinv;
 use etl_core::thermal::ThermalCalibration;
 
-use crate::error::{Error, Result};
-use crate::formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
-use crate::formats::observations::{Observations, SETTING_TOLERANCE_MA};
 use crate::zhang::{zhang, PlanarView, ZhangResult};
+use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
+use etl_formats::observations::{Observations, SETTING_TOLERANCE_MA};
+use etl_formats::{Error, Result};
 
 /// One setting's Zhang calibration.
 #[derive(Debug, Clone)]

@@ -6,11 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
+use etl_core::progress::Progress;
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
-use crate::formats::dataset::{Board, Dataset};
-use crate::formats::observations::{Observations, OffstateView, PointObs, ViewObs};
+use etl_formats::dataset::{Board, Dataset};
+use etl_formats::observations::{Observations, OffstateView, PointObs, ViewObs};
+use etl_formats::{Error, Result};
 
 /// Corners found in one image.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,7 +73,7 @@ pub fn observations_from_dataset(
     dataset: &Dataset,
     dataset_path: &Path,
     detector: &dyn CornerDetector,
-    progress: bool,
+    progress: &dyn Progress,
 ) -> Result<(Observations, DetectionSummary)> {
     dataset.validate()?;
     // (kind, image, board asked of the detector, index of its corner (0, 0) on the board).
@@ -98,16 +99,16 @@ pub fn observations_from_dataset(
     for (_, path, _, _) in &jobs {
         std::fs::metadata(path).map_err(|source| Error::Io { path: path.clone(), source })?;
     }
-    let bar = crate::progress::bar(jobs.len(), "detecting", progress);
+    progress.start(jobs.len(), "detecting");
     let results: Vec<Result<Detection>> = jobs
         .par_iter()
         .map(|(_, path, board, _)| {
             let r = detector.detect(path, board.inner_corners);
-            bar.inc(1);
+            progress.advance(1);
             r
         })
         .collect();
-    bar.finish_and_clear();
+    progress.finish();
 
     let mut obs = Observations::new(dataset.image_size);
     let mut summary = DetectionSummary { images: jobs.len(), ..DetectionSummary::default() };
@@ -229,8 +230,8 @@ impl CornerDetector for ImageDetector {
 type GridCorners = Vec<([usize; 2], [f64; 2])>;
 
 fn find_corners(img: &image::GrayImage, inner: [usize; 2]) -> std::result::Result<GridCorners, String> {
-    let pattern = crate::detect::Pattern::new(inner[0], inner[1]).map_err(|e| e.to_string())?;
-    let det = crate::detect::detect_corners(img, pattern).map_err(|e| match e {
+    let pattern = etl_image::detect::Pattern::new(inner[0], inner[1]).map_err(|e| e.to_string())?;
+    let det = etl_image::detect::detect_corners(img, pattern).map_err(|e| match e {
         Error::BoardNotFound(m) => m,
         other => other.to_string(),
     })?;

@@ -19,9 +19,9 @@ use etl_core::lm::BlockScratch;
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalCalibration;
 
-use crate::error::Result;
-use crate::formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
-use crate::formats::observations::Observations;
+use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
+use etl_formats::observations::Observations;
+use etl_formats::Result;
 
 /// Options of [`calibrate`]. The default is errors-in-variables with the paper's noise
 /// levels ([`Estimator::EIV_PAPER`]), no robust loss, A0 free; [`Estimator::Paper`] is the
@@ -60,7 +60,7 @@ pub struct CalibrationResult {
 /// Errors: no lens-off views (pass an A0 file instead), or those of [`crate::zhang::zhang`].
 pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult> {
     if obs.offstate_views.is_empty() {
-        return Err(crate::error::Error::InvalidInput(
+        return Err(etl_formats::Error::InvalidInput(
             "no lens-off views (offstate_views) in the observations: pass --a0 A0.json".into(),
         ));
     }
@@ -81,7 +81,7 @@ pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult>
 ///
 /// ```
 /// use etl_calib::pipeline::{calibrate, CalibrateOptions};
-/// use etl_calib::simulate::{paper_rig, NoiseModel};
+/// use etl_sim::simulate::{paper_rig, NoiseModel};
 /// use etl_core::calib::Estimator;
 /// use etl_core::thermal::ThermalCalibration;
 ///
@@ -107,7 +107,7 @@ pub fn calibrate(
 ) -> Result<CalibrationResult> {
     obs.validate()?;
     if obs.views.is_empty() {
-        return Err(crate::error::Error::InvalidInput(
+        return Err(etl_formats::Error::InvalidInput(
             "no ETL views (views) in the observations: the proposed method needs the board on the stage at >= 3 currents"
                 .into(),
         ));

@@ -7,7 +7,7 @@ use etl_core::calib::View;
 use etl_core::lm::{solve, Options, Problem, RowSink};
 use etl_core::model::CameraModel;
 
-use crate::error::Result;
+use etl_formats::Result;
 
 struct OneView<'a> {
     model: CameraModel,

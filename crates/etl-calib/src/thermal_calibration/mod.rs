@@ -24,16 +24,15 @@
 //! - The temperature recorded is the mean of the sensor readings before and after the
 //!   refocus.
 
-pub mod virtual_rig;
-
 use etl_core::focus::{autofocus, AutofocusOptions};
 use etl_core::lens::Lens;
+use etl_core::progress::Progress;
 use etl_core::thermal::{ThermalCalibration, ThermalFit};
 use image::GrayImage;
 
-use crate::error::{Error, Result};
-use crate::formats::thermal::ThermalSample;
-use crate::sharpness::{sharpness, Metric};
+use etl_formats::thermal::ThermalSample;
+use etl_formats::{Error, Result};
+use etl_image::sharpness::{sharpness, Metric};
 
 /// A camera for the procedure.
 pub trait Camera {
@@ -128,7 +127,7 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
     camera: &mut C,
     climate: &mut K,
     options: &ProcedureOptions,
-    progress: bool,
+    progress: &dyn Progress,
 ) -> Result<ProcedureResult> {
     if options.e_in_grid_ma.is_empty() || options.temperatures_c.len() < 2 {
         return Err(Error::InvalidInput("the procedure needs at least one current and two temperatures".into()));
@@ -137,7 +136,7 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
         return Err(Error::InvalidInput("search half width and tolerance must be positive".into()));
     }
     let steps = options.e_in_grid_ma.len() * options.temperatures_c.len();
-    let bar = crate::progress::bar(steps, "thermal", progress);
+    progress.start(steps, "thermal");
     let mut samples = vec![];
     let mut frames = 0usize;
     for &e0 in &options.e_in_grid_ma {
@@ -195,10 +194,10 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
             let e_ref = *reference.get_or_insert(e_set);
             samples.push(ThermalSample { temperature_c, e_in_ma: e_set, e_t_ma: e_set - e_ref });
             last = e_set;
-            bar.inc(1);
+            progress.advance(1);
         }
     }
-    bar.finish_and_clear();
+    progress.finish();
     let (calibration, rms_ma) = fit_samples(&samples)?;
     Ok(ProcedureResult { samples, calibration, rms_ma, frames })
 }

@@ -1,3 +1,0 @@
-fn main() {
-    etl_calib::cli::main();
-}

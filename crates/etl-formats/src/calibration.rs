@@ -1,0 +1,171 @@
+//! `etlcal.calibration/1`: the result of a calibration (DESIGN.md).
+//!
+//! The model's 25 numbers under the names of [`etl_core::model::CameraModel`], `std` with
+//! one standard deviation of each, the calibrated current range, the RMS reprojection
+//! error, and what produced it (estimator, iterations, per-view residuals and, for the
+//! errors-in-variables estimator, each view's stage and current corrections).
+
+use std::path::Path;
+
+use etl_core::model::CameraModel;
+use etl_core::thermal::ThermalSurface;
+use serde::{Deserialize, Serialize};
+
+use super::{read_json, write_json};
+use crate::{Error, Result};
+
+/// The format tag.
+pub const FORMAT: &str = "etlcal.calibration/1";
+
+/// One standard deviation of every model number (same keys as the model).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelStd {
+    /// Of the Rodrigues vector, rad.
+    pub rotation_rodrigues: [f64; 3],
+    /// Of T, mm.
+    pub translation_mm: [f64; 3],
+    /// Of kf_x.
+    pub kf_x: [f64; 4],
+    /// Of kf_y.
+    pub kf_y: [f64; 4],
+    /// Of (u0, v0), px.
+    pub principal_point: [f64; 2],
+    /// Of a1..a9.
+    pub distortion_a: [f64; 9],
+}
+
+impl ModelStd {
+    /// From the 25 standard deviations in parameter order.
+    pub fn from_params(s: &[f64; 25]) -> Self {
+        let m = etl_core::calib::jacobian::from_params(s);
+        ModelStd {
+            rotation_rodrigues: m.rotation_rodrigues,
+            translation_mm: m.translation_mm,
+            kf_x: m.kf_x,
+            kf_y: m.kf_y,
+            principal_point: m.principal_point,
+            distortion_a: m.distortion_a,
+        }
+    }
+}
+
+/// The thermal surface a calibration was made with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalRef {
+    /// The 10 coefficients of E_T(T, E_in) (NOTES.md order).
+    pub coefficients: [f64; 10],
+}
+
+/// Per-view summary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewSummary {
+    /// E_com of the view, mA.
+    pub e_com_ma: f64,
+    /// Points used.
+    pub points: usize,
+    /// RMS reprojection error of the view, px.
+    pub rms_px: f64,
+    /// Estimated stage correction, mm (errors-in-variables; 0 otherwise).
+    pub dz_mm: f64,
+    /// Estimated current correction, mA (errors-in-variables; 0 otherwise).
+    pub de_ma: f64,
+    /// The view's own estimate of fx, px: fx refitted to this view alone with every other
+    /// number of the calibration held (0 when not computed).
+    #[serde(default)]
+    pub fx_px: f64,
+    /// The view's own estimate of fy, px (as `fx_px`).
+    #[serde(default)]
+    pub fy_px: f64,
+}
+
+/// The whole file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Calibration {
+    /// `"etlcal.calibration/1"`.
+    pub format: String,
+    /// Image width and height, px.
+    pub image_size: [u32; 2],
+    /// Rodrigues vector of R, rad.
+    pub rotation_rodrigues: [f64; 3],
+    /// T, mm.
+    pub translation_mm: [f64; 3],
+    /// kf0x..kf3x.
+    pub kf_x: [f64; 4],
+    /// kf0y..kf3y.
+    pub kf_y: [f64; 4],
+    /// (u0, v0), px.
+    pub principal_point: [f64; 2],
+    /// a1..a9.
+    pub distortion_a: [f64; 9],
+    /// The thermal surface (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thermal: Option<ThermalRef>,
+    /// The range of E_com the calibration saw, mA.
+    pub e_com_range_ma: [f64; 2],
+    /// RMS reprojection error, px (sqrt of the mean squared point distance).
+    pub rms_reprojection_px: f64,
+    /// One standard deviation of each number.
+    pub std: ModelStd,
+    /// `"paper"` or `"eiv"`.
+    #[serde(default)]
+    pub estimator: String,
+    /// Bundle-adjustment iterations.
+    #[serde(default)]
+    pub iterations: usize,
+    /// RMS reprojection error before bundle adjustment, px.
+    #[serde(default)]
+    pub initial_rms_px: f64,
+    /// Per-view summaries.
+    #[serde(default)]
+    pub views: Vec<ViewSummary>,
+}
+
+impl Calibration {
+    /// The camera model.
+    pub fn model(&self) -> CameraModel {
+        CameraModel {
+            rotation_rodrigues: self.rotation_rodrigues,
+            translation_mm: self.translation_mm,
+            kf_x: self.kf_x,
+            kf_y: self.kf_y,
+            principal_point: self.principal_point,
+            distortion_a: self.distortion_a,
+        }
+    }
+
+    /// The thermal surface (the paper's when the file has none).
+    pub fn thermal_surface(&self) -> ThermalSurface {
+        self.thermal.map_or(ThermalSurface::PAPER, |t| ThermalSurface { coefficients: t.coefficients })
+    }
+
+    /// Reads and checks a file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let c: Calibration = read_json(path, FORMAT)?;
+        c.model().validate().map_err(|e| Error::Parse { path: path.to_owned(), message: e.to_string() })?;
+        Ok(c)
+    }
+
+    /// Writes the file atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        write_json(path, self)
+    }
+
+    /// Refuses a current outside the calibrated range (by more than `margin_ma`): the
+    /// cubic fx(E) is not trustworthy there.
+    pub fn check_current(&self, e_com_ma: f64, margin_ma: f64) -> Result<()> {
+        let [lo, hi] = self.e_com_range_ma;
+        if !e_com_ma.is_finite() {
+            return Err(Error::InvalidInput("current is NaN or infinite".into()));
+        }
+        if e_com_ma < lo - margin_ma || e_com_ma > hi + margin_ma {
+            return Err(Error::InvalidInput(format!(
+                "E_com = {e_com_ma} mA is outside the calibrated range [{lo}, {hi}] mA (+- {margin_ma})"
+            )));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,268 @@
+//! `etlcal.dataset/1`: the images of a calibration and what was recorded with each
+//! (DESIGN.md): the observations' shape with an image per view instead of points.
+//!
+//! ```json
+//! {"format": "etlcal.dataset/1", "image_size": [1936, 1458],
+//!  "board": {"inner_corners": [14, 12], "square_mm": 1.5},
+//!  "views": [{"image": "views/view00.png", "e_in_ma": 80.0, "temperature_c": 27.0,
+//!             "z_w_mm": 75.0}],
+//!  "offstate_board": {"inner_corners": [11, 8], "square_mm": 4.0},
+//!  "offstate_views": [{"image": "offstate/off00.png"}],
+//!  "setting_views": [{"image": "settings/s150_00.png", "e_in_ma": 150.0, "temperature_c": 27.0}]}
+//! ```
+//!
+//! Image paths are relative to the dataset file (absolute paths are taken as they are).
+//! Inner corner (i, j) of the board, i along the `cols` direction, sits at
+//! (i * square_mm, j * square_mm) in the board frame; for an ETL view its world point is
+//! (i * square_mm, j * square_mm, z_w_mm) (the stage moves the board along Z_W).
+//! `e_com_ma` is optional as in the observations. `offstate_board` defaults to `board`.
+//! `setting_views` are the per-setting baseline's views (several per current, board in a
+//! free pose each).
+//!
+//! Extension (optional, per view of any kind): `"board"` overrides the dataset's board for
+//! that image and `"first_corner": [i0, j0]` says which inner corner of the physical board
+//! the image's corner (0, 0) is; corner (i, j) of the image then sits at
+//! ((i0 + i) square_mm, (j0 + j) square_mm). This is how views that see only part of a
+//! large board are recorded: the detector is asked for the part that is fully visible
+//! (a board found only in part is otherwise an error).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::{read_json, write_json};
+use crate::{Error, Result};
+
+/// The format tag.
+pub const FORMAT: &str = "etlcal.dataset/1";
+
+/// A checkerboard: its inner corners (columns, rows) and square size, mm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Board {
+    /// Inner corners along the columns and rows, `[cols, rows]`.
+    pub inner_corners: [usize; 2],
+    /// Side of a square, mm.
+    pub square_mm: f64,
+}
+
+impl Board {
+    /// Checks a board: at least 3 x 3 inner corners and a positive, finite square.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.square_mm.is_finite() && self.square_mm > 0.0) {
+            return Err(Error::InvalidInput(format!("square size must be positive, got {} mm", self.square_mm)));
+        }
+        if self.inner_corners[0] < 3 || self.inner_corners[1] < 3 {
+            return Err(Error::InvalidInput(format!(
+                "a board needs at least 3 x 3 inner corners, got {} x {}",
+                self.inner_corners[0], self.inner_corners[1]
+            )));
+        }
+        Ok(())
+    }
+
+    /// Board-frame (X, Y) of every inner corner, row by row (i fastest), mm.
+    pub fn corners_mm(&self) -> Vec<[f64; 2]> {
+        let [cols, rows] = self.inner_corners;
+        (0..rows).flat_map(|j| (0..cols).map(move |i| [i as f64 * self.square_mm, j as f64 * self.square_mm])).collect()
+    }
+}
+
+/// One ETL view: an image of the board on the stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetView {
+    /// The image, relative to the dataset file.
+    pub image: PathBuf,
+    /// Commanded lens current, mA.
+    pub e_in_ma: f64,
+    /// Lens temperature, degC.
+    pub temperature_c: f64,
+    /// Compensated current, mA (optional; used as is when present).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub e_com_ma: Option<f64>,
+    /// The stage position, mm.
+    pub z_w_mm: f64,
+    /// Board of this image when it differs from the dataset's (see the module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<Board>,
+    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_corner: Option<[usize; 2]>,
+}
+
+/// A lens-off view (E = 0) of the lens-off board.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OffstateImage {
+    /// The image, relative to the dataset file.
+    pub image: PathBuf,
+    /// Board of this image when it differs from the dataset's (see the module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<Board>,
+    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_corner: Option<[usize; 2]>,
+}
+
+/// A view for the per-setting baseline: the board in a free pose at a current.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingImage {
+    /// The image, relative to the dataset file.
+    pub image: PathBuf,
+    /// Commanded lens current, mA.
+    pub e_in_ma: f64,
+    /// Lens temperature, degC.
+    pub temperature_c: f64,
+    /// Compensated current, mA (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub e_com_ma: Option<f64>,
+    /// Board of this image when it differs from the dataset's (see the module docs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub board: Option<Board>,
+    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_corner: Option<[usize; 2]>,
+}
+
+/// The whole file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dataset {
+    /// `"etlcal.dataset/1"`.
+    pub format: String,
+    /// Image width and height, px (every image must have it).
+    pub image_size: [u32; 2],
+    /// The board of the ETL views (and of the setting views).
+    pub board: Board,
+    /// The ETL views.
+    #[serde(default)]
+    pub views: Vec<DatasetView>,
+    /// The board of the lens-off views (default: `board`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offstate_board: Option<Board>,
+    /// Lens-off views (optional).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub offstate_views: Vec<OffstateImage>,
+    /// Per-setting baseline views (optional).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub setting_views: Vec<SettingImage>,
+}
+
+impl Dataset {
+    /// An empty dataset.
+    pub fn new(image_size: [u32; 2], board: Board) -> Self {
+        Dataset {
+            format: FORMAT.into(),
+            image_size,
+            board,
+            views: vec![],
+            offstate_board: None,
+            offstate_views: vec![],
+            setting_views: vec![],
+        }
+    }
+
+    /// Reads and checks a file (boards, finite numbers, at least one view).
+    pub fn load(path: &Path) -> Result<Self> {
+        let d: Dataset = read_json(path, FORMAT)?;
+        d.validate().map_err(|e| Error::Parse { path: path.to_owned(), message: e.to_string() })?;
+        Ok(d)
+    }
+
+    /// Writes the file atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        write_json(path, self)
+    }
+
+    /// The lens-off board.
+    pub fn offstate_board(&self) -> Board {
+        self.offstate_board.unwrap_or(self.board)
+    }
+
+    /// Checks boards, numbers and that there is something to calibrate.
+    pub fn validate(&self) -> Result<()> {
+        self.board.validate()?;
+        if let Some(b) = self.offstate_board {
+            b.validate().map_err(|e| Error::InvalidInput(format!("offstate_board: {e}")))?;
+        }
+        if self.image_size[0] == 0 || self.image_size[1] == 0 {
+            return Err(Error::InvalidInput("image_size must be positive".into()));
+        }
+        if self.views.is_empty() && self.setting_views.is_empty() {
+            return Err(Error::InvalidInput("the dataset holds no views".into()));
+        }
+        for (i, v) in self.views.iter().enumerate() {
+            if ![v.e_in_ma, v.temperature_c, v.z_w_mm].iter().all(|x| x.is_finite())
+                || !v.e_com_ma.is_none_or(f64::is_finite)
+            {
+                return Err(Error::InvalidInput(format!("view {i}: current, temperature or z_w_mm is not finite")));
+            }
+        }
+        for (i, v) in self.setting_views.iter().enumerate() {
+            if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
+                return Err(Error::InvalidInput(format!("setting view {i}: current or temperature is not finite")));
+            }
+        }
+        let overrides = self
+            .views
+            .iter()
+            .map(|v| ("view", &v.image, v.board))
+            .chain(self.offstate_views.iter().map(|v| ("offstate view", &v.image, v.board)))
+            .chain(self.setting_views.iter().map(|v| ("setting view", &v.image, v.board)));
+        for (kind, image, board) in overrides {
+            if let Some(b) = board {
+                b.validate().map_err(|e| Error::InvalidInput(format!("{kind} {}: board: {e}", image.display())))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The board and first corner of the ETL view `i` (its own, or the dataset's board and
+    /// [0, 0]).
+    pub fn view_board(&self, i: usize) -> Option<(Board, [usize; 2])> {
+        let v = self.views.get(i)?;
+        Some((v.board.unwrap_or(self.board), v.first_corner.unwrap_or([0, 0])))
+    }
+
+    /// `image` resolved against the directory of the dataset file `dataset_path`.
+    pub fn resolve(dataset_path: &Path, image: &Path) -> PathBuf {
+        if image.is_absolute() {
+            return image.to_owned();
+        }
+        match dataset_path.parent() {
+            Some(d) => d.join(image),
+            None => image.to_owned(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corners_are_row_by_row() {
+        let b = Board { inner_corners: [3, 4], square_mm: 2.0 };
+        let c = b.corners_mm();
+        assert_eq!(c.len(), 12);
+        assert_eq!(c[1], [2.0, 0.0]);
+        assert_eq!(c[3], [0.0, 2.0]);
+        assert_eq!(c[11], [4.0, 6.0]);
+    }
+
+    #[test]
+    fn bad_boards_are_named() {
+        let e = Board { inner_corners: [3, 4], square_mm: -1.5 }.validate().unwrap_err().to_string();
+        assert!(e.contains("square size must be positive"), "{e}");
+        let e = Board { inner_corners: [2, 4], square_mm: 1.5 }.validate().unwrap_err().to_string();
+        assert!(e.contains("3 x 3"), "{e}");
+    }
+
+    #[test]
+    fn relative_images_resolve_against_the_file() {
+        assert_eq!(Dataset::resolve(Path::new("/a/b/d.json"), Path::new("v/x.png")), PathBuf::from("/a/b/v/x.png"));
+        assert_eq!(Dataset::resolve(Path::new("/a/b/d.json"), Path::new("/x.png")), PathBuf::from("/x.png"));
+    }
+}

@@ -1,0 +1,265 @@
+//! File formats (DESIGN.md): JSON with a `"format"` field naming format and version
+//! (`etlcal.<name>/<version>`); lengths in mm, currents in mA, temperatures in degC.
+//!
+//! Readers refuse an unknown format or version with a message naming it. Unknown fields
+//! are refused too (`deny_unknown_fields` on every format struct): a misspelt key would
+//! otherwise silently fall back to a default, which for a calibration is worse than an
+//! error. Writers are atomic: a temporary file in the same directory, then a rename, so a
+//! failed run leaves earlier output whole.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+pub mod a0;
+pub mod calibration;
+pub mod dataset;
+mod error;
+pub mod observations;
+pub mod thermal;
+
+pub use error::{Error, ErrorKind, Result};
+
+/// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
+///
+/// The `"format"` field is checked before the rest is parsed, so a file of another
+/// format or version gets a message naming both, not a confusing field error.
+pub fn read_json<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
+    parse_json(&text, path, expected)
+}
+
+/// Parses JSON text of format `expected`; `path` is used in messages only.
+pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path, expected: &str) -> Result<T> {
+    let parse_error = |e: serde_json::Error| Error::Parse { path: path.to_owned(), message: e.to_string() };
+    // The tag first, then the typed value straight from the text: no serde_json::Value
+    // tree, which allocates a map per point and was most of the time of reading an
+    // observations file. Files etlcal writes lead with the tag, read without a scan.
+    let tag = match leading_format_tag(text) {
+        Some(tag) => tag,
+        None => serde_json::from_str::<FormatTag>(text).map_err(parse_error)?.0,
+    };
+    let found = tag.as_deref().unwrap_or("missing");
+    if found != expected {
+        return Err(Error::Format { path: path.to_owned(), found: found.to_owned(), expected: expected.to_owned() });
+    }
+    serde_json::from_str(text).map_err(parse_error)
+}
+
+/// The tag of a document that opens with `{"format": "<string>"`, read without looking
+/// further (the typed parse that follows checks the rest); `None` for any other opening.
+fn leading_format_tag(text: &str) -> Option<Option<String>> {
+    let json_ws: &[char] = &[' ', '\t', '\n', '\r'];
+    let rest = text.trim_start_matches(json_ws).strip_prefix('{')?;
+    let rest = rest.trim_start_matches(json_ws).strip_prefix("\"format\"")?;
+    let rest = rest.trim_start_matches(json_ws).strip_prefix(':')?;
+    // One value off a stream: the text after it (the rest of the object) is not read.
+    match serde_json::Deserializer::from_str(rest).into_iter::<String>().next() {
+        Some(Ok(tag)) => Some(Some(tag)),
+        _ => None,
+    }
+}
+
+/// The string `"format"` field of a JSON document, `None` if the document is not an
+/// object or the field is missing or not a string; everything else is skipped unbuilt.
+struct FormatTag(Option<String>);
+
+impl<'de> serde::Deserialize<'de> for FormatTag {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(FormatTagVisitor)
+    }
+}
+
+/// Whether an object key is `"format"`.
+struct IsFormatKey(bool);
+
+impl<'de> serde::Deserialize<'de> for IsFormatKey {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = IsFormatKey;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("an object key")
+            }
+            fn visit_str<E: serde::de::Error>(self, key: &str) -> std::result::Result<IsFormatKey, E> {
+                Ok(IsFormatKey(key == "format"))
+            }
+        }
+        d.deserialize_str(V)
+    }
+}
+
+struct FormatTagVisitor;
+
+impl<'de> serde::de::Visitor<'de> for FormatTagVisitor {
+    type Value = FormatTag;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON document")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> std::result::Result<FormatTag, A::Error> {
+        let mut found = None;
+        while let Some(IsFormatKey(is_format)) = map.next_key()? {
+            if is_format {
+                // The last of repeated keys, as a serde_json::Value map would keep.
+                found = map.next_value::<serde_json::Value>()?.as_str().map(str::to_owned);
+            } else {
+                map.next_value::<serde::de::IgnoredAny>()?;
+            }
+        }
+        Ok(FormatTag(found))
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<FormatTag, A::Error> {
+        while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {}
+        Ok(FormatTag(None))
+    }
+
+    fn visit_bool<E: serde::de::Error>(self, _: bool) -> std::result::Result<FormatTag, E> {
+        Ok(FormatTag(None))
+    }
+
+    fn visit_i64<E: serde::de::Error>(self, _: i64) -> std::result::Result<FormatTag, E> {
+        Ok(FormatTag(None))
+    }
+
+    fn visit_u64<E: serde::de::Error>(self, _: u64) -> std::result::Result<FormatTag, E> {
+        Ok(FormatTag(None))
+    }
+
+    fn visit_f64<E: serde::de::Error>(self, _: f64) -> std::result::Result<FormatTag, E> {
+        Ok(FormatTag(None))
+    }
+
+    fn visit_str<E: serde::de::Error>(self, _: &str) -> std::result::Result<FormatTag, E> {
+        Ok(FormatTag(None))
+    }
+
+    fn visit_unit<E: serde::de::Error>(self) -> std::result::Result<FormatTag, E> {
+        Ok(FormatTag(None))
+    }
+}
+
+/// Writes `value` as pretty JSON to `path` atomically (temp file + rename).
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let mut bytes =
+        serde_json::to_vec_pretty(value).map_err(|e| Error::Parse { path: path.to_owned(), message: e.to_string() })?;
+    bytes.push(b'\n');
+    write_atomic(path, &bytes)
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same directory is written,
+/// flushed to disk and renamed over `path`. On any error `path` is untouched and the
+/// temporary file removed. The parent directory must exist (it is not created: a
+/// misspelt output directory is an error, not a surprise tree).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let io = |source| Error::Io { path: path.to_owned(), source };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        return Err(Error::Io {
+            path: path.to_owned(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "the output directory does not exist"),
+        });
+    }
+    let name = path.file_name().ok_or_else(|| Error::InvalidInput(format!("{}: not a file path", path.display())))?;
+    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io(e));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(serde::Serialize, serde::Deserialize, Debug, PartialEq)]
+    #[serde(deny_unknown_fields)]
+    struct Doc {
+        format: String,
+        x: f64,
+    }
+
+    #[test]
+    fn round_trip_and_format_checks() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.json");
+        let d = Doc { format: "etlcal.test/1".into(), x: 1.5 };
+        write_json(&p, &d).unwrap();
+        assert_eq!(read_json::<Doc>(&p, "etlcal.test/1").unwrap(), d);
+        let e = read_json::<Doc>(&p, "etlcal.test/2").unwrap_err().to_string();
+        assert!(e.contains("etlcal.test/1") && e.contains("etlcal.test/2"), "{e}");
+        std::fs::write(&p, r#"{"format": "etlcal.test/1", "x": 1, "y": 2}"#).unwrap();
+        let e = read_json::<Doc>(&p, "etlcal.test/1").unwrap_err().to_string();
+        assert!(e.contains("unknown field"), "{e}");
+    }
+
+    #[test]
+    fn the_format_tag_is_read_from_objects_only() {
+        let p = Path::new("t.json");
+        let format_of = |text: &str| match parse_json::<Doc>(text, p, "etlcal.test/1") {
+            Err(Error::Format { found, .. }) => found,
+            other => panic!("{text}: {other:?}"),
+        };
+        // Not an object, or no string "format": "missing", as before any field is read.
+        for text in
+            ["[1, {\"format\": \"x\"}]", "3", "\"etlcal.test/1\"", "null", "{\"format\": 1, \"x\": 2}", "{\"x\": 2}"]
+        {
+            assert_eq!(format_of(text), "missing", "{text}");
+        }
+        // The tag is found wherever it is, escapes and nesting included.
+        assert_eq!(format_of(r#"{"x": {"format": "inner"}, "form\u0061t": "etlcal.test/9"}"#), "etlcal.test/9");
+        // Malformed JSON and a bad field are parse errors naming the place.
+        for (text, needle) in [
+            ("{\"format\": \"etlcal.test/1\", \"x\": }", "line 1"),
+            ("{\"format\": \"etlcal.test/1\"}", "missing field `x`"),
+        ] {
+            match parse_json::<Doc>(text, p, "etlcal.test/1") {
+                Err(Error::Parse { message, .. }) => assert!(message.contains(needle), "{message}"),
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+        // A leading tag of another format is named before the rest is read, even if the
+        // rest is broken; a leading tag of this format leaves the rest to the typed parse.
+        assert_eq!(format_of(" \n{ \"format\" :\"etlcal.test/2\", \"x\": "), "etlcal.test/2");
+        assert!(matches!(
+            parse_json::<Doc>("{\"format\": \"etlcal.test/1\", \"x\": 1", p, "etlcal.test/1"),
+            Err(Error::Parse { .. })
+        ));
+        let d: Doc = parse_json(r#"{"x": 2, "format": "etlcal.test/1"}"#, p, "etlcal.test/1").unwrap();
+        assert_eq!(d, Doc { format: "etlcal.test/1".into(), x: 2.0 });
+    }
+
+    #[test]
+    fn missing_directory_is_an_error_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("missing").join("a.json");
+        assert!(write_json(&p, &Doc { format: "f".into(), x: 0.0 }).is_err());
+        assert!(!dir.path().join("missing").exists());
+    }
+
+    #[test]
+    fn failed_write_leaves_the_old_file_whole() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.json");
+        std::fs::write(&p, "old").unwrap();
+        // A directory where the temp file would go makes the write fail.
+        let tmp = dir.path().join(format!(".a.json.tmp{}", std::process::id()));
+        std::fs::create_dir(&tmp).unwrap();
+        assert!(write_atomic(&p, b"new").is_err());
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "old");
+    }
+}

@@ -1,0 +1,39 @@
+//! Exports the paper-rig bundle-adjustment problem for `benches/ba_scipy.py` and times
+//! etlcal's solve of it: prints one JSON object with the observations, the linear start,
+//! etlcal's final cost and its mean time per solve (one core).
+//!
+//! `cargo run --release -p etl-calib --example ba_problem`
+use std::time::Instant;
+
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, View, ViewCorrection};
+use etl_sim::simulate::{paper_rig, NoiseModel};
+
+fn main() {
+    let sim = paper_rig(&NoiseModel::PAPER, 1);
+    let pts = sim.observations.core_points();
+    let e: Vec<f64> = sim.observations.views.iter().map(|v| v.e_com_ma.unwrap_or(v.e_in_ma)).collect();
+    let views: Vec<View> = pts.iter().zip(&e).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
+    let init = initialise(&views, &sim.a0).expect("initialise");
+    let opts = BundleAdjustOptions::default();
+    let mut corr = vec![ViewCorrection::default(); views.len()];
+    let runs = 50;
+    let t = Instant::now();
+    let mut report = None;
+    for _ in 0..runs {
+        report = Some(bundle_adjust(&views, &init, &opts, &mut corr, &mut []).expect("bundle adjustment"));
+    }
+    let secs = t.elapsed().as_secs_f64() / runs as f64;
+    let r = report.expect("at least one run");
+    let n: usize = pts.iter().map(Vec::len).sum();
+    let cost = r.rms_px * r.rms_px * n as f64;
+    let out = serde_json::json!({
+        "observations": sim.observations,
+        "start": to_params(&init),
+        "etlcal_final": to_params(&r.model),
+        "etlcal_cost": cost,
+        "etlcal_seconds": secs,
+        "etlcal_iterations": r.iterations,
+    });
+    println!("{out}");
+}

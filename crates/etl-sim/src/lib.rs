@@ -1,0 +1,11 @@
+//! etl-sim: simulation. The synthetic camera ([`render`]: a board rendered through a camera
+//! model with exact coverage, defocus and noise), the paper's rig and its noise model
+//! ([`rig`], [`simulate`]) and the virtual rig of the temperature procedure
+//! ([`virtual_rig`]).
+
+pub mod render;
+pub mod rig;
+pub mod simulate;
+pub mod virtual_rig;
+
+pub use etl_formats::{Error, Result};

@@ -1,0 +1,147 @@
+//! The procedure's virtual rig: the synthetic camera looking at a board through the
+//! virtual lens ([`etl_hw::virtual_lens::VirtualLens`]), and the virtual lens's heated
+//! mount as the [`Climate`].
+//!
+//! The camera (this simulation's choices): a board of 5 x 4 inner corners, 1.5 mm squares,
+//! fronto-parallel on the optical axis, an 800 x 600 crop of a sensor with 5.86 um pixels at
+//! a fixed image distance of 26 mm behind the ETL group; the group's focal length is the
+//! paper's physics, f_com(E_com) (Eq. 8, 10), at the lens's *true* E_com = E_in - E_T(T,
+//! E_in) (the virtual lens's surface), so the plane in focus lies at the thin-lens distance
+//! s_o = 1 / (1/f_com - 1/26 mm): about 236 mm at 40 mA and 81 mm at 240 mA. The board's
+//! image size is held fixed (a pinhole of focal length 26 mm / 5.86 um); only the focus
+//! moves with the current, so a sharpness peak is where the board is in focus.
+
+use etl_core::model::CameraModel;
+use etl_core::physics::LensPhysics;
+use etl_core::thermal::ThermalSurface;
+use etl_hw::virtual_lens::VirtualLens;
+use image::GrayImage;
+
+use crate::render::{render, Optics, RenderOptions, Scene};
+use etl_calib::thermal_calibration::{Camera, Climate, ProcedureResult};
+use etl_formats::dataset::Board;
+use etl_formats::{Error, Result};
+
+/// Image distance of the virtual camera, mm.
+pub const IMAGE_DISTANCE_MM: f64 = 26.0;
+/// Pixel pitch, mm.
+pub const PIXEL_MM: f64 = 0.005_86;
+
+/// The synthetic camera looking through a virtual lens.
+pub struct VirtualCamera<'a> {
+    lens: &'a VirtualLens,
+    physics: LensPhysics,
+    /// Aperture diameter, mm.
+    pub aperture_mm: f64,
+    /// Image width and height, px.
+    pub image_size: [u32; 2],
+    board: Board,
+    board_depth_mm: f64,
+    frames: u64,
+}
+
+impl<'a> VirtualCamera<'a> {
+    /// The camera of the module documentation on `lens`, aperture 10 mm (the EL-10-30's
+    /// clear aperture: the paper placed the board close, at high magnification, for the
+    /// same reason, a sharpness that changes fast with the current).
+    pub fn new(lens: &'a VirtualLens) -> Self {
+        VirtualCamera {
+            lens,
+            physics: LensPhysics::paper(),
+            aperture_mm: 10.0,
+            image_size: [800, 600],
+            board: Board { inner_corners: [5, 4], square_mm: 1.5 },
+            board_depth_mm: 150.0,
+            frames: 0,
+        }
+    }
+
+    /// The distance in focus at E_com, mm (thin lens at the fixed image distance).
+    pub fn focus_distance_mm(&self, e_com_ma: f64) -> Result<f64> {
+        let f = self.physics.f_com_mm(e_com_ma)?;
+        let inv = 1.0 / f - 1.0 / IMAGE_DISTANCE_MM;
+        if !(inv > 0.0) {
+            return Err(Error::InvalidInput(format!(
+                "at E_com {e_com_ma} mA the lens (f = {f} mm) cannot focus with the sensor at {IMAGE_DISTANCE_MM} mm"
+            )));
+        }
+        Ok(1.0 / inv)
+    }
+}
+
+impl Camera for VirtualCamera<'_> {
+    fn capture(&mut self) -> Result<GrayImage> {
+        let focus = self.focus_distance_mm(self.lens.state().e_com_ma)?;
+        let f_px = IMAGE_DISTANCE_MM / PIXEL_MM;
+        let [w, h] = self.image_size;
+        let s = self.board.square_mm;
+        let [cols, rows] = self.board.inner_corners;
+        let centre = [0.5 * s * (cols - 1) as f64, 0.5 * s * (rows - 1) as f64];
+        let model = CameraModel {
+            rotation_rodrigues: [0.0; 3],
+            translation_mm: [-centre[0], -centre[1], self.board_depth_mm],
+            kf_x: [f_px, 0.0, 0.0, 0.0],
+            kf_y: [f_px, 0.0, 0.0, 0.0],
+            principal_point: [0.5 * (w as f64 - 1.0), 0.5 * (h as f64 - 1.0)],
+            distortion_a: [0.0; 9],
+        };
+        self.frames += 1;
+        let scene = Scene::new(model, 0.0, self.board, 0.0, self.image_size);
+        let opts = RenderOptions {
+            optics: Optics { focus_depth_mm: Some(focus), aperture_mm: self.aperture_mm, base_sigma_px: 0.0 },
+            seed: self.frames,
+            ..RenderOptions::default()
+        };
+        Ok(render(&scene, &opts)?.image.to_dynamic().to_luma8())
+    }
+
+    fn place_board_in_focus(&mut self) -> Result<()> {
+        self.board_depth_mm = self.focus_distance_mm(self.lens.state().e_com_ma)?;
+        Ok(())
+    }
+}
+
+/// The virtual lens's heated mount: sets the heater for the temperature and jumps to
+/// thermal equilibrium.
+pub struct VirtualClimate<'a>(pub &'a VirtualLens);
+
+impl Climate for VirtualClimate<'_> {
+    fn set_temperature_c(&mut self, t_c: f64) -> Result<()> {
+        if !t_c.is_finite() {
+            return Err(Error::InvalidInput(format!("temperature {t_c} degC is not finite")));
+        }
+        self.0.set_target_temperature_c(t_c);
+        self.0.settle();
+        Ok(())
+    }
+}
+
+/// How far a fitted surface is from the virtual lens's true one over `t_range_c` x
+/// `e_in_range_ma` (a 21 x 21 grid), mA: (RMS against the truth referenced like the
+/// procedure, i.e. E_T(T, E) - E_T(T_ref, E_ref) with E_ref the current in focus at
+/// T_ref for the same E_com; RMS against the truth as it is).
+pub fn surface_error_ma(
+    result: &ProcedureResult,
+    truth: &ThermalSurface,
+    t_ref_c: f64,
+    t_range_c: [f64; 2],
+    e_in_range_ma: [f64; 2],
+) -> Result<(f64, f64)> {
+    let fitted = &result.calibration.surface;
+    let (mut referenced, mut absolute, mut n) = (0.0, 0.0, 0usize);
+    for a in 0..=20 {
+        for b in 0..=20 {
+            let t = t_range_c[0] + (t_range_c[1] - t_range_c[0]) * a as f64 / 20.0;
+            let e = e_in_range_ma[0] + (e_in_range_ma[1] - e_in_range_ma[0]) * b as f64 / 20.0;
+            let got = fitted.e_t_ma(t, e)?;
+            let want = truth.e_t_ma(t, e)?;
+            let e_com = e - want;
+            let e_ref = truth.e_in_for_e_com(e_com, t_ref_c)?;
+            let want_ref = want - truth.e_t_ma(t_ref_c, e_ref)?;
+            referenced += (got - want_ref) * (got - want_ref);
+            absolute += (got - want) * (got - want);
+            n += 1;
+        }
+    }
+    Ok(((referenced / n as f64).sqrt(), (absolute / n as f64).sqrt()))
+}

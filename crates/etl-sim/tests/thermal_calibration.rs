@@ -1,0 +1,57 @@
+//! The temperature-calibration procedure (section 4.1) against the virtual lens, driven by
+//! the real client through a pseudo-terminal, and the synthetic camera seeing through the
+//! virtual lens's true state: the fitted E_T surface against the lens's true one.
+use std::time::Duration;
+
+use etl_calib::thermal_calibration::{run_procedure, ProcedureOptions};
+use etl_core::thermal::ThermalSurface;
+use etl_hw::client::{LensClient, OpenOptions};
+use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
+use etl_sim::virtual_rig::{surface_error_ma, VirtualCamera, VirtualClimate};
+
+#[test]
+fn the_procedure_recovers_the_virtual_lens_surface() {
+    let device = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
+    let mut client =
+        LensClient::open(device.path(), OpenOptions { timeout: Duration::from_millis(500), ..Default::default() })
+            .unwrap();
+    let mut camera = VirtualCamera::new(&device);
+    camera.image_size = [480, 360];
+    camera.aperture_mm = 10.0;
+    let mut climate = VirtualClimate(&device);
+    // A coarser grid than the paper's (5 x 5 instead of 11 x 11) keeps the test short; the
+    // command line runs the paper's grid.
+    let options = ProcedureOptions {
+        e_in_grid_ma: vec![40.0, 90.0, 140.0, 190.0, 240.0],
+        temperatures_c: vec![27.0, 29.5, 32.0, 34.5, 37.0],
+        ..ProcedureOptions::default()
+    };
+    let r = run_procedure(&mut client, &mut camera, &mut climate, &options, &etl_core::progress::NoProgress).unwrap();
+    assert_eq!(r.samples.len(), 25);
+    let (referenced, absolute) =
+        surface_error_ma(&r, &ThermalSurface::PAPER, 27.0, [27.0, 37.0], [40.0, 240.0]).unwrap();
+    println!("fit RMS {:.3} mA; surface error {referenced:.3} mA (referenced to 27 degC), {absolute:.3} mA (absolute); {} frames", r.rms_ma, r.frames);
+    assert!(referenced < 0.3, "{referenced} mA");
+    // Every commanded current stayed inside the driver's limits.
+    let [lo, hi] = device.limits_ma();
+    assert!(r.samples.iter().all(|s| (lo..=hi).contains(&s.e_in_ma)));
+}
+
+#[test]
+fn bad_options_are_refused_before_any_command() {
+    let device = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
+    let mut client = LensClient::open(device.path(), OpenOptions::default()).unwrap();
+    let mut camera = VirtualCamera::new(&device);
+    let mut climate = VirtualClimate(&device);
+    let commands_before = device.received().commands;
+    for options in [
+        ProcedureOptions { temperatures_c: vec![27.0], ..ProcedureOptions::default() },
+        ProcedureOptions { e_in_grid_ma: vec![], ..ProcedureOptions::default() },
+        ProcedureOptions { search_half_width_ma: 0.0, ..ProcedureOptions::default() },
+    ] {
+        assert!(
+            run_procedure(&mut client, &mut camera, &mut climate, &options, &etl_core::progress::NoProgress).is_err()
+        );
+    }
+    assert_eq!(device.received().commands, commands_before);
+}

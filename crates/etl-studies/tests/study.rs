@@ -1,0 +1,130 @@
+//! The studies of issue 8 (`etlcal study ...`) on few trials, asserting the acceptance
+//! shapes where a few trials can show them: Fig. 5's cubic against the paper, Fig. 6's
+//! trends and the errors-in-variables gain, the subsets' reprojection error, the baseline's
+//! error at high current, the statistical efficiency; and the command line's bad input.
+
+use etl_studies::common::{stat, StudyOptions};
+use etl_studies::fig6::{fig6_of, Fig6Study};
+use etl_studies::{baseline, crlb, fig5, subsets};
+
+fn opts(trials: usize) -> StudyOptions<'static> {
+    StudyOptions { trials, seed: 7, ..Default::default() }
+}
+
+#[test]
+fn fig5_cubic_matches_the_paper_and_degrees_improve() {
+    let f = fig5::fig5().unwrap();
+    let cubic = f.fit_rmse_mm[2];
+    assert!((cubic / fig5::PAPER_CUBIC_RMSE_MM - 1.0).abs() < 0.10, "cubic RMSE {cubic:e} mm");
+    // Each degree fits the smooth physics curve at least 5 times better than the one below.
+    for d in 1..6 {
+        assert!(f.fit_rmse_mm[d] * 5.0 < f.fit_rmse_mm[d - 1], "{:?}", f.fit_rmse_mm);
+    }
+    // The cubic's residual stays within a few times its RMSE.
+    assert!(f.cubic_residual_mm.iter().all(|r| r.1.abs() < 4.0 * cubic));
+}
+
+#[test]
+fn fig6_current_noise_shape_and_eiv_gain() {
+    let r = fig6_of(&[Fig6Study::CurrentNoise], &opts(6)).unwrap();
+    let levels = &r.studies[0].1;
+    assert_eq!(levels.len(), 9);
+    assert!(levels.iter().all(|l| l.paper.failures == 0 && l.eiv.failures == 0 && l.paper.trials == 6));
+    // The plain BA's curve error rises with the current noise (common random numbers).
+    let fx: Vec<f64> = levels.iter().map(|l| l.paper.mean.fx_curve_max_rel).collect();
+    assert!(fx[8] > 1.5 * fx[2] && fx[1..].windows(2).all(|w| w[1] > w[0]), "{fx:?}");
+    // Errors-in-variables lowers the curve errors at every level above 0.4 mA.
+    assert_eq!(r.eiv_lowers_current_noise_curves(), Some(true));
+    // The bound of the stated model lies above the paper's Fig. 6 levels (kf3x < 1.8 %).
+    let b = levels[2].bound;
+    assert!(b.kf_rel_full[2] > 0.05 && b.kf_rel_full[2] > b.kf_rel_pixel_only[2], "{b:?}");
+    let out = r.output();
+    assert_eq!(out.json["current_noise"].as_array().unwrap().len(), 9);
+    assert!(out.json["current_noise"][3]["eiv"]["kf3y_rel"].is_f64());
+    // Every mean carries its standard error: positive, below the mean (errors are positive
+    // and spread), and the same in the JSON.
+    let l = &levels[4].paper;
+    assert!(l.se.fx_curve_max_rel > 0.0 && l.se.fx_curve_max_rel < l.mean.fx_curve_max_rel, "{l:?}");
+    assert!(l.pnp_um_se > 0.0 && l.pnp_um_se < l.pnp_um, "{l:?}");
+    let j = &out.json["current_noise"][4]["paper"];
+    assert_eq!(j["fx_curve_max_rel_se"].as_f64(), Some(l.se.fx_curve_max_rel));
+    assert_eq!(j["kf3x_rel_se"].as_f64(), Some(l.se.kf_rel[2]));
+    assert_eq!(j["pnp_225ma_um_se"].as_f64(), Some(l.pnp_um_se));
+}
+
+#[test]
+fn fig6_images_errors_fall_with_more_images() {
+    let r = fig6_of(&[Fig6Study::Images], &opts(4)).unwrap();
+    let levels = &r.studies[0].1;
+    assert_eq!(levels.first().unwrap().level, 3.0);
+    // The bound falls with the number of images; 3 images err more than 15.
+    assert!(levels[0].bound.fx_curve_rel_full > 1.5 * levels[12].bound.fx_curve_rel_full);
+    let few = levels[0].paper.mean.kf_rel.iter().sum::<f64>();
+    let all = levels[12].paper.mean.kf_rel.iter().sum::<f64>();
+    assert!(few > all, "3 images {few}, 15 images {all}");
+    // Pixel noise 0 has no bound: it is reported as missing, not as 0.
+    assert!(fig6::level_bound(Fig6Study::PixelNoise, 0.0).unwrap().fx_curve_rel_full.is_nan());
+}
+
+use etl_studies::fig6;
+
+#[test]
+fn subsets_eiv_reprojection_is_the_noise_and_every_subset_converges_in_5() {
+    let s = subsets::subsets(&opts(1)).unwrap();
+    assert!(s.failures.is_empty(), "{:?}", s.failures);
+    assert_eq!(s.fits[0].len(), 88);
+    let [(_, plain_hi), (lo, hi)] = s.per_coordinate_rms_range_px();
+    assert!(lo >= 0.9 * s.noise_px && hi <= 1.1 * s.noise_px, "eiv RMS {lo} .. {hi}");
+    // The plain BA keeps the per-view Z_W, E errors in its residuals.
+    assert!(plain_hi > hi);
+    // Issue 8: every subset's paper BA is at its minimum after 5 iterations (parameters
+    // within 0.05 formal std, RMS within 1e-4), and stops (ftol 1e-10) within 8.
+    let nine = &s.fits[0][3];
+    assert_eq!(nine.mask, 0x1ff);
+    assert!(s.converged_within_5(), "{:?}", s.worst_after_5());
+    assert!(s.max_iterations() <= 8, "{}", s.max_iterations());
+    let stats = s.six_view_stats(0);
+    // kf0x over the 84 subsets: within 1 % of the truth, spread below 1 %.
+    assert!((stats[6].0 / 5380.0 - 1.0).abs() < 0.01 && stats[6].1 > 0.1 && stats[6].1 < 54.0, "{:?}", stats[6]);
+}
+
+#[test]
+fn baseline_is_worse_at_high_current() {
+    let b = baseline::baseline(&opts(4)).unwrap();
+    assert!(b.failures.is_empty(), "{:?}", b.failures);
+    // At 250 mA (high magnification, beyond the calibrated range) the baseline errs far
+    // more than errors-in-variables, and more than at 130 mA.
+    assert!(b.ratio_at_highest(true) >= 3.0, "ratio {}", b.ratio_at_highest(true));
+    assert!(b.ratio_at_highest(false) > 1.0, "ratio {}", b.ratio_at_highest(false));
+    assert!(b.pnp(2, 5).0 > 2.0 * b.pnp(2, 1).0);
+    // The depth of field shrinks the tilt with the current.
+    assert!(b.tilt_limit_deg.windows(2).all(|w| w[1].1 <= w[0].1));
+    // The ratio's standard error (delta method over paired trials) is reported with it.
+    let (r, se) = b.ratio_at_highest_with_se(true);
+    assert!(se > 0.0 && se < r, "{r} ± {se}");
+    let j = b.output().json;
+    assert_eq!(j["pnp"].as_array().unwrap().len(), 6);
+    assert_eq!(j["baseline_over_eiv_at_250ma_se"].as_f64(), Some(se));
+    assert_eq!(j["default_estimator"], "eiv");
+}
+
+#[test]
+fn crlb_efficiency_on_a_modest_trial_count() {
+    let c = crlb::crlb(&opts(150)).unwrap();
+    assert_eq!(c.points, 2311);
+    assert_eq!(c.trials, [150, 150]);
+    // 150 trials: each observed std is uncertain by about 6 %.
+    let eff: Vec<f64> = c.parameters.iter().map(|p| p.efficiency).collect();
+    let eiv: Vec<f64> = c.parameters.iter().map(|p| p.eiv_efficiency).collect();
+    for (name, e) in [("paper", &eff), ("eiv", &eiv)] {
+        assert!(e.iter().all(|&v| (0.8..1.25).contains(&v)), "{name}: {e:?}");
+        let mean = stat(e).mean;
+        assert!((0.9..1.12).contains(&mean), "{name}: mean efficiency {mean}");
+    }
+    let j = c.output().json;
+    let p = &j["parameters"][9];
+    assert_eq!(p["name"], "kf3x");
+    for key in ["truth", "crlb_std", "mc_std", "efficiency"] {
+        assert!(p[key].is_f64(), "{key}");
+    }
+}

@@ -1,0 +1,283 @@
+//! `etlcal lens (--port PATH | --virtual) info|set-current MA|get-current|temperature|hold
+//! --e-com MA [--thermal FILE]` (add `--json` for one JSON object on stdout).
+//!
+//! Safety policy of `set-current`: a request beyond the driver's software limits is
+//! **clamped** to the nearest limit, sent so, and reported with a warning on stderr
+//! (`"clamped": true` in JSON); NaN and infinities are refused (exit 1). Nothing outside
+//! the limits is ever sent.
+//!
+//! `--port` opens a real driver without the `Start` handshake (which would zero the
+//! current), unless `--handshake` is given. `--virtual` starts an in-process virtual lens
+//! (`etl_hw::virtual_lens`) and talks to it through its pseudo-terminal with the same
+//! client: each invocation gets a fresh lens at 0 mA; for a lens that persists between
+//! invocations run `etlcal lens-sim` and pass its path to `--port`.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use etl_core::thermal::ThermalCalibration;
+use etl_hw::client::{LensClient, OpenOptions};
+use etl_hw::hold::{hold, HoldConfig, HoldError};
+use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig};
+use serde_json::json;
+
+use super::print_json;
+use etl_formats::thermal::ThermalFile;
+use etl_formats::{Error, Result};
+
+/// Arguments of `etlcal lens`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Which lens.
+    #[command(flatten)]
+    pub target: Target,
+    /// Send the `Start` handshake on open (zeroes the current).
+    #[arg(long)]
+    pub handshake: bool,
+    /// Reply timeout, ms.
+    #[arg(long, default_value_t = 500, value_name = "MS")]
+    pub timeout_ms: u64,
+    /// Print one JSON object on stdout.
+    #[arg(long, global = true)]
+    pub json: bool,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: LensCommand,
+}
+
+/// A real port or the virtual lens.
+#[derive(clap::Args, Debug)]
+#[group(required = true, multiple = false)]
+pub struct Target {
+    /// Serial port of the Optotune Lens Driver 4 (e.g. /dev/ttyACM0).
+    #[arg(long, value_name = "PATH")]
+    pub port: Option<PathBuf>,
+    /// An in-process virtual lens (paper physics and thermal surface).
+    #[arg(long = "virtual")]
+    pub virtual_lens: bool,
+}
+
+/// The subcommands of `etlcal lens`.
+#[derive(clap::Subcommand, Debug)]
+pub enum LensCommand {
+    /// Firmware, lens serial, max current, limits and temperature.
+    Info,
+    /// Set the driver current (clamped to the driver's limits, with a warning).
+    #[command(allow_negative_numbers = true)]
+    SetCurrent {
+        /// Current, mA.
+        #[arg(value_name = "MA")]
+        ma: f64,
+    },
+    /// The driver current, mA.
+    GetCurrent,
+    /// The lens temperature, degC.
+    Temperature,
+    /// Hold a compensated current E_com while the temperature changes (section 2.2.1 iii).
+    #[command(allow_negative_numbers = true)]
+    Hold(HoldArgs),
+}
+
+/// Arguments of `etlcal lens hold`.
+#[derive(clap::Args, Debug)]
+pub struct HoldArgs {
+    /// The E_com to hold, mA.
+    #[arg(long = "e-com", value_name = "MA")]
+    pub e_com_ma: f64,
+    /// A fitted surface (etlcal.thermal/1) instead of the paper's.
+    #[arg(long, value_name = "FILE")]
+    pub thermal: Option<PathBuf>,
+    /// Loop rate, Hz (0: as fast as the link allows).
+    #[arg(long, default_value_t = 10.0, value_name = "HZ")]
+    pub rate: f64,
+    /// Stop after this many seconds (default: run until killed).
+    #[arg(long, value_name = "S")]
+    pub duration: Option<f64>,
+    /// Virtual lens only: heat it towards this many degC above its start.
+    #[arg(long, value_name = "C")]
+    pub warm: Option<f64>,
+    /// Virtual lens only: model seconds per wall second.
+    #[arg(long, default_value_t = 1.0, value_name = "X")]
+    pub time_scale: f64,
+}
+
+/// Runs `etlcal lens`.
+pub fn run(args: Args) -> Result<()> {
+    let (device, path) = match (&args.target.port, args.target.virtual_lens) {
+        (Some(p), _) => (None, p.clone()),
+        (None, _) => {
+            let time_scale = match &args.command {
+                LensCommand::Hold(h) => h.time_scale,
+                _ => 1.0,
+            };
+            let config = VirtualLensConfig {
+                time_scale,
+                thermal: ThermalModel { ambient_c: 27.0, ..Default::default() },
+                ..Default::default()
+            };
+            let d = VirtualLens::spawn(config).map_err(Error::lens)?;
+            let p = d.path().to_owned();
+            (Some(d), p)
+        }
+    };
+    let options = OpenOptions {
+        handshake: args.handshake,
+        timeout: Duration::from_millis(args.timeout_ms),
+        ..Default::default()
+    };
+    let client = LensClient::open(&path, options).map_err(Error::lens)?;
+    match args.command {
+        LensCommand::Info => {
+            let info = client.identify().map_err(Error::lens)?;
+            let t = client.temperature_c().ok();
+            if args.json {
+                print_json(&json!({
+                    "firmware_type": info.firmware_type.letter().to_string(),
+                    "firmware_version": info.firmware_version,
+                    "lens_serial": info.lens_serial,
+                    "max_current_ma": info.max_current_ma,
+                    "upper_limit_ma": info.upper_limit_ma,
+                    "lower_limit_ma": info.lower_limit_ma,
+                    "temperature_c": t,
+                }));
+            } else {
+                outln!("port:             {}", path.display());
+                outln!("firmware:         type {} version {}", info.firmware_type.letter(), info.firmware_version);
+                outln!("lens serial:      {}", info.lens_serial);
+                outln!("max current:      {:.2} mA", info.max_current_ma);
+                outln!("limits:           [{:.3}, {:.3}] mA", info.lower_limit_ma, info.upper_limit_ma);
+                match t {
+                    Some(t) => outln!("temperature:      {t:.4} degC"),
+                    None => outln!("temperature:      no sensor"),
+                }
+            }
+        }
+        LensCommand::SetCurrent { ma } => {
+            let r = client.set_current_ma(ma).map_err(Error::lens)?;
+            // Fire-and-forget: a query afterwards surfaces an error frame the driver sent.
+            let now = client.current_ma().map_err(Error::lens)?;
+            if let Some(u) = client.take_unsolicited().first() {
+                return Err(Error::InvalidInput(format!("the driver rejected the current command: {:?}", u.reply)));
+            }
+            if r.clamped {
+                let [lo, hi] = client.limits_ma();
+                eprintln!(
+                    "etlcal: warning: {ma} mA is outside the driver's limits [{lo:.3}, {hi:.3}] mA: clamped to {:.3} mA",
+                    r.commanded_ma
+                );
+            }
+            if args.json {
+                print_json(&json!({
+                    "requested_ma": ma,
+                    "commanded_ma": r.commanded_ma,
+                    "code": r.code,
+                    "clamped": r.clamped,
+                    "current_ma": now,
+                }));
+            } else {
+                outln!("current set to {:.4} mA (code {})", r.commanded_ma, r.code);
+            }
+        }
+        LensCommand::GetCurrent => {
+            let ma = client.current_ma().map_err(Error::lens)?;
+            if args.json {
+                print_json(&json!({ "current_ma": ma }));
+            } else {
+                outln!("{ma:.4} mA");
+            }
+        }
+        LensCommand::Temperature => {
+            let t = client.temperature_c().map_err(Error::lens)?;
+            if args.json {
+                print_json(&json!({ "temperature_c": t }));
+            } else {
+                outln!("{t:.4} degC");
+            }
+        }
+        LensCommand::Hold(h) => run_hold(&client, device.as_ref(), h, args.json)?,
+    }
+    Ok(())
+}
+
+fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json_out: bool) -> Result<()> {
+    let cal = match &h.thermal {
+        Some(p) => ThermalFile::load(p)?.calibration(),
+        None => ThermalCalibration::PAPER,
+    };
+    if !(h.rate.is_finite() && h.rate >= 0.0) {
+        return Err(Error::InvalidInput(format!("--rate {} must be a finite number >= 0", h.rate)));
+    }
+    let duration = match h.duration {
+        Some(s) if s.is_finite() && s >= 0.0 => Some(Duration::from_secs_f64(s)),
+        Some(s) => return Err(Error::InvalidInput(format!("--duration {s} must be a finite number >= 0"))),
+        None => None,
+    };
+    if let (Some(d), Some(w)) = (device, h.warm) {
+        let t0 = d.state().temperature_c;
+        d.set_target_temperature_c(t0 + w);
+    } else if h.warm.is_some() {
+        return Err(Error::InvalidInput("--warm only applies to --virtual".into()));
+    }
+    let cfg = HoldConfig { e_com_ma: h.e_com_ma, rate_hz: h.rate, duration };
+    let mut last_print = std::time::Instant::now();
+    let report = hold(&mut LensRef(client), &cal, &cfg, |s| {
+        if !json_out && last_print.elapsed() >= Duration::from_secs(1) {
+            last_print = std::time::Instant::now();
+            eprintln!(
+                "T = {:.4} degC, E_in = {:.3} mA, E_com = {:.3} mA{}",
+                s.temperature_c,
+                s.e_in_ma,
+                s.e_com_ma,
+                if s.extrapolated { " (extrapolated)" } else { "" }
+            );
+        }
+        true
+    })
+    .map_err(|e| match e {
+        HoldError::Lens(e) => Error::lens(e),
+        HoldError::Core(e) => Error::Core(e),
+    })?;
+    let unsolicited = client.take_unsolicited().len();
+    if json_out {
+        print_json(&json!({
+            "e_com_ma": h.e_com_ma,
+            "commands_sent": report.commands_sent,
+            "elapsed_s": report.elapsed.as_secs_f64(),
+            "achieved_rate_hz": report.achieved_rate_hz,
+            "worst_e_com_error_ma": report.worst_e_com_error_ma,
+            "temperature_range_c": report.temperature_range_c,
+            "extrapolated_steps": report.extrapolated_steps,
+            "last_e_in_ma": report.last.map(|s| s.e_in_ma),
+            "unsolicited_errors": unsolicited,
+        }));
+    } else {
+        outln!(
+            "held E_com = {} mA: {} commands in {:.2} s ({:.1} Hz), worst E_com error {:.4} mA, T {:.3}..{:.3} degC{}",
+            h.e_com_ma,
+            report.commands_sent,
+            report.elapsed.as_secs_f64(),
+            report.achieved_rate_hz,
+            report.worst_e_com_error_ma,
+            report.temperature_range_c[0],
+            report.temperature_range_c[1],
+            if unsolicited > 0 { format!(", {unsolicited} error frames from the driver") } else { String::new() }
+        );
+    }
+    Ok(())
+}
+
+/// `&LensClient` as a [`etl_core::lens::Lens`] (the client locks internally).
+struct LensRef<'a>(&'a LensClient);
+
+impl etl_core::lens::Lens for LensRef<'_> {
+    type Error = etl_hw::HwError;
+    fn set_current_ma(&mut self, e_in_ma: f64) -> std::result::Result<f64, Self::Error> {
+        self.0.set_current_ma(e_in_ma).map(|r| r.commanded_ma)
+    }
+    fn current_ma(&mut self) -> std::result::Result<f64, Self::Error> {
+        self.0.current_ma()
+    }
+    fn temperature_c(&mut self) -> std::result::Result<f64, Self::Error> {
+        self.0.temperature_c()
+    }
+}

@@ -1,0 +1,61 @@
+//! `etlcal lens-sim`: runs a virtual Optotune lens + Lens Driver 4 on a pseudo-terminal,
+//! prints the port path (first line of stdout; `{"port": ...}` with `--json`) and serves
+//! until killed. Point any client at it: `etlcal lens --port PATH info`.
+
+use std::io::Write;
+
+use etl_hw::codec::scaling::current_code;
+use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig};
+use serde_json::json;
+
+use super::print_json;
+use etl_formats::{Error, Result};
+
+/// Arguments of `etlcal lens-sim`.
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// Model seconds per wall second (thermal time runs this much faster).
+    #[arg(long, default_value_t = 1.0, value_name = "X")]
+    pub time_scale: f64,
+    /// Ambient temperature, degC.
+    #[arg(long, default_value_t = 25.0, value_name = "C")]
+    pub ambient: f64,
+    /// Upper software current limit, mA.
+    #[arg(long, default_value_t = 292.84, value_name = "MA")]
+    pub upper_limit: f64,
+    /// Lower software current limit, mA.
+    #[arg(long, default_value_t = -292.84, value_name = "MA")]
+    pub lower_limit: f64,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `etlcal lens-sim` (does not return unless spawning fails).
+pub fn run(args: Args) -> Result<()> {
+    let [lo, hi] = [args.lower_limit, args.upper_limit];
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= -292.84 && hi <= 292.84) {
+        return Err(Error::InvalidInput(format!(
+            "limits [{lo}, {hi}] mA must satisfy -292.84 <= lower <= upper <= 292.84"
+        )));
+    }
+    let config = VirtualLensConfig {
+        time_scale: args.time_scale,
+        thermal: ThermalModel { ambient_c: args.ambient, ..Default::default() },
+        upper_limit_code: current_code(hi, 292.84),
+        lower_limit_code: current_code(lo, 292.84),
+        ..Default::default()
+    };
+    let lens = VirtualLens::spawn(config).map_err(Error::lens)?;
+    if args.json {
+        print_json(&json!({ "port": lens.path().display().to_string() }));
+    } else {
+        outln!("{}", lens.path().display());
+        eprintln!("etlcal: virtual lens serving on {} (kill to stop)", lens.path().display());
+    }
+    let _ = std::io::stdout().flush();
+    loop {
+        std::thread::sleep(std::time::Duration::from_secs(3600));
+    }
+}

@@ -1,0 +1,230 @@
+//! `etlcal thermal ...`: temperature compensation (section 4.1, 5.2.2).
+//!
+//! - `eval --t C --e-in MA [--thermal FILE]`: E_T and E_com = E_in - E_T with the paper's
+//!   surface or a fitted `etlcal.thermal/1` file;
+//! - `fit TABLE.csv --out thermal.json`: fits the cubic surface to a table
+//!   `temperature_c,e_in_ma,e_t_ma` and writes `etlcal.thermal/1`.
+//!
+//! Each subcommand is a variant of [`ThermalCommand`] with its own `*Args` struct and
+//! `run_*` function; a new one (e.g. `calibrate`) adds a variant and a match arm in
+//! [`run`], and may live in its own file.
+//!
+//! Out-of-range policy (from etl-core): a temperature or current outside the range the
+//! surface was fitted over gives a result flagged `"extrapolated": true` (and a warning
+//! on stderr in text mode); outside the lens's operating domain (-40..125 degC,
+//! +-292.84 mA) it is an error.
+
+use std::path::PathBuf;
+
+use etl_core::thermal::ThermalCalibration;
+use serde_json::json;
+
+use super::print_json;
+use etl_formats::thermal::{read_thermal_table, ThermalFile};
+use etl_formats::{Error, Result};
+
+/// Arguments of `etlcal thermal`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: ThermalCommand,
+}
+
+/// The subcommands of `etlcal thermal`.
+#[derive(clap::Subcommand, Debug)]
+pub enum ThermalCommand {
+    /// E_T(T, E_in) and E_com = E_in - E_T at one temperature and driver current.
+    Eval(EvalArgs),
+    /// Fit the cubic surface E_T(T, E_in) to a CSV table and write etlcal.thermal/1.
+    Fit(FitArgs),
+    /// The temperature-calibration procedure (section 4.1) against the virtual lens and the
+    /// synthetic camera: refocus at every temperature step, fit, write the surface and table.
+    Calibrate(CalibrateArgs),
+}
+
+/// Arguments of `etlcal thermal calibrate`.
+#[derive(clap::Args, Debug)]
+pub struct CalibrateArgs {
+    /// Run against the virtual lens (on a pseudo-terminal, through the real client) and the
+    /// synthetic camera. Required: a real rig needs a camera binding (from Python or Rust).
+    #[arg(long, required = true)]
+    pub r#virtual: bool,
+    /// Where to write the fitted surface (etlcal.thermal/1).
+    #[arg(long, value_name = "thermal.json")]
+    pub out: PathBuf,
+    /// Where to write the raw table (CSV `temperature_c,e_in_ma,e_t_ma`; default: beside
+    /// --out, with .csv).
+    #[arg(long, value_name = "TABLE.csv")]
+    pub table: Option<PathBuf>,
+    /// Half width of each refocus search, mA.
+    #[arg(long, default_value_t = 20.0)]
+    pub search_ma: f64,
+    /// A 5 x 5 grid (40..240 mA by 50, 27..37 degC by 2.5) instead of the paper's 11 x 11.
+    #[arg(long)]
+    pub quick: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `etlcal thermal eval`.
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct EvalArgs {
+    /// Lens temperature, degC.
+    #[arg(long = "t", value_name = "C")]
+    pub t_c: f64,
+    /// Driver current E_in, mA.
+    #[arg(long = "e-in", value_name = "MA")]
+    pub e_in_ma: f64,
+    /// A fitted surface (etlcal.thermal/1) instead of the paper's.
+    #[arg(long, value_name = "FILE")]
+    pub thermal: Option<PathBuf>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `etlcal thermal fit`.
+#[derive(clap::Args, Debug)]
+pub struct FitArgs {
+    /// CSV table with header `temperature_c,e_in_ma,e_t_ma`.
+    #[arg(value_name = "TABLE.csv")]
+    pub table: PathBuf,
+    /// Where to write the fitted surface (etlcal.thermal/1); written only on success.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `etlcal thermal`.
+pub fn run(args: Args) -> Result<()> {
+    match args.command {
+        ThermalCommand::Eval(a) => run_eval(a),
+        ThermalCommand::Fit(a) => run_fit(a),
+        ThermalCommand::Calibrate(a) => run_calibrate(a),
+    }
+}
+
+/// Runs `etlcal thermal calibrate --virtual`.
+pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
+    use etl_calib::thermal_calibration::{run_procedure, ProcedureOptions};
+    use etl_hw::client::{LensClient, OpenOptions};
+    use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
+    use etl_sim::virtual_rig::{surface_error_ma, VirtualCamera, VirtualClimate};
+    let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
+    for p in [&args.out, &table] {
+        if let Some(parent) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if !parent.is_dir() {
+                return Err(Error::InvalidInput(format!("{}: output directory does not exist", parent.display())));
+            }
+        }
+    }
+    let mut options = ProcedureOptions { search_half_width_ma: args.search_ma, ..ProcedureOptions::default() };
+    if args.quick {
+        options.e_in_grid_ma = vec![40.0, 90.0, 140.0, 190.0, 240.0];
+        options.temperatures_c = vec![27.0, 29.5, 32.0, 34.5, 37.0];
+    }
+    let config = VirtualLensConfig::default();
+    let truth = config.surface;
+    let device = VirtualLens::spawn(config).map_err(|e| Error::InvalidInput(format!("virtual lens: {e}")))?;
+    let mut client = LensClient::open(device.path(), OpenOptions::default())
+        .map_err(|e| Error::InvalidInput(format!("{}: {e}", device.path().display())))?;
+    let mut camera = VirtualCamera::new(&device);
+    let mut climate = VirtualClimate(&device);
+    let r = run_procedure(&mut client, &mut camera, &mut climate, &options, &crate::progress::Bar::new(!args.json))?;
+    let t0 = options.temperatures_c.first().copied().unwrap_or(27.0);
+    let (referenced, absolute) =
+        surface_error_ma(&r, &truth, t0, r.calibration.t_range_c, r.calibration.e_in_range_ma)?;
+    etl_formats::thermal::write_thermal_table(&table, &r.samples)?;
+    let file = ThermalFile::new(&r.calibration, r.rms_ma);
+    file.save(&args.out)?;
+    if args.json {
+        print_json(&json!({
+            "format": file.format,
+            "coefficients": file.coefficients,
+            "rms_ma": file.rms_ma,
+            "t_range_c": file.t_range_c,
+            "e_in_range_ma": file.e_in_range_ma,
+            "samples": r.samples.len(),
+            "frames": r.frames,
+            "surface_error_ma": referenced,
+            "surface_error_absolute_ma": absolute,
+            "out": args.out.display().to_string(),
+            "table": table.display().to_string(),
+        }));
+    } else {
+        outln!(
+            "{} samples from {} frames; fit RMS {:.3} mA; against the virtual lens's true surface: {:.3} mA RMS \
+             (referenced to {t0} degC as the procedure is), {:.3} mA absolute; wrote {} and {}",
+            r.samples.len(),
+            r.frames,
+            r.rms_ma,
+            referenced,
+            absolute,
+            args.out.display(),
+            table.display()
+        );
+    }
+    Ok(())
+}
+
+/// Runs `etlcal thermal eval`.
+pub fn run_eval(args: EvalArgs) -> Result<()> {
+    let cal = match &args.thermal {
+        Some(path) => ThermalFile::load(path)?.calibration(),
+        None => ThermalCalibration::PAPER,
+    };
+    let c = cal.compensate(args.t_c, args.e_in_ma)?;
+    if args.json {
+        print_json(&json!({
+            "e_t_ma": c.e_t_ma,
+            "e_com_ma": c.e_com_ma,
+            "extrapolated": c.extrapolated,
+            "t_c": args.t_c,
+            "e_in_ma": args.e_in_ma,
+        }));
+    } else {
+        if c.extrapolated {
+            eprintln!(
+                "etlcal: warning: (T, E_in) = ({} degC, {} mA) is outside the fitted ranges {:?} degC x {:?} mA: extrapolated",
+                args.t_c, args.e_in_ma, cal.t_range_c, cal.e_in_range_ma
+            );
+        }
+        outln!("E_T = {:.6} mA, E_com = {:.6} mA", c.e_t_ma, c.e_com_ma);
+    }
+    Ok(())
+}
+
+/// Runs `etlcal thermal fit`.
+pub fn run_fit(args: FitArgs) -> Result<()> {
+    let rows = read_thermal_table(&args.table)?;
+    let (cal, rms_ma) = etl_calib::thermal_calibration::fit_samples(&rows)
+        .map_err(|err| Error::InvalidInput(format!("{}: {err}", args.table.display())))?;
+    let file = ThermalFile::new(&cal, rms_ma);
+    file.save(&args.out)?;
+    if args.json {
+        print_json(&json!({
+            "format": file.format,
+            "coefficients": file.coefficients,
+            "rms_ma": file.rms_ma,
+            "t_range_c": file.t_range_c,
+            "e_in_range_ma": file.e_in_range_ma,
+            "samples": rows.len(),
+            "out": args.out.display().to_string(),
+        }));
+    } else {
+        outln!(
+            "Fitted E_T(T, E_in) to {} samples: RMS {:.4} mA over {:?} degC x {:?} mA; wrote {}",
+            rows.len(),
+            rms_ma,
+            cal.t_range_c,
+            cal.e_in_range_ma,
+            args.out.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,30 @@
+//! `etlcal study`: fig5's JSON and files, and its bad input.
+
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn etlcal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
+}
+
+#[test]
+fn cli_fig5_json_and_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().to_str().unwrap();
+    let out = etlcal(&["study", "fig5", "--json", "--out", out_dir]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["fit_rmse_mm"].as_array().unwrap().len(), 6);
+    for f in ["fig5.json", "fig5.md", "fig5.png", "fig5.svg"] {
+        let m = std::fs::metadata(dir.path().join(f)).unwrap();
+        assert!(m.len() > 100 && m.len() < 200_000, "{f}: {} bytes", m.len());
+    }
+    let bad = etlcal(&["study", "fig6", "--trials", "0", "--out", out_dir]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("--trials must be at least 1"), "{err}");
+    assert!(!dir.path().join("fig6.json").exists());
+    let unknown = etlcal(&["study", "fig7"]);
+    assert!(!unknown.status.success());
+}
