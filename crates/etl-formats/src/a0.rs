@@ -38,20 +38,29 @@ impl A0File {
         A0 { kf0x: self.kf0x, kf0y: self.kf0y, u0: self.u0, v0: self.v0 }
     }
 
-    /// Reads and checks a file (positive focal lengths, finite numbers).
-    pub fn load(path: &Path) -> Result<Self> {
-        let r: A0File = read_json(path, FORMAT)?;
+    /// The one check of the format (positive focal lengths, finite numbers), made by the
+    /// reader and the writer; `path` names the file in the message.
+    pub fn validate(&self, path: &Path) -> Result<()> {
+        let r = self;
         if !([r.kf0x, r.kf0y, r.u0, r.v0].iter().all(|x| x.is_finite()) && r.kf0x > 0.0 && r.kf0y > 0.0) {
             return Err(Error::Parse {
                 path: path.to_owned(),
                 message: "kf0x, kf0y must be positive and u0, v0 finite".into(),
             });
         }
+        Ok(())
+    }
+
+    /// Reads and checks a file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let r: A0File = read_json(path, FORMAT)?;
+        r.validate(path)?;
         Ok(r)
     }
 
-    /// Writes the file atomically.
+    /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
+        self.validate(path)?;
         write_json(path, self)
     }
 }

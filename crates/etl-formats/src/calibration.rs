@@ -11,7 +11,7 @@ use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface;
 use serde::{Deserialize, Serialize};
 
-use super::{read_json, write_json};
+use super::{parse_json, read_json, write_json};
 use crate::{Error, Result};
 
 /// The format tag.
@@ -137,20 +137,60 @@ impl Calibration {
         }
     }
 
-    /// The thermal surface (the paper's when the file has none).
-    pub fn thermal_surface(&self) -> ThermalSurface {
-        self.thermal.map_or(ThermalSurface::PAPER, |t| ThermalSurface { coefficients: t.coefficients })
+    /// The thermal surface the calibration was made with. A file without one is refused
+    /// here rather than given a default: a surface assumed silently changes every E_com.
+    pub fn thermal_surface(&self) -> Result<ThermalSurface> {
+        self.thermal.map(|t| ThermalSurface { coefficients: t.coefficients }).ok_or_else(|| {
+            Error::InvalidInput(
+                "this calibration has no temperature compensation (thermal); pass E_com directly or add one".into(),
+            )
+        })
+    }
+
+    /// The one check of a calibration, made by every reader and writer (CLI and Python):
+    /// a valid camera model, a positive image size, a finite ordered current range, a
+    /// valid thermal surface when there is one, and a finite RMS >= 0. `path` names the
+    /// file in the message.
+    pub fn validate(&self, path: &Path) -> Result<()> {
+        let bad = |message: String| Err(Error::Parse { path: path.to_owned(), message });
+        if let Err(e) = self.model().validate() {
+            return bad(e.to_string());
+        }
+        if self.image_size[0] == 0 || self.image_size[1] == 0 {
+            return bad(format!("image_size {:?} must be positive", self.image_size));
+        }
+        let [lo, hi] = self.e_com_range_ma;
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return bad(format!("e_com_range_ma {:?} must be a finite [min, max]", self.e_com_range_ma));
+        }
+        if let Some(t) = &self.thermal {
+            if let Err(e) = (ThermalSurface { coefficients: t.coefficients }).validate() {
+                return bad(e.to_string());
+            }
+        }
+        if !(self.rms_reprojection_px.is_finite() && self.rms_reprojection_px >= 0.0) {
+            return bad(format!("rms_reprojection_px = {} must be a finite number >= 0", self.rms_reprojection_px));
+        }
+        Ok(())
     }
 
     /// Reads and checks a file.
     pub fn load(path: &Path) -> Result<Self> {
         let c: Calibration = read_json(path, FORMAT)?;
-        c.model().validate().map_err(|e| Error::Parse { path: path.to_owned(), message: e.to_string() })?;
+        c.validate(path)?;
         Ok(c)
     }
 
-    /// Writes the file atomically.
+    /// Parses and checks `etlcal.calibration/1` text; `path` names it in messages.
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        let c: Calibration = parse_json(text, path, FORMAT)?;
+        c.validate(path)?;
+        Ok(c)
+    }
+
+    /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
+        self.validate(path)?;
         write_json(path, self)
     }
 

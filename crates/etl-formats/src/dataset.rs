@@ -171,8 +171,9 @@ impl Dataset {
         Ok(d)
     }
 
-    /// Writes the file atomically.
+    /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
+        self.validate().map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
         write_json(path, self)
     }
 

@@ -18,10 +18,20 @@ pub type Result<T> = std::result::Result<T, Error>;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// Reading or writing a file failed.
+    /// Reading a file (or a directory) failed.
     #[error("{path}: {source}")]
     Io {
         /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Writing an output failed (its directory is missing, the disk is full, ...); earlier
+    /// output at `path` is left whole.
+    #[error("{path}: {source}")]
+    Output {
+        /// The output file.
         path: PathBuf,
         /// The OS error.
         #[source]
@@ -78,8 +88,10 @@ pub enum Error {
 pub enum ErrorKind {
     /// A value or argument the caller gave is invalid.
     InvalidInput,
-    /// A file could not be read, or an output could not be written.
+    /// A file could not be read.
     Io,
+    /// An output could not be written.
+    Output,
     /// A file could not be parsed or has the wrong shape.
     Parse,
     /// A file declares another format or version.
@@ -107,6 +119,7 @@ impl Error {
     pub fn kind(&self) -> ErrorKind {
         match self {
             Error::Io { .. } => ErrorKind::Io,
+            Error::Output { .. } => ErrorKind::Output,
             Error::Parse { .. } => ErrorKind::Parse,
             Error::Format { .. } => ErrorKind::Format,
             Error::Image { .. } => ErrorKind::Image,
@@ -127,5 +140,53 @@ impl Error {
     /// A lens failure, keeping its kind: `lens.set_current_ma(e).map_err(Error::lens)?`.
     pub fn lens<E: LensError>(e: E) -> Self {
         Error::Lens { kind: e.kind(), message: e.to_string() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A lens error of a given kind, as a driver would return it.
+    #[derive(Debug)]
+    struct FakeLens(LensErrorKind);
+    impl core::fmt::Display for FakeLens {
+        fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+            write!(f, "no reply to GetTemperature within 500ms")
+        }
+    }
+    impl LensError for FakeLens {
+        fn kind(&self) -> LensErrorKind {
+            self.0
+        }
+    }
+
+    #[test]
+    fn a_lens_failure_keeps_its_kind_and_message() {
+        let cases = [
+            (LensErrorKind::Timeout, ErrorKind::DeviceTimeout),
+            (LensErrorKind::Refused, ErrorKind::DeviceRefused),
+            (LensErrorKind::LinkLost, ErrorKind::LinkLost),
+            (LensErrorKind::Protocol, ErrorKind::DeviceProtocol),
+            (LensErrorKind::InvalidInput, ErrorKind::InvalidInput),
+            (LensErrorKind::Other, ErrorKind::Device),
+        ];
+        for (lens, kind) in cases {
+            let e = Error::lens(FakeLens(lens));
+            assert_eq!(e.kind(), kind);
+            assert_eq!(e.to_string(), "lens: no reply to GetTemperature within 500ms");
+        }
+    }
+
+    #[test]
+    fn a_failed_write_is_an_output_error_and_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing-dir").join("c.json");
+        let e = crate::write_atomic(&path, b"{}").unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Output);
+        assert!(!path.exists() && std::fs::read_dir(dir.path()).unwrap().count() == 0);
+        let read = crate::read_json::<serde_json::Value>(&path, "x/1").unwrap_err();
+        assert_eq!(read.kind(), ErrorKind::Io);
+        assert_eq!(Error::Core(etl_core::Error::BehindCamera).kind(), ErrorKind::Precondition);
     }
 }

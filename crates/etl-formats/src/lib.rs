@@ -1,11 +1,43 @@
+//! etl-formats: every `etlcal.*` file format, its one validator, and its conversions to
+//! etl-core types. This is the crate a vision service depends on: it reads a calibration
+//! and gives the camera at any lens current and temperature, with nothing of the
+//! calibration machinery (detection, solvers' drivers, plots, the command line).
+//!
+//! ```
+//! use std::path::Path;
+//! use etl_formats::Calibration;
+//!
+//! # fn main() -> etl_formats::Result<()> {
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/service/calibration.json");
+//! let cal = Calibration::load(Path::new(path))?; // refuses a file that fails its checks
+//! let camera = cal.model();
+//!
+//! // E_com at the lens's driver current and temperature (Eq. 8), with the surface the
+//! // calibration was made with; a current outside the calibrated range is refused.
+//! let (e_in_ma, temperature_c) = (150.0, 35.0);
+//! let e_com_ma = cal.thermal_surface()?.e_com_ma(temperature_c, e_in_ma)?;
+//! assert!((e_com_ma - 143.485).abs() < 1e-3);
+//! cal.check_current(e_com_ma, 0.0)?;
+//!
+//! // K at that setting, a world point's pixel, and a pixel without distortion.
+//! let k = camera.intrinsics(e_com_ma)?;
+//! assert!(k.fx > 1000.0 && k.fy > 1000.0);
+//! let pixel = camera.project([10.0, 8.0, 20.0], e_com_ma)?;
+//! let ideal = camera.undistort(pixel, e_com_ma)?;
+//! assert!((ideal[0] - pixel[0]).abs() < 5.0 && (ideal[1] - pixel[1]).abs() < 5.0);
+//! # Ok(())
+//! # }
+//! ```
+//!
 //! File formats (DESIGN.md): JSON with a `"format"` field naming format and version
 //! (`etlcal.<name>/<version>`); lengths in mm, currents in mA, temperatures in degC.
 //!
 //! Readers refuse an unknown format or version with a message naming it. Unknown fields
 //! are refused too (`deny_unknown_fields` on every format struct): a misspelt key would
 //! otherwise silently fall back to a default, which for a calibration is worse than an
-//! error. Writers are atomic: a temporary file in the same directory, then a rename, so a
-//! failed run leaves earlier output whole.
+//! error. Each format has one `validate`, run by its reader and its writer (the command
+//! line and Python alike). Writers are atomic: a temporary file in the same directory,
+//! then a rename, so a failed run leaves earlier output whole.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -21,6 +53,14 @@ pub mod observations;
 pub mod thermal;
 
 pub use error::{Error, ErrorKind, Result};
+
+pub use a0::A0File;
+pub use calibration::Calibration;
+pub use dataset::{Board, Dataset};
+pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
+pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
+pub use observations::Observations;
+pub use thermal::ThermalFile;
 
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
 ///
@@ -156,13 +196,13 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
 /// temporary file removed. The parent directory must exist (it is not created: a
 /// misspelt output directory is an error, not a surprise tree).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let io = |source| Error::Io { path: path.to_owned(), source };
+    let io = |source| Error::Output { path: path.to_owned(), source };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
     };
     if !dir.is_dir() {
-        return Err(Error::Io {
+        return Err(Error::Output {
             path: path.to_owned(),
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "the output directory does not exist"),
         });

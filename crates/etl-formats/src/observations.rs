@@ -102,8 +102,9 @@ impl Observations {
         Ok(o)
     }
 
-    /// Writes the file atomically.
+    /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
+        self.validate().map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
         write_json(path, self)
     }
 

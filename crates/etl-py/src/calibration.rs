@@ -19,36 +19,9 @@ use crate::thermal::ThermalSurface;
 /// costs more than it lets other threads gain).
 const DETACH_POINTS: usize = 4096;
 
-/// Parses and checks `etlcal.calibration/1` text as `CalFile::load` checks a file.
+/// Parses and checks `etlcal.calibration/1` text (the format's one validator).
 fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
-    let f: CalFile = etl_formats::parse_json(text, path, FORMAT).py()?;
-    check_file(&f, path)?;
-    Ok(f)
-}
-
-/// The checks of `CalFile::load`, and those this module relies on.
-fn check_file(f: &CalFile, path: &Path) -> PyResult<()> {
-    let bad =
-        |message: String| Err(crate::errors::calib_err(etl_calib::Error::Parse { path: path.to_owned(), message }));
-    if let Err(e) = f.model().validate() {
-        return bad(e.to_string());
-    }
-    if f.image_size[0] == 0 || f.image_size[1] == 0 {
-        return bad(format!("image_size {:?} must be positive", f.image_size));
-    }
-    let [lo, hi] = f.e_com_range_ma;
-    if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-        return bad(format!("e_com_range_ma {:?} must be a finite [min, max]", f.e_com_range_ma));
-    }
-    if let Some(t) = &f.thermal {
-        if let Err(e) = (CoreSurface { coefficients: t.coefficients }).validate() {
-            return bad(e.to_string());
-        }
-    }
-    if !(f.rms_reprojection_px.is_finite() && f.rms_reprojection_px >= 0.0) {
-        return bad(format!("rms_reprojection_px = {} must be a finite number >= 0", f.rms_reprojection_px));
-    }
-    Ok(())
+    CalFile::parse(text, path).py()
 }
 
 const ZERO_STD: ModelStd = ModelStd {
@@ -153,7 +126,7 @@ impl Calibration {
         let mut c = Calibration::from_model(model, [image_size.0, image_size.1], [e_com_range_ma.0, e_com_range_ma.1]);
         c.file.thermal = thermal.map(|t| ThermalRef { coefficients: t.inner.coefficients });
         c.file.rms_reprojection_px = rms_px;
-        check_file(&c.file, Path::new("<Calibration>"))?;
+        c.file.validate(Path::new("<Calibration>")).py()?;
         Ok(c)
     }
 
@@ -187,7 +160,6 @@ impl Calibration {
     /// Args:
     ///     path: the file (str or os.PathLike); its directory must exist.
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        check_file(&self.file, &path)?;
         self.file.save(&path).py()
     }
 
@@ -291,21 +263,30 @@ impl Calibration {
         self.file.iterations
     }
 
-    /// Per-view summaries of the calibration: a list of dicts with e_com_ma (mA), points,
-    /// rms_px (px), dz_mm (mm) and de_ma (mA) (the errors-in-variables corrections; 0
-    /// for the paper's estimator).
+    /// Per-view summaries of the calibration: a list of dicts with every key of the
+    /// file's `views` entries: e_com_ma (mA), points, rms_px (px), dz_mm (mm) and de_ma
+    /// (mA) (the errors-in-variables corrections; 0 for the paper's estimator), fx_px and
+    /// fy_px (px; the focal lengths refitted to that view alone).
     #[getter]
     fn views<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.file
             .views
             .iter()
             .map(|v| {
+                // Through the file's own serialisation, so a key added to the format
+                // reaches Python without a second list of names here.
+                let serde_json::Value::Object(fields) =
+                    serde_json::to_value(v).map_err(|e| input_error(e.to_string()))?
+                else {
+                    return Err(input_error("a view summary is not a JSON object"));
+                };
                 let d = PyDict::new(py);
-                d.set_item("e_com_ma", v.e_com_ma)?;
-                d.set_item("points", v.points)?;
-                d.set_item("rms_px", v.rms_px)?;
-                d.set_item("dz_mm", v.dz_mm)?;
-                d.set_item("de_ma", v.de_ma)?;
+                for (key, value) in fields {
+                    match value.as_u64() {
+                        Some(n) => d.set_item(key, n)?,
+                        None => d.set_item(key, value.as_f64())?,
+                    }
+                }
                 Ok(d)
             })
             .collect()
@@ -517,12 +498,7 @@ impl Calibration {
 
 impl Calibration {
     fn surface(&self) -> PyResult<CoreSurface> {
-        match &self.file.thermal {
-            Some(t) => Ok(CoreSurface { coefficients: t.coefficients }),
-            None => Err(input_error(
-                "this calibration has no temperature compensation (thermal); pass E_com directly or add one",
-            )),
-        }
+        self.file.thermal_surface().py()
     }
 }
 

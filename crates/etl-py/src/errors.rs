@@ -168,7 +168,7 @@ pub fn calib_err(e: etl_formats::Error) -> PyErr {
     let kind = match (&e, e.kind()) {
         (etl_formats::Error::Core(c), _) => core_kind(c),
         (etl_formats::Error::Lens { kind, .. }, _) => lens_kind(*kind),
-        (_, K::Io) => Kind::File,
+        (_, K::Io | K::Output) => Kind::File,
         (_, K::BoardNotFound) => Kind::BoardNotFound,
         _ => Kind::Input,
     };

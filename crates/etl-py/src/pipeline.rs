@@ -68,11 +68,16 @@ pub fn calibrate(
         "per-setting" => {
             // An estimator given at all is refused, "eiv" and "paper" alike: the baseline
             // has no bundle adjustment.
-            if a0.is_some() || estimator.is_some() || hold_a0 || robust.is_some() {
-                return Err(input_error(
-                    "method=\"per-setting\" takes no a0, estimator, hold_a0 or robust: the baseline is Zhang at each current",
-                ));
-            }
+            etl_calib::baseline::refuse_bundle_adjust_options(
+                "method=\"per-setting\"",
+                [
+                    ("a0", a0.is_some()),
+                    ("estimator", estimator.is_some()),
+                    ("hold_a0", hold_a0),
+                    ("robust", robust.is_some()),
+                ],
+            )
+            .py()?;
             let obs = observations.file.clone();
             let result = py.detach(|| etl_calib::baseline::per_setting(&obs, &thermal)).py()?;
             return Ok(Calibration::from_file(result.calibration));

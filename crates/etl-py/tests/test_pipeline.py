@@ -1,4 +1,5 @@
 """Observations, A0, simulate.paper_rig, calibrate and solve_pnp."""
+import json
 import math
 import pickle
 
@@ -51,6 +52,10 @@ def test_calibrate_recovers_the_rig(sim):
     assert np.max(np.abs(fx / fx_true - 1)) < 0.02
     assert cal.std["kf_x"].shape == (4,) and np.all(cal.std["kf_x"] > 0)
     assert len(cal.views) == 15 and cal.views[0]["points"] == 141
+    # Every key of the file's views, with the file's values (fx_px, fy_px included).
+    file_views = json.loads(cal.to_json())["views"]
+    assert cal.views == file_views and {"fx_px", "fy_px"} <= set(cal.views[0])
+    assert abs(cal.views[0]["fx_px"] / np.polyval(cal.kf_x[::-1], cal.views[0]["e_com_ma"]) - 1) < 0.01
     eiv = etlcal.calibrate(sim.observations, sim.a0, estimator="eiv")
     assert eiv.estimator == "eiv"
     dz = [v["dz_mm"] for v in eiv.views]

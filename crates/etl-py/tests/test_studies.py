@@ -34,3 +34,11 @@ def test_the_studies_module_calls_the_same_studies():
     assert etlcal.studies.crlb(trials=20, seed=3) == etlcal.study("crlb", trials=20, seed=3)
     with pytest.raises(etlcal.InputError, match="does not exist"):
         etlcal.studies.fig6(trials=1, out="/no/such/dir")
+
+
+def test_study_defaults_are_rusts_own():
+    """trials=None is the command line's default count (one owner: Rust), not a second one."""
+    import inspect
+
+    for name in ["fig6", "subsets", "baseline", "crlb"]:
+        assert inspect.signature(getattr(etlcal.studies, name)).parameters["trials"].default is None

@@ -382,7 +382,7 @@ pub fn write_report(
     dir: &Path,
 ) -> Result<ReportFiles> {
     if !dir.is_dir() {
-        return Err(Error::Io {
+        return Err(Error::Output {
             path: dir.to_owned(),
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "the output directory does not exist"),
         });

@@ -19,6 +19,7 @@ use etl_core::calib::{Estimator, RobustLoss};
 use etl_core::thermal::ThermalCalibration;
 
 use super::print_json;
+use etl_calib::baseline::refuse_bundle_adjust_options;
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_formats::a0::A0File;
@@ -124,14 +125,16 @@ pub fn run(args: Args) -> Result<()> {
     if !(args.sigma_z_um > 0.0 && args.sigma_e_ma > 0.0) {
         return Err(Error::InvalidInput("--sigma-z-um and --sigma-e-ma must be positive".into()));
     }
-    if args.method == MethodArg::PerSetting
-        && (args.a0.is_some() || args.estimator.is_some() || args.hold_a0 || args.huber_px.is_some())
-    {
-        return Err(Error::InvalidInput(
-            "--method per-setting takes no --a0, --estimator, --hold-a0 or --huber-px: the baseline is Zhang at \
-             each current, with no bundle adjustment; drop those flags or use --method proposed"
-                .into(),
-        ));
+    if args.method == MethodArg::PerSetting {
+        refuse_bundle_adjust_options(
+            "--method per-setting",
+            [
+                ("--a0", args.a0.is_some()),
+                ("--estimator", args.estimator.is_some()),
+                ("--hold-a0", args.hold_a0),
+                ("--huber-px", args.huber_px.is_some()),
+            ],
+        )?;
     }
     for out in std::iter::once(&args.out).chain(&args.observations_out) {
         let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));

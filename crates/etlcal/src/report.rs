@@ -62,7 +62,7 @@ pub fn run(args: Args) -> Result<()> {
     let obs = args.observations.as_deref().map(Observations::load).transpose()?;
     let thermal = match &args.thermal {
         Some(p) => ThermalFile::load(p)?.calibration(),
-        None => ThermalCalibration { surface: cal.thermal_surface(), ..ThermalCalibration::PAPER },
+        None => ThermalCalibration { surface: cal.thermal_surface()?, ..ThermalCalibration::PAPER },
     };
     ensure_out_dir(&args.out)?;
     let r = write_report(&cal, obs.as_ref(), &thermal, &args.out)?;

@@ -98,6 +98,34 @@ fn poly_fit(x: &[f64], y: &[f64], sd: &[f64], deg: usize) -> Result<([f64; 4], [
     Ok((raw, cov))
 }
 
+/// The proposed method's options that the baseline has no use for, as a front end got
+/// them: `(the option's name as that front end spells it, whether it was given)`, in the
+/// order a0, estimator, hold-a0, robust loss.
+pub type BundleAdjustOptionsGiven<'a> = [(&'a str, bool); 4];
+
+/// Refuses the bundle adjustment's options for the baseline (one rule for the CLI and
+/// Python): the baseline is Zhang at each current, with no bundle adjustment, so an
+/// estimator or an A0 given would be silently ignored. `method` names the baseline as the
+/// front end spells it.
+///
+/// ```
+/// use etl_calib::baseline::refuse_bundle_adjust_options;
+/// let given = [("a0", false), ("estimator", true), ("hold_a0", false), ("robust", false)];
+/// let e = refuse_bundle_adjust_options("method=\"per-setting\"", given).unwrap_err();
+/// assert!(e.to_string().contains("takes no a0, estimator, hold_a0 or robust"));
+/// assert!(refuse_bundle_adjust_options("x", given.map(|(n, _)| (n, false))).is_ok());
+/// ```
+pub fn refuse_bundle_adjust_options(method: &str, given: BundleAdjustOptionsGiven<'_>) -> Result<()> {
+    if !given.iter().any(|&(_, g)| g) {
+        return Ok(());
+    }
+    let [a, b, c, d] = given.map(|(name, _)| name);
+    Err(Error::InvalidInput(format!(
+        "{method} takes no {a}, {b}, {c} or {d}: the baseline is Zhang at each current, with no bundle \
+         adjustment; drop them or use the proposed method"
+    )))
+}
+
 /// Runs the baseline on `obs.setting_views` (see the module docs).
 ///
 /// Errors: no setting views; a setting with fewer than 3 views; fewer than 3 settings;
