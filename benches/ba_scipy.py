@@ -43,7 +43,7 @@ def residuals(x, world, pix, e):
 
 
 def main():
-    subprocess.run(["cargo", "build", "--release", "-q", "-p", "etl-calib", "--example", "ba_problem"], cwd=ROOT, check=True)
+    subprocess.run(["cargo", "build", "--release", "-q", "-p", "etl-sim", "--example", "ba_problem"], cwd=ROOT, check=True)
     out = subprocess.run([str(ROOT / "target/release/examples/ba_problem")], capture_output=True, text=True, check=True).stdout
     prob = json.loads(out)
     world, pix, e = [], [], []

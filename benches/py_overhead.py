@@ -90,7 +90,7 @@ def main() -> None:
     # fresh process each of them is a new mmap whose pages fault on first touch (~3x the
     # time). Compare like with like: both sides in fresh processes, cold and warmed by one
     # 16 MiB allocation, same timing loop (best of 7 repeats of 5 calls).
-    rust = rust_median_ns("detect", "detect_1936x1458_14x12/blur_1.5", package="etl-calib")
+    rust = rust_median_ns("detect", "detect_1936x1458_14x12/blur_1.5", package="etl-image")
     png = TARGET / "criterion" / "detect_view_blur_1.5.png"
     for warm in [False, True]:
         r_ms = rust_detect_ms(png, warm)

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
-use etl_calib::zhang::{detect_views, zhang};
+use etl_calib::pipeline::detect_views;
+use etl_calib::zhang::zhang;
 use etl_formats::dataset::Board;
 use etl_formats::{Error, Result};
 
@@ -41,7 +42,11 @@ pub struct Args {
 /// Runs `etlcal zhang`.
 pub fn run(args: Args) -> Result<()> {
     let board = Board { inner_corners: args.pattern, square_mm: args.square };
-    let (views, size) = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
+    let found = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
+    for m in &found.skipped {
+        eprintln!("etlcal: warning: skipped: {m}");
+    }
+    let (views, size) = (found.views, found.image_size);
     if views.len() < 3 {
         return Err(Error::BoardNotFound(format!(
             "the board was found in {} of {} images; Zhang's method needs at least 3",

@@ -7,8 +7,10 @@
 //! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports.
 
 pub mod dataset;
+mod planar_views;
 mod view_focal;
 
+pub use planar_views::{detect_views, PlanarViews};
 pub use view_focal::view_focal;
 
 use etl_core::calib::{

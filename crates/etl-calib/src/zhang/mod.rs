@@ -16,8 +16,6 @@
 //! Needs at least 3 views of the board in distinct orientations (each view gives two
 //! constraints on the 5 unknowns of B up to scale).
 
-use std::path::PathBuf;
-
 use etl_core::calib::jacobian::{to_params, Projector};
 use etl_core::calib::rac::nearest_rotation;
 use etl_core::calib::A0;
@@ -26,13 +24,8 @@ use etl_core::lm::{solve_blocks, BlockProblem, BlockRowSink, BlockScratch, Optio
 use etl_core::model::rotation::matrix_to_rodrigues;
 use etl_core::model::CameraModel;
 use etl_core::pnp::homography;
-use etl_core::progress::Progress;
-use rayon::prelude::*;
 
-use etl_formats::dataset::Board;
 use etl_formats::{Error, Result};
-
-use crate::pipeline::dataset::{default_detector, CornerDetector};
 
 /// One view: board points (mm, on Z = 0) and their observed pixels.
 #[derive(Debug, Clone, Default)]
@@ -241,49 +234,4 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
         iterations: r.iterations,
         views_used: views.len(),
     })
-}
-/// Detects the board in every image (in parallel); images where it is not found are
-/// named on stderr and skipped. Returns the views and the image size.
-pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) -> Result<(Vec<PlanarView>, [u32; 2])> {
-    board.validate()?;
-    for p in images {
-        std::fs::metadata(p).map_err(|source| Error::Io { path: p.clone(), source })?;
-    }
-    let det = default_detector();
-    progress.start(images.len(), "detecting");
-    let results: Vec<_> = images
-        .par_iter()
-        .map(|p| {
-            let r = det.detect(p, board.inner_corners);
-            progress.advance(1);
-            r
-        })
-        .collect();
-    progress.finish();
-    let (mut views, mut size) = (vec![], None::<[u32; 2]>);
-    for (p, r) in images.iter().zip(results) {
-        match r {
-            Ok(d) => {
-                if let Some(s) = size.filter(|s| *s != d.image_size) {
-                    return Err(Error::Image {
-                        path: p.clone(),
-                        message: format!(
-                            "{} x {} px, the first image is {} x {}",
-                            d.image_size[0], d.image_size[1], s[0], s[1]
-                        ),
-                    });
-                }
-                size = Some(d.image_size);
-                let sq = board.square_mm;
-                views.push(PlanarView {
-                    board_mm: d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq]).collect(),
-                    pixels: d.corners.iter().map(|c| c.1).collect(),
-                });
-            }
-            Err(Error::BoardNotFound(m)) => eprintln!("etlcal: warning: skipped: {m}"),
-            Err(e) => return Err(e),
-        }
-    }
-    let size = size.ok_or_else(|| Error::BoardNotFound(format!("in none of the {} images", images.len())))?;
-    Ok((views, size))
 }
