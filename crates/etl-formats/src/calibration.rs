@@ -125,6 +125,30 @@ pub struct Calibration {
 }
 
 impl Calibration {
+    /// A calibration of `model` for images of `image_size` px over `e_com_range_ma`, with
+    /// no thermal part, zero standard deviations, zero RMS and no views: an exact model,
+    /// not an estimate. Estimators fill in the rest (`Calibration { .., ..from_model() }`).
+    pub fn from_model(model: &CameraModel, image_size: [u32; 2], e_com_range_ma: [f64; 2]) -> Self {
+        Calibration {
+            format: FORMAT.to_owned(),
+            image_size,
+            rotation_rodrigues: model.rotation_rodrigues,
+            translation_mm: model.translation_mm,
+            kf_x: model.kf_x,
+            kf_y: model.kf_y,
+            principal_point: model.principal_point,
+            distortion_a: model.distortion_a,
+            thermal: None,
+            e_com_range_ma,
+            rms_reprojection_px: 0.0,
+            std: ModelStd::from_params(&[0.0; 25]),
+            estimator: String::new(),
+            iterations: 0,
+            initial_rms_px: 0.0,
+            views: vec![],
+        }
+    }
+
     /// The camera model.
     pub fn model(&self) -> CameraModel {
         CameraModel {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface as CoreSurface;
-use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef, FORMAT};
+use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
@@ -23,15 +23,6 @@ const DETACH_POINTS: usize = 4096;
 fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
     CalFile::parse(text, path).py()
 }
-
-const ZERO_STD: ModelStd = ModelStd {
-    rotation_rodrigues: [0.0; 3],
-    translation_mm: [0.0; 3],
-    kf_x: [0.0; 4],
-    kf_y: [0.0; 4],
-    principal_point: [0.0; 2],
-    distortion_a: [0.0; 9],
-};
 
 /// A calibrated ETL camera: the 25 numbers of the paper's model (Eq. 12-18), the
 /// temperature compensation (optional), the current range, and the quality figures.
@@ -65,24 +56,7 @@ impl Calibration {
     /// A calibration of `model` with no thermal part, zero standard deviations and zero
     /// RMS (an exact model, not an estimate).
     pub fn from_model(model: CameraModel, image_size: [u32; 2], e_com_range_ma: [f64; 2]) -> Self {
-        Calibration::from_file(CalFile {
-            format: FORMAT.to_owned(),
-            image_size,
-            rotation_rodrigues: model.rotation_rodrigues,
-            translation_mm: model.translation_mm,
-            kf_x: model.kf_x,
-            kf_y: model.kf_y,
-            principal_point: model.principal_point,
-            distortion_a: model.distortion_a,
-            thermal: None,
-            e_com_range_ma,
-            rms_reprojection_px: 0.0,
-            std: ZERO_STD,
-            estimator: String::new(),
-            iterations: 0,
-            initial_rms_px: 0.0,
-            views: vec![],
-        })
+        Calibration::from_file(CalFile::from_model(&model, image_size, e_com_range_ma))
     }
 
     /// Wraps a calibration file's content.

@@ -21,7 +21,7 @@ use etl_core::lm::BlockScratch;
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalCalibration;
 
-use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
+use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
 use etl_formats::observations::Observations;
 use etl_formats::Result;
 
@@ -155,16 +155,7 @@ pub fn calibrate(
     let lo = e_com.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = e_com.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let calibration = Calibration {
-        format: FORMAT.into(),
-        image_size: obs.image_size,
-        rotation_rodrigues: m.rotation_rodrigues,
-        translation_mm: m.translation_mm,
-        kf_x: m.kf_x,
-        kf_y: m.kf_y,
-        principal_point: m.principal_point,
-        distortion_a: m.distortion_a,
         thermal: Some(ThermalRef { coefficients: thermal.surface.coefficients }),
-        e_com_range_ma: [lo, hi],
         rms_reprojection_px: report.rms_px,
         std: ModelStd::from_params(&report.std),
         estimator: match options.estimator {
@@ -174,6 +165,7 @@ pub fn calibrate(
         iterations: report.iterations,
         initial_rms_px: report.initial_rms_px,
         views: summaries,
+        ..Calibration::from_model(&m, obs.image_size, [lo, hi])
     };
     Ok(CalibrationResult { calibration, report, initial })
 }
