@@ -10,13 +10,16 @@ fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/service/calibration.json")
 }
 
+/// A way to spoil a good calibration, named by the field it spoils.
+type Spoil = (&'static str, fn(&mut Calibration));
+
 #[test]
 fn the_reader_the_parser_and_the_writer_apply_the_same_checks() {
     let good = Calibration::load(&fixture()).unwrap();
     let text = std::fs::read_to_string(fixture()).unwrap();
     assert_eq!(Calibration::parse(&text, &fixture()).unwrap(), good);
     let dir = tempfile::tempdir().unwrap();
-    let bads: [(&str, fn(&mut Calibration)); 4] = [
+    let bads: [Spoil; 4] = [
         ("image_size", |c| c.image_size = [0, 1458]),
         ("e_com_range_ma", |c| c.e_com_range_ma = [225.0, 80.0]),
         ("rms_reprojection_px", |c| c.rms_reprojection_px = -1.0),
