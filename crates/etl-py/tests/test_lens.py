@@ -101,6 +101,27 @@ def test_thermal_calibration_with_a_python_camera():
             etlcal.thermal_calibration(lens, capture, set_temperature, temperatures_c=[27.0])
 
 
+def test_a_lens_timeout_inside_the_temperature_procedure_is_a_device_timeout():
+    """The procedure is library code between Python and the lens: the failure keeps its
+    kind on the way (issue 14), so it is DeviceTimeoutError, not InputError."""
+    import numpy as np
+
+    device = etlcal.VirtualLens()
+    frame = np.full((64, 64), 128, dtype=np.uint8)
+
+    def set_temperature(t):
+        # The lens stops answering once the climate moves: the next lens call times out.
+        device.set_temperature_c(t)
+        device.inject_faults(silence_next=1000)
+
+    with etlcal.Lens(device.port, timeout_ms=150) as lens:
+        with pytest.raises(etlcal.DeviceTimeoutError, match=r"^lens: no reply to \w+ within 150ms$"):
+            etlcal.thermal_calibration(
+                lens, lambda: frame, set_temperature, e_in_grid_ma=[100.0], temperatures_c=[27.0, 30.0]
+            )
+    device.inject_faults()
+
+
 def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
     device = etlcal.VirtualLens()
     with etlcal.Lens(device.port, timeout_ms=150) as lens:

@@ -113,10 +113,6 @@ pub fn fit_samples(samples: &[ThermalSample]) -> Result<(ThermalCalibration, f64
     fit.solve_calibration().map_err(|err| Error::InvalidInput(format!("cannot fit the surface: {err}")))
 }
 
-fn lens_err<E: std::fmt::Display>(e: E) -> Error {
-    Error::InvalidInput(format!("lens: {e}"))
-}
-
 /// Runs the procedure (see the module documentation); `progress` draws a bar.
 ///
 /// Errors: bad options (named); any error of the lens, camera or climate; a refocus that
@@ -145,10 +141,10 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
         for &t in &options.temperatures_c {
             climate.set_temperature_c(t)?;
             if reference.is_none() {
-                lens.set_current_ma(e0).and_then(|_| lens.current_ma()).map_err(lens_err)?;
+                lens.set_current_ma(e0).and_then(|_| lens.current_ma()).map_err(Error::lens)?;
                 camera.place_board_in_focus()?;
             }
-            let t_before = lens.temperature_c().map_err(lens_err)?;
+            let t_before = lens.temperature_c().map_err(Error::lens)?;
             let window = [last - options.search_half_width_ma, last + options.search_half_width_ma];
             let af = AutofocusOptions {
                 range_ma: window,
@@ -165,7 +161,7 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
                     let measured = lens
                         .set_current_ma(e)
                         .and_then(|_| lens.current_ma())
-                        .map_err(lens_err)
+                        .map_err(Error::lens)
                         .and_then(|_| camera.capture())
                         .and_then(|img| sharpness(&img, options.metric));
                     measured.map_err(|err| {
@@ -188,8 +184,8 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
                 )));
             }
             // The current the driver actually holds (clamped and quantised) is the one recorded.
-            let e_set = lens.set_current_ma(found.best_ma).map_err(lens_err)?;
-            let t_after = lens.temperature_c().map_err(lens_err)?;
+            let e_set = lens.set_current_ma(found.best_ma).map_err(Error::lens)?;
+            let t_after = lens.temperature_c().map_err(Error::lens)?;
             let temperature_c = 0.5 * (t_before + t_after);
             let e_ref = *reference.get_or_insert(e_set);
             samples.push(ThermalSample { temperature_c, e_in_ma: e_set, e_t_ma: e_set - e_ref });
