@@ -3,14 +3,26 @@
 //! what 115200 baud allows for its commands (10 bits per byte on the wire).
 //!
 //! `cargo bench -p etl-hw --bench link` (prints one line per figure).
+#[cfg(unix)]
 use std::time::{Duration, Instant};
 
+#[cfg(unix)]
 use etl_core::thermal::ThermalCalibration;
+#[cfg(unix)]
 use etl_hw::client::{LensClient, OpenOptions};
+#[cfg(unix)]
 use etl_hw::codec::{Command, Reply};
+#[cfg(unix)]
 use etl_hw::hold::{hold, HoldConfig};
+#[cfg(unix)]
 use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
 
+#[cfg(not(unix))]
+fn main() {
+    eprintln!("the link bench needs the pseudo-terminal virtual lens (Unix only)");
+}
+
+#[cfg(unix)]
 fn main() {
     let device = VirtualLens::spawn(VirtualLensConfig::default()).expect("virtual lens");
     let mut client = LensClient::open(device.path(), OpenOptions::default()).expect("open");

@@ -1,4 +1,5 @@
-//! [`LensClient`]: an Optotune Lens Driver 4 over a serial port (facts sheet section 9).
+//! [`LensClient`]: an Optotune Lens Driver 4 over a serial port (facts sheet section 9), or
+//! over any other [`Transport`] ([`LensClient::from_transport`]).
 //!
 //! Safety rules it keeps:
 //! - no call can command a current outside the driver's software limits (read from the
@@ -11,7 +12,6 @@
 //! - [`LensClient::reconnect`] reopens the port without `Start`, so the lens keeps its
 //!   current (and focus); the EEPROM-backed limits are never written.
 
-use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -21,6 +21,7 @@ use serialport::{ClearBuffer, SerialPort};
 use crate::codec::scaling::{current_code, current_ma, temperature_c, FirmwareType};
 use crate::codec::{scan_reply, Command, Mode, Reply, Scan};
 use crate::error::{HwError, Result};
+pub use crate::transport::Transport;
 
 /// How to open the driver.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,8 +102,8 @@ pub struct ControlledRange {
     pub max_dpt: f64,
 }
 
-struct Inner {
-    port: Option<Box<dyn SerialPort>>,
+struct Inner<T> {
+    port: Option<T>,
     rx: Vec<u8>,
     last_command: &'static str,
     unsolicited: Vec<Unsolicited>,
@@ -113,10 +114,12 @@ struct Inner {
     fp_range_dpt: Option<(f64, f64)>,
 }
 
-/// The driver over a serial port. All methods take `&self` (an internal lock serialises
-/// command-reply pairs), so one client can be shared between threads.
+/// The driver over a [`Transport`], the serial port by default (`LensClient` alone means
+/// `LensClient<Box<dyn SerialPort>>`). All methods take `&self` (an internal lock
+/// serialises command-reply pairs), so one client can be shared between threads.
 ///
 /// ```
+/// # #[cfg(unix)] { // the virtual lens's serial port is a pseudo-terminal
 /// use etl_hw::client::{LensClient, OpenOptions};
 /// use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
 /// let device = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
@@ -125,11 +128,12 @@ struct Inner {
 /// assert!(r.clamped && (r.commanded_ma - 292.84).abs() < 1e-9);
 /// assert!(lens.set_current_ma(f64::NAN).is_err());
 /// assert_eq!(lens.identify().unwrap().lens_serial, "ETLV0001");
+/// # }
 /// ```
-pub struct LensClient {
+pub struct LensClient<T: Transport = Box<dyn SerialPort>> {
     path: PathBuf,
     options: OpenOptions,
-    inner: Mutex<Inner>,
+    inner: Mutex<Inner<T>>,
 }
 
 fn open_port(path: &Path, options: &OpenOptions) -> Result<Box<dyn SerialPort>> {
@@ -151,11 +155,48 @@ impl LensClient {
     /// the software limits and the firmware type (needed to clamp and encode).
     ///
     /// Errors: the port cannot be opened ([`HwError::Open`]); no or bad replies
-    /// ([`HwError::Timeout`], [`HwError::Crc`], [`HwError::Device`]); a max current <= 0 or
-    /// limits with lower > upper ([`HwError::Protocol`]).
+    /// ([`HwError::Timeout`], [`HwError::Crc`], [`HwError::Device`],
+    /// [`HwError::UnexpectedReply`]); a max current <= 0 ([`HwError::BadMaxCurrent`]) or
+    /// limits with lower > upper ([`HwError::InvertedLimits`]).
     pub fn open(path: impl AsRef<Path>, options: OpenOptions) -> Result<LensClient> {
         let path = path.as_ref().to_owned();
         let port = open_port(&path, &options)?;
+        LensClient::start(port, path, options)
+    }
+
+    /// Reopens the port at the same path without `Start` (the lens keeps its current)
+    /// and re-reads the limits. Use after an I/O error (cable pulled and plugged back).
+    pub fn reconnect(&self) -> Result<()> {
+        {
+            let mut i = self.lock();
+            i.port = None; // close first: the port is opened exclusively
+            i.rx.clear();
+        }
+        let port = open_port(&self.path, &self.options)?;
+        self.lock().port = Some(port);
+        self.read_calibration()
+    }
+}
+
+impl<T: Transport> LensClient<T> {
+    /// The driver over `transport` (already open and configured), as [`LensClient::open`]
+    /// does it over a serial port: optional `Start` handshake, then the max current, the
+    /// limits and the firmware type. `options.baud_rate` is not used; the name in messages
+    /// is [`Transport::name`].
+    ///
+    /// ```
+    /// use etl_hw::client::{LensClient, OpenOptions};
+    /// use etl_hw::virtual_lens::{VirtualDevice, VirtualLensConfig};
+    /// let device = VirtualDevice::new(VirtualLensConfig::default()).unwrap();
+    /// let lens = LensClient::from_transport(device.transport(), OpenOptions::default()).unwrap();
+    /// assert_eq!(lens.max_current_ma(), 292.84);
+    /// ```
+    pub fn from_transport(transport: T, options: OpenOptions) -> Result<LensClient<T>> {
+        let path = PathBuf::from(transport.name());
+        LensClient::start(transport, path, options)
+    }
+
+    fn start(port: T, path: PathBuf, options: OpenOptions) -> Result<LensClient<T>> {
         let client = LensClient {
             path,
             options,
@@ -174,7 +215,7 @@ impl LensClient {
         if options.handshake {
             match client.transact(Command::Start)? {
                 Some(Reply::Ready) => {}
-                other => return Err(HwError::Protocol(format!("expected Ready after Start, got {other:?}"))),
+                other => return Err(unexpected(Command::Start, other)),
             }
         }
         client.read_calibration()?;
@@ -184,22 +225,23 @@ impl LensClient {
     fn read_calibration(&self) -> Result<()> {
         let max = match self.transact(Command::ReadMaxCurrent)? {
             Some(Reply::MaxCurrent { centi_ma }) if centi_ma > 0 => f64::from(centi_ma) / 100.0,
-            other => return Err(HwError::Protocol(format!("bad max-current reply {other:?}"))),
+            Some(Reply::MaxCurrent { centi_ma }) => return Err(HwError::BadMaxCurrent { centi_ma }),
+            other => return Err(unexpected(Command::ReadMaxCurrent, other)),
         };
         let upper = match self.transact(Command::ReadUpperLimit)? {
             Some(Reply::UpperLimit { code }) => code.clamp(-4095, 4095),
-            other => return Err(HwError::Protocol(format!("bad upper-limit reply {other:?}"))),
+            other => return Err(unexpected(Command::ReadUpperLimit, other)),
         };
         let lower = match self.transact(Command::ReadLowerLimit)? {
             Some(Reply::LowerLimit { code }) => code.clamp(-4095, 4095),
-            other => return Err(HwError::Protocol(format!("bad lower-limit reply {other:?}"))),
+            other => return Err(unexpected(Command::ReadLowerLimit, other)),
         };
         if lower > upper {
-            return Err(HwError::Protocol(format!("driver limits are inverted: lower {lower} > upper {upper}")));
+            return Err(HwError::InvertedLimits { lower, upper });
         }
         let fw = match self.transact(Command::FirmwareType)? {
             Some(Reply::FirmwareType(letter)) => FirmwareType::from_letter(letter),
-            other => return Err(HwError::Protocol(format!("bad firmware-type reply {other:?}"))),
+            other => return Err(unexpected(Command::FirmwareType, other)),
         };
         let mut inner = self.lock();
         inner.max_current_ma = max;
@@ -208,11 +250,11 @@ impl LensClient {
         Ok(())
     }
 
-    fn lock(&self) -> MutexGuard<'_, Inner> {
+    fn lock(&self) -> MutexGuard<'_, Inner<T>> {
         self.inner.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// The port path.
+    /// The port path (for another transport: its [`Transport::name`]).
     pub fn path(&self) -> &Path {
         &self.path
     }
@@ -243,73 +285,23 @@ impl LensClient {
     pub fn transact(&self, command: Command) -> Result<Option<Reply>> {
         let mut inner = self.lock();
         let inner = &mut *inner;
-        let path = self.path.display().to_string();
-        let io = |source: std::io::Error| HwError::Io { path: path.clone(), source };
+        let io = |source: std::io::Error| HwError::Io { path: self.path.display().to_string(), source };
         let port = inner
             .port
             .as_mut()
             .ok_or_else(|| io(std::io::Error::new(std::io::ErrorKind::NotConnected, "port closed; reconnect")))?;
         // Drain what is on the line: stray bytes and error frames of earlier writes.
-        let pending = port.bytes_to_read().map_err(|e| io(e.into()))? as usize;
-        if pending > 0 {
-            let mut tmp = vec![0u8; pending];
-            let n = port.read(&mut tmp).map_err(io)?;
-            inner.rx.extend_from_slice(&tmp[..n]);
-        }
-        if !inner.rx.is_empty() {
-            let mut at = 0;
-            while at < inner.rx.len() {
-                match Reply::decode(&inner.rx[at..]) {
-                    Ok((r @ (Reply::Error(_) | Reply::Nack), n)) => {
-                        inner.unsolicited.push(Unsolicited { reply: r, after: inner.last_command });
-                        at += n;
-                    }
-                    Ok((_, n)) => at += n,
-                    Err(_) => at += 1,
-                }
-            }
-            inner.rx.clear();
-        }
+        drain(port, &mut inner.rx, self.options.timeout).map_err(io)?;
+        record_unsolicited(&mut inner.rx, &mut inner.unsolicited, inner.last_command);
         inner.last_command = command.name();
-        port.write_all(&command.encode()).map_err(io)?;
-        port.flush().map_err(io)?;
-        if !command.has_reply() {
+        port.send(&command.encode()).map_err(io)?;
+        let Some(expected) = command.reply_header() else {
             return Ok(None);
-        }
-        let expected: &[u8] = match command {
-            Command::Start => b"Ready",
-            Command::GetCurrent => b"A",
-            Command::ReadMaxCurrent => b"CMA",
-            Command::ReadUpperLimit => b"CUA",
-            Command::ReadLowerLimit => b"CLA",
-            Command::SetMode(m) => match m {
-                Mode::Current => b"MDA",
-                Mode::Sinusoidal => b"MSA",
-                Mode::Rectangular => b"MQA",
-                Mode::Triangular => b"MTA",
-                Mode::Analog => b"MAA",
-                Mode::Controlled => b"MCA",
-            },
-            Command::ReadMode => b"MMA",
-            Command::GetFocalPower => b"PD",
-            Command::SetTemperatureLimits { .. } => b"PT",
-            Command::Temperature => b"TCA",
-            Command::TemperatureLegacy => b"TA",
-            Command::FirmwareType => b"H",
-            Command::FirmwareBranch => b"F",
-            Command::PartNumber => b"J",
-            Command::FirmwareVersion => b"V",
-            Command::DeviceId => b"IR",
-            Command::LensSerial => b"X",
-            Command::Status => b"S",
-            Command::AnalogInput => b"GAA",
-            // Fire-and-forget commands returned above.
-            _ => b"",
         };
         let deadline = Instant::now() + self.options.timeout;
         let mut chunk = [0u8; 256];
         loop {
-            match scan_reply(&inner.rx, expected) {
+            match scan_reply(&inner.rx, expected.as_bytes()) {
                 Scan::Found { reply, end, .. } => {
                     inner.rx.drain(..end);
                     return match reply {
@@ -322,7 +314,7 @@ impl LensClient {
                     // Drop the frame and whatever follows it: the line is resynchronised by
                     // the next command's drain.
                     inner.rx.clear();
-                    let _ = port.clear(ClearBuffer::Input);
+                    let _ = port.discard_input();
                     return Err(HwError::Crc { command: command.name() });
                 }
                 Scan::NeedMore => {}
@@ -332,13 +324,8 @@ impl LensClient {
                 inner.rx.clear();
                 return Err(HwError::Timeout { command: command.name(), timeout: self.options.timeout });
             }
-            port.set_timeout(deadline - now).map_err(|e| io(e.into()))?;
-            match port.read(&mut chunk) {
-                Ok(0) => {}
-                Ok(n) => inner.rx.extend_from_slice(&chunk[..n]),
-                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
-                Err(e) => return Err(io(e)),
-            }
+            let n = port.receive(&mut chunk, deadline - now).map_err(io)?;
+            inner.rx.extend_from_slice(chunk.get(..n).unwrap_or(&chunk));
         }
     }
 
@@ -349,17 +336,17 @@ impl LensClient {
             Some(Reply::FirmwareVersion { major, minor, build, revision }) => {
                 format!("{major}.{minor}.{build}.{revision}")
             }
-            other => return Err(HwError::Protocol(format!("bad version reply {other:?}"))),
+            other => return Err(unexpected(Command::FirmwareVersion, other)),
         };
         let lens_serial = match self.transact(Command::LensSerial)? {
             Some(Reply::LensSerial(b)) => {
                 b.iter().map(|&c| if c.is_ascii_graphic() { char::from(c) } else { '?' }).collect()
             }
-            other => return Err(HwError::Protocol(format!("bad lens-serial reply {other:?}"))),
+            other => return Err(unexpected(Command::LensSerial, other)),
         };
         let status = match self.transact(Command::Status)? {
             Some(Reply::Status(s)) => s,
-            other => return Err(HwError::Protocol(format!("bad status reply {other:?}"))),
+            other => return Err(unexpected(Command::Status, other)),
         };
         let [lower_limit_ma, upper_limit_ma] = self.limits_ma();
         let i = self.lock();
@@ -403,7 +390,7 @@ impl LensClient {
     pub fn current_ma(&self) -> Result<f64> {
         match self.transact(Command::GetCurrent)? {
             Some(Reply::Current { code }) => Ok(current_ma(code, self.max_current_ma())),
-            other => Err(HwError::Protocol(format!("bad current reply {other:?}"))),
+            other => Err(unexpected(Command::GetCurrent, other)),
         }
     }
 
@@ -427,7 +414,11 @@ impl LensClient {
             Some(Reply::Temperature { raw }) => raw,
             Some(Reply::TemperatureLegacy { status: 0, raw }) => raw,
             Some(Reply::TemperatureLegacy { raw, .. }) => return Err(HwError::NoSensor { raw }),
-            other => return Err(HwError::Protocol(format!("bad temperature reply {other:?}"))),
+            other => {
+                let sent =
+                    if self.lock().legacy_temperature { Command::TemperatureLegacy } else { Command::Temperature };
+                return Err(unexpected(sent, other));
+            }
         };
         temperature_c(raw).ok_or(HwError::NoSensor { raw })
     }
@@ -440,7 +431,7 @@ impl LensClient {
         }
         match self.transact(Command::SetMode(mode))? {
             Some(Reply::Mode(m)) if m == mode => Ok(()),
-            other => Err(HwError::Protocol(format!("bad mode reply {other:?}"))),
+            other => Err(unexpected(Command::SetMode(mode), other)),
         }
     }
 
@@ -448,7 +439,7 @@ impl LensClient {
     pub fn mode(&self) -> Result<Option<Mode>> {
         match self.transact(Command::ReadMode)? {
             Some(Reply::ActiveMode { code }) => Ok(Mode::from_active_code(code)),
-            other => Err(HwError::Protocol(format!("bad mode reply {other:?}"))),
+            other => Err(unexpected(Command::ReadMode, other)),
         }
     }
 
@@ -468,7 +459,7 @@ impl LensClient {
         };
         match self.transact(cmd)? {
             Some(Reply::TemperatureLimits { status, max_fp, min_fp }) => Ok(self.range(status, min_fp, max_fp)),
-            other => Err(HwError::Protocol(format!("bad temperature-limits reply {other:?}"))),
+            other => Err(unexpected(cmd, other)),
         }
     }
 
@@ -478,22 +469,19 @@ impl LensClient {
     }
 
     /// Enters focal-power controlled mode (`MwCA`); send the temperature limits first.
-    /// Errors with [`HwError::Protocol`] when the status says the mode was refused (bit 2:
-    /// no temperature limits).
+    /// Errors with [`HwError::ControlledModeRefused`] when the status says the mode was
+    /// refused (bit 2: no temperature limits).
     pub fn enter_controlled_mode(&self) -> Result<ControlledRange> {
         match self.transact(Command::SetMode(Mode::Controlled))? {
             Some(Reply::ControlledMode { status, max_fp, min_fp }) => {
                 let r = self.range(status, min_fp, max_fp);
                 if status & 0b100 != 0 {
-                    return Err(HwError::Protocol(
-                        "controlled mode refused: no temperature limits received (call set_temperature_limits_c first)"
-                            .into(),
-                    ));
+                    return Err(HwError::ControlledModeRefused { status });
                 }
                 self.lock().fp_range_dpt = Some((r.min_dpt, r.max_dpt));
                 Ok(r)
             }
-            other => Err(HwError::Protocol(format!("bad controlled-mode reply {other:?}"))),
+            other => Err(unexpected(Command::SetMode(Mode::Controlled), other)),
         }
     }
 
@@ -521,25 +509,46 @@ impl LensClient {
     pub fn focal_power_dpt(&self) -> Result<f64> {
         match self.transact(Command::GetFocalPower)? {
             Some(Reply::FocalPower { code }) => Ok(self.lock().firmware.fp_dpt(code)),
-            other => Err(HwError::Protocol(format!("bad focal-power reply {other:?}"))),
+            other => Err(unexpected(Command::GetFocalPower, other)),
         }
-    }
-
-    /// Reopens the port at the same path without `Start` (the lens keeps its current)
-    /// and re-reads the limits. Use after an I/O error (cable pulled and plugged back).
-    pub fn reconnect(&self) -> Result<()> {
-        {
-            let mut i = self.lock();
-            i.port = None; // close first: the port is opened exclusively
-            i.rx.clear();
-        }
-        let port = open_port(&self.path, &self.options)?;
-        self.lock().port = Some(port);
-        self.read_calibration()
     }
 }
 
-impl etl_core::lens::Lens for LensClient {
+/// The error for a reply of another shape than `command`'s.
+fn unexpected(command: Command, got: Option<Reply>) -> HwError {
+    HwError::UnexpectedReply { command: command.name(), expected: command.reply_header().unwrap_or("no"), got }
+}
+
+/// Appends every byte waiting on the line to `rx` (they arrived before the command about
+/// to be sent, so none is its reply).
+fn drain<T: Transport>(port: &mut T, rx: &mut Vec<u8>, timeout: Duration) -> std::io::Result<()> {
+    let pending = port.bytes_waiting()?;
+    if pending > 0 {
+        let mut tmp = vec![0u8; pending];
+        let n = port.receive(&mut tmp, timeout)?;
+        rx.extend_from_slice(tmp.get(..n).unwrap_or(&tmp));
+    }
+    Ok(())
+}
+
+/// Records the error frames among drained bytes as unsolicited (caused by the command sent
+/// `after`, a fire-and-forget one) and empties `rx`; other bytes are stray and dropped.
+fn record_unsolicited(rx: &mut Vec<u8>, unsolicited: &mut Vec<Unsolicited>, after: &'static str) {
+    let mut at = 0;
+    while let Some(rest) = rx.get(at..).filter(|r| !r.is_empty()) {
+        match Reply::decode(rest) {
+            Ok((r @ (Reply::Error(_) | Reply::Nack), n)) => {
+                unsolicited.push(Unsolicited { reply: r, after });
+                at += n;
+            }
+            Ok((_, n)) => at += n,
+            Err(_) => at += 1,
+        }
+    }
+    rx.clear();
+}
+
+impl<T: Transport> etl_core::lens::Lens for LensClient<T> {
     type Error = HwError;
 
     fn set_current_ma(&mut self, e_in_ma: f64) -> Result<f64> {

@@ -1,6 +1,9 @@
 //! The error type of etl-hw.
 
+use std::path::PathBuf;
 use std::time::Duration;
+
+use crate::codec::Reply;
 
 /// Result with [`HwError`].
 pub type Result<T> = std::result::Result<T, HwError>;
@@ -54,9 +57,40 @@ pub enum HwError {
         /// The command's header.
         command: &'static str,
     },
-    /// The driver answered something the protocol does not allow here.
-    #[error("protocol error: {0}")]
-    Protocol(String),
+    /// The driver answered a command with a frame of another shape than the command's
+    /// reply ([`crate::codec::Command::reply_header`]).
+    #[error("protocol error: {command} expects a reply starting {expected:?}, got {}", describe(got))]
+    UnexpectedReply {
+        /// The command's header.
+        command: &'static str,
+        /// The reply header the command should get.
+        expected: &'static str,
+        /// What came instead.
+        got: Option<Reply>,
+    },
+    /// The driver reports a max-current calibration (`CrMA`) that is not positive, so no
+    /// current can be scaled.
+    #[error("protocol error: the driver reports a max current of {} mA (must be > 0)", f64::from(*centi_ma) / 100.0)]
+    BadMaxCurrent {
+        /// The value received, mA x 100.
+        centi_ma: i16,
+    },
+    /// The driver's software limits (`CrLA`, `CrUA`) have lower > upper.
+    #[error("protocol error: driver limits are inverted: lower {lower} > upper {upper}")]
+    InvertedLimits {
+        /// Lower limit, current code.
+        lower: i16,
+        /// Upper limit, current code.
+        upper: i16,
+    },
+    /// `MwCA` answered with status bit 2 set: the driver has no temperature limits.
+    #[error(
+        "controlled mode refused: no temperature limits received (call set_temperature_limits_c first; status {status:#010b})"
+    )]
+    ControlledModeRefused {
+        /// Status byte #1 of the reply.
+        status: u8,
+    },
     /// The lens has no temperature sensor (or it returned an impossible value).
     #[error("the lens reports no temperature sensor (raw value {raw})")]
     NoSensor {
@@ -66,9 +100,25 @@ pub enum HwError {
     /// A caller's value was refused (NaN, out of range, ...).
     #[error(transparent)]
     Core(#[from] etl_core::Error),
-    /// Creating or serving the virtual lens's pseudo-terminal failed.
-    #[error("virtual lens: {0}")]
-    Virtual(String),
+    /// A step of creating or serving the virtual lens's pseudo-terminal failed (`openpty`,
+    /// `tcgetattr`, `tcsetattr`, `ttyname`, the serving thread).
+    #[error("virtual lens: {step}: {source}")]
+    Pty {
+        /// The step.
+        step: &'static str,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The virtual lens's port path (its directory or symlink) could not be made.
+    #[error("virtual lens: {}: {source}", path.display())]
+    PortPath {
+        /// The path.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 impl etl_core::lens::LensError for HwError {
@@ -77,10 +127,22 @@ impl etl_core::lens::LensError for HwError {
         match self {
             HwError::Open { .. } | HwError::Io { .. } => K::LinkLost,
             HwError::Timeout { .. } => K::Timeout,
-            HwError::Crc { .. } | HwError::Nack { .. } | HwError::Protocol(_) => K::Protocol,
-            HwError::Device { .. } | HwError::NoSensor { .. } => K::Refused,
+            HwError::Crc { .. }
+            | HwError::Nack { .. }
+            | HwError::UnexpectedReply { .. }
+            | HwError::BadMaxCurrent { .. }
+            | HwError::InvertedLimits { .. } => K::Protocol,
+            HwError::Device { .. } | HwError::NoSensor { .. } | HwError::ControlledModeRefused { .. } => K::Refused,
             HwError::Core(_) => K::InvalidInput,
-            HwError::Virtual(_) => K::Other,
+            HwError::Pty { .. } | HwError::PortPath { .. } => K::Other,
         }
+    }
+}
+
+/// A reply for a message: its frame header and fields, or that none came.
+fn describe(reply: &Option<Reply>) -> String {
+    match reply {
+        Some(r) => format!("{} frame {r:?}", String::from_utf8_lossy(r.header())),
+        None => "no reply".to_owned(),
     }
 }

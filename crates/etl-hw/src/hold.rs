@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use etl_core::lens::Lens;
+use etl_core::lens::{Lens, LensError, LensErrorKind};
 use etl_core::thermal::ThermalCalibration;
 
 /// How to hold.
@@ -66,6 +66,18 @@ pub enum HoldError<E: std::fmt::Display + std::fmt::Debug> {
     Core(etl_core::Error),
 }
 
+/// The lens's kind for a lens failure; a refused compensation is invalid input (the wanted
+/// E_com or the temperature is outside what the calibration covers). Callers act on
+/// `kind()` without matching the variants.
+impl<E: LensError> LensError for HoldError<E> {
+    fn kind(&self) -> LensErrorKind {
+        match self {
+            HoldError::Lens(e) => e.kind(),
+            HoldError::Core(e) => e.kind(),
+        }
+    }
+}
+
 /// Runs the hold loop until `config.duration` passes or `observe` returns false.
 ///
 /// Errors: a non-finite wanted E_com or rate ([`HoldError::Core`]); the lens or the
@@ -73,9 +85,9 @@ pub enum HoldError<E: std::fmt::Display + std::fmt::Debug> {
 ///
 /// ```
 /// use etl_hw::hold::{hold, HoldConfig};
-/// use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
+/// use etl_hw::virtual_lens::{VirtualDevice, VirtualLensConfig};
 /// use etl_core::thermal::ThermalCalibration;
-/// let mut lens = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
+/// let mut lens = VirtualDevice::new(VirtualLensConfig::default()).unwrap();
 /// let cfg = HoldConfig { e_com_ma: 120.0, rate_hz: 0.0, duration: None };
 /// let report = hold(&mut lens, &ThermalCalibration::PAPER, &cfg, |s| s.index < 9).unwrap();
 /// assert_eq!(report.commands_sent, 10);

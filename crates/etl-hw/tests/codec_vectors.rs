@@ -169,3 +169,49 @@ fn scan_skips_garbage_and_reports_corruption() {
     // A valid frame of another command is not taken for the reply.
     assert_eq!(scan_reply(&Reply::Current { code: 5 }.encode(), b"TCA"), Scan::NeedMore);
 }
+
+#[test]
+fn reply_headers_follow_the_facts_sheet() {
+    // Sections 2 and 4: the header each command's reply starts with; fire-and-forget
+    // commands have none (only an error frame can come back).
+    let cases: &[(Command, Option<&str>)] = &[
+        (Command::Start, Some("Ready")),
+        (Command::SetCurrent { code: 1 }, None),
+        (Command::SetCurrentLegacy { code: 1 }, None),
+        (Command::GetCurrent, Some("A")),
+        (Command::ReadMaxCurrent, Some("CMA")),
+        (Command::ReadUpperLimit, Some("CUA")),
+        (Command::ReadLowerLimit, Some("CLA")),
+        (Command::SetMode(Mode::Current), Some("MDA")),
+        (Command::SetMode(Mode::Sinusoidal), Some("MSA")),
+        (Command::SetMode(Mode::Rectangular), Some("MQA")),
+        (Command::SetMode(Mode::Triangular), Some("MTA")),
+        (Command::SetMode(Mode::Analog), Some("MAA")),
+        (Command::SetMode(Mode::Controlled), Some("MCA")),
+        (Command::ReadMode, Some("MMA")),
+        (Command::SetFocalPower { code: 1 }, None),
+        (Command::GetFocalPower, Some("PD")),
+        (Command::SetTemperatureLimits { max_x16: 2, min_x16: 1 }, Some("PT")),
+        (Command::SetSignalUpper { code: 1 }, None),
+        (Command::SetSignalLower { code: 1 }, None),
+        (Command::SetFrequency { millihertz: 1 }, None),
+        (Command::Temperature, Some("TCA")),
+        (Command::TemperatureLegacy, Some("TA")),
+        (Command::FirmwareType, Some("H")),
+        (Command::FirmwareBranch, Some("F")),
+        (Command::PartNumber, Some("J")),
+        (Command::FirmwareVersion, Some("V")),
+        (Command::DeviceId, Some("IR")),
+        (Command::LensSerial, Some("X")),
+        (Command::Status, Some("S")),
+        (Command::AnalogInput, Some("GAA")),
+    ];
+    for (cmd, header) in cases {
+        assert_eq!(cmd.reply_header(), *header, "{cmd:?}");
+        assert_eq!(cmd.has_reply(), header.is_some(), "{cmd:?}");
+    }
+    // The codec's replies start with the header their command expects.
+    assert_eq!(Reply::MaxCurrent { centi_ma: 1 }.header(), b"CMA");
+    assert_eq!(Reply::ControlledMode { status: 0, max_fp: 0, min_fp: 0 }.header(), b"MCA");
+    assert_eq!(Reply::Status([0; 4]).header(), b"S");
+}

@@ -1,5 +1,6 @@
 //! Faults against the virtual lens: a reply that never comes, a corrupted reply, garbage
 //! before a reply, error frames, a NACK, the port vanishing and a reconnect.
+#![cfg(unix)] // the pseudo-terminal virtual lens
 
 use std::time::{Duration, Instant};
 

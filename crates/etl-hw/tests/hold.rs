@@ -3,11 +3,16 @@
 
 use std::time::Duration;
 
+use etl_core::lens::{LensError, LensErrorKind};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
+#[cfg(unix)]
 use etl_hw::client::{LensClient, OpenOptions};
 use etl_hw::hold::{hold, HoldConfig, HoldError};
-use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig};
+#[cfg(unix)]
+use etl_hw::virtual_lens::{ThermalModel, VirtualLens};
+use etl_hw::virtual_lens::{VirtualDevice, VirtualLensConfig};
 
+#[cfg(unix)] // through the pseudo-terminal
 #[test]
 fn hold_keeps_e_com_while_the_lens_warms_10_c() {
     // tau = 20 model s at 5x: warming by 10 degC takes ~8 s of wall time. (At 20x the
@@ -55,7 +60,7 @@ fn hold_keeps_e_com_while_the_lens_warms_10_c() {
 
 #[test]
 fn hold_refuses_bad_input_and_reports_lens_errors() {
-    let mut lens = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
+    let mut lens = VirtualDevice::new(VirtualLensConfig::default()).unwrap();
     let cal = ThermalCalibration::PAPER;
     let bad = HoldConfig { e_com_ma: f64::NAN, rate_hz: 0.0, duration: None };
     assert!(matches!(hold(&mut lens, &cal, &bad, |_| true), Err(HoldError::Core(_))));
@@ -63,15 +68,20 @@ fn hold_refuses_bad_input_and_reports_lens_errors() {
     assert!(matches!(hold(&mut lens, &cal, &bad_rate, |_| true), Err(HoldError::Core(_))));
     // Unreachable E_com: the driver range cannot give it.
     let far = HoldConfig { e_com_ma: 5000.0, rate_hz: 0.0, duration: None };
-    assert!(matches!(hold(&mut lens, &cal, &far, |_| true), Err(HoldError::Core(_))));
-    let mut blind = VirtualLens::spawn(VirtualLensConfig { has_sensor: false, ..Default::default() }).unwrap();
+    let e = hold(&mut lens, &cal, &far, |_| true).unwrap_err();
+    assert!(matches!(e, HoldError::Core(_)));
+    assert_eq!(e.kind(), LensErrorKind::InvalidInput);
+    let mut blind = VirtualDevice::new(VirtualLensConfig { has_sensor: false, ..Default::default() }).unwrap();
     let ok = HoldConfig { e_com_ma: 100.0, rate_hz: 0.0, duration: None };
-    assert!(matches!(hold(&mut blind, &cal, &ok, |_| true), Err(HoldError::Lens(_))));
+    let e = hold(&mut blind, &cal, &ok, |_| true).unwrap_err();
+    assert!(matches!(e, HoldError::Lens(etl_hw::HwError::NoSensor { raw: 4095 })));
+    // The lens's own kind comes through the hold (no sensor: the driver refuses).
+    assert_eq!(e.kind(), LensErrorKind::Refused);
 }
 
 #[test]
 fn hold_runs_at_the_configured_rate_for_the_duration() {
-    let mut lens = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
+    let mut lens = VirtualDevice::new(VirtualLensConfig::default()).unwrap();
     let cfg = HoldConfig { e_com_ma: 100.0, rate_hz: 100.0, duration: Some(Duration::from_millis(200)) };
     let r = hold(&mut lens, &ThermalCalibration::PAPER, &cfg, |_| true).unwrap();
     // 200 ms at 100 Hz: 21 steps at most (first at t = 0); fewer only if the machine stalls.

@@ -270,18 +270,55 @@ impl Command {
         f
     }
 
-    /// Whether the driver answers this command on success (`Aw`, `A`, `PwDA`, `PwUA`,
-    /// `PwLA`, `PwFA` are fire-and-forget: they only ever produce an error frame).
-    pub fn has_reply(&self) -> bool {
-        !matches!(
-            self,
+    /// The header the driver's reply to this command starts with (facts sheet sections 2
+    /// and 4), or None for the fire-and-forget commands (`Aw`, `A`, `PwDA`, `PwUA`, `PwLA`,
+    /// `PwFA`), which only ever produce an error frame. The one table of reply shapes: the
+    /// client looks its replies up here.
+    ///
+    /// ```
+    /// use etl_hw::codec::{Command, Mode};
+    /// assert_eq!(Command::ReadMaxCurrent.reply_header(), Some("CMA"));
+    /// assert_eq!(Command::SetMode(Mode::Controlled).reply_header(), Some("MCA"));
+    /// assert_eq!(Command::SetCurrent { code: 1 }.reply_header(), None);
+    /// ```
+    pub fn reply_header(&self) -> Option<&'static str> {
+        Some(match self {
             Command::SetCurrent { .. }
-                | Command::SetCurrentLegacy { .. }
-                | Command::SetFocalPower { .. }
-                | Command::SetSignalUpper { .. }
-                | Command::SetSignalLower { .. }
-                | Command::SetFrequency { .. }
-        )
+            | Command::SetCurrentLegacy { .. }
+            | Command::SetFocalPower { .. }
+            | Command::SetSignalUpper { .. }
+            | Command::SetSignalLower { .. }
+            | Command::SetFrequency { .. } => return None,
+            Command::Start => "Ready",
+            Command::GetCurrent => "A",
+            Command::ReadMaxCurrent => "CMA",
+            Command::ReadUpperLimit => "CUA",
+            Command::ReadLowerLimit => "CLA",
+            Command::SetMode(Mode::Current) => "MDA",
+            Command::SetMode(Mode::Sinusoidal) => "MSA",
+            Command::SetMode(Mode::Rectangular) => "MQA",
+            Command::SetMode(Mode::Triangular) => "MTA",
+            Command::SetMode(Mode::Analog) => "MAA",
+            Command::SetMode(Mode::Controlled) => "MCA",
+            Command::ReadMode => "MMA",
+            Command::GetFocalPower => "PD",
+            Command::SetTemperatureLimits { .. } => "PT",
+            Command::Temperature => "TCA",
+            Command::TemperatureLegacy => "TA",
+            Command::FirmwareType => "H",
+            Command::FirmwareBranch => "F",
+            Command::PartNumber => "J",
+            Command::FirmwareVersion => "V",
+            Command::DeviceId => "IR",
+            Command::LensSerial => "X",
+            Command::Status => "S",
+            Command::AnalogInput => "GAA",
+        })
+    }
+
+    /// Whether the driver answers this command on success (see [`Self::reply_header`]).
+    pub fn has_reply(&self) -> bool {
+        self.reply_header().is_some()
     }
 
     /// Decodes the command at the start of `buf`: `Ok((command, bytes used))`.

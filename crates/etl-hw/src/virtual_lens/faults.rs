@@ -4,8 +4,8 @@
 use std::time::Duration;
 
 /// Faults the virtual lens injects (all off by default). Set them with
-/// [`VirtualLens::set_faults`](super::VirtualLens::set_faults) or
-/// [`VirtualLens::with_faults`](super::VirtualLens::with_faults).
+/// [`VirtualDevice::set_faults`](super::VirtualDevice::set_faults) or
+/// [`VirtualDevice::with_faults`](super::VirtualDevice::with_faults).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Faults {
     /// Every reply is sent this long (wall time) after its command.

@@ -1,51 +1,44 @@
-//! A virtual Optotune lens + Lens Driver 4: a thread serving the driver's protocol on a
-//! pseudo-terminal, so that the real client talks to it through a real serial-port path,
-//! driven by the physical model of [`model`] and with the fault injection of [`faults`].
+//! A virtual Optotune lens + Lens Driver 4: a device model ([`VirtualDevice`]: the physics
+//! of [`model`], the driver's protocol, the fault injection of [`faults`]) that a client
+//! reaches either in-process ([`VirtualTransport`], on every platform) or, on Unix,
+//! through a pseudo-terminal behind a real serial-port path ([`VirtualLens`]).
 //!
 //! Time: the model's clock runs at wall time x [`VirtualLensConfig::time_scale`] (1 =
 //! real time; tests use e.g. 100 so that a 60 s thermal time constant passes in 0.6 s),
-//! plus explicit jumps ([`VirtualLens::advance_s`], [`VirtualLens::settle`]).
-//!
-//! Port path: [`VirtualLens::path`] is a symlink (in a private temporary directory) to the
-//! pty's slave, like a udev symlink to `/dev/ttyACM0`. [`VirtualLens::disconnect`] closes
-//! the pty (the client sees an I/O error, as when the USB cable is pulled) and
-//! [`VirtualLens::reconnect`] opens a new one behind the same path; the lens keeps its
-//! current and temperature.
+//! plus explicit jumps ([`VirtualDevice::advance_s`], [`VirtualDevice::settle`]).
 //!
 //! ```
-//! use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
-//! use etl_core::lens::Lens;
-//! let mut lens = VirtualLens::spawn(VirtualLensConfig::default()).unwrap();
-//! lens.set_current_ma(120.0).unwrap(); // directly, without the serial port
-//! let s = lens.state();
+//! use etl_hw::client::{LensClient, OpenOptions};
+//! use etl_hw::virtual_lens::{VirtualDevice, VirtualLensConfig};
+//! let device = VirtualDevice::new(VirtualLensConfig::default()).unwrap();
+//! let lens = LensClient::from_transport(device.transport(), OpenOptions::default()).unwrap();
+//! lens.set_current_ma(120.0).unwrap();
+//! let s = device.state();
 //! assert!((s.e_in_ma - 120.0).abs() < 0.04 && s.f_liq_mm > 50.0 && s.f_liq_mm < 121.0);
-//! assert!(lens.path().exists());
 //! ```
 
 pub mod faults;
 pub mod model;
+#[cfg(unix)]
+mod pty;
+mod responder;
 
-use std::fs::File;
-use std::io::{Read, Write};
-use std::os::fd::{AsFd, OwnedFd};
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::ThermalSurface;
-use nix::poll::{poll, PollFd, PollFlags};
-use nix::pty::openpty;
-use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
 
 pub use faults::Faults;
 pub use model::{LensState, ThermalModel};
+#[cfg(unix)]
+pub use pty::VirtualLens;
 
-use crate::codec::scaling::{current_code, current_ma, FirmwareType, NO_SENSOR_RAW};
-use crate::codec::{Command, DecodeError, Mode, Reply};
+use crate::codec::scaling::{current_code, current_ma, NO_SENSOR_RAW};
+use crate::codec::Mode;
 use crate::error::{HwError, Result};
+use crate::transport::Transport;
 use model::Model;
 
 /// How the virtual lens is built.
@@ -125,25 +118,11 @@ pub struct Received {
     pub handshakes: u64,
 }
 
-struct Pty {
-    master: File,
-    // Held open so that the master does not see a hangup while no client has the port open.
-    _slave: OwnedFd,
-}
-
-#[derive(Default)]
-struct Control {
-    stop: bool,
-    disconnect: bool,
-    new_pty: Option<Pty>,
-}
-
 struct Shared {
     config: VirtualLensConfig,
     model: Model,
     faults: Faults,
     received: Received,
-    control: Control,
     wall: Instant,
 }
 
@@ -157,39 +136,26 @@ impl Shared {
     }
 }
 
-/// A running virtual lens (see the module docs). Dropping it stops the server and removes
-/// the port symlink.
-pub struct VirtualLens {
-    shared: Arc<Mutex<Shared>>,
-    dir: PathBuf,
-    link: PathBuf,
-    thread: Option<JoinHandle<()>>,
-}
-
-static SERIAL: AtomicU64 = AtomicU64::new(0);
-
-fn open_pty() -> Result<(Pty, PathBuf)> {
-    let pty = openpty(None, None).map_err(|e| HwError::Virtual(format!("openpty: {e}")))?;
-    let mut t = tcgetattr(&pty.slave).map_err(|e| HwError::Virtual(format!("tcgetattr: {e}")))?;
-    cfmakeraw(&mut t);
-    tcsetattr(&pty.slave, SetArg::TCSANOW, &t).map_err(|e| HwError::Virtual(format!("tcsetattr: {e}")))?;
-    let name = nix::unistd::ttyname(&pty.slave).map_err(|e| HwError::Virtual(format!("ttyname: {e}")))?;
-    Ok((Pty { master: File::from(pty.master), _slave: pty.slave }, name))
-}
-
 fn lock(shared: &Mutex<Shared>) -> MutexGuard<'_, Shared> {
     // A panic in a test thread must not hide the device's state from the others.
     shared.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-impl VirtualLens {
-    /// Creates the pty, starts the serving thread and returns the handle.
+/// The virtual lens and driver: the model, its protocol responder and its faults. A
+/// handle: clones share one device (a pty server, transports and the test that
+/// inspects its true state).
+#[derive(Clone)]
+pub struct VirtualDevice {
+    shared: Arc<Mutex<Shared>>,
+}
+
+impl VirtualDevice {
+    /// A device at rest (zero current, at the initial temperature).
     ///
     /// Errors: an invalid configuration (non-finite or non-positive time scale, sensor
     /// period or time constant; limits outside +-4095 or lower > upper; max current <= 0;
-    /// invalid physics or surface) as [`HwError::Core`]; the OS refusing a pty or a
-    /// temporary directory ([`HwError::Virtual`]).
-    pub fn spawn(config: VirtualLensConfig) -> Result<VirtualLens> {
+    /// invalid physics or surface) as [`HwError::Core`].
+    pub fn new(config: VirtualLensConfig) -> Result<VirtualDevice> {
         validate(&config)?;
         let t0 = config.initial_temperature_c.unwrap_or(config.thermal.ambient_c);
         let model = Model {
@@ -210,34 +176,15 @@ impl VirtualLens {
             fp_code: 0,
             temperature_limits_x16: None,
         };
-        let dir = std::env::temp_dir().join(format!(
-            "etl-vlens-{}-{}",
-            std::process::id(),
-            SERIAL.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&dir).map_err(|e| HwError::Virtual(format!("{}: {e}", dir.display())))?;
-        let link = dir.join("lens");
-        let (pty, name) = open_pty()?;
-        std::os::unix::fs::symlink(&name, &link).map_err(|e| HwError::Virtual(format!("{}: {e}", link.display())))?;
-        let shared = Arc::new(Mutex::new(Shared {
-            config,
-            model,
-            faults: Faults::default(),
-            received: Received::default(),
-            control: Control::default(),
-            wall: Instant::now(),
-        }));
-        let s2 = Arc::clone(&shared);
-        let thread = std::thread::Builder::new()
-            .name("virtual-lens".into())
-            .spawn(move || serve(s2, pty))
-            .map_err(|e| HwError::Virtual(format!("thread: {e}")))?;
-        Ok(VirtualLens { shared, dir, link, thread: Some(thread) })
+        let shared =
+            Shared { config, model, faults: Faults::default(), received: Received::default(), wall: Instant::now() };
+        Ok(VirtualDevice { shared: Arc::new(Mutex::new(shared)) })
     }
 
-    /// The serial-port path to open (a symlink to the pty's slave).
-    pub fn path(&self) -> &Path {
-        &self.link
+    /// An in-process link to this device for [`crate::client::LensClient::from_transport`]
+    /// (no pseudo-terminal: works on every platform).
+    pub fn transport(&self) -> VirtualTransport {
+        VirtualTransport { device: self.clone(), commands: Vec::new(), replies: VecDeque::new() }
     }
 
     /// The lens's true state now.
@@ -310,30 +257,6 @@ impl VirtualLens {
         s.model.settle();
     }
 
-    /// Pulls the cable: closes the pty; the client's next I/O fails.
-    pub fn disconnect(&self) {
-        lock(&self.shared).control.disconnect = true;
-        // Let the server drop the pty before the caller goes on.
-        for _ in 0..200 {
-            if !lock(&self.shared).control.disconnect {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(1));
-        }
-    }
-
-    /// Plugs the cable back in: a new pty behind the same [`Self::path`]. The lens keeps its
-    /// current and temperature.
-    pub fn reconnect(&self) -> Result<()> {
-        let (pty, name) = open_pty()?;
-        let tmp = self.dir.join("lens.new");
-        let _ = std::fs::remove_file(&tmp);
-        std::os::unix::fs::symlink(&name, &tmp).map_err(|e| HwError::Virtual(format!("{}: {e}", tmp.display())))?;
-        std::fs::rename(&tmp, &self.link).map_err(|e| HwError::Virtual(format!("{}: {e}", self.link.display())))?;
-        lock(&self.shared).control.new_pty = Some(pty);
-        Ok(())
-    }
-
     fn command_code(&self, e_in_ma: f64) -> std::result::Result<i16, etl_core::Error> {
         let e = etl_core::error::finite(e_in_ma, "e_in_ma")?;
         let s = lock(&self.shared);
@@ -377,18 +300,7 @@ fn validate(c: &VirtualLensConfig) -> Result<()> {
     Ok(())
 }
 
-impl Drop for VirtualLens {
-    fn drop(&mut self) {
-        lock(&self.shared).control.stop = true;
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-        let _ = std::fs::remove_file(&self.link);
-        let _ = std::fs::remove_dir(&self.dir);
-    }
-}
-
-impl etl_core::lens::Lens for VirtualLens {
+impl etl_core::lens::Lens for VirtualDevice {
     type Error = HwError;
 
     /// Sets the current directly on the model (no serial port), clamped to the driver's
@@ -416,250 +328,71 @@ impl etl_core::lens::Lens for VirtualLens {
     }
 }
 
-/// The serving loop: poll the master, decode commands, answer.
-fn serve(shared: Arc<Mutex<Shared>>, first: Pty) {
-    let mut pty = Some(first);
-    let mut buf: Vec<u8> = Vec::new();
-    let mut last_rx = Instant::now();
-    let mut chunk = [0u8; 4096];
-    loop {
-        {
-            let mut s = lock(&shared);
-            if s.control.stop {
-                return;
-            }
-            if s.control.disconnect {
-                pty = None;
-                buf.clear();
-                s.control.disconnect = false;
-            }
-            if let Some(p) = s.control.new_pty.take() {
-                pty = Some(p);
-                buf.clear();
-            }
-        }
-        let Some(p) = pty.as_mut() else {
-            std::thread::sleep(Duration::from_millis(2));
-            continue;
-        };
-        let ready = {
-            let mut fds = [PollFd::new(p.master.as_fd(), PollFlags::POLLIN)];
-            match poll(&mut fds, 20u16) {
-                Ok(n) if n > 0 => fds[0].revents().is_some_and(|r| r.contains(PollFlags::POLLIN)),
-                Ok(_) => false,
-                Err(_) => false,
-            }
-        };
-        if !ready {
-            // A partial command left alone for 50 ms is dropped (the host gave up on it).
-            if !buf.is_empty() && last_rx.elapsed() > Duration::from_millis(50) {
-                buf.clear();
-            }
-            continue;
-        }
-        let n = match p.master.read(&mut chunk) {
-            Ok(n) => n,
-            // EIO: no client has the slave open (after it closed the port). Wait.
-            Err(_) => {
-                std::thread::sleep(Duration::from_millis(2));
-                continue;
-            }
-        };
-        last_rx = Instant::now();
-        {
-            let mut s = lock(&shared);
-            for &b in &chunk[..n] {
-                if s.faults.drop_rx_bytes_next > 0 {
-                    s.faults.drop_rx_bytes_next -= 1;
-                } else {
-                    buf.push(b);
-                }
-            }
-        }
-        process(&shared, &mut buf, &mut p.master);
+/// An in-process [`Transport`] to a [`VirtualDevice`]: what the client sends is answered
+/// at once by the device's responder (with its faults); a reply becomes readable after
+/// the device's reply delay.
+pub struct VirtualTransport {
+    device: VirtualDevice,
+    /// Bytes received that are not a whole command yet.
+    commands: Vec<u8>,
+    /// Replies sent, each readable from its instant on.
+    replies: VecDeque<(Instant, Vec<u8>)>,
+}
+
+impl VirtualTransport {
+    /// The bytes readable now (the fronts of the reply queue whose instant has come).
+    fn ready(&self, now: Instant) -> impl Iterator<Item = &Vec<u8>> {
+        self.replies.iter().take_while(move |(at, _)| *at <= now).map(|(_, b)| b)
     }
 }
 
-/// Decodes and answers every complete command in `buf`.
-fn process(shared: &Mutex<Shared>, buf: &mut Vec<u8>, out: &mut File) {
-    let mut garbage = false;
-    loop {
-        let decoded = Command::decode(buf);
-        let reply: Option<Reply> = {
-            let mut s = lock(shared);
-            match decoded {
-                Err(DecodeError::Incomplete) => break,
-                Err(DecodeError::Unknown) => {
-                    buf.remove(0);
-                    garbage = true;
-                    continue;
-                }
-                Err(DecodeError::Crc { len }) => {
-                    buf.drain(..len);
-                    s.received.crc_errors += 1;
-                    Some(if s.config.nack_on_crc { Reply::Nack } else { Reply::Error(1) })
-                }
-                Err(DecodeError::Malformed { len }) => {
-                    buf.drain(..len);
-                    Some(Reply::Error(3))
-                }
-                Ok((cmd, len)) => {
-                    buf.drain(..len);
-                    s.received.commands += 1;
-                    if s.faults.crc_error_next > 0 {
-                        s.faults.crc_error_next -= 1;
-                        s.received.crc_errors += 1;
-                        Some(if s.config.nack_on_crc { Reply::Nack } else { Reply::Error(1) })
-                    } else if let Some(id) = s.faults.error_frame_next.take() {
-                        Some(Reply::Error(id))
-                    } else {
-                        s.sync();
-                        execute(&mut s, cmd, buf)
-                    }
-                }
-            }
-        };
-        if garbage {
-            garbage = false;
-            send(shared, out, Reply::Error(3));
-        }
-        if let Some(r) = reply {
-            send(shared, out, r);
-        }
+impl Transport for VirtualTransport {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        let shared = &self.device.shared;
+        responder::receive(shared, bytes, &mut self.commands);
+        let now = Instant::now();
+        let replies = &mut self.replies;
+        responder::process(shared, &mut self.commands, &mut |delay, frame| replies.push_back((now + delay, frame)));
+        Ok(())
     }
-    if garbage {
-        send(shared, out, Reply::Error(3));
-    }
-}
 
-/// Writes a reply, applying the reply faults.
-fn send(shared: &Mutex<Shared>, out: &mut File, reply: Reply) {
-    let (delay, bytes) = {
-        let mut s = lock(shared);
-        if s.faults.silence_next > 0 {
-            s.faults.silence_next -= 1;
-            return;
-        }
-        let mut bytes = std::mem::take(&mut s.faults.garbage_before_next);
-        let mut frame = reply.encode();
-        if s.faults.corrupt_next > 0 {
-            s.faults.corrupt_next -= 1;
-            // The CRC's high byte (just before \r\n; for Ready/N, a letter).
-            let at = frame.len().saturating_sub(3);
-            if let Some(b) = frame.get_mut(at) {
-                *b ^= 0x5A;
-            }
-        }
-        bytes.append(&mut frame);
-        (s.faults.reply_delay, bytes)
-    };
-    if !delay.is_zero() {
-        std::thread::sleep(delay);
+    fn bytes_waiting(&mut self) -> std::io::Result<usize> {
+        Ok(self.ready(Instant::now()).map(Vec::len).sum())
     }
-    let _ = out.write_all(&bytes);
-}
 
-/// Executes a decoded command on the model; the reply, if the command has one.
-fn execute(s: &mut Shared, cmd: Command, buf: &mut Vec<u8>) -> Option<Reply> {
-    let Shared { config, model: m, received, .. } = s;
-    let legacy = config.legacy_firmware;
-    let fw = FirmwareType::from_letter(config.firmware_type);
-    match cmd {
-        Command::Start => {
-            // MAN16: zeroes the current and flushes the input buffer.
-            m.apply_code(0);
-            buf.clear();
-            received.handshakes += 1;
-            Some(Reply::Ready)
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        let now = Instant::now();
+        // Wait as a blocking read would: until the next reply is due or the timeout.
+        let due = self.replies.front().map_or(timeout, |(at, _)| at.saturating_duration_since(now).min(timeout));
+        if !due.is_zero() {
+            std::thread::sleep(due);
         }
-        Command::SetCurrent { code } | Command::SetCurrentLegacy { code } => {
-            if legacy != matches!(cmd, Command::SetCurrentLegacy { .. }) {
-                return Some(Reply::Error(3));
+        let now = Instant::now();
+        let mut n = 0;
+        while let Some((at, frame)) = self.replies.front_mut() {
+            let Some(room) = buf.get_mut(n..).filter(|r| !r.is_empty() && *at <= now) else {
+                break;
+            };
+            let k = room.len().min(frame.len());
+            room[..k].copy_from_slice(&frame[..k]);
+            frame.drain(..k);
+            n += k;
+            if frame.is_empty() {
+                self.replies.pop_front();
             }
-            received.current_codes.push(code);
-            m.apply_code(code);
-            None
         }
-        Command::GetCurrent => Some(Reply::Current { code: m.code }),
-        Command::ReadMaxCurrent => Some(Reply::MaxCurrent { centi_ma: m.max_current_centi_ma }),
-        Command::ReadUpperLimit => Some(Reply::UpperLimit { code: m.upper_limit_code }),
-        Command::ReadLowerLimit => Some(Reply::LowerLimit { code: m.lower_limit_code }),
-        Command::SetMode(Mode::Controlled) => {
-            let status = if m.temperature_limits_x16.is_none() { 0b100 } else { 0 };
-            if status == 0 {
-                m.mode = Mode::Controlled;
-            }
-            let (min_fp, max_fp) = fp_range(m, fw);
-            Some(Reply::ControlledMode { status, max_fp, min_fp })
-        }
-        Command::SetMode(mode) => {
-            m.mode = mode;
-            Some(Reply::Mode(mode))
-        }
-        Command::ReadMode => Some(Reply::ActiveMode { code: m.mode.active_code() }),
-        Command::SetFocalPower { code } => {
-            m.fp_code = code;
-            if m.mode == Mode::Controlled {
-                // Hold the power at the present temperature: E_com from the optics, then E_in.
-                if let Some(e_com) = m.e_com_for_power(fw.fp_dpt(code)) {
-                    if let Ok(e_in) = m.surface.e_in_for_e_com(e_com, m.temperature_c) {
-                        let c = current_code(e_in, m.max_current_ma());
-                        m.apply_code(c);
-                    }
-                }
-            }
-            None
-        }
-        Command::GetFocalPower => {
-            let st = m.state();
-            Some(Reply::FocalPower { code: fw.fp_code(st.focal_power_dpt) })
-        }
-        Command::SetTemperatureLimits { max_x16, min_x16 } => {
-            let ok = max_x16 > min_x16;
-            if ok {
-                m.temperature_limits_x16 = Some((max_x16, min_x16));
-            }
-            let (min_fp, max_fp) = fp_range(m, fw);
-            Some(Reply::TemperatureLimits { status: if ok { 0 } else { 0b100 }, max_fp, min_fp })
-        }
-        Command::SetSignalUpper { .. } | Command::SetSignalLower { .. } | Command::SetFrequency { .. } => None,
-        Command::Temperature | Command::TemperatureLegacy => {
-            if legacy != matches!(cmd, Command::TemperatureLegacy) {
-                return Some(Reply::Error(3));
-            }
-            let raw = if m.has_sensor { m.sensor_raw } else { NO_SENSOR_RAW };
-            Some(if legacy {
-                Reply::TemperatureLegacy { status: if m.has_sensor { 0 } else { 0xFF }, raw }
-            } else {
-                Reply::Temperature { raw }
-            })
-        }
-        Command::FirmwareType => Some(Reply::FirmwareType(config.firmware_type)),
-        Command::FirmwareBranch => Some(Reply::FirmwareBranch(0)),
-        Command::PartNumber => Some(Reply::PartNumber([0x12, 0x34, 0x56])),
-        Command::FirmwareVersion => {
-            let (major, minor, build, revision) = config.firmware_version;
-            Some(Reply::FirmwareVersion { major, minor, build, revision })
-        }
-        Command::DeviceId => Some(Reply::DeviceId(config.device_id)),
-        Command::LensSerial => Some(Reply::LensSerial(config.lens_serial)),
-        Command::Status => {
-            let status1 = if m.temperature_limits_x16.is_none() { 0b100 } else { 0 };
-            Some(Reply::Status([0, 0, 0, status1]))
-        }
-        Command::AnalogInput => Some(Reply::AnalogInput(0)),
+        Ok(n)
     }
-}
 
-/// (min, max) focal-power codes over [max(lower limit, 0), upper limit] at the present
-/// temperature.
-fn fp_range(m: &Model, fw: FirmwareType) -> (i16, i16) {
-    let mm = m.max_current_ma();
-    let lo = current_ma(m.lower_limit_code, mm).max(0.0);
-    let hi = current_ma(m.upper_limit_code, mm);
-    let p = |e: f64| {
-        let e_t = m.surface.e_t_ma(m.temperature_c, e).unwrap_or(0.0);
-        fw.fp_code(m.power_dpt_at(e - e_t))
-    };
-    (p(lo), p(hi))
+    fn discard_input(&mut self) -> std::io::Result<()> {
+        let now = Instant::now();
+        while self.replies.front().is_some_and(|(at, _)| *at <= now) {
+            self.replies.pop_front();
+        }
+        Ok(())
+    }
+
+    fn name(&self) -> String {
+        "virtual lens".to_owned()
+    }
 }

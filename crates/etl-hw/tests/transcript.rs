@@ -1,0 +1,305 @@
+//! Byte transcripts of the client, as embedded-hal-mock does for I2C drivers: a scripted
+//! transport records exactly the bytes the client writes and answers each write with
+//! canned bytes. The bytes come from the facts sheet
+//! (`shared/protocol/optotune-lens-driver-4.md`, sections 2-4 and 4.10) and the codec
+//! vectors; CRCs the sheet does not print are computed with the sheet's own script
+//! (section 3, transcribed below), never with the codec under test.
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use etl_core::lens::{LensError, LensErrorKind};
+use etl_hw::client::{LensClient, OpenOptions, Transport, Unsolicited};
+use etl_hw::codec::Reply;
+use etl_hw::HwError;
+
+/// The facts sheet's `crc16_arc` (section 3), transcribed.
+fn crc16_arc(data: &[u8]) -> u16 {
+    let mut crc = 0u16;
+    for &b in data {
+        crc ^= u16::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xA001 } else { crc >> 1 };
+        }
+    }
+    crc
+}
+
+/// The sheet's `frame`: payload + CRC, low byte first (a command).
+fn frame(payload: &[u8]) -> Vec<u8> {
+    let c = crc16_arc(payload);
+    [payload, &[(c & 0xFF) as u8, (c >> 8) as u8]].concat()
+}
+
+/// A reply: payload + CRC + CRLF.
+fn reply(payload: &[u8]) -> Vec<u8> {
+    [frame(payload), b"\r\n".to_vec()].concat()
+}
+
+fn hex(s: &str) -> Vec<u8> {
+    s.split_whitespace().map(|b| u8::from_str_radix(b, 16).unwrap()).collect()
+}
+
+/// One command the client must write and the bytes the device answers it with.
+type Exchange = (Vec<u8>, Vec<u8>);
+
+/// The scripted link: every write is logged as one frame and releases the next canned
+/// answer; a read with nothing to give blocks for its timeout, as a serial port does.
+struct Script {
+    answers: VecDeque<Vec<u8>>,
+    input: Vec<u8>,
+    written: Arc<Mutex<Vec<Vec<u8>>>>,
+}
+
+impl Transport for Script {
+    fn send(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.written.lock().unwrap().push(bytes.to_vec());
+        let answer = self.answers.pop_front().unwrap_or_default();
+        self.input.extend_from_slice(&answer);
+        Ok(())
+    }
+
+    fn bytes_waiting(&mut self) -> std::io::Result<usize> {
+        Ok(self.input.len())
+    }
+
+    fn receive(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        if self.input.is_empty() {
+            std::thread::sleep(timeout);
+            return Ok(0);
+        }
+        let n = buf.len().min(self.input.len());
+        buf[..n].copy_from_slice(&self.input[..n]);
+        self.input.drain(..n);
+        Ok(n)
+    }
+
+    fn discard_input(&mut self) -> std::io::Result<()> {
+        self.input.clear();
+        Ok(())
+    }
+
+    fn name(&self) -> String {
+        "script".into()
+    }
+}
+
+/// The script of `exchanges` and the log of what the client wrote.
+fn script(exchanges: &[Exchange]) -> (Script, Arc<Mutex<Vec<Vec<u8>>>>) {
+    let written = Arc::new(Mutex::new(Vec::new()));
+    let answers = exchanges.iter().map(|(_, answer)| answer.clone()).collect();
+    (Script { answers, input: Vec::new(), written: Arc::clone(&written) }, written)
+}
+
+fn outs(exchanges: &[Exchange]) -> Vec<Vec<u8>> {
+    exchanges.iter().map(|(out, _)| out.clone()).collect()
+}
+
+/// Max current 292.84 mA (29284 = 0x7264), limits +-4095 (0x0FFF, 0xF001), firmware `C`.
+fn calibration_reads() -> Vec<Exchange> {
+    vec![
+        (hex("43 72 4D 41 00 00 71 80"), reply(b"CMA\x72\x64")),
+        (frame(b"CrUA\x00\x00"), reply(b"CUA\x0F\xFF")),
+        (frame(b"CrLA\x00\x00"), reply(b"CLA\xF0\x01")),
+        (hex("48 00 36"), reply(b"HC")),
+    ]
+}
+
+const TIMEOUT: Duration = Duration::from_millis(60);
+
+fn options() -> OpenOptions {
+    OpenOptions { timeout: TIMEOUT, ..OpenOptions::default() }
+}
+
+/// Opens a client over the script `calibration_reads() + then`, runs `body` on it and
+/// asserts that the client wrote exactly the script's commands.
+fn run(then: &[Exchange], body: impl FnOnce(&LensClient<Script>)) {
+    let exchanges = [calibration_reads(), then.to_vec()].concat();
+    let (link, written) = script(&exchanges);
+    let client = LensClient::from_transport(link, options()).unwrap();
+    body(&client);
+    assert_eq!(*written.lock().unwrap(), outs(&exchanges));
+}
+
+/// mA of a current code with the 292.84 mA calibration (section 4.1: code x I_max / 4095).
+fn ma(code: i16) -> f64 {
+    f64::from(code) * 292.84 / 4095.0
+}
+
+#[test]
+fn the_transcribed_crc_reproduces_the_facts_sheet() {
+    assert_eq!(crc16_arc(b"123456789"), 0xBB3D);
+    assert_eq!(frame(b"CrMA\x00\x00"), hex("43 72 4D 41 00 00 71 80"));
+    assert_eq!(frame(b"TCA"), hex("54 43 41 B0 D0"));
+    assert_eq!(reply(b"TCA\x01\xB2"), hex("54 43 41 01 B2 F5 B9 0D 0A"));
+}
+
+#[test]
+fn handshake_then_the_calibration_reads() {
+    let exchanges = [vec![(hex("53 74 61 72 74"), hex("52 65 61 64 79 0D 0A"))], calibration_reads()].concat();
+    let (link, written) = script(&exchanges);
+    let client = LensClient::from_transport(link, OpenOptions { handshake: true, ..options() }).unwrap();
+    assert_eq!(*written.lock().unwrap(), outs(&exchanges));
+    assert_eq!(client.max_current_ma(), 292.84);
+    let [lo, hi] = client.limits_ma();
+    assert!((lo + 292.84).abs() < 1e-12 && (hi - 292.84).abs() < 1e-12, "{lo} {hi}");
+    assert_eq!(client.path(), std::path::Path::new("script"));
+}
+
+#[test]
+fn set_current_writes_aw_and_waits_for_nothing() {
+    let then = [
+        (hex("41 77 05 76 26 90"), vec![]), // 100 mA -> code 1398
+        (hex("41 77 FD 45 25 45"), vec![]), // -50 mA -> code -699
+        (frame(b"Aw\x0F\xFF"), vec![]),     // 1000 mA: clamped to the upper limit 4095
+    ];
+    run(&then, |client| {
+        let t0 = Instant::now();
+        let r = client.set_current_ma(100.0).unwrap();
+        assert!(t0.elapsed() < TIMEOUT, "a fire-and-forget write does not wait for a reply");
+        assert_eq!((r.code, r.clamped), (1398, false));
+        assert!((r.commanded_ma - ma(1398)).abs() < 1e-12, "{r:?}");
+        let r = client.set_current_ma(-50.0).unwrap();
+        assert_eq!((r.code, r.clamped), (-699, false));
+        assert!((r.commanded_ma - ma(-699)).abs() < 1e-12, "{r:?}");
+        let r = client.set_current_ma(1000.0).unwrap();
+        assert_eq!((r.code, r.clamped), (4095, true));
+        assert!((r.commanded_ma - 292.84).abs() < 1e-12, "{r:?}");
+    });
+}
+
+#[test]
+fn read_current() {
+    // The sheet's `A 05 7A` with its true CRC 0xA7D2 (section 3): code 1402.
+    let then = [(hex("41 72 00 00 B4 27"), hex("41 05 7A D2 A7 0D 0A"))];
+    run(&then, |client| {
+        let got = client.current_ma().unwrap();
+        assert!((got - ma(1402)).abs() < 1e-12, "{got}");
+        assert!((got - 100.25926).abs() < 1e-5, "{got}");
+    });
+}
+
+#[test]
+fn read_temperature() {
+    // 434 / 16 = 27.125 degC (section 3 worked example).
+    let then = [(hex("54 43 41 B0 D0"), hex("54 43 41 01 B2 F5 B9 0D 0A"))];
+    run(&then, |client| assert_eq!(client.temperature_c().unwrap(), 27.125));
+}
+
+#[test]
+fn old_firmware_refuses_tca_and_the_client_falls_back_to_ta() {
+    // E 03 "command not recognised", then `TA` (`54 41 FE F0`) answered `TA 00 01 B2`
+    // (section 4.5); the second reading goes to `TA` directly.
+    let ta = (hex("54 41 FE F0"), reply(b"TA\x00\x01\xB2"));
+    let then = [(hex("54 43 41 B0 D0"), reply(b"E\x03")), ta.clone(), ta];
+    run(&then, |client| {
+        assert_eq!(client.temperature_c().unwrap(), 27.125);
+        assert_eq!(client.temperature_c().unwrap(), 27.125);
+    });
+}
+
+#[test]
+fn a_device_error_reply_is_refused_with_its_id() {
+    // E 04: lens not compatible with firmware (section 4.10).
+    let then = [(hex("41 72 00 00 B4 27"), reply(b"E\x04"))];
+    run(&then, |client| {
+        let e = client.current_ma().unwrap_err();
+        assert!(matches!(e, HwError::Device { command: "Ar", id: 4 }), "{e:?}");
+        assert_eq!(e.kind(), LensErrorKind::Refused);
+        assert_eq!(e.to_string(), "lens driver answered Ar with error 4: lens not compatible with firmware");
+    });
+}
+
+#[test]
+fn a_reply_failing_its_crc_is_reported_at_once_and_the_next_query_works() {
+    // The worked TCA reply with the CRC's high byte B9 -> B8.
+    let then = [
+        (hex("54 43 41 B0 D0"), hex("54 43 41 01 B2 F5 B8 0D 0A")),
+        (hex("54 43 41 B0 D0"), hex("54 43 41 01 B2 F5 B9 0D 0A")),
+    ];
+    run(&then, |client| {
+        let t0 = Instant::now();
+        let e = client.temperature_c().unwrap_err();
+        assert!(t0.elapsed() < TIMEOUT, "a CRC failure does not wait for the timeout");
+        assert!(matches!(e, HwError::Crc { command: "TCA" }), "{e:?}");
+        assert_eq!(e.kind(), LensErrorKind::Protocol);
+        assert_eq!(client.temperature_c().unwrap(), 27.125);
+    });
+}
+
+#[test]
+fn a_nack_is_a_protocol_error() {
+    let then = [(hex("54 43 41 B0 D0"), hex("4E 0D 0A"))];
+    run(&then, |client| {
+        let e = client.temperature_c().unwrap_err();
+        assert!(matches!(e, HwError::Nack { command: "TCA" }), "{e:?}");
+        assert_eq!(e.kind(), LensErrorKind::Protocol);
+    });
+}
+
+#[test]
+fn silence_times_out_after_the_configured_time() {
+    let then = [(hex("54 43 41 B0 D0"), vec![])];
+    run(&then, |client| {
+        let t0 = Instant::now();
+        let e = client.temperature_c().unwrap_err();
+        let waited = t0.elapsed();
+        assert!(matches!(e, HwError::Timeout { command: "TCA", timeout: TIMEOUT }), "{e:?}");
+        assert_eq!(e.kind(), LensErrorKind::Timeout);
+        assert!(waited >= TIMEOUT && waited < 10 * TIMEOUT, "{waited:?}");
+    });
+}
+
+#[test]
+fn an_error_frame_after_a_write_is_drained_as_unsolicited() {
+    // `Aw` has no reply; the E 01 it provoked waits on the line until the next command.
+    let then = [(hex("41 77 05 76 26 90"), reply(b"E\x01")), (hex("41 72 00 00 B4 27"), reply(b"A\x05\x76"))];
+    run(&then, |client| {
+        client.set_current_ma(100.0).unwrap();
+        assert!((client.current_ma().unwrap() - ma(1398)).abs() < 1e-12);
+        assert_eq!(client.take_unsolicited(), vec![Unsolicited { reply: Reply::Error(1), after: "Aw" }]);
+    });
+}
+
+#[test]
+fn impossible_calibrations_are_typed_protocol_errors() {
+    // A max current of 0 stops the open at the first read.
+    let zero = [(hex("43 72 4D 41 00 00 71 80"), reply(b"CMA\x00\x00"))];
+    let (link, written) = script(&zero);
+    let e = LensClient::from_transport(link, options()).err().unwrap();
+    assert!(matches!(e, HwError::BadMaxCurrent { centi_ma: 0 }), "{e:?}");
+    assert_eq!(e.kind(), LensErrorKind::Protocol);
+    assert_eq!(e.to_string(), "protocol error: the driver reports a max current of 0 mA (must be > 0)");
+    assert_eq!(*written.lock().unwrap(), outs(&zero));
+    // Lower 5 > upper -5 (0xFFFB): refused before the firmware type is read.
+    let mut inverted = calibration_reads();
+    inverted[1].1 = reply(b"CUA\xFF\xFB");
+    inverted[2].1 = reply(b"CLA\x00\x05");
+    inverted.truncate(3);
+    let (link, written) = script(&inverted);
+    let e = LensClient::from_transport(link, options()).err().unwrap();
+    assert!(matches!(e, HwError::InvertedLimits { lower: 5, upper: -5 }), "{e:?}");
+    assert_eq!(e.to_string(), "protocol error: driver limits are inverted: lower 5 > upper -5");
+    assert_eq!(*written.lock().unwrap(), outs(&inverted));
+}
+
+#[test]
+fn controlled_mode_without_temperature_limits_is_refused() {
+    // `MwCA` (`4D 77 43 41 56 76`) answered `MCA` + status 0b100 + max FP + min FP.
+    let then = [(hex("4D 77 43 41 56 76"), reply(b"MCA\x04\x0B\xB8\x07\xD0"))];
+    run(&then, |client| {
+        let e = client.enter_controlled_mode().unwrap_err();
+        assert!(matches!(e, HwError::ControlledModeRefused { status: 0b100 }), "{e:?}");
+        assert_eq!(e.kind(), LensErrorKind::Refused);
+    });
+}
+
+#[test]
+fn an_unexpected_reply_says_what_was_expected_and_what_came() {
+    let e = HwError::UnexpectedReply { command: "Ar", expected: "A", got: Some(Reply::Status([0, 0, 0, 4])) };
+    assert_eq!(e.to_string(), r#"protocol error: Ar expects a reply starting "A", got S frame Status([0, 0, 0, 4])"#);
+    assert_eq!(e.kind(), LensErrorKind::Protocol);
+    let none = HwError::UnexpectedReply { command: "Start", expected: "Ready", got: None };
+    assert_eq!(none.to_string(), r#"protocol error: Start expects a reply starting "Ready", got no reply"#);
+}
