@@ -29,8 +29,6 @@
 //! gone from the parameterisation. The price: the map z -> x is nonlinear in the kf part,
 //! so dx/dz is evaluated at z ([`Basis::params_jacobian`]).
 
-#![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
-
 use super::jacobian::{PARAMS, U0};
 use super::observations::View;
 use crate::model::camera::cubic;

@@ -9,7 +9,7 @@
 use super::jacobian::{to_params, Projector, PARAMS};
 use super::observations::{validate, View};
 use crate::error::Result;
-use crate::lm::svd::sym_pinv;
+use crate::linalg::svd::sym_pinv;
 use crate::model::CameraModel;
 
 /// Relative singular-value threshold of the inversions (directions below it are

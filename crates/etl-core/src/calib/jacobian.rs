@@ -4,8 +4,6 @@
 //! Layout (also the names used in studies and reports):
 //! `om1 om2 om3 tx ty tz kf0x kf1x kf2x kf3x kf0y kf1y kf2y kf3y u0 v0 a1 .. a9`.
 
-#![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
-
 use crate::error::{Error, Result};
 use crate::model::camera::cubic;
 use crate::model::rotation::{mat_vec, rodrigues_to_matrix, Mat3};

@@ -19,7 +19,7 @@ pub mod rac;
 
 pub use bundle_adjust::{
     bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
-    ViewCorrection,
+    ViewCorrection, ViewScratch,
 };
 pub use initialise::{initialise, A0};
 pub use observations::{Point, View};
