@@ -103,7 +103,7 @@ fn noise_free_paper_rig_is_recovered_exactly() {
     for i in 0..25 {
         let tol = if i >= 16 { 1e-6 } else { 1e-8 };
         let rel = ((got[i] - truth[i]) / truth[i]).abs();
-        assert!(rel < tol, "{}: {} vs {} (rel {rel:e})", etl_core::calib::jacobian::PARAM_NAMES[i], got[i], truth[i]);
+        assert!(rel < tol, "{}: {} vs {} (rel {rel:e})", etl_core::calib::params::PARAM_NAMES[i], got[i], truth[i]);
     }
     assert!(r.iterations <= 10, "{} iterations", r.iterations);
     assert!(r.rms_px < 1e-6);
@@ -278,7 +278,7 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
         let ratio = bound / sd;
         println!(
             "{:5} truth {:+.4e} crlb {:.3e} mc {:.3e} efficiency {:.3} bias/crlb {:+.2}",
-            etl_core::calib::jacobian::PARAM_NAMES[i],
+            etl_core::calib::params::PARAM_NAMES[i],
             truth_x[i],
             bound,
             sd,
@@ -286,7 +286,7 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
             (mean - truth_x[i]) / bound
         );
         if (ratio - 1.0).abs() > worst.0 {
-            worst = ((ratio - 1.0).abs(), etl_core::calib::jacobian::PARAM_NAMES[i]);
+            worst = ((ratio - 1.0).abs(), etl_core::calib::params::PARAM_NAMES[i]);
         }
     }
     assert!(worst.0 < 0.10, "spread of {} differs from its CRLB by {:.1} %", worst.1, 100.0 * worst.0);

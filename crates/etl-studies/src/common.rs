@@ -6,7 +6,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use etl_core::calib::jacobian::{to_params, PARAMS};
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{KF_X, PARAMS};
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, View,
     ViewScratch, A0,
@@ -275,11 +276,10 @@ pub fn cov_std(cov: &[[f64; PARAMS]; PARAMS]) -> [f64; PARAMS] {
 /// (fx is linear in kf0x..kf3x: var = g^T C g with g = [1, E, E^2, E^3]).
 pub fn fx_std_px(cov: &[[f64; PARAMS]; PARAMS], e_ma: f64) -> f64 {
     let g = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
-    let k = etl_core::calib::jacobian::KF0X;
     let mut v = 0.0;
     for i in 0..4 {
         for j in 0..4 {
-            v += g[i] * cov[k + i][k + j] * g[j];
+            v += g[i] * cov[KF_X.at(i)][KF_X.at(j)] * g[j];
         }
     }
     v.max(0.0).sqrt()

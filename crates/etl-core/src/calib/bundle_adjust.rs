@@ -31,9 +31,10 @@
 //! storage) and the loop stops when the estimate no longer moves (at most
 //! [`IRLS_MAX_ROUNDS`] rounds).
 
-use super::basis::{Basis, A0_INDICES};
-use super::jacobian::{from_params, to_params, Projector, PARAMS, REDUCED, R_FX, R_K1};
+use super::basis::Basis;
+use super::jacobian::{from_params, to_params, Projector};
 use super::observations::{distinct_currents, point_count, validate, View};
+use super::params::{A0_INDICES, PARAMS, REDUCED, R_DISTORTION, R_FX, R_FY, R_POSE, R_U0, R_V0};
 use crate::error::{Error, Result};
 use crate::lm::{
     self, Accumulation, BlockNormal, BlockProblem, BlockRowSink, BlockScratch, NormalEquations, Options, Problem,
@@ -165,7 +166,7 @@ pub struct BundleAdjustReport {
     /// The refined model.
     pub model: CameraModel,
     /// One standard deviation of each of the 25 numbers (order of
-    /// [`super::jacobian::PARAM_NAMES`]).
+    /// [`super::params::PARAM_NAMES`]).
     pub std: [f64; PARAMS],
     /// Covariance of the 25 numbers.
     pub covariance: [[f64; PARAMS]; PARAMS],
@@ -328,7 +329,19 @@ const PADDED: usize = 12;
 
 /// The 11 per-view variables other than u0, v0 (whose columns are the constants (1, 0)
 /// and (0, 1) and are accumulated as plain sums).
-const OTHER: [usize; 11] = [0, 1, 2, 3, 4, 5, R_FX, R_FX + 1, R_K1, R_K1 + 1, R_K1 + 2];
+const OTHER: [usize; 11] = [
+    R_POSE.at(0),
+    R_POSE.at(1),
+    R_POSE.at(2),
+    R_POSE.at(3),
+    R_POSE.at(4),
+    R_POSE.at(5),
+    R_FX,
+    R_FY,
+    R_DISTORTION.at(0),
+    R_DISTORTION.at(1),
+    R_DISTORTION.at(2),
+];
 
 /// A view's reduced normal equations: the 11 x 11 block of the variables in [`OTHER`]
 /// (upper triangle: row i holds columns i.., padded), their cross terms with u0 and v0 (column sums of the two rows),
@@ -376,7 +389,7 @@ impl ViewNormal {
 
     /// The 13 x 13 normal equations (order of the per-view variables).
     fn expand(&self) -> ([[f64; REDUCED]; REDUCED], [f64; REDUCED]) {
-        let (iu, iv) = (R_FX + 2, R_FX + 3);
+        let (iu, iv) = (R_U0, R_V0);
         let mut a = [[0.0; REDUCED]; REDUCED];
         let mut g = [0.0; REDUCED];
         for (p, &op) in OTHER.iter().enumerate() {

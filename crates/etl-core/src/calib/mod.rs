@@ -15,6 +15,7 @@ pub mod focal_poly;
 mod initialise;
 pub mod jacobian;
 pub mod observations;
+pub mod params;
 pub mod rac;
 
 pub use bundle_adjust::{
