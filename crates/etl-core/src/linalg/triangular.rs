@@ -31,3 +31,22 @@ pub fn certified_upper_inverse<const N: usize>(b: &[[f64; N]; N], rank_tolerance
     let (nb, ninv) = (frob(b), frob(&inv));
     (ninv.is_finite() && nb.is_finite() && 100.0 * rank_tolerance * nb * ninv < 1.0).then_some(inv)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverts_a_well_conditioned_triangle_exactly() {
+        // [[2, 1], [0, 4]]^-1 = [[1/2, -1/8], [0, 1/4]] (all exact in binary).
+        let inv = certified_upper_inverse(&[[2.0, 1.0], [0.0, 4.0]], 1e-13).unwrap();
+        assert_eq!(inv, [[0.5, -0.125], [0.0, 0.25]]);
+    }
+
+    #[test]
+    fn refuses_singular_and_nearly_singular_triangles() {
+        assert!(certified_upper_inverse(&[[1.0, 1.0], [0.0, 0.0]], 1e-13).is_none());
+        assert!(certified_upper_inverse(&[[1.0, 0.0], [0.0, 1e-15]], 1e-13).is_none());
+        assert!(certified_upper_inverse(&[[f64::NAN, 0.0], [0.0, 1.0]], 1e-13).is_none());
+    }
+}
