@@ -5,7 +5,9 @@
 use std::time::Instant;
 
 use etl_core::calib::jacobian::{to_params, Projector};
-use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, Point, View, ViewCorrection, A0};
+use etl_core::calib::{
+    bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, Point, View, ViewScratch, A0,
+};
 use etl_core::model::CameraModel;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -45,14 +47,13 @@ fn main() {
     } else {
         BundleAdjustOptions::default()
     };
-    let mut corr = vec![ViewCorrection::default(); views.len()];
-    let mut scratch = vec![etl_core::lm::BlockScratch::ZERO; views.len()];
-    let r = bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch).expect("ba");
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    let r = bundle_adjust(&views, &init, &opts, &mut scratch).expect("ba");
     if std::env::var_os("BA_TRACE").is_some() {
         for k in 1..=r.iterations {
             let mut o = opts;
             o.lm.max_iterations = k;
-            let rk = bundle_adjust(&views, &init, &o, &mut corr, &mut scratch).expect("ba");
+            let rk = bundle_adjust(&views, &init, &o, &mut scratch).expect("ba");
             println!(
                 "iterations {k}: rms {:.12} px, fx(225) rel err {:.3e}",
                 rk.rms_px,
@@ -77,7 +78,7 @@ fn main() {
             .fold(f64::INFINITY, f64::min)
     };
     let total = min_time(&mut || {
-        std::hint::black_box(bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch).expect("ba"));
+        std::hint::black_box(bundle_adjust(&views, &init, &opts, &mut scratch).expect("ba"));
     });
     if std::env::var_os("BA_ONLY").is_some() {
         println!("solve {:.3} ms", total * 1e3);
@@ -109,7 +110,7 @@ fn main() {
         }
     }
     let svd = min_time(&mut || {
-        std::hint::black_box(etl_core::lm::svd::Svd::of_columns(std::hint::black_box(cols)));
+        std::hint::black_box(etl_core::linalg::svd::Svd::of_columns(std::hint::black_box(cols)));
     });
     println!("svd 25x25 {:.3} ms", svd * 1e3);
     println!(

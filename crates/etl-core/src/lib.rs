@@ -30,6 +30,7 @@ pub mod error;
 pub mod fit;
 pub mod focus;
 pub mod lens;
+pub mod linalg;
 pub mod lm;
 pub mod model;
 pub mod physics;

@@ -72,9 +72,12 @@ impl Problem<7> for Stacked<'_> {
 #[test]
 fn block_solver_agrees_with_the_dense_solver() {
     let (centres, pts) = circle_points();
-    let mut y: Vec<[f64; 2]> = centres.iter().map(|c| [c[0] + 0.3, c[1] - 0.2]).collect();
     let mut scratch = vec![BlockScratch::<1, 2>::ZERO; solve_blocks_scratch::<1, 2>(3)];
-    let rb = solve_blocks(&mut Circles(&pts), [2.0], &mut y, &Options::default(), &mut scratch).unwrap();
+    for (s, c) in scratch.iter_mut().zip(&centres) {
+        s.set_y([c[0] + 0.3, c[1] - 0.2]);
+    }
+    let rb = solve_blocks(&mut Circles(&pts), [2.0], &Options::default(), &mut scratch).unwrap();
+    let y: Vec<[f64; 2]> = scratch.iter().map(|s| *s.y()).collect();
     let x0 = [
         2.0,
         centres[0][0] + 0.3,
@@ -153,14 +156,12 @@ fn bad_inputs_are_typed_errors() {
     assert_eq!(solve(&mut Failing, [1.0], &Options::default()).unwrap_err(), Error::BehindCamera);
     assert!(matches!(solve(&mut Nothing, [1.0], &Options::default()).unwrap_err(), Error::TooFew { .. }));
     let (_, pts) = circle_points();
-    let mut y = vec![[0.0; 2]; 3];
     let mut small = vec![BlockScratch::<1, 2>::ZERO; 2];
-    let e = solve_blocks(&mut Circles(&pts), [2.0], &mut y, &Options::default(), &mut small).unwrap_err();
+    let e = solve_blocks(&mut Circles(&pts), [2.0], &Options::default(), &mut small).unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { needed: 3, got: 2, .. }), "{e}");
-    let mut y2 = vec![[0.0; 2]; 2];
-    let mut scratch = vec![BlockScratch::<1, 2>::ZERO; 3];
-    let e = solve_blocks(&mut Circles(&pts), [2.0], &mut y2, &Options::default(), &mut scratch).unwrap_err();
-    assert!(matches!(e, Error::InvalidArgument { .. }), "{e}");
+    let mut scratch = vec![BlockScratch::<1, 2>::starting_at([0.0, f64::NAN]); 3];
+    let e = solve_blocks(&mut Circles(&pts), [2.0], &Options::default(), &mut scratch).unwrap_err();
+    assert!(matches!(e, Error::NotFinite { .. }), "{e}");
 }
 
 #[test]

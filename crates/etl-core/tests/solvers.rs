@@ -3,9 +3,9 @@
 //! bad inputs.
 
 use etl_core::calib::{
-    bundle_adjust, initialise, rac::rac, BundleAdjustOptions, Estimator, Point, View, ViewCorrection, A0,
+    bundle_adjust, bundle_adjust_scratch, initialise, rac::rac, BundleAdjustOptions, Estimator, Point, View,
+    ViewScratch, A0,
 };
-use etl_core::lm::BlockScratch;
 use etl_core::model::CameraModel;
 use etl_core::Error;
 use rand::SeedableRng;
@@ -89,9 +89,8 @@ fn calibrate(pts: &[Vec<Point>], e: &[f64], a0: &A0, estimator: Estimator) -> et
     let views = as_views(pts, e);
     let init = initialise(&views, a0).unwrap();
     let opts = BundleAdjustOptions { estimator, ..BundleAdjustOptions::default() };
-    let mut corr = vec![ViewCorrection::default(); views.len()];
-    let mut scratch = vec![BlockScratch::ZERO; views.len()];
-    bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch).unwrap()
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    bundle_adjust(&views, &init, &opts, &mut scratch).unwrap()
 }
 
 #[test]
@@ -104,7 +103,7 @@ fn noise_free_paper_rig_is_recovered_exactly() {
     for i in 0..25 {
         let tol = if i >= 16 { 1e-6 } else { 1e-8 };
         let rel = ((got[i] - truth[i]) / truth[i]).abs();
-        assert!(rel < tol, "{}: {} vs {} (rel {rel:e})", etl_core::calib::jacobian::PARAM_NAMES[i], got[i], truth[i]);
+        assert!(rel < tol, "{}: {} vs {} (rel {rel:e})", etl_core::calib::params::PARAM_NAMES[i], got[i], truth[i]);
     }
     assert!(r.iterations <= 10, "{} iterations", r.iterations);
     assert!(r.rms_px < 1e-6);
@@ -279,7 +278,7 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
         let ratio = bound / sd;
         println!(
             "{:5} truth {:+.4e} crlb {:.3e} mc {:.3e} efficiency {:.3} bias/crlb {:+.2}",
-            etl_core::calib::jacobian::PARAM_NAMES[i],
+            etl_core::calib::params::PARAM_NAMES[i],
             truth_x[i],
             bound,
             sd,
@@ -287,7 +286,7 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
             (mean - truth_x[i]) / bound
         );
         if (ratio - 1.0).abs() > worst.0 {
-            worst = ((ratio - 1.0).abs(), etl_core::calib::jacobian::PARAM_NAMES[i]);
+            worst = ((ratio - 1.0).abs(), etl_core::calib::params::PARAM_NAMES[i]);
         }
     }
     assert!(worst.0 < 0.10, "spread of {} differs from its CRLB by {:.1} %", worst.1, 100.0 * worst.0);
@@ -299,8 +298,8 @@ fn hold_a0_keeps_the_lens_off_intrinsics() {
     let views = as_views(&pts, &e);
     let init = initialise(&views, &a0).unwrap();
     let opts = BundleAdjustOptions { hold_a0: true, ..BundleAdjustOptions::default() };
-    let mut corr = vec![ViewCorrection::default(); views.len()];
-    let r = bundle_adjust(&views, &init, &opts, &mut corr, &mut []).unwrap();
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    let r = bundle_adjust(&views, &init, &opts, &mut scratch).unwrap();
     assert!((r.model.kf_x[0] - a0.kf0x).abs() < 1e-4 && (r.model.kf_y[0] - a0.kf0y).abs() < 1e-4);
     assert!((r.model.principal_point[0] - a0.u0).abs() < 1e-4 && (r.model.principal_point[1] - a0.v0).abs() < 1e-4);
     assert!(r.std[6] < 1e-3 && r.std[14] < 1e-3, "held numbers have ~0 spread: {} {}", r.std[6], r.std[14]);
@@ -324,8 +323,8 @@ fn robust_loss_resists_bad_corners() {
     let init = initialise(&views, &a0).unwrap();
     let run = |robust| {
         let opts = BundleAdjustOptions { robust, ..BundleAdjustOptions::default() };
-        let mut corr = vec![ViewCorrection::default(); views.len()];
-        bundle_adjust(&views, &init, &opts, &mut corr, &mut []).unwrap().model
+        let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+        bundle_adjust(&views, &init, &opts, &mut scratch).unwrap().model
     };
     // Distance of an estimate from the clean-data estimate: max relative fx(E) difference.
     let dist = |m: &CameraModel| {

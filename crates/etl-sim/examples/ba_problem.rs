@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use etl_core::calib::jacobian::to_params;
-use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, View, ViewCorrection};
+use etl_core::calib::{bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, View, ViewScratch};
 use etl_sim::simulate::{paper_rig, NoiseModel};
 
 fn main() {
@@ -16,12 +16,12 @@ fn main() {
     let views: Vec<View> = pts.iter().zip(&e).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let init = initialise(&views, &sim.a0).expect("initialise");
     let opts = BundleAdjustOptions::default();
-    let mut corr = vec![ViewCorrection::default(); views.len()];
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
     let runs = 50;
     let t = Instant::now();
     let mut report = None;
     for _ in 0..runs {
-        report = Some(bundle_adjust(&views, &init, &opts, &mut corr, &mut []).expect("bundle adjustment"));
+        report = Some(bundle_adjust(&views, &init, &opts, &mut scratch).expect("bundle adjustment"));
     }
     let secs = t.elapsed().as_secs_f64() / runs as f64;
     let r = report.expect("at least one run");

@@ -4,7 +4,8 @@
 //!
 //! `cargo run --release -p etl-calib --example subset_trace -- [VIEWS] [TRIAL]`, VIEWS as
 //! the study labels them (e.g. 135789, 1-based in the nine).
-use etl_core::calib::jacobian::{to_params, PARAMS, PARAM_NAMES};
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_sim::simulate::{paper_rig, NoiseModel};
 use etl_studies::common::{calibrate_paper_capped, StudyOptions};
 use etl_studies::subsets::NINE_VIEWS;

@@ -6,12 +6,12 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use etl_core::calib::jacobian::{to_params, PARAMS};
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{KF_X, PARAMS};
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, View,
-    ViewCorrection, A0,
+    ViewScratch, A0,
 };
-use etl_core::lm::BlockScratch;
 use etl_core::model::CameraModel;
 use etl_core::pnp::{displacement_mm, solve_pnp};
 use etl_core::progress::{NoProgress, Progress};
@@ -214,10 +214,10 @@ pub fn calibrate_paper_capped(obs: &Observations, a0: &A0, max_iterations: usize
     let (pts, e_com) = core_views(obs)?;
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let initial = initialise(&views, a0)?;
-    let mut corrections = vec![ViewCorrection::default(); views.len()];
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
     let mut options = BundleAdjustOptions::default();
     options.lm.max_iterations = max_iterations;
-    Ok(bundle_adjust(&views, &initial, &options, &mut corrections, &mut [])?)
+    Ok(bundle_adjust(&views, &initial, &options, &mut scratch)?)
 }
 
 /// Calibrates `obs` with `a0` by the paper's estimator ([`calibrate_paper`]), then by
@@ -232,13 +232,12 @@ pub fn calibrate_pair(obs: &Observations, a0: &A0, sigma_z_mm: f64, sigma_e_ma: 
     let (pts, e_com) = core_views(obs)?;
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let initial = initialise(&views, a0)?;
-    let mut corrections = vec![ViewCorrection::default(); views.len()];
-    let paper = bundle_adjust(&views, &initial, &BundleAdjustOptions::default(), &mut corrections, &mut [])?;
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    let paper = bundle_adjust(&views, &initial, &BundleAdjustOptions::default(), &mut scratch)?;
     let estimator = Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px: None };
     let mut options = BundleAdjustOptions { estimator, ..BundleAdjustOptions::default() };
     options.lm.initial_damping = EIV_INITIAL_DAMPING;
-    let mut scratch = vec![BlockScratch::ZERO; bundle_adjust_scratch(views.len(), &estimator)];
-    let eiv = bundle_adjust(&views, &paper.model, &options, &mut corrections, &mut scratch)?;
+    let eiv = bundle_adjust(&views, &paper.model, &options, &mut scratch)?;
     Ok(PairFit { paper, eiv })
 }
 
@@ -277,11 +276,10 @@ pub fn cov_std(cov: &[[f64; PARAMS]; PARAMS]) -> [f64; PARAMS] {
 /// (fx is linear in kf0x..kf3x: var = g^T C g with g = [1, E, E^2, E^3]).
 pub fn fx_std_px(cov: &[[f64; PARAMS]; PARAMS], e_ma: f64) -> f64 {
     let g = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
-    let k = etl_core::calib::jacobian::KF0X;
     let mut v = 0.0;
     for i in 0..4 {
         for j in 0..4 {
-            v += g[i] * cov[k + i][k + j] * g[j];
+            v += g[i] * cov[KF_X.at(i)][KF_X.at(j)] * g[j];
         }
     }
     v.max(0.0).sqrt()

@@ -16,7 +16,8 @@
 //! about 1 / sqrt(2 (trials - 1)) relative (4 % at 300 trials).
 
 use etl_core::calib::crlb::{crlb_covariance, crlb_covariance_eiv};
-use etl_core::calib::jacobian::{to_params, PARAMS, PARAM_NAMES};
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
 use serde_json::json;

@@ -20,7 +20,7 @@
 //! views.
 
 use etl_core::calib::crlb::crlb_covariance_eiv;
-use etl_core::calib::jacobian::{KF0X, PARAMS};
+use etl_core::calib::params::{KF_X, KF_Y, PARAMS};
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
 use rand::SeedableRng;
@@ -235,7 +235,7 @@ pub fn level_bound(study: Fig6Study, level: f64) -> Result<LevelBound> {
     let noise = study.noise(level);
     let x = super::common::truth_params();
     let rel = |cov: &[[f64; PARAMS]; PARAMS]| -> [f64; 6] {
-        let idx = [KF0X + 1, KF0X + 2, KF0X + 3, KF0X + 5, KF0X + 6, KF0X + 7];
+        let idx = [KF_X.at(1), KF_X.at(2), KF_X.at(3), KF_Y.at(1), KF_Y.at(2), KF_Y.at(3)];
         core::array::from_fn(|k| MEAN_ABS_OF_STD * cov[idx[k]][idx[k]].max(0.0).sqrt() / x[idx[k]].abs())
     };
     if noise.px <= 0.0 {

@@ -15,7 +15,8 @@
 //! reports) and per coordinate (that divided by sqrt 2: the estimate of the pixel noise's
 //! standard deviation, comparable to the noise level).
 
-use etl_core::calib::jacobian::{to_params, PARAMS, PARAM_NAMES};
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::model::CameraModel;
 use serde_json::{json, Value};
 

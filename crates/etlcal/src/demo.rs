@@ -19,7 +19,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use etl_core::calib::jacobian::{to_params, PARAM_NAMES};
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::PARAM_NAMES;
 use etl_core::calib::Estimator;
 use etl_core::thermal::ThermalCalibration;
 use serde_json::json;

@@ -118,8 +118,7 @@ pub extern "C" fn etl_gate_physics(e_ma: f64, dp: f64, nu: f64) -> f64 {
 /// Returns the refined kf1x (or NaN on error).
 #[no_mangle]
 pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
-    use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, Estimator, Point, View, ViewCorrection, A0};
-    use etl_core::lm::BlockScratch;
+    use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, Estimator, Point, View, ViewScratch, A0};
     let cam = CameraModel::paper_rig();
     let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 12]; 3];
     let setup = [(60.0, 90.0), (31.0, 130.0), (8.0, 200.0)];
@@ -140,9 +139,8 @@ pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
     let Ok(init) = initialise(&views, &a0) else { return f64::NAN };
     let estimator = if eiv { Estimator::EIV_PAPER } else { Estimator::Paper };
     let opts = BundleAdjustOptions { estimator, ..BundleAdjustOptions::default() };
-    let mut corr = [ViewCorrection::default(); 3];
-    let mut scratch = [BlockScratch::ZERO; 3];
-    let Ok(r) = bundle_adjust(&views, &init, &opts, &mut corr, &mut scratch) else { return f64::NAN };
+    let mut scratch = [ViewScratch::ZERO; 3];
+    let Ok(r) = bundle_adjust(&views, &init, &opts, &mut scratch) else { return f64::NAN };
     let mut board = [[0.0; 3]; 12];
     let mut px = [[0.0; 2]; 12];
     for i in 0..12 {

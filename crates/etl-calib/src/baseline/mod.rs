@@ -11,7 +11,7 @@
 //! a1..a9. R and T are not defined by this method (no common world frame) and are written
 //! as zero: the result serves measurements (PnP), not stage geometry.
 
-use etl_core::lm::svd::sym_pinv;
+use etl_core::linalg::svd::sym_pinv;
 use etl_core::thermal::ThermalCalibration;
 
 use crate::zhang::{zhang, PlanarView, ZhangResult};

@@ -15,9 +15,8 @@ pub use view_focal::view_focal;
 
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
-    View, ViewCorrection, A0,
+    View, ViewCorrection, ViewScratch, A0,
 };
-use etl_core::lm::BlockScratch;
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalCalibration;
 
@@ -124,9 +123,9 @@ pub fn calibrate(
         robust: options.robust,
         ..BundleAdjustOptions::default()
     };
-    let mut corrections = vec![ViewCorrection::default(); views.len()];
-    let mut scratch = vec![BlockScratch::ZERO; bundle_adjust_scratch(views.len(), &options.estimator)];
-    let report = bundle_adjust(&views, &initial, &ba, &mut corrections, &mut scratch)?;
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    let report = bundle_adjust(&views, &initial, &ba, &mut scratch)?;
+    let corrections: Vec<ViewCorrection> = scratch.iter().map(ViewCorrection::from).collect();
     let m = report.model;
     let summaries = views
         .iter()

@@ -2,7 +2,8 @@
 //! the curve): fx, fy refitted to one view's points with R, T, the principal point and
 //! the distortion of the calibration held.
 
-use etl_core::calib::jacobian::{to_params, Projector, R_FX};
+use etl_core::calib::jacobian::{to_params, Projector};
+use etl_core::calib::params::{R_FX, R_FY};
 use etl_core::calib::View;
 use etl_core::lm::{solve, Options, Problem, RowSink};
 use etl_core::model::CameraModel;
@@ -33,7 +34,7 @@ impl Problem<2> for OneView<'_> {
             // suffice: the same numbers as the full 25-number Jacobian at a fifth of the cost.
             let q = proj.project_reduced(w, self.view.e_com_ma, jacobian)?;
             for row in 0..2 {
-                sink.push(q.pixel[row] - p.pixel[row], &[q.d_reduced[row][R_FX], q.d_reduced[row][R_FX + 1]]);
+                sink.push(q.pixel[row] - p.pixel[row], &[q.d_reduced[row][R_FX], q.d_reduced[row][R_FY]]);
             }
         }
         Ok(())

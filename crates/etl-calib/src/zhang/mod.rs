@@ -19,7 +19,7 @@
 use etl_core::calib::jacobian::{to_params, Projector};
 use etl_core::calib::rac::nearest_rotation;
 use etl_core::calib::A0;
-use etl_core::lm::svd::Svd;
+use etl_core::linalg::svd::Svd;
 use etl_core::lm::{solve_blocks, BlockProblem, BlockRowSink, BlockScratch, Options, StopReason};
 use etl_core::model::rotation::matrix_to_rodrigues;
 use etl_core::model::CameraModel;
@@ -210,9 +210,10 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
         poses.push([om[0], om[1], om[2], t[0], t[1], t[2]]);
     }
     let mut problem = Refine { views };
-    let mut scratch = vec![BlockScratch::<7, 6>::ZERO; views.len()];
+    let mut scratch: Vec<BlockScratch<7, 6>> = poses.iter().map(|&p| BlockScratch::starting_at(p)).collect();
     let opts = Options { max_iterations: 100, ftol: 1e-12, xtol: 1e-12, gtol: 1e-12, ..Options::default() };
-    let r = solve_blocks(&mut problem, [fx, fy, u0, v0, 0.0, 0.0, 0.0], &mut poses, &opts, &mut scratch)?;
+    let r = solve_blocks(&mut problem, [fx, fy, u0, v0, 0.0, 0.0, 0.0], &opts, &mut scratch)?;
+    let poses: Vec<[f64; 6]> = scratch.iter().map(|b| *b.y()).collect();
     if r.stop == StopReason::RankDeficient {
         return Err(Error::Core(etl_core::Error::Degenerate {
             what: "Zhang's refinement is rank deficient (too few or too similar views)",

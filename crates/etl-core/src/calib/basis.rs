@@ -29,11 +29,14 @@
 //! gone from the parameterisation. The price: the map z -> x is nonlinear in the kf part,
 //! so dx/dz is evaluated at z ([`Basis::params_jacobian`]).
 
-#![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
-
-use super::jacobian::{PARAMS, U0};
 use super::observations::View;
+use super::params::{DISTORTION_TRIPLES, KF_X, KF_Y, PARAMS};
 use crate::model::camera::cubic;
+
+/// Where fx's and fy's coefficients start (kf0x, kf0y).
+const KF_STARTS: [usize; 2] = [KF_X.start, KF_Y.start];
+/// Where each distortion coefficient's a-triple starts (a1, a4, a7).
+const A_STARTS: [usize; 3] = [DISTORTION_TRIPLES[0].start, DISTORTION_TRIPLES[1].start, DISTORTION_TRIPLES[2].start];
 
 /// Monomial coefficients (t^0..t^3) of T_0..T_3.
 const MONO_OF_CHEB: [[f64; 4]; 4] =
@@ -147,7 +150,7 @@ impl Basis {
     /// projection's own checks).
     fn w_range(&self, x: &[f64; PARAMS]) -> WRange {
         let (lo, hi) = (self.e_mid - self.e_half, self.e_mid + self.e_half);
-        let (kx, ky) = (read::<4>(x, 6), read::<4>(x, 10));
+        let (kx, ky) = (read::<4>(x, KF_X.start), read::<4>(x, KF_Y.start));
         let f = |e: f64| 0.5 * (cubic(&kx, e) + cubic(&ky, e));
         let (flo, fhi) = (f(lo), f(hi));
         let (wlo, whi) = (1.0 / flo, 1.0 / fhi);
@@ -167,11 +170,11 @@ impl Basis {
     /// The internal parameters z of the model's parameters x.
     pub fn to_internal(&self, x: &[f64; PARAMS]) -> [f64; PARAMS] {
         let mut z = *x;
-        for start in [6, 10] {
+        for start in KF_STARTS {
             write(&mut z, start, &mono_to_cheb(read(x, start), 4, self.e_mid, self.e_half));
         }
         let w = self.w_range(x);
-        for s in [16, 19, 22] {
+        for s in A_STARTS {
             // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
             let [q2, q1, q0] = read::<3>(x, s);
             let m = mono_to_cheb([q0, q1, q2, 0.0], 3, w.mid, w.half);
@@ -183,11 +186,11 @@ impl Basis {
     /// The model's parameters x of the internal parameters z.
     pub fn to_params(&self, z: &[f64; PARAMS]) -> [f64; PARAMS] {
         let mut x = *z;
-        for start in [6, 10] {
+        for start in KF_STARTS {
             write(&mut x, start, &cheb_to_mono(read(z, start), 4, self.e_mid, self.e_half));
         }
         let w = self.w_range(&x);
-        for s in [16, 19, 22] {
+        for s in A_STARTS {
             let [d2, d1, d0] = read::<3>(z, s);
             let m = cheb_to_mono([d0, d1, d2, 0.0], 3, w.mid, w.half);
             write(&mut x, s, &[m[2], m[1], m[0]]);
@@ -210,7 +213,7 @@ impl Basis {
         for i in 0..PARAMS {
             set(&mut j, i, i, 1.0);
         }
-        for start in [6, 10] {
+        for start in KF_STARTS {
             for col in 0..4 {
                 let unit: [f64; 4] = core::array::from_fn(|k| if k == col { 1.0 } else { 0.0 });
                 for (row, a) in cheb_to_mono(unit, 4, self.e_mid, self.e_half).into_iter().enumerate() {
@@ -220,7 +223,7 @@ impl Basis {
         }
         let x = self.to_params(z);
         let w = self.w_range(&x);
-        for s in [16, 19, 22] {
+        for s in A_STARTS {
             // The slots hold z (T_2, T_1, T_0) and x (w^2, w, 1): descending degree.
             let [d2, d1, _] = read::<3>(z, s);
             let to_slots = |m: [f64; 4]| [m[2], m[1], m[0]];
@@ -235,16 +238,14 @@ impl Basis {
             let da_dhalf = to_slots(cheb_to_mono([-2.0 * d2 * ih, -d1 * ih, -2.0 * d2 * ih, 0.0], 3, w.mid, w.half));
             for (row, (dm, dh)) in da_dmid.into_iter().zip(da_dhalf).enumerate() {
                 for (c, (&gm, &gh)) in w.d_mid.iter().zip(w.d_half.iter()).enumerate() {
-                    set(&mut j, s + row, 6 + c, dm * gm + dh * gh);
+                    // Slot c < 8 runs over kf_x then kf_y (contiguous).
+                    set(&mut j, s + row, KF_X.at(c), dm * gm + dh * gh);
                 }
             }
         }
         j
     }
 }
-
-/// Indices of the four numbers the hold-A0 option pins (kf0x, kf0y, u0, v0).
-pub(crate) const A0_INDICES: [usize; 4] = [6, 10, U0, U0 + 1];
 
 #[cfg(test)]
 mod tests {
@@ -271,7 +272,7 @@ mod tests {
         for e in [80.0, 131.0, 225.0] {
             let t = (e - 152.5) / 72.5;
             let col = [1.0, t, 2.0 * t * t - 1.0, 4.0 * t * t * t - 3.0 * t];
-            let fx: f64 = (0..4).map(|k| z[6 + k] * col[k]).sum();
+            let fx: f64 = (0..4).map(|k| z[KF_X.at(k)] * col[k]).sum();
             assert!((fx / cubic(&m.kf_x, e) - 1.0).abs() < 1e-12);
             let w = 1.0 / f(e);
             let s = (w - 0.5 * (whi + wlo)) / (0.5 * (whi - wlo));

@@ -31,9 +31,10 @@
 //! storage) and the loop stops when the estimate no longer moves (at most
 //! [`IRLS_MAX_ROUNDS`] rounds).
 
-use super::basis::{Basis, A0_INDICES};
-use super::jacobian::{from_params, to_params, Projector, PARAMS, REDUCED, R_FX, R_K1};
+use super::basis::Basis;
+use super::jacobian::{from_params, to_params, Projector};
 use super::observations::{distinct_currents, point_count, validate, View};
+use super::params::{A0_INDICES, PARAMS, REDUCED, R_DISTORTION, R_FX, R_FY, R_POSE, R_U0, R_V0};
 use crate::error::{Error, Result};
 use crate::lm::{
     self, Accumulation, BlockNormal, BlockProblem, BlockRowSink, BlockScratch, NormalEquations, Options, Problem,
@@ -165,7 +166,7 @@ pub struct BundleAdjustReport {
     /// The refined model.
     pub model: CameraModel,
     /// One standard deviation of each of the 25 numbers (order of
-    /// [`super::jacobian::PARAM_NAMES`]).
+    /// [`super::params::PARAM_NAMES`]).
     pub std: [f64; PARAMS],
     /// Covariance of the 25 numbers.
     pub covariance: [[f64; PARAMS]; PARAMS],
@@ -184,13 +185,23 @@ pub struct BundleAdjustReport {
     pub sigma_px: f64,
 }
 
-/// Storage [`bundle_adjust`] needs in `scratch` for `views` views: one element per view for
-/// the errors-in-variables estimator, none for the paper's.
-pub const fn bundle_adjust_scratch(views: usize, estimator: &Estimator) -> usize {
-    match estimator {
-        Estimator::Paper => 0,
-        Estimator::Eiv { .. } => views,
+/// One view's storage of [`bundle_adjust`]: the view's correction (dZ_j mm, dE_j mA: the
+/// block parameters of the errors-in-variables solve, zeros for the paper's estimator)
+/// and the block solver's working state. Read the correction with
+/// [`ViewCorrection::from`].
+pub type ViewScratch = BlockScratch<PARAMS, 2>;
+
+impl From<&ViewScratch> for ViewCorrection {
+    fn from(scratch: &ViewScratch) -> Self {
+        let [dz_mm, de_ma] = *scratch.y();
+        ViewCorrection { dz_mm, de_ma }
     }
+}
+
+/// Number of [`ViewScratch`] elements [`bundle_adjust`] needs for `views` views: one per
+/// view, whatever the estimator (each holds the view's correction on return).
+pub const fn bundle_adjust_scratch(views: usize) -> usize {
+    lm::solve_blocks_scratch::<PARAMS, 2>(views)
 }
 
 const HOLD_WEIGHT: f64 = 1e8;
@@ -318,7 +329,19 @@ const PADDED: usize = 12;
 
 /// The 11 per-view variables other than u0, v0 (whose columns are the constants (1, 0)
 /// and (0, 1) and are accumulated as plain sums).
-const OTHER: [usize; 11] = [0, 1, 2, 3, 4, 5, R_FX, R_FX + 1, R_K1, R_K1 + 1, R_K1 + 2];
+const OTHER: [usize; 11] = [
+    R_POSE.at(0),
+    R_POSE.at(1),
+    R_POSE.at(2),
+    R_POSE.at(3),
+    R_POSE.at(4),
+    R_POSE.at(5),
+    R_FX,
+    R_FY,
+    R_DISTORTION.at(0),
+    R_DISTORTION.at(1),
+    R_DISTORTION.at(2),
+];
 
 /// A view's reduced normal equations: the 11 x 11 block of the variables in [`OTHER`]
 /// (upper triangle: row i holds columns i.., padded), their cross terms with u0 and v0 (column sums of the two rows),
@@ -366,7 +389,7 @@ impl ViewNormal {
 
     /// The 13 x 13 normal equations (order of the per-view variables).
     fn expand(&self) -> ([[f64; REDUCED]; REDUCED], [f64; REDUCED]) {
-        let (iu, iv) = (R_FX + 2, R_FX + 3);
+        let (iu, iv) = (R_U0, R_V0);
         let mut a = [[0.0; REDUCED]; REDUCED];
         let mut g = [0.0; REDUCED];
         for (p, &op) in OTHER.iter().enumerate() {
@@ -555,11 +578,11 @@ impl Eiv<'_, '_> {
 }
 
 /// RMS reprojection error of `model` over the views (with per-view corrections).
-fn rms(views: &[View<'_>], x: &[f64; PARAMS], corrections: Option<&[[f64; 2]]>) -> Result<f64> {
+fn rms(views: &[View<'_>], x: &[f64; PARAMS], corrections: Option<&[ViewScratch]>) -> Result<f64> {
     let proj = Projector::new(x);
     let (mut s, mut n) = (0.0, 0usize);
     for (j, view) in views.iter().enumerate() {
-        let c = corrections.and_then(|c| c.get(j)).copied().unwrap_or([0.0; 2]);
+        let c = corrections.and_then(|c| c.get(j)).map_or([0.0; 2], |s| *s.y());
         for p in view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + c[0]];
             let pr = proj.project_reduced(w, view.e_com_ma + c[1], false)?;
@@ -575,21 +598,8 @@ fn std_of(cov: &[[f64; PARAMS]; PARAMS]) -> [f64; PARAMS] {
     core::array::from_fn(|i| libm::sqrt(cov[i][i].max(0.0)))
 }
 
-/// Refines `init` over the views (Eq. 24, or errors-in-variables; see the module docs).
-///
-/// `corrections` receives each view's (dZ_j mm, dE_j mA) (zeros for the paper's estimator);
-/// it must hold one entry per view. `scratch` needs [`bundle_adjust_scratch`] elements.
-///
-/// Preconditions (typed errors): finite input and no empty view; at least 3 distinct
-/// currents; at least 25 residual pairs' worth of points (13 points); positive prior
-/// standard deviations for errors-in-variables; storage of the right size.
-pub fn bundle_adjust(
-    views: &[View<'_>],
-    init: &CameraModel,
-    options: &BundleAdjustOptions,
-    corrections: &mut [ViewCorrection],
-    scratch: &mut [BlockScratch<PARAMS, 2>],
-) -> Result<BundleAdjustReport> {
+/// The preconditions of [`bundle_adjust`] on its input and storage.
+fn check_input(views: &[View<'_>], init: &CameraModel, scratch: &[ViewScratch]) -> Result<()> {
     validate(views)?;
     init.validate()?;
     let nc = distinct_currents(views);
@@ -600,17 +610,24 @@ pub fn bundle_adjust(
     if 2 * n < PARAMS + 1 {
         return Err(Error::TooFew { what: "points for bundle adjustment", needed: PARAMS / 2 + 1, got: n });
     }
-    if corrections.len() != views.len() {
-        return Err(Error::BufferTooSmall { what: "corrections", needed: views.len(), got: corrections.len() });
+    let needed = bundle_adjust_scratch(views.len());
+    if scratch.len() < needed {
+        return Err(Error::BufferTooSmall { what: "bundle adjustment scratch", needed, got: scratch.len() });
     }
-    let x0 = to_params(init);
-    let initial_rms_px = rms(views, &x0, None)?;
-    // The solver works in the well-conditioned internal parameters z (basis.rs).
-    let basis = &Basis::for_views(views);
+    Ok(())
+}
+
+/// The paper's estimator from z0, with the IRLS rounds of a robust loss: reweight around
+/// the latest estimate until it stops moving.
+fn solve_plain(
+    views: &[View<'_>],
+    x0: [f64; PARAMS],
+    options: &BundleAdjustOptions,
+    basis: &Basis,
+) -> Result<lm::Report<PARAMS>> {
     let z0 = basis.to_internal(&x0);
     let mut plain = lm::solve(&mut Plain { views, x0, options, reference: None, basis }, z0, &options.lm)?;
     if options.robust.is_some() {
-        // IRLS: reweight around the latest estimate until it stops moving.
         for _ in 0..IRLS_MAX_ROUNDS {
             let reference = Some(Projector::new(&basis.to_params(&plain.x)));
             let next = lm::solve(&mut Plain { views, x0, options, reference, basis }, plain.x, &options.lm)?;
@@ -621,24 +638,63 @@ pub fn bundle_adjust(
             }
         }
     }
-    corrections.iter_mut().for_each(|c| *c = ViewCorrection::default());
+    Ok(plain)
+}
+
+/// The report of a solve in the internal parameters z: the model, the covariance mapped
+/// to the 25 numbers, the RMS with the view corrections of `scratch` (if any).
+fn report_of(
+    views: &[View<'_>],
+    basis: &Basis,
+    solved: &lm::Report<PARAMS>,
+    initial_rms_px: f64,
+    sigma_px: f64,
+    corrections: Option<&[ViewScratch]>,
+) -> Result<BundleAdjustReport> {
+    let x = basis.to_params(&solved.x);
+    let covariance = covariance_in_params(&basis.params_jacobian(&solved.x), &solved.covariance);
+    Ok(BundleAdjustReport {
+        model: from_params(&x),
+        std: std_of(&covariance),
+        covariance,
+        initial_rms_px,
+        rms_px: rms(views, &x, corrections)?,
+        iterations: solved.iterations,
+        evaluations: solved.evaluations,
+        stop: solved.stop,
+        sigma_px,
+    })
+}
+
+/// Refines `init` over the views (Eq. 24, or errors-in-variables; see the module docs).
+///
+/// `scratch` needs [`bundle_adjust_scratch`] elements; on return its element j holds view
+/// j's correction (dZ_j mm, dE_j mA), read with [`ViewCorrection::from`] (zeros for the
+/// paper's estimator).
+///
+/// Preconditions (typed errors): finite input and no empty view; at least 3 distinct
+/// currents; at least 25 residual pairs' worth of points (13 points); positive prior
+/// standard deviations for errors-in-variables; storage of the right size.
+pub fn bundle_adjust(
+    views: &[View<'_>],
+    init: &CameraModel,
+    options: &BundleAdjustOptions,
+    scratch: &mut [ViewScratch],
+) -> Result<BundleAdjustReport> {
+    check_input(views, init, scratch)?;
+    let needed = views.len();
+    let scratch =
+        scratch.get_mut(..needed).ok_or(Error::BufferTooSmall { what: "bundle adjustment scratch", needed, got: 0 })?;
+    // The corrections start at zero (and stay there for the paper's estimator).
+    scratch.iter_mut().for_each(|s| s.set_y([0.0; 2]));
+    let x0 = to_params(init);
+    let initial_rms_px = rms(views, &x0, None)?;
+    // The solver works in the well-conditioned internal parameters z (basis.rs).
+    let basis = &Basis::for_views(views);
+    let plain = solve_plain(views, x0, options, basis)?;
     let sigma_plain = libm::sqrt(plain.sigma2);
     let (sigma_z_mm, sigma_e_ma, sigma_px) = match options.estimator {
-        Estimator::Paper => {
-            let x = basis.to_params(&plain.x);
-            let covariance = covariance_in_params(&basis.params_jacobian(&plain.x), &plain.covariance);
-            return Ok(BundleAdjustReport {
-                model: from_params(&x),
-                std: std_of(&covariance),
-                covariance,
-                initial_rms_px,
-                rms_px: rms(views, &x, None)?,
-                iterations: plain.iterations,
-                evaluations: plain.evaluations,
-                stop: plain.stop,
-                sigma_px: sigma_plain,
-            });
-        }
+        Estimator::Paper => return report_of(views, basis, &plain, initial_rms_px, sigma_plain, None),
         Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px } => {
             (sigma_z_mm, sigma_e_ma, sigma_px.unwrap_or(sigma_plain))
         }
@@ -646,45 +702,11 @@ pub fn bundle_adjust(
     if !(sigma_z_mm > 0.0 && sigma_e_ma > 0.0 && sigma_px > 0.0) {
         return Err(Error::InvalidArgument { what: "errors-in-variables standard deviations must be positive" });
     }
-    if scratch.len() < views.len() {
-        return Err(Error::BufferTooSmall {
-            what: "bundle adjustment scratch",
-            needed: views.len(),
-            got: scratch.len(),
-        });
-    }
-    // The view corrections live in the caller's `corrections`, viewed as [dZ, dE] pairs
-    // through a small copy per solve (the caller's type stays self-describing).
-    let mut y = [[0.0f64; 2]; MAX_EIV_VIEWS];
-    let y = y.get_mut(..views.len()).ok_or(Error::TooFew {
-        what: "capacity for errors-in-variables views (MAX_EIV_VIEWS)",
-        needed: views.len(),
-        got: MAX_EIV_VIEWS,
-    })?;
     let reference = options.robust.map(|_| Projector::new(&basis.to_params(&plain.x)));
     let mut problem = Eiv { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
-    let r = lm::solve_blocks(&mut problem, plain.x, y, &options.lm, scratch)?;
-    for (c, yj) in corrections.iter_mut().zip(y.iter()) {
-        *c = ViewCorrection { dz_mm: yj[0], de_ma: yj[1] };
-    }
-    let x = basis.to_params(&r.x);
-    let covariance = covariance_in_params(&basis.params_jacobian(&r.x), &r.covariance);
-    Ok(BundleAdjustReport {
-        model: from_params(&x),
-        std: std_of(&covariance),
-        covariance,
-        initial_rms_px,
-        rms_px: rms(views, &x, Some(y))?,
-        iterations: r.iterations,
-        evaluations: r.evaluations,
-        stop: r.stop,
-        sigma_px,
-    })
+    let solved = lm::solve_blocks(&mut problem, plain.x, &options.lm, scratch)?;
+    report_of(views, basis, &solved, initial_rms_px, sigma_px, Some(scratch))
 }
-
-/// Largest number of views the errors-in-variables estimator takes (its per-view
-/// corrections are held on the stack: 16 bytes each).
-pub const MAX_EIV_VIEWS: usize = 256;
 
 #[cfg(test)]
 mod tests {

@@ -6,10 +6,11 @@
 //! errors-in-variables unknowns (dZ_j, dE_j with Gaussian priors), the bound of the 25
 //! numbers is the inverse of the Schur complement of the per-view unknowns.
 
-use super::jacobian::{to_params, Projector, PARAMS};
+use super::jacobian::{to_params, Projector};
 use super::observations::{validate, View};
+use super::params::PARAMS;
 use crate::error::Result;
-use crate::lm::svd::sym_pinv;
+use crate::linalg::svd::sym_pinv;
 use crate::model::CameraModel;
 
 /// Relative singular-value threshold of the inversions (directions below it are

@@ -1,51 +1,48 @@
-//! The 25 numbers as one parameter vector, and the projection (Eq. 13-18) with its
-//! analytic Jacobian.
-//!
-//! Layout (also the names used in studies and reports):
-//! `om1 om2 om3 tx ty tz kf0x kf1x kf2x kf3x kf0y kf1y kf2y kf3y u0 v0 a1 .. a9`.
+//! The 25 numbers as one parameter vector (layout: [`super::params`]), and the
+//! projection (Eq. 13-18) with its analytic Jacobian.
 
-#![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
-
+use super::params::{
+    Span, DISTORTION_A, DISTORTION_TRIPLES, KF0X, KF0Y, KF_X, KF_Y, PARAMS, PRINCIPAL_POINT, REDUCED, ROTATION,
+    R_DISTORTION, R_FX, R_FY, R_POSE, R_U0, R_V0, TRANSLATION, U0, V0,
+};
 use crate::error::{Error, Result};
 use crate::model::camera::cubic;
 use crate::model::rotation::{mat_vec, rodrigues_to_matrix, Mat3};
 use crate::model::{CameraModel, Distortion};
 
-/// Number of model parameters.
-pub const PARAMS: usize = 25;
-
-/// Names of the 25 parameters, in vector order.
-pub const PARAM_NAMES: [&str; PARAMS] = [
-    "om1", "om2", "om3", "tx", "ty", "tz", "kf0x", "kf1x", "kf2x", "kf3x", "kf0y", "kf1y", "kf2y", "kf3y", "u0", "v0",
-    "a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8", "a9",
-];
-
-/// Index of kf0x; kf0y is at `KF0X + 4`, u0 and v0 at [`U0`], `U0 + 1`.
-pub const KF0X: usize = 6;
-/// Index of u0.
-pub const U0: usize = 14;
+/// The `N` entries of `x` in `span` (N = span.len; 0 past the end of `x`).
+fn entries<const N: usize>(x: &[f64; PARAMS], span: Span) -> [f64; N] {
+    core::array::from_fn(|k| x.get(span.at(k)).copied().unwrap_or(0.0))
+}
 
 /// The model as a parameter vector.
 pub fn to_params(m: &CameraModel) -> [f64; PARAMS] {
     let mut x = [0.0; PARAMS];
-    x[0..3].copy_from_slice(&m.rotation_rodrigues);
-    x[3..6].copy_from_slice(&m.translation_mm);
-    x[6..10].copy_from_slice(&m.kf_x);
-    x[10..14].copy_from_slice(&m.kf_y);
-    x[14..16].copy_from_slice(&m.principal_point);
-    x[16..25].copy_from_slice(&m.distortion_a);
+    let parts: [(Span, &[f64]); 6] = [
+        (ROTATION, &m.rotation_rodrigues),
+        (TRANSLATION, &m.translation_mm),
+        (KF_X, &m.kf_x),
+        (KF_Y, &m.kf_y),
+        (PRINCIPAL_POINT, &m.principal_point),
+        (DISTORTION_A, &m.distortion_a),
+    ];
+    for (span, values) in parts {
+        for (slot, &v) in x.iter_mut().skip(span.start).take(span.len).zip(values) {
+            *slot = v;
+        }
+    }
     x
 }
 
 /// The parameter vector as a model.
 pub fn from_params(x: &[f64; PARAMS]) -> CameraModel {
     CameraModel {
-        rotation_rodrigues: [x[0], x[1], x[2]],
-        translation_mm: [x[3], x[4], x[5]],
-        kf_x: [x[6], x[7], x[8], x[9]],
-        kf_y: [x[10], x[11], x[12], x[13]],
-        principal_point: [x[14], x[15]],
-        distortion_a: [x[16], x[17], x[18], x[19], x[20], x[21], x[22], x[23], x[24]],
+        rotation_rodrigues: entries(x, ROTATION),
+        translation_mm: entries(x, TRANSLATION),
+        kf_x: entries(x, KF_X),
+        kf_y: entries(x, KF_Y),
+        principal_point: entries(x, PRINCIPAL_POINT),
+        distortion_a: entries(x, DISTORTION_A),
     }
 }
 
@@ -104,14 +101,6 @@ pub struct Projection {
     pub d_e: [f64; 2],
 }
 
-/// Number of per-view variables: at one current the pixel depends on the 25 numbers only
-/// through om1..om3, tx..tz, fx, fy, u0, v0, k1, p1, p2 (Eq. 13-18 with E fixed).
-pub const REDUCED: usize = 13;
-/// Index of fx among the per-view variables (fy follows, then u0, v0, k1, p1, p2).
-pub const R_FX: usize = 6;
-/// Index of k1 among the per-view variables.
-pub const R_K1: usize = 10;
-
 /// The projection of one point with its derivatives with respect to the 13 per-view
 /// variables ([`REDUCED`]). The full Jacobian is `d_reduced * chain`, with
 /// [`Projector::chain`] the view's 13 x 25 matrix: this factorisation is what makes the
@@ -138,8 +127,9 @@ pub struct Projector {
 impl Projector {
     /// Prepares the projection for parameter vector `x`.
     pub fn new(x: &[f64; PARAMS]) -> Self {
-        let r = rodrigues_to_matrix([x[0], x[1], x[2]]);
-        let jr = right_jacobian([x[0], x[1], x[2]]);
+        let om = entries(x, ROTATION);
+        let r = rodrigues_to_matrix(om);
+        let jr = right_jacobian(om);
         // d(R p)/d om = -R [p]x J_r, linear in p: -R [p]x J_r = sum_l p_l (R [J_r]... ) is
         // precomputed as three matrices M_l = R [e_l]x J_r with d(R p)/d om = -sum_l p_l M_l.
         let r_skew_jr = core::array::from_fn(|l| {
@@ -152,8 +142,8 @@ impl Projector {
 
     fn focal(&self, e_ma: f64) -> Result<(f64, f64)> {
         let x = &self.x;
-        let fx = cubic(&[x[6], x[7], x[8], x[9]], e_ma);
-        let fy = cubic(&[x[10], x[11], x[12], x[13]], e_ma);
+        let fx = cubic(&entries(x, KF_X), e_ma);
+        let fy = cubic(&entries(x, KF_Y), e_ma);
         if !(fx > 0.0 && fy > 0.0) {
             return Err(Error::Degenerate { what: "focal length is not positive at a view's current" });
         }
@@ -169,19 +159,26 @@ impl Projector {
         let w = 2.0 / (fx + fy);
         let powers = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
         let mut c = [[0.0; PARAMS]; REDUCED];
-        for k in 0..6 {
-            c[k][k] = 1.0;
+        // Entry (row, col) of C; the spans lie inside C by construction (params.rs tests).
+        let mut put = |row: usize, col: usize, v: f64| {
+            if let Some(slot) = c.get_mut(row).and_then(|r| r.get_mut(col)) {
+                *slot = v;
+            }
+        };
+        // The pose is the same entries in both vectors.
+        for k in 0..R_POSE.len {
+            put(R_POSE.at(k), R_POSE.at(k), 1.0);
         }
-        for i in 0..4 {
-            c[R_FX][KF0X + i] = powers[i];
-            c[R_FX + 1][KF0X + 4 + i] = powers[i];
+        for (i, &p) in powers.iter().enumerate() {
+            put(R_FX, KF0X + i, p);
+            put(R_FY, KF0Y + i, p);
         }
-        c[R_FX + 2][U0] = 1.0;
-        c[R_FX + 3][U0 + 1] = 1.0;
+        put(R_U0, U0, 1.0);
+        put(R_V0, V0, 1.0);
         let wp = [w * w, w, 1.0];
-        for k in 0..3 {
-            for i in 0..3 {
-                c[R_K1 + k][16 + 3 * k + i] = wp[i];
+        for (k, triple) in DISTORTION_TRIPLES.iter().enumerate() {
+            for (i, &wpi) in wp.iter().enumerate() {
+                put(R_DISTORTION.at(k), triple.at(i), wpi);
             }
         }
         Ok(c)
@@ -215,7 +212,8 @@ impl Projector {
         let x = &self.x;
         let (fx, fy) = self.focal(e_ma)?;
         let rc = mat_vec(&self.r, world_mm);
-        let pc = [rc[0] + x[3], rc[1] + x[4], rc[2] + x[5]];
+        let t = entries::<3>(x, TRANSLATION);
+        let pc = [rc[0] + t[0], rc[1] + t[1], rc[2] + t[2]];
         if !(pc[2] > 0.0) {
             return Err(Error::BehindCamera);
         }
@@ -223,10 +221,10 @@ impl Projector {
         let (xn, yn) = (pc[0] * iz, pc[1] * iz);
         let (u, v) = (fx * xn, fy * yn);
         let w = 2.0 / (fx + fy);
-        let a = [x[16], x[17], x[18], x[19], x[20], x[21], x[22], x[23], x[24]];
+        let a: [f64; 9] = entries(x, DISTORTION_A);
         let d = Distortion::from_a(&a, 0.5 * (fx + fy));
         let [ud, vd] = d.distort(u, v);
-        let pixel = [ud + x[14], vd + x[15]];
+        let pixel = [ud + x[U0], vd + x[V0]];
         if !(pixel[0].is_finite() && pixel[1].is_finite()) {
             return Err(Error::NotFinite { what: "projected pixel" });
         }
@@ -255,23 +253,25 @@ impl Projector {
                 dpix_dpc[k] = jd[row][0] * du_dpc[k] + jd[row][1] * dv_dpc[k];
             }
             for j in 0..3 {
-                dp[j] = (0..3).map(|k| dpix_dpc[k] * drot[k][j]).sum();
-                dp[3 + j] = dpix_dpc[j];
+                dp[ROTATION.at(j)] = (0..3).map(|k| dpix_dpc[k] * drot[k][j]).sum();
+                dp[TRANSLATION.at(j)] = dpix_dpc[j];
             }
             // fx enters u directly (u = fx xn) and the distortion through w.
             let via_w: f64 = (0..3).map(|k| dk[row][k] * dkdw[k]).sum::<f64>() * dwdf;
             dp[R_FX] = jd[row][0] * xn + via_w;
-            dp[R_FX + 1] = jd[row][1] * yn + via_w;
-            dp[R_FX + 2 + row] = 1.0;
-            dp[R_K1..R_K1 + 3].copy_from_slice(&dk[row]);
+            dp[R_FY] = jd[row][1] * yn + via_w;
+            dp[R_U0 + row] = 1.0;
+            for (d, &v) in dp.iter_mut().skip(R_DISTORTION.start).zip(dk[row].iter()) {
+                *d = v;
+            }
         }
         Ok(out)
     }
 
     /// d(fx, fy)/dE at `e_ma` (Eq. 16 differentiated).
     pub fn focal_slope(&self, e_ma: f64) -> [f64; 2] {
-        let x = &self.x;
-        [x[7] + 2.0 * x[8] * e_ma + 3.0 * x[9] * e_ma * e_ma, x[11] + 2.0 * x[12] * e_ma + 3.0 * x[13] * e_ma * e_ma]
+        let (kx, ky) = (entries::<4>(&self.x, KF_X), entries::<4>(&self.x, KF_Y));
+        [kx[1] + 2.0 * kx[2] * e_ma + 3.0 * kx[3] * e_ma * e_ma, ky[1] + 2.0 * ky[2] * e_ma + 3.0 * ky[3] * e_ma * e_ma]
     }
 
     /// d pixel / d Z_W and d pixel / d E of a point from its per-view derivatives: a stage
@@ -295,10 +295,10 @@ impl Projector {
         let slope = self.focal_slope(e_ma);
         let mut c = [[0.0; 2]; REDUCED];
         for k in 0..3 {
-            c[3 + k][0] = self.r[k][2];
+            c[TRANSLATION.at(k)][0] = self.r[k][2];
         }
         c[R_FX][1] = slope[0];
-        c[R_FX + 1][1] = slope[1];
+        c[R_FY][1] = slope[1];
         c
     }
 
@@ -330,6 +330,7 @@ impl Projector {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calib::params::PARAM_NAMES;
 
     #[test]
     fn jacobian_matches_central_differences() {
@@ -338,7 +339,7 @@ mod tests {
             let p = Projector::new(&x0).project(pw, e, true).unwrap();
             for j in 0..PARAMS {
                 // The pixel is linear in a_i, so a large step is exact there and beats roundoff.
-                let h = if j >= 16 { 1e-2 } else { 1e-6 } * x0[j].abs().max(1e-3);
+                let h = if j >= DISTORTION_A.start { 1e-2 } else { 1e-6 } * x0[j].abs().max(1e-3);
                 let (mut xp, mut xm) = (x0, x0);
                 xp[j] += h;
                 xm[j] -= h;

@@ -15,11 +15,12 @@ pub mod focal_poly;
 mod initialise;
 pub mod jacobian;
 pub mod observations;
+pub mod params;
 pub mod rac;
 
 pub use bundle_adjust::{
     bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
-    ViewCorrection,
+    ViewCorrection, ViewScratch,
 };
 pub use initialise::{initialise, A0};
 pub use observations::{Point, View};

@@ -21,7 +21,7 @@
 use super::observations::{point_count, validate, View};
 use crate::error::{Error, Result};
 use crate::fit::GivensQr;
-use crate::lm::svd::Svd;
+use crate::linalg::svd::Svd;
 use crate::model::rotation::{matrix_to_rodrigues, Mat3};
 
 /// What RAC determines.

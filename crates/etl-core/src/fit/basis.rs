@@ -5,8 +5,6 @@
 //! columns nearly orthogonal (condition number of tens, not the ~1e16 of raw mA powers);
 //! the monomial coefficients the paper prints are derived afterwards, exactly.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 /// Highest polynomial degree the bases provide.
 pub const MAX_BASIS_DEGREE: usize = 6;
 

@@ -5,9 +5,6 @@
 //! memory is one N x N triangle whatever the number of rows, and the conditioning is that
 //! of the design matrix itself: the normal equations would square it.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-#![allow(clippy::needless_range_loop)] // rotations pair entries of two arrays by index
-
 use crate::error::{Error, Result};
 
 /// Largest magnitude accepted in a row, a right-hand side or sqrt(weight) times either.

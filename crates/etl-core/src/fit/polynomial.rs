@@ -1,7 +1,5 @@
 //! [`PolyFit`]: streamed weighted least-squares polynomials of degree 1..6 in one variable.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use serde::{Deserialize, Serialize};
 
 use super::basis::{chebyshev_to_monomial, chebyshev_values, horner, scaled_to_raw, MAX_BASIS_DEGREE};

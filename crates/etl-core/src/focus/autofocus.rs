@@ -51,31 +51,8 @@ pub struct AutofocusResult {
     pub converged: bool,
 }
 
-/// Finds the current (mA) that maximises `sharpness_at(current_ma)` over
-/// `options.range_ma`.
-///
-/// Preconditions: the measure is unimodal around its peak over at least the two coarse
-/// intervals next to it (flat or noisy far from focus is fine), and larger is sharper.
-/// When the best coarse point is an end of the range, the refinement stays in the interval
-/// next to it (the peak may then lie outside the range: widen it).
-///
-/// The search never allocates and never evaluates outside the range. When the budget runs
-/// out first, the best point so far is returned with `converged == false`.
-///
-/// Errors: bad options ([`Error::OutOfRange`], [`Error::NotFinite`]); any error of
-/// `sharpness_at` (returned as is); a non-finite sharpness ([`Error::NotFinite`]).
-///
-/// ```
-/// use etl_core::focus::{autofocus, AutofocusOptions};
-/// // A sharpness peak at 151.3 mA with the cusp-like shape of a defocused edge.
-/// let f = |e: f64| Ok(1.0 / (1.0 + ((e - 151.3) / 4.0).powi(2)).sqrt());
-/// let r = autofocus(f, &AutofocusOptions::default()).unwrap();
-/// assert!((r.best_ma - 151.3).abs() < 0.5 && r.evaluations <= 15);
-/// ```
-pub fn autofocus<F>(mut sharpness_at: F, options: &AutofocusOptions) -> Result<AutofocusResult>
-where
-    F: FnMut(f64) -> Result<f64>,
-{
+/// The preconditions of [`autofocus`] on its options.
+fn check_options(options: &AutofocusOptions) -> Result<()> {
     let [lo, hi] = options.range_ma;
     finite(lo, "autofocus range_ma[0]")?;
     finite(hi, "autofocus range_ma[1]")?;
@@ -108,20 +85,50 @@ where
             max: f64::INFINITY,
         });
     }
+    Ok(())
+}
 
-    let mut evaluations = 0usize;
-    let mut eval = |e: f64, count: &mut usize| -> Result<f64> {
-        *count += 1;
-        finite(sharpness_at(e)?, "sharpness returned by the measure")
-    };
+/// The coarse scan's points: `n` currents evenly spaced over [lo, hi], both ends exact.
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    lo: f64,
+    hi: f64,
+    n: usize,
+    step: f64,
+}
 
-    // Coarse scan; keep the best point and its neighbours' values without storing the scan.
-    let step = (hi - lo) / (n - 1) as f64;
-    let at = |i: usize| if i + 1 == n { hi } else { lo + step * i as f64 };
+impl Grid {
+    fn new(options: &AutofocusOptions) -> Self {
+        let ([lo, hi], n) = (options.range_ma, options.coarse_points);
+        Grid { lo, hi, n, step: (hi - lo) / (n - 1) as f64 }
+    }
+
+    /// Current of point i, mA.
+    fn at(&self, i: usize) -> f64 {
+        if i + 1 == self.n {
+            self.hi
+        } else {
+            self.lo + self.step * i as f64
+        }
+    }
+}
+
+/// The best point of the coarse scan (index, sharpness) and its neighbours' sharpness
+/// (NaN past an end of the range).
+struct Coarse {
+    best: usize,
+    sharpness: f64,
+    before: f64,
+    after: f64,
+}
+
+/// The coarse scan; keeps the best point and its neighbours' values without storing the
+/// scan.
+fn coarse_scan(grid: &Grid, mut eval: impl FnMut(f64) -> Result<f64>) -> Result<Coarse> {
     let mut best = (0usize, f64::NEG_INFINITY);
     let (mut prev, mut before_best, mut after_best) = (f64::NAN, f64::NAN, f64::NAN);
-    for i in 0..n {
-        let s = eval(at(i), &mut evaluations)?;
+    for i in 0..grid.n {
+        let s = eval(grid.at(i))?;
         if s > best.1 {
             best = (i, s);
             before_best = prev;
@@ -131,41 +138,62 @@ where
         }
         prev = s;
     }
-    let (k, fk) = best;
+    Ok(Coarse { best: best.0, sharpness: best.1, before: before_best, after: after_best })
+}
 
-    // Brent's minimisation of -sharpness in [a, b] (Numerical Recipes' `brent`), seeded
-    // with x = best coarse point, w and v = its neighbours.
-    let mut a = at(k.saturating_sub(1));
-    let mut b = at(if k + 1 < n { k + 1 } else { k });
-    let (mut x, mut fx) = (at(k), -fk);
-    let (mut w, mut fw, mut v, mut fv);
-    match (before_best.is_nan(), after_best.is_nan()) {
-        (false, false) => {
-            // The better neighbour is w (second best), the other v.
-            let (l, fl, r, fr) = (a, -before_best, b, -after_best);
-            if fl <= fr {
-                (w, fw, v, fv) = (l, fl, r, fr);
-            } else {
-                (w, fw, v, fv) = (r, fr, l, fl);
+/// Brent's minimisation of f = -sharpness (Numerical Recipes' `brent`): the bracket
+/// [a, b], the best point x, the second best w, the previous w in v, the last step d and
+/// the one before e.
+struct Brent {
+    a: f64,
+    b: f64,
+    x: f64,
+    fx: f64,
+    w: f64,
+    fw: f64,
+    v: f64,
+    fv: f64,
+    d: f64,
+    e: f64,
+}
+
+impl Brent {
+    /// Seeded with x = the best coarse point, w and v = its neighbours (the better one is
+    /// w), so that the first step is the parabola through the three.
+    fn seeded(grid: &Grid, coarse: &Coarse) -> Self {
+        let k = coarse.best;
+        let a = grid.at(k.saturating_sub(1));
+        let b = grid.at(if k + 1 < grid.n { k + 1 } else { k });
+        let (w, fw, v, fv) = match (coarse.before.is_nan(), coarse.after.is_nan()) {
+            (false, false) => {
+                let (l, fl, r, fr) = (a, -coarse.before, b, -coarse.after);
+                if fl <= fr {
+                    (l, fl, r, fr)
+                } else {
+                    (r, fr, l, fl)
+                }
             }
-        }
-        (true, _) => (w, fw, v, fv) = (b, -after_best, b, -after_best),
-        (false, true) => (w, fw, v, fv) = (a, -before_best, a, -before_best),
+            (true, _) => (b, -coarse.after, b, -coarse.after),
+            (false, true) => (a, -coarse.before, a, -coarse.before),
+        };
+        // A large previous step lets the first parabolic step through.
+        Brent { a, b, x: grid.at(k), fx: -coarse.sharpness, w, fw, v, fv, d: 0.0, e: b - a }
     }
-    // A large previous step lets the first parabolic step through.
-    let mut d = 0.0f64;
-    let mut e = b - a;
-    let tol1 = options.tolerance_ma;
-    let tol2 = 2.0 * tol1;
-    let mut converged = false;
-    while evaluations < options.max_evaluations {
+
+    /// |x - (a + b) / 2| <= 2 tol - (b - a) / 2: the bracket is within the tolerance.
+    fn converged(&self, tol2: f64) -> bool {
+        let xm = 0.5 * (self.a + self.b);
+        (self.x - xm).abs() <= tol2 - 0.5 * (self.b - self.a)
+    }
+
+    /// The next point to evaluate: the parabola through x, w, v when it falls inside the
+    /// bracket and moves less than half the step before last, else a golden-section step
+    /// into the larger part; never closer than `tol1` to x.
+    fn next_point(&mut self, tol1: f64, tol2: f64) -> f64 {
+        let Brent { a, b, x, fx, w, fw, v, fv, .. } = *self;
         let xm = 0.5 * (a + b);
-        if (x - xm).abs() <= tol2 - 0.5 * (b - a) {
-            converged = true;
-            break;
-        }
         let mut golden = true;
-        if e.abs() > tol1 && w != x && v != x && w != v {
+        if self.e.abs() > tol1 && w != x && v != x && w != v {
             let r = (x - w) * (fx - fv);
             let mut q = (x - v) * (fx - fw);
             let mut p = (x - v) * q - (x - w) * r;
@@ -174,49 +202,102 @@ where
                 p = -p;
             }
             q = q.abs();
-            let e_before = e;
+            let e_before = self.e;
             if !(p.abs() >= (0.5 * q * e_before).abs() || p <= q * (a - x) || p >= q * (b - x)) {
-                e = d;
-                d = p / q;
-                let u = x + d;
+                self.e = self.d;
+                self.d = p / q;
+                let u = x + self.d;
                 if u - a < tol2 || b - u < tol2 {
-                    d = tol1.copysign(xm - x);
+                    self.d = tol1.copysign(xm - x);
                 }
                 golden = false;
             }
         }
         if golden {
-            e = if x >= xm { a - x } else { b - x };
-            d = CGOLD * e;
+            self.e = if x >= xm { a - x } else { b - x };
+            self.d = CGOLD * self.e;
         }
-        let u = if d.abs() >= tol1 { x + d } else { x + tol1.copysign(d) };
-        let fu = -eval(u, &mut evaluations)?;
-        if fu <= fx {
-            if u >= x {
-                a = x;
-            } else {
-                b = x;
-            }
-            (v, fv) = (w, fw);
-            (w, fw) = (x, fx);
-            (x, fx) = (u, fu);
+        if self.d.abs() >= tol1 {
+            x + self.d
         } else {
-            if u < x {
-                a = u;
+            x + tol1.copysign(self.d)
+        }
+    }
+
+    /// Takes in f(u) = `fu`: shrinks the bracket and reorders x, w, v.
+    fn update(&mut self, u: f64, fu: f64) {
+        if fu <= self.fx {
+            if u >= self.x {
+                self.a = self.x;
             } else {
-                b = u;
+                self.b = self.x;
             }
-            if fu <= fw || w == x {
-                (v, fv) = (w, fw);
-                (w, fw) = (u, fu);
-            } else if fu <= fv || v == x || v == w {
-                (v, fv) = (u, fu);
+            (self.v, self.fv) = (self.w, self.fw);
+            (self.w, self.fw) = (self.x, self.fx);
+            (self.x, self.fx) = (u, fu);
+        } else {
+            if u < self.x {
+                self.a = u;
+            } else {
+                self.b = u;
+            }
+            if fu <= self.fw || self.w == self.x {
+                (self.v, self.fv) = (self.w, self.fw);
+                (self.w, self.fw) = (u, fu);
+            } else if fu <= self.fv || self.v == self.x || self.v == self.w {
+                (self.v, self.fv) = (u, fu);
             }
         }
     }
-    if !converged {
-        let xm = 0.5 * (a + b);
-        converged = (x - xm).abs() <= tol2 - 0.5 * (b - a);
+}
+
+/// Finds the current (mA) that maximises `sharpness_at(current_ma)` over
+/// `options.range_ma`.
+///
+/// Preconditions: the measure is unimodal around its peak over at least the two coarse
+/// intervals next to it (flat or noisy far from focus is fine), and larger is sharper.
+/// When the best coarse point is an end of the range, the refinement stays in the interval
+/// next to it (the peak may then lie outside the range: widen it).
+///
+/// The search never allocates and never evaluates outside the range. When the budget runs
+/// out first, the best point so far is returned with `converged == false`.
+///
+/// Errors: bad options ([`Error::OutOfRange`], [`Error::NotFinite`]); any error of
+/// `sharpness_at` (returned as is); a non-finite sharpness ([`Error::NotFinite`]).
+///
+/// ```
+/// use etl_core::focus::{autofocus, AutofocusOptions};
+/// // A sharpness peak at 151.3 mA with the cusp-like shape of a defocused edge.
+/// let f = |e: f64| Ok(1.0 / (1.0 + ((e - 151.3) / 4.0).powi(2)).sqrt());
+/// let r = autofocus(f, &AutofocusOptions::default()).unwrap();
+/// assert!((r.best_ma - 151.3).abs() < 0.5 && r.evaluations <= 15);
+/// ```
+pub fn autofocus<F>(mut sharpness_at: F, options: &AutofocusOptions) -> Result<AutofocusResult>
+where
+    F: FnMut(f64) -> Result<f64>,
+{
+    check_options(options)?;
+    let mut evaluations = 0usize;
+    let mut eval = |e: f64, count: &mut usize| -> Result<f64> {
+        *count += 1;
+        finite(sharpness_at(e)?, "sharpness returned by the measure")
+    };
+    let grid = Grid::new(options);
+    let coarse = coarse_scan(&grid, |e| eval(e, &mut evaluations))?;
+    let mut brent = Brent::seeded(&grid, &coarse);
+    let tol1 = options.tolerance_ma;
+    let tol2 = 2.0 * tol1;
+    let mut converged = false;
+    while evaluations < options.max_evaluations {
+        if brent.converged(tol2) {
+            converged = true;
+            break;
+        }
+        let u = brent.next_point(tol1, tol2);
+        let fu = -eval(u, &mut evaluations)?;
+        brent.update(u, fu);
     }
+    converged = converged || brent.converged(tol2);
+    let Brent { a, b, x, fx, .. } = brent;
     Ok(AutofocusResult { best_ma: x, best_sharpness: -fx, evaluations, bracket_ma: [a, b], converged })
 }

@@ -17,12 +17,10 @@
 //! nu *= 2. Small systems are inverted through a diagonally scaled Jacobi SVD, whose
 //! truncation is the rank decision.
 
-#![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
-
-use super::cholesky::psd_inverse;
-use super::options::{Options, StopReason};
+use super::options::{stop_reason, Options, StopReason, TrialOutcome};
 use super::report::BlockReport;
 use crate::error::{all_finite, Error, Result};
+use crate::linalg::cholesky::psd_inverse;
 
 /// Receives residual rows of one block: the residual, its gradient with respect to the
 /// shared parameters and with respect to the block's own parameters.
@@ -62,9 +60,11 @@ pub trait BlockProblem<const N: usize, const M: usize> {
     }
 }
 
-/// Per-block storage of [`solve_blocks`].
+/// Per-block storage of [`solve_blocks`]: the block's parameters y_b (start and result)
+/// and the solver's working state of the block.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BlockScratch<const N: usize, const M: usize> {
+    y: [f64; M],
     w: [[f64; M]; N],
     v: [[f64; M]; M],
     gy: [f64; M],
@@ -72,8 +72,24 @@ pub struct BlockScratch<const N: usize, const M: usize> {
 }
 
 impl<const N: usize, const M: usize> BlockScratch<N, M> {
-    /// Zeroed storage (any content is fine: [`solve_blocks`] overwrites it).
-    pub const ZERO: Self = BlockScratch { w: [[0.0; M]; N], v: [[0.0; M]; M], gy: [0.0; M], y_trial: [0.0; M] };
+    /// Zeroed storage: y_b starts at 0 (the working state's content does not matter:
+    /// [`solve_blocks`] overwrites it).
+    pub const ZERO: Self = Self::starting_at([0.0; M]);
+
+    /// Storage whose block parameters start at `y`.
+    pub const fn starting_at(y: [f64; M]) -> Self {
+        BlockScratch { y, w: [[0.0; M]; N], v: [[0.0; M]; M], gy: [0.0; M], y_trial: [0.0; M] }
+    }
+
+    /// The block's parameters: the start before [`solve_blocks`], the estimate after it.
+    pub const fn y(&self) -> &[f64; M] {
+        &self.y
+    }
+
+    /// Sets the block's starting parameters.
+    pub fn set_y(&mut self, y: [f64; M]) {
+        self.y = y;
+    }
 }
 
 /// Number of [`BlockScratch`] elements [`solve_blocks`] needs for `block_count` blocks.
@@ -135,11 +151,11 @@ struct Linearization<const N: usize> {
 fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>>(
     problem: &mut P,
     x: &[f64; N],
-    ys: &[[f64; M]],
     scratch: &mut [BlockScratch<N, M>],
 ) -> Result<Linearization<N>> {
     let mut lin = Linearization { u: [[0.0; N]; N], gx: [0.0; N], cost: 0.0, rows: 0 };
-    for (b, (y, blk)) in ys.iter().zip(scratch.iter_mut()).enumerate() {
+    for (b, blk) in scratch.iter_mut().enumerate() {
+        let y = &{ blk.y };
         blk.w = [[0.0; M]; N];
         blk.v = [[0.0; M]; M];
         blk.gy = [0.0; M];
@@ -178,7 +194,6 @@ fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>>(
 /// into each block's `y_trial`. Also returns the predicted reduction of the cost.
 fn step<const N: usize, const M: usize>(
     lin: &Linearization<N>,
-    ys: &[[f64; M]],
     scratch: &mut [BlockScratch<N, M>],
     mu: f64,
     tol: f64,
@@ -219,7 +234,7 @@ fn step<const N: usize, const M: usize>(
     for i in 0..N {
         pred += mu * lin.u[i][i] * dx[i] * dx[i] - dx[i] * lin.gx[i];
     }
-    for (y, blk) in ys.iter().zip(scratch.iter_mut()) {
+    for blk in scratch.iter_mut() {
         let mut vd = blk.v;
         for k in 0..M {
             vd[k][k] += mu * blk.v[k][k];
@@ -231,11 +246,175 @@ fn step<const N: usize, const M: usize>(
         }
         for k in 0..M {
             let dy: f64 = -(0..M).map(|l| vinv[k][l] * t[l]).sum::<f64>();
-            blk.y_trial[k] = y[k] + dy;
+            blk.y_trial[k] = blk.y[k] + dy;
             pred += mu * blk.v[k][k] * dy * dy - dy * blk.gy[k];
         }
     }
     (dx, rank, pred)
+}
+
+/// The report at (x, y): rank of the undamped reduced system, and the covariance of the
+/// shared parameters marginalised over the blocks, (U - sum_b W_b V_b^-1 W_b^T)^-1 sigma2
+/// with sigma2 = cost / (residuals - unknowns).
+fn finish<const N: usize, const M: usize>(
+    state: &State<N>,
+    lin: &Linearization<N>,
+    scratch: &[BlockScratch<N, M>],
+    stop: StopReason,
+    rank: usize,
+    tol: f64,
+) -> BlockReport<N> {
+    let mut s0 = lin.u;
+    for blk in scratch.iter() {
+        let (vinv, _) = psd_inverse(&blk.v, tol);
+        for i in 0..N {
+            for j in 0..N {
+                let mut acc = 0.0;
+                for k in 0..M {
+                    for l in 0..M {
+                        acc += blk.w[i][k] * vinv[k][l] * blk.w[j][l];
+                    }
+                }
+                s0[i][j] -= acc;
+            }
+        }
+    }
+    let (mut cov, _) = psd_inverse(&s0, tol);
+    let unknowns = N + M * scratch.len();
+    let dof = state.rows.saturating_sub(unknowns);
+    let f = lin.cost;
+    let sigma2 = if dof > 0 { f / dof as f64 } else { f };
+    for row in cov.iter_mut() {
+        for c in row.iter_mut() {
+            *c *= sigma2;
+        }
+    }
+    BlockReport {
+        x: state.x,
+        stop,
+        cost: f,
+        initial_cost: state.initial_cost,
+        iterations: state.iterations,
+        evaluations: state.evaluations,
+        residuals: state.rows,
+        rank,
+        sigma2,
+        covariance: cov,
+    }
+}
+
+/// The largest cosine between r and a column of J over every parameter:
+/// |g_j| / (||J e_j|| ||r||).
+fn gradient_cosine<const N: usize, const M: usize>(lin: &Linearization<N>, scratch: &[BlockScratch<N, M>]) -> f64 {
+    let sf = libm::sqrt(lin.cost);
+    let mut gnorm = 0.0f64;
+    for i in 0..N {
+        if lin.u[i][i] > 0.0 {
+            gnorm = gnorm.max(lin.gx[i].abs() / (libm::sqrt(lin.u[i][i]) * sf));
+        }
+    }
+    for blk in scratch.iter() {
+        for k in 0..M {
+            if blk.v[k][k] > 0.0 {
+                gnorm = gnorm.max(blk.gy[k].abs() / (libm::sqrt(blk.v[k][k]) * sf));
+            }
+        }
+    }
+    gnorm
+}
+
+/// Scaled norms of the step (dx, the blocks' y_trial - y) and of the parameters, the scale
+/// being sqrt(diag(J^T J)).
+fn scaled_norms<const N: usize, const M: usize>(
+    lin: &Linearization<N>,
+    x: &[f64; N],
+    dx: &[f64; N],
+    scratch: &[BlockScratch<N, M>],
+) -> (f64, f64) {
+    let (mut hn, mut xn) = (0.0, 0.0);
+    for i in 0..N {
+        let d = lin.u[i][i];
+        hn += d * dx[i] * dx[i];
+        xn += d * x[i] * x[i];
+    }
+    for blk in scratch.iter() {
+        for k in 0..M {
+            let d = blk.v[k][k];
+            let dy = blk.y_trial[k] - blk.y[k];
+            hn += d * dy * dy;
+            xn += d * blk.y[k] * blk.y[k];
+        }
+    }
+    (libm::sqrt(hn), libm::sqrt(xn))
+}
+
+/// The shared iterate, Nielsen's damping state and the counters.
+struct State<const N: usize> {
+    x: [f64; N],
+    mu: f64,
+    nu: f64,
+    initial_cost: f64,
+    rows: usize,
+    evaluations: usize,
+    iterations: usize,
+}
+
+/// How the inner loop of one iteration ended.
+enum Inner {
+    /// A step was accepted (the state and the blocks' y hold it); a stop may be pending.
+    Accepted(Option<StopReason>),
+    /// The solver stops at the current (x, y).
+    Stopped(StopReason),
+}
+
+/// The inner loop: raise the damping until a step is accepted (Nielsen's update) or a
+/// stop test fires.
+fn inner_loop<const N: usize, const M: usize, P: BlockProblem<N, M>>(
+    problem: &mut P,
+    state: &mut State<N>,
+    lin: &Linearization<N>,
+    scratch: &mut [BlockScratch<N, M>],
+    options: &Options,
+) -> Inner {
+    let f = lin.cost;
+    loop {
+        let (dx, _, pred) = step(lin, scratch, state.mu, options.rank_tolerance);
+        let xnew: [f64; N] = core::array::from_fn(|i| state.x[i] + dx[i]);
+        let (hn, xn) = scaled_norms(lin, &state.x, &dx, scratch);
+        state.evaluations += 1;
+        let fnew = trial_cost(problem, &xnew, scratch);
+        let actred = match fnew {
+            Some(c) => f - c,
+            None => -f,
+        };
+        let rho = if pred > 0.0 { actred / pred } else { -1.0 };
+        let accepted = fnew.is_some() && rho > 1e-4 && actred > 0.0;
+        let trial = TrialOutcome {
+            cost_converged: actred.abs() <= options.ftol * f && pred <= options.ftol * f && pred >= 0.0,
+            step_converged: hn <= options.xtol * (xn + options.xtol),
+            stalled: state.mu > 1e30,
+            accepted,
+        };
+        if accepted {
+            state.x = xnew;
+            for blk in scratch.iter_mut() {
+                blk.y = blk.y_trial;
+            }
+            let t = 2.0 * rho - 1.0;
+            state.mu *= (1.0 - t * t * t).max(1.0 / 3.0);
+            state.nu = 2.0;
+            state.iterations += 1;
+        }
+        let stop = stop_reason(&trial, state.evaluations, state.iterations, options);
+        if accepted {
+            return Inner::Accepted(stop);
+        }
+        if let Some(s) = stop {
+            return Inner::Stopped(s);
+        }
+        state.mu *= state.nu;
+        state.nu *= 2.0;
+    }
 }
 
 /// Minimises the sum of squared residuals of a block problem over the shared `x` (start
@@ -251,167 +430,59 @@ fn step<const N: usize, const M: usize>(
 pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
     problem: &mut P,
     x0: [f64; N],
-    y: &mut [[f64; M]],
     options: &Options,
-    scratch: &mut [BlockScratch<N, M>],
+    blocks: &mut [BlockScratch<N, M>],
 ) -> Result<BlockReport<N>> {
     all_finite(&x0, "starting point")?;
-    let blocks = problem.block_count();
-    if y.len() != blocks {
-        return Err(Error::InvalidArgument { what: "y must hold one parameter vector per block" });
-    }
-    if scratch.len() < blocks {
-        return Err(Error::BufferTooSmall { what: "block scratch", needed: blocks, got: scratch.len() });
-    }
-    if y.iter().any(|b| b.iter().any(|v| !v.is_finite())) {
-        return Err(Error::NotFinite { what: "block starting values" });
+    let count = problem.block_count();
+    if blocks.len() < count {
+        return Err(Error::BufferTooSmall { what: "block scratch", needed: count, got: blocks.len() });
     }
     let scratch =
-        scratch.get_mut(..blocks).ok_or(Error::BufferTooSmall { what: "block scratch", needed: blocks, got: 0 })?;
-    let unknowns = N + M * blocks;
+        blocks.get_mut(..count).ok_or(Error::BufferTooSmall { what: "block scratch", needed: count, got: 0 })?;
+    if scratch.iter().any(|b| b.y.iter().any(|v| !v.is_finite())) {
+        return Err(Error::NotFinite { what: "block starting values" });
+    }
     let tol = options.rank_tolerance;
-    let mut x = x0;
-    let mut lin = evaluate(problem, &x, y, scratch)?;
+    let mut lin = evaluate(problem, &x0, scratch)?;
     if lin.rows == 0 {
         return Err(Error::TooFew { what: "residuals", needed: 1, got: 0 });
     }
-    let initial_cost = lin.cost;
-    let rows = lin.rows;
-    let mut evaluations = 1usize;
-    let mut iterations = 0usize;
-    let mut mu = options.initial_damping;
-    let mut nu = 2.0;
+    let mut state = State {
+        x: x0,
+        mu: options.initial_damping,
+        nu: 2.0,
+        initial_cost: lin.cost,
+        rows: lin.rows,
+        evaluations: 1,
+        iterations: 0,
+    };
     let mut pending: Option<StopReason> = None;
     loop {
-        let f = lin.cost;
         // The undamped reduced system: rank, and the covariance if we stop here.
-        let (_, rank, _) = step(&lin, y, scratch, 0.0, tol);
-        macro_rules! finish {
-            ($stop:expr) => {{
-                let mut s0 = lin.u;
-                for blk in scratch.iter() {
-                    let (vinv, _) = psd_inverse(&blk.v, tol);
-                    for i in 0..N {
-                        for j in 0..N {
-                            let mut acc = 0.0;
-                            for k in 0..M {
-                                for l in 0..M {
-                                    acc += blk.w[i][k] * vinv[k][l] * blk.w[j][l];
-                                }
-                            }
-                            s0[i][j] -= acc;
-                        }
-                    }
+        let (_, rank, _) = step(&lin, scratch, 0.0, tol);
+        let stop = if let Some(stop) = pending {
+            Some(stop)
+        } else if lin.cost == 0.0 {
+            Some(StopReason::CostTolerance)
+        } else if rank < N {
+            Some(StopReason::RankDeficient)
+        } else if gradient_cosine(&lin, scratch) <= options.gtol {
+            Some(StopReason::GradientTolerance)
+        } else {
+            match inner_loop(problem, &mut state, &lin, scratch, options) {
+                Inner::Accepted(stop) => {
+                    pending = stop;
+                    None
                 }
-                let (mut cov, _) = psd_inverse(&s0, tol);
-                let dof = rows.saturating_sub(unknowns);
-                let sigma2 = if dof > 0 { f / dof as f64 } else { f };
-                for row in cov.iter_mut() {
-                    for c in row.iter_mut() {
-                        *c *= sigma2;
-                    }
-                }
-                return Ok(BlockReport {
-                    x,
-                    stop: $stop,
-                    cost: f,
-                    initial_cost,
-                    iterations,
-                    evaluations,
-                    residuals: rows,
-                    rank,
-                    sigma2,
-                    covariance: cov,
-                });
-            }};
-        }
-        if let Some(stop) = pending {
-            finish!(stop);
-        }
-        if f == 0.0 {
-            finish!(StopReason::CostTolerance);
-        }
-        if rank < N {
-            finish!(StopReason::RankDeficient);
-        }
-        // Gradient test over every parameter: |g_j| / (||J e_j|| ||r||).
-        let sf = libm::sqrt(f);
-        let mut gnorm = 0.0f64;
-        for i in 0..N {
-            if lin.u[i][i] > 0.0 {
-                gnorm = gnorm.max(lin.gx[i].abs() / (libm::sqrt(lin.u[i][i]) * sf));
+                Inner::Stopped(stop) => Some(stop),
             }
+        };
+        if let Some(stop) = stop {
+            return Ok(finish(&state, &lin, scratch, stop, rank, tol));
         }
-        for blk in scratch.iter() {
-            for k in 0..M {
-                if blk.v[k][k] > 0.0 {
-                    gnorm = gnorm.max(blk.gy[k].abs() / (libm::sqrt(blk.v[k][k]) * sf));
-                }
-            }
-        }
-        if gnorm <= options.gtol {
-            finish!(StopReason::GradientTolerance);
-        }
-        loop {
-            let (dx, _, pred) = step(&lin, y, scratch, mu, tol);
-            let xnew: [f64; N] = core::array::from_fn(|i| x[i] + dx[i]);
-            // Scaled norms of the step and of the parameters (scale: sqrt(diag(J^T J))).
-            let (mut hn, mut xn) = (0.0, 0.0);
-            for i in 0..N {
-                let d = lin.u[i][i];
-                hn += d * dx[i] * dx[i];
-                xn += d * x[i] * x[i];
-            }
-            for (yb, blk) in y.iter().zip(scratch.iter()) {
-                for k in 0..M {
-                    let d = blk.v[k][k];
-                    let dy = blk.y_trial[k] - yb[k];
-                    hn += d * dy * dy;
-                    xn += d * yb[k] * yb[k];
-                }
-            }
-            let (hn, xn) = (libm::sqrt(hn), libm::sqrt(xn));
-            evaluations += 1;
-            let fnew = trial_cost(problem, &xnew, scratch);
-            let actred = match fnew {
-                Some(c) => f - c,
-                None => -f,
-            };
-            let rho = if pred > 0.0 { actred / pred } else { -1.0 };
-            let accepted = fnew.is_some() && rho > 1e-4 && actred > 0.0;
-            let mut stop = None;
-            if actred.abs() <= options.ftol * f && pred <= options.ftol * f && pred >= 0.0 {
-                stop = Some(StopReason::CostTolerance);
-            } else if hn <= options.xtol * (xn + options.xtol) {
-                stop = Some(StopReason::StepTolerance);
-            } else if evaluations >= options.max_evaluations {
-                stop = Some(StopReason::MaxIterations);
-            } else if !accepted && mu > 1e30 {
-                stop = Some(StopReason::NoProgress);
-            }
-            if accepted {
-                x = xnew;
-                for (yb, blk) in y.iter_mut().zip(scratch.iter()) {
-                    *yb = blk.y_trial;
-                }
-                let t = 2.0 * rho - 1.0;
-                mu *= (1.0 - t * t * t).max(1.0 / 3.0);
-                nu = 2.0;
-                iterations += 1;
-                if stop.is_none() && iterations >= options.max_iterations {
-                    stop = Some(StopReason::MaxIterations);
-                }
-                pending = stop;
-                break;
-            }
-            if let Some(s) = stop {
-                finish!(s);
-            }
-            mu *= nu;
-            nu *= 2.0;
-        }
-        lin = evaluate(problem, &x, y, scratch)?;
-        evaluations += 1;
+        lin = evaluate(problem, &state.x, scratch)?;
+        state.evaluations += 1;
     }
 }
 

@@ -9,14 +9,14 @@
 //! Directions with s_k below `rank_tolerance * s_max` are dropped: that is the rank
 //! decision, reported in [`Report::rank`].
 
-#![allow(clippy::needless_range_loop)] // small fixed-size linear algebra reads best indexed
-
-use super::options::{Accumulation, Options, StopReason};
+use super::options::{stop_reason, Accumulation, Options, StopReason, TrialOutcome};
 use super::report::Report;
-use super::svd::Svd;
 use super::{NormalEquations, Problem, RowSink};
 use crate::error::{all_finite, Error, Result};
 use crate::fit::GivensQr;
+use crate::linalg::cholesky::normal_equations_factor;
+use crate::linalg::svd::Svd;
+use crate::linalg::triangular::certified_upper_inverse;
 
 struct QrSink<const N: usize> {
     qr: GivensQr<N>,
@@ -76,7 +76,7 @@ fn linearize<const N: usize, P: Problem<N>>(
             if !problem.normal_equations(x, &mut sink)? {
                 problem.eval(x, true, &mut sink)?;
             }
-            let (r, qtf) = cholesky_factor(&sink.a, &sink.g);
+            let (r, qtf) = normal_equations_factor(&sink.a, &sink.g);
             (r, qtf, sink.cost, sink.rows)
         }
     };
@@ -87,55 +87,6 @@ fn linearize<const N: usize, P: Problem<N>>(
         return Err(Error::TooFew { what: "residuals", needed: 1, got: 0 });
     }
     Ok(Linearization { r, qtf, cost, rows })
-}
-
-/// R with R^T R = A (A = J^T J, upper triangle given) and Q^T r = R^-T J^T r, by a
-/// Cholesky factorisation of the diagonally scaled A (unit diagonal), semidefinite: a pivot
-/// below 1e-14 of its scaled diagonal ends its row at zero (that direction then carries no
-/// information; the SVD of the step finds the rank).
-fn cholesky_factor<const N: usize>(a: &[[f64; N]; N], g: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
-    let d: [f64; N] = core::array::from_fn(|i| {
-        let v = a[i][i];
-        if v > 0.0 {
-            libm::sqrt(v)
-        } else {
-            1.0
-        }
-    });
-    let mut r = [[0.0; N]; N];
-    for i in 0..N {
-        let mut diag = a[i][i] / (d[i] * d[i]);
-        for k in 0..i {
-            diag -= r[k][i] * r[k][i];
-        }
-        if !(diag > 1e-14) {
-            continue; // row i stays zero
-        }
-        let rii = libm::sqrt(diag);
-        r[i][i] = rii;
-        for j in (i + 1)..N {
-            let mut v = a[i][j] / (d[i] * d[j]);
-            for k in 0..i {
-                v -= r[k][i] * r[k][j];
-            }
-            r[i][j] = v / rii;
-        }
-    }
-    // Unscale: R_scaled = R D^-1 column-wise, so R = R_scaled D.
-    let mut qtf = [0.0; N];
-    for i in 0..N {
-        let mut v = g[i] / d[i];
-        for k in 0..i {
-            v -= r[k][i] * qtf[k];
-        }
-        qtf[i] = if r[i][i] > 0.0 { v / r[i][i] } else { 0.0 };
-    }
-    for row in r.iter_mut() {
-        for (rij, dj) in row.iter_mut().zip(d.iter()) {
-            *rij *= dj;
-        }
-    }
-    (r, qtf)
 }
 
 /// Cost at a trial point, or `None` when the problem refuses it or it is not finite.
@@ -256,37 +207,6 @@ impl<const N: usize> Spectral<N> {
     }
 }
 
-/// The inverse of the upper triangular `b` when it is certified to have full numerical
-/// rank: s_min(B) >= 1 / ||B^-1||_F and s_max(B) <= ||B||_F, so
-/// 1 / ||B^-1||_F > 100 `rank_tolerance` ||B||_F guarantees that every singular value
-/// clears the rank threshold (the factor 100 leaves room for rounding). `None` otherwise
-/// (the caller then decides the rank by the SVD).
-fn full_rank_inverse<const N: usize>(b: &[[f64; N]; N], rank_tolerance: f64) -> Option<[[f64; N]; N]> {
-    let mut inv = [[0.0; N]; N];
-    // Column j of B^-1 by back substitution of B x = e_j (x_i = 0 for i > j).
-    for j in 0..N {
-        for i in (0..=j).rev() {
-            let row = b.get(i)?;
-            let bii = *row.get(i)?;
-            if !(bii.abs() > 0.0) {
-                return None;
-            }
-            let rhs = if i == j { 1.0 } else { 0.0 };
-            let s: f64 = row
-                .iter()
-                .zip(inv.iter())
-                .take(j + 1)
-                .skip(i + 1)
-                .map(|(bik, ik)| bik * ik.get(j).unwrap_or(&0.0))
-                .sum();
-            *inv.get_mut(i)?.get_mut(j)? = (rhs - s) / bii;
-        }
-    }
-    let frob = |m: &[[f64; N]; N]| libm::sqrt(m.iter().flatten().map(|v| v * v).sum::<f64>());
-    let (nb, ninv) = (frob(b), frob(&inv));
-    (ninv.is_finite() && nb.is_finite() && 100.0 * rank_tolerance * nb * ninv < 1.0).then_some(inv)
-}
-
 /// (J^T J)^-1 sigma2 = D^-1 B^-1 B^-T D^-1 sigma2 for a certified full-rank B.
 fn covariance_from_inverse<const N: usize>(b_inv: &[[f64; N]; N], diag: &[f64; N], sigma2: f64) -> [[f64; N]; N] {
     let mut cov = [[0.0; N]; N];
@@ -297,6 +217,224 @@ fn covariance_from_inverse<const N: usize>(b_inv: &[[f64; N]; N], diag: &[f64; N
         }
     }
     cov
+}
+
+/// The scaled factor B = R D^-1 of one linearisation and what the steps need of it: the
+/// certified inverse (Gauss-Newton step by a triangular solve) or the SVD (rank decision,
+/// damped steps), computed lazily.
+struct Scaled<const N: usize> {
+    b: [[f64; N]; N],
+    b_inv: Option<[[f64; N]; N]>,
+    z_gauss_newton: Option<[f64; N]>,
+    spectral: Option<Spectral<N>>,
+    /// The rank decided at the linearisation (N when B is certified).
+    rank: usize,
+}
+
+impl<const N: usize> Scaled<N> {
+    /// B = R D^-1 (upper triangular). When B is certified well inside full rank, the
+    /// Gauss-Newton step comes from a triangular solve and the SVD is computed only if the
+    /// trust region binds (or for the covariance at the end): the usual case near a
+    /// solution.
+    fn of(lin: &Linearization<N>, diag: &[f64; N], rank_tolerance: f64) -> Result<Self> {
+        let mut b = [[0.0; N]; N];
+        for (bi, ri) in b.iter_mut().zip(lin.r.iter()) {
+            for ((bij, rij), dj) in bi.iter_mut().zip(ri.iter()).zip(diag.iter()) {
+                *bij = rij / dj;
+            }
+        }
+        let b_inv = certified_upper_inverse(&b, rank_tolerance);
+        let z_gauss_newton = b_inv.as_ref().map(|b_inv| {
+            let mut z = [0.0; N];
+            for (zi, row) in z.iter_mut().zip(b_inv.iter()) {
+                *zi = -row.iter().zip(lin.qtf.iter()).map(|(a, q)| a * q).sum::<f64>();
+            }
+            z
+        });
+        let spectral = match z_gauss_newton {
+            Some(_) => None,
+            None => Some(Spectral::of(&b, &lin.qtf, rank_tolerance)?),
+        };
+        let rank = spectral.as_ref().map_or(N, |sp| sp.rank);
+        Ok(Scaled { b, b_inv, z_gauss_newton, spectral, rank })
+    }
+
+    /// The scaled step z = D p and its damping mu for the trust radius `delta`: the
+    /// Gauss-Newton step when it fits, else Moré's damped step from the SVD.
+    fn step(&mut self, qtf: &[f64; N], delta: f64, rank_tolerance: f64) -> Result<(f64, [f64; N])> {
+        if let Some(z) = self.z_gauss_newton {
+            if norm(&z) <= 1.1 * delta {
+                return Ok((0.0, z));
+            }
+        }
+        let sp = match self.spectral.take() {
+            Some(sp) => sp,
+            None => Spectral::of(&self.b, qtf, rank_tolerance)?,
+        };
+        let mu = secular_mu(&sp.svd, &sp.c, &sp.keep, delta);
+        let z = scaled_step(&sp.svd, &sp.c, &sp.keep, mu);
+        self.spectral = Some(sp);
+        Ok((mu, z))
+    }
+
+    /// (J^T J)^+ sigma2 from whichever factorisation is at hand.
+    fn covariance(&self, qtf: &[f64; N], diag: &[f64; N], sigma2: f64, rank_tolerance: f64) -> Result<[[f64; N]; N]> {
+        Ok(match (&self.spectral, &self.b_inv) {
+            (Some(sp), _) => covariance_from_svd(&sp.svd, &sp.keep, diag, sigma2),
+            (None, Some(b_inv)) => covariance_from_inverse(b_inv, diag, sigma2),
+            (None, None) => {
+                let sp = Spectral::of(&self.b, qtf, rank_tolerance)?;
+                covariance_from_svd(&sp.svd, &sp.keep, diag, sigma2)
+            }
+        })
+    }
+}
+
+/// The iterate and the solver's running state.
+struct State<const N: usize> {
+    x: [f64; N],
+    /// MINPACK's scaling D (the largest column norms seen).
+    diag: [f64; N],
+    /// Trust radius in the scaled variables (0 before the first iteration).
+    delta: f64,
+    evaluations: usize,
+    iterations: usize,
+}
+
+impl<const N: usize> State<N> {
+    /// Updates D from the column norms of R (returned) and sets the first trust radius;
+    /// returns the column norms and ||D x||.
+    fn rescale(&mut self, r: &[[f64; N]; N], step_factor: f64) -> ([f64; N], f64) {
+        let mut colnorm = [0.0; N];
+        for j in 0..N {
+            colnorm[j] = libm::sqrt((0..N).map(|i| r[i][j] * r[i][j]).sum::<f64>());
+        }
+        for j in 0..N {
+            let c = if colnorm[j] > 0.0 { colnorm[j] } else { 1.0 };
+            self.diag[j] = if self.iterations == 0 && self.delta == 0.0 { c } else { self.diag[j].max(colnorm[j]) };
+        }
+        let xnorm = norm(&core::array::from_fn::<f64, N, _>(|j| self.diag[j] * self.x[j]));
+        if self.delta == 0.0 {
+            self.delta = if xnorm > 0.0 { step_factor * xnorm } else { step_factor };
+        }
+        (colnorm, xnorm)
+    }
+}
+
+/// The largest cosine between r and a column of J: max_j |(J^T r)_j| / (||J e_j|| ||r||).
+fn gradient_cosine<const N: usize>(lin: &Linearization<N>, colnorm: &[f64; N]) -> f64 {
+    let mut gnorm = 0.0f64;
+    for j in 0..N {
+        if colnorm[j] > 0.0 {
+            let g: f64 = (0..N).map(|i| lin.r[i][j] * lin.qtf[i]).sum();
+            gnorm = gnorm.max(g.abs() / (colnorm[j] * libm::sqrt(lin.cost)));
+        }
+    }
+    gnorm
+}
+
+/// ||Q^T r||^2 - ||R p + Q^T r||^2: the reduction of the cost the linear model predicts.
+fn predicted_reduction<const N: usize>(lin: &Linearization<N>, p: &[f64; N]) -> f64 {
+    let qtf2: f64 = lin.qtf.iter().map(|q| q * q).sum();
+    let mut model = 0.0;
+    for (i, (ri, qi)) in lin.r.iter().zip(lin.qtf.iter()).enumerate() {
+        // R is upper triangular: row i starts at column i.
+        let rp: f64 = ri.iter().zip(p.iter()).skip(i).map(|(a, b)| a * b).sum();
+        model += (rp + qi) * (rp + qi);
+    }
+    qtf2 - model
+}
+
+/// How the inner loop of one iteration ended.
+enum Inner {
+    /// A step was accepted (the state holds the new x); a stop may be pending.
+    Accepted(Option<StopReason>),
+    /// The solver stops at the current x.
+    Stopped(StopReason),
+}
+
+/// The inner loop: shrink the trust region until a step is accepted (Moré's update of
+/// Delta from the gain ratio actual / predicted reduction) or a stop test fires.
+fn inner_loop<const N: usize, P: Problem<N>>(
+    problem: &mut P,
+    state: &mut State<N>,
+    lin: &Linearization<N>,
+    scaled: &mut Scaled<N>,
+    xnorm: f64,
+    options: &Options,
+) -> Result<Inner> {
+    let f = lin.cost;
+    loop {
+        let (mu, z) = scaled.step(&lin.qtf, state.delta, options.rank_tolerance)?;
+        let pnorm = norm(&z);
+        if state.iterations == 0 && state.evaluations == 1 {
+            state.delta = state.delta.min(pnorm);
+        }
+        let p: [f64; N] = core::array::from_fn(|j| z[j] / state.diag[j]);
+        let xnew: [f64; N] = core::array::from_fn(|j| state.x[j] + p[j]);
+        state.evaluations += 1;
+        let fnew = trial_cost(problem, &xnew, lin.rows);
+        let pred = predicted_reduction(lin, &p);
+        let actred = match fnew {
+            Some(fnew) => f - fnew,
+            None => -f,
+        };
+        let ratio = if pred > 0.0 { actred / pred } else { 0.0 };
+        if ratio <= 0.25 {
+            let shrink = if actred >= 0.0 && fnew.is_some() { 0.5 } else { 0.1 };
+            state.delta = shrink * state.delta.min(pnorm / 0.1);
+        } else if mu == 0.0 || ratio >= 0.75 {
+            state.delta = pnorm / 0.5;
+        }
+        let accepted = ratio >= 1e-4 && fnew.is_some();
+        let (rel_act, rel_pred) = (actred / f, pred / f);
+        let trial = TrialOutcome {
+            cost_converged: rel_act.abs() <= options.ftol && rel_pred <= options.ftol && ratio <= 2.0,
+            step_converged: state.delta <= options.xtol * xnorm,
+            stalled: state.delta <= f64::EPSILON * xnorm || rel_pred <= f64::EPSILON,
+            accepted,
+        };
+        if accepted {
+            state.x = xnew;
+            state.iterations += 1;
+        }
+        let stop = stop_reason(&trial, state.evaluations, state.iterations, options);
+        if accepted {
+            return Ok(Inner::Accepted(stop));
+        }
+        if let Some(s) = stop {
+            return Ok(Inner::Stopped(s));
+        }
+    }
+}
+
+/// The report at the current iterate; a minimum where some direction is undetermined is
+/// reported as [`StopReason::RankDeficient`].
+fn finish<const N: usize>(
+    state: &State<N>,
+    lin: &Linearization<N>,
+    scaled: &Scaled<N>,
+    stop: StopReason,
+    initial_cost: f64,
+    options: &Options,
+) -> Result<Report<N>> {
+    let rank = scaled.rank;
+    let dof = lin.rows.saturating_sub(rank);
+    let sigma2 = if dof > 0 { lin.cost / dof as f64 } else { lin.cost };
+    let stop = if rank < N && stop.converged() { StopReason::RankDeficient } else { stop };
+    let covariance = scaled.covariance(&lin.qtf, &state.diag, sigma2, options.rank_tolerance)?;
+    Ok(Report {
+        x: state.x,
+        stop,
+        cost: lin.cost,
+        initial_cost,
+        iterations: state.iterations,
+        evaluations: state.evaluations,
+        residuals: lin.rows,
+        rank,
+        sigma2,
+        covariance,
+    })
 }
 
 /// Minimises sum_i r_i(x)^2 from `x0` (see the module documentation for the method).
@@ -312,169 +450,27 @@ pub fn solve<const N: usize, P: Problem<N>>(problem: &mut P, x0: [f64; N], optio
     if N == 0 {
         return Err(Error::InvalidArgument { what: "a problem needs at least one parameter" });
     }
-    let mut x = x0;
-    let mut lin = linearize(problem, &x, options.accumulation)?;
+    let mut state = State { x: x0, diag: [0.0; N], delta: 0.0, evaluations: 1, iterations: 0 };
+    let mut lin = linearize(problem, &state.x, options.accumulation)?;
     let initial_cost = lin.cost;
-    let rows = lin.rows;
-    let mut evaluations = 1usize;
-    let mut iterations = 0usize;
-    let mut diag = [0.0; N];
-    let mut delta = 0.0;
     let mut pending: Option<StopReason> = None;
     loop {
-        let r = lin.r;
-        let qtf = lin.qtf;
-        let f = lin.cost;
-        let mut colnorm = [0.0; N];
-        for j in 0..N {
-            colnorm[j] = libm::sqrt((0..N).map(|i| r[i][j] * r[i][j]).sum::<f64>());
-        }
-        for j in 0..N {
-            let c = if colnorm[j] > 0.0 { colnorm[j] } else { 1.0 };
-            diag[j] = if iterations == 0 && delta == 0.0 { c } else { diag[j].max(colnorm[j]) };
-        }
-        let xnorm = norm(&core::array::from_fn::<f64, N, _>(|j| diag[j] * x[j]));
-        if delta == 0.0 {
-            delta = if xnorm > 0.0 { options.step_factor * xnorm } else { options.step_factor };
-        }
-        // B = R D^-1 (upper triangular). Its SVD gives the rank and the damped steps; when
-        // B is certified well inside full rank, the Gauss-Newton step comes from a
-        // triangular solve and the SVD is computed only if the trust region binds (or for
-        // the covariance at the end): the usual case near a solution.
-        let mut b = [[0.0; N]; N];
-        for (bi, ri) in b.iter_mut().zip(r.iter()) {
-            for ((bij, rij), dj) in bi.iter_mut().zip(ri.iter()).zip(diag.iter()) {
-                *bij = rij / dj;
-            }
-        }
-        let b_inv = full_rank_inverse(&b, options.rank_tolerance);
-        let z_gauss_newton = b_inv.as_ref().map(|b_inv| {
-            let mut z = [0.0; N];
-            for (zi, row) in z.iter_mut().zip(b_inv.iter()) {
-                *zi = -row.iter().zip(qtf.iter()).map(|(a, q)| a * q).sum::<f64>();
-            }
-            z
-        });
-        let mut spectral: Option<Spectral<N>> = None;
-        if z_gauss_newton.is_none() {
-            spectral = Some(Spectral::of(&b, &qtf, options.rank_tolerance)?);
-        }
-        let rank = spectral.as_ref().map_or(N, |sp| sp.rank);
-        let dof = rows.saturating_sub(rank);
-        let sigma2 = if dof > 0 { f / dof as f64 } else { f };
-        macro_rules! finish {
-            ($stop:expr) => {{
-                // A minimum where some direction is undetermined is reported as such.
-                let stop = if rank < N && $stop.converged() { StopReason::RankDeficient } else { $stop };
-                let covariance = match (&spectral, &b_inv) {
-                    (Some(sp), _) => covariance_from_svd(&sp.svd, &sp.keep, &diag, sigma2),
-                    (None, Some(b_inv)) => covariance_from_inverse(b_inv, &diag, sigma2),
-                    (None, None) => {
-                        let sp = Spectral::of(&b, &qtf, options.rank_tolerance)?;
-                        covariance_from_svd(&sp.svd, &sp.keep, &diag, sigma2)
-                    }
-                };
-                return Ok(Report {
-                    x,
-                    stop,
-                    cost: f,
-                    initial_cost,
-                    iterations,
-                    evaluations,
-                    residuals: rows,
-                    rank,
-                    sigma2,
-                    covariance,
-                });
-            }};
-        }
+        let (colnorm, xnorm) = state.rescale(&lin.r, options.step_factor);
+        let mut scaled = Scaled::of(&lin, &state.diag, options.rank_tolerance)?;
         if let Some(stop) = pending {
-            finish!(stop);
+            return finish(&state, &lin, &scaled, stop, initial_cost, options);
         }
-        if f == 0.0 {
-            finish!(StopReason::CostTolerance);
+        if lin.cost == 0.0 {
+            return finish(&state, &lin, &scaled, StopReason::CostTolerance, initial_cost, options);
         }
-        // Gradient test: the largest cosine between r and a column of J.
-        let mut gnorm = 0.0f64;
-        for j in 0..N {
-            if colnorm[j] > 0.0 {
-                let g: f64 = (0..N).map(|i| r[i][j] * qtf[i]).sum();
-                gnorm = gnorm.max(g.abs() / (colnorm[j] * libm::sqrt(f)));
-            }
+        if gradient_cosine(&lin, &colnorm) <= options.gtol {
+            return finish(&state, &lin, &scaled, StopReason::GradientTolerance, initial_cost, options);
         }
-        if gnorm <= options.gtol {
-            finish!(StopReason::GradientTolerance);
+        match inner_loop(problem, &mut state, &lin, &mut scaled, xnorm, options)? {
+            Inner::Accepted(stop) => pending = stop,
+            Inner::Stopped(stop) => return finish(&state, &lin, &scaled, stop, initial_cost, options),
         }
-        let qtf2: f64 = qtf.iter().map(|q| q * q).sum();
-        // Inner loop: shrink the trust region until a step is accepted.
-        loop {
-            let (mu, z) = match z_gauss_newton {
-                Some(z) if norm(&z) <= 1.1 * delta => (0.0, z),
-                _ => {
-                    let sp = match spectral.take() {
-                        Some(sp) => sp,
-                        None => Spectral::of(&b, &qtf, options.rank_tolerance)?,
-                    };
-                    let mu = secular_mu(&sp.svd, &sp.c, &sp.keep, delta);
-                    let z = scaled_step(&sp.svd, &sp.c, &sp.keep, mu);
-                    spectral = Some(sp);
-                    (mu, z)
-                }
-            };
-            let pnorm = norm(&z);
-            if iterations == 0 && evaluations == 1 {
-                delta = delta.min(pnorm);
-            }
-            let p: [f64; N] = core::array::from_fn(|j| z[j] / diag[j]);
-            let xnew: [f64; N] = core::array::from_fn(|j| x[j] + p[j]);
-            evaluations += 1;
-            let fnew = trial_cost(problem, &xnew, rows);
-            // Predicted reduction of the linear model: ||Q^T r||^2 - ||R p + Q^T r||^2.
-            let mut model = 0.0;
-            for (i, (ri, qi)) in r.iter().zip(qtf.iter()).enumerate() {
-                // R is upper triangular: row i starts at column i.
-                let rp: f64 = ri.iter().zip(p.iter()).skip(i).map(|(a, b)| a * b).sum();
-                model += (rp + qi) * (rp + qi);
-            }
-            let pred = qtf2 - model;
-            let actred = match fnew {
-                Some(fnew) => f - fnew,
-                None => -f,
-            };
-            let ratio = if pred > 0.0 { actred / pred } else { 0.0 };
-            if ratio <= 0.25 {
-                let shrink = if actred >= 0.0 && fnew.is_some() { 0.5 } else { 0.1 };
-                delta = shrink * delta.min(pnorm / 0.1);
-            } else if mu == 0.0 || ratio >= 0.75 {
-                delta = pnorm / 0.5;
-            }
-            let accepted = ratio >= 1e-4 && fnew.is_some();
-            let mut stop = None;
-            let rel_act = actred / f;
-            let rel_pred = pred / f;
-            if rel_act.abs() <= options.ftol && rel_pred <= options.ftol && ratio <= 2.0 {
-                stop = Some(StopReason::CostTolerance);
-            } else if delta <= options.xtol * xnorm {
-                stop = Some(StopReason::StepTolerance);
-            } else if evaluations >= options.max_evaluations {
-                stop = Some(StopReason::MaxIterations);
-            } else if !accepted && (delta <= f64::EPSILON * xnorm || rel_pred <= f64::EPSILON) {
-                stop = Some(StopReason::NoProgress);
-            }
-            if accepted {
-                x = xnew;
-                iterations += 1;
-                if stop.is_none() && iterations >= options.max_iterations {
-                    stop = Some(StopReason::MaxIterations);
-                }
-                pending = stop;
-                break;
-            }
-            if let Some(s) = stop {
-                finish!(s);
-            }
-        }
-        lin = linearize(problem, &x, options.accumulation)?;
-        evaluations += 1;
+        lin = linearize(problem, &state.x, options.accumulation)?;
+        state.evaluations += 1;
     }
 }

@@ -6,7 +6,7 @@
 //!   [`RowSink`], folded into the triangular factor R of the Jacobian by Givens rotations
 //!   as they arrive (MINPACK's `lmstr` idea), so memory is O(N^2) whatever the number of
 //!   residuals. The step is Moré's (1978) trust-region Levenberg-Marquardt step with
-//!   MINPACK's adaptive column scaling, computed from the SVD of the scaled factor, which
+//!   MINPACK's adaptive column scaling, computed from the SVD ([`crate::linalg::svd`]) of the scaled factor, which
 //!   also gives an honest numerical rank.
 //! - [`solve_blocks`]: problems with `N` shared parameters and `M` private parameters per
 //!   block (a view's pose in Zhang's method; a view's stage/current corrections in the
@@ -35,14 +35,11 @@
 //! ```
 
 mod blocks;
-mod cholesky;
 mod dense;
 mod options;
 mod report;
-pub mod svd;
 
 pub use blocks::{solve_blocks, solve_blocks_scratch, BlockNormal, BlockProblem, BlockRowSink, BlockScratch};
-pub use cholesky::spd_inverse;
 pub use dense::solve;
 pub use options::{Accumulation, Options, StopReason};
 pub use report::{BlockReport, Report};

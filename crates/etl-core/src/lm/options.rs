@@ -91,3 +91,66 @@ impl StopReason {
         )
     }
 }
+
+/// What one trial step of either solver showed, each test measured in that solver's own
+/// terms (the dense solver's trust radius, the block solver's damped step).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct TrialOutcome {
+    /// The actual and the predicted relative reduction of the cost are both within `ftol`.
+    pub cost_converged: bool,
+    /// The scaled step is within `xtol` of the scaled parameters.
+    pub step_converged: bool,
+    /// No smaller step can be tried (read only when the step was rejected).
+    pub stalled: bool,
+    /// The step was accepted.
+    pub accepted: bool,
+}
+
+/// The stop test shared by [`super::solve`] and [`super::solve_blocks`], in MINPACK's
+/// order of precedence: cost tolerance, step tolerance, the evaluation cap, no progress
+/// (a rejected step that cannot shrink further), then the iteration cap after an accepted
+/// step. `evaluations` and `iterations` are the counts after this trial (an accepted step
+/// counted). `None`: go on.
+pub(crate) fn stop_reason(
+    trial: &TrialOutcome,
+    evaluations: usize,
+    iterations: usize,
+    options: &Options,
+) -> Option<StopReason> {
+    if trial.cost_converged {
+        Some(StopReason::CostTolerance)
+    } else if trial.step_converged {
+        Some(StopReason::StepTolerance)
+    } else if evaluations >= options.max_evaluations {
+        Some(StopReason::MaxIterations)
+    } else if !trial.accepted && trial.stalled {
+        Some(StopReason::NoProgress)
+    } else if trial.accepted && iterations >= options.max_iterations {
+        Some(StopReason::MaxIterations)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trial(cost: bool, step: bool, stalled: bool, accepted: bool) -> TrialOutcome {
+        TrialOutcome { cost_converged: cost, step_converged: step, stalled, accepted }
+    }
+
+    #[test]
+    fn stop_reasons_follow_minpack_precedence() {
+        let o = Options { max_iterations: 5, max_evaluations: 10, ..Options::default() };
+        assert_eq!(stop_reason(&trial(true, true, true, true), 10, 5, &o), Some(StopReason::CostTolerance));
+        assert_eq!(stop_reason(&trial(false, true, true, false), 10, 5, &o), Some(StopReason::StepTolerance));
+        assert_eq!(stop_reason(&trial(false, false, true, false), 10, 1, &o), Some(StopReason::MaxIterations));
+        assert_eq!(stop_reason(&trial(false, false, true, false), 9, 1, &o), Some(StopReason::NoProgress));
+        // A stalled flag means nothing once the step was accepted.
+        assert_eq!(stop_reason(&trial(false, false, true, true), 9, 4, &o), None);
+        assert_eq!(stop_reason(&trial(false, false, false, true), 9, 5, &o), Some(StopReason::MaxIterations));
+        // The iteration cap counts accepted steps only.
+        assert_eq!(stop_reason(&trial(false, false, false, false), 9, 5, &o), None);
+    }
+}

@@ -1,7 +1,5 @@
 //! The ETL group: the compound focal length of the ETL and the prime lens (Eq. 10).
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use super::lens::LensPhysics;
 use crate::error::{finite, Error, Result};
 

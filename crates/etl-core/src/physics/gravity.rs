@@ -1,8 +1,6 @@
 //! The effect of gravity: the focal-length error of a vertical lens (Eq. 6) and the
 //! gravity coefficient of a horizontal one (Eq. 9).
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use super::lens::LensPhysics;
 use crate::error::{finite, Error, Result};
 

@@ -1,7 +1,5 @@
 //! [`LensPhysics`]: the parameters of Eq. 1-10.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use serde::{Deserialize, Serialize};
 
 use crate::error::{all_finite, Error, Result};

@@ -5,8 +5,6 @@
 //! focal length of the plano-convex liquid lens (Eq. 4). Eq. 5 and 8 are the composition
 //! (with E_in, resp. the compensated E_com, as the current).
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use super::lens::LensPhysics;
 use crate::error::{finite, Error, Result};
 

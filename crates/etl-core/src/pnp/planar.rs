@@ -1,7 +1,5 @@
 //! Planar PnP: closed-form start from the homography, then LM.
 
-#![allow(clippy::needless_range_loop)]
-
 use super::homography::homography;
 use crate::calib::jacobian::{to_params, Projector};
 use crate::calib::rac::nearest_rotation;

@@ -2,8 +2,6 @@
 //! (Hestenes 1958), accurate to high relative precision even for graded matrices, which
 //! is why the solvers use it for their rank decisions.
 
-#![allow(clippy::needless_range_loop)] // rotations pair two columns entry by entry
-
 /// A = U diag(s) V^T for an N x N matrix.
 ///
 /// Stored column-wise: `u[j]` is the j-th left singular vector, `v[j]` the j-th right one.
