@@ -28,7 +28,7 @@ def rust_reference():
 def etlcal_binary():
     """The `etlcal` command line (built by cargo once per session), to make test data."""
     cargo = shutil.which("cargo") or os.path.expanduser("~/.cargo/bin/cargo")
-    subprocess.run([cargo, "build", "-q", "-p", "etl-calib", "--bin", "etlcal"], cwd=ROOT, check=True)
+    subprocess.run([cargo, "build", "-q", "-p", "etlcal", "--bin", "etlcal"], cwd=ROOT, check=True)
     target = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
     if not target.is_absolute():
         target = ROOT / target
