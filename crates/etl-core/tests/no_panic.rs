@@ -235,8 +235,8 @@ proptest! {
         paper_ranges in any::<bool>(),
     ) {
         ok_finite(s.validate());
-        ok_finite(s.e_t_ma(t, e));
-        ok_finite(s.e_com_ma(t, e));
+        ok_finite(s.e_t_ma(e, t));
+        ok_finite(s.e_com_ma(e, t));
         ok_finite(s.e_in_for_e_com(y, t));
         ok_finite(s.e_in_for_e_com(e, 30.0));
         let cal = if paper_ranges {
@@ -245,18 +245,18 @@ proptest! {
             ThermalCalibration { surface: s, t_range_c: [ranges[0], ranges[1]], e_in_range_ma: [ranges[2], ranges[3]] }
         };
         ok_finite(cal.validate());
-        let _ = cal.contains(t, e);
-        ok_finite(cal.compensate(t, e));
+        let _ = cal.contains(e, t);
+        ok_finite(cal.compensate(e, t));
         ok_finite(cal.e_in_for_e_com(y, t));
 
-        let mut fit = ThermalFit::with_ranges([ranges[0], ranges[1]], [ranges[2], ranges[3]])
+        let mut fit = ThermalFit::with_ranges([ranges[2], ranges[3]], [ranges[0], ranges[1]])
             .unwrap_or_default();
-        ok_finite(fit.add(t, e, y));
-        ok_finite(fit.add_weighted(t, e, y, w));
+        ok_finite(fit.add(e, t, y));
+        ok_finite(fit.add_weighted(e, t, y, w));
         for smp in &samples {
-            ok_finite(fit.add_weighted(smp[0], smp[1], smp[2], smp[3]));
+            ok_finite(fit.add_weighted(smp[1], smp[0], smp[2], smp[3]));
             // Plausible samples too, so that some solves succeed.
-            ok_finite(fit.add(20.0 + (smp[0] % 20.0).abs(), (smp[1] % 290.0).abs(), smp[2]));
+            ok_finite(fit.add((smp[1] % 290.0).abs(), 20.0 + (smp[0] % 20.0).abs(), smp[2]));
         }
         let _ = (fit.samples(), fit.t_range_c(), fit.e_in_range_ma());
         ok_finite(fit.solve());
@@ -333,10 +333,10 @@ proptest! {
 /// above would prove nothing about their `Ok` paths: check one plausible case each.
 #[test]
 fn plausible_inputs_reach_ok() {
-    let mut fit = ThermalFit::with_ranges([20.0, 40.0], [0.0, 290.0]).unwrap_or_default();
+    let mut fit = ThermalFit::with_ranges([0.0, 290.0], [20.0, 40.0]).unwrap_or_default();
     for k in 0..30 {
         let kf = k as f64;
-        fit.add(20.0 + (kf * 7.3) % 20.0, (kf * 37.1) % 290.0, kf.sin()).unwrap();
+        fit.add((kf * 37.1) % 290.0, 20.0 + (kf * 7.3) % 20.0, kf.sin()).unwrap();
     }
     assert!(fit.solve().is_ok());
     assert!(CameraModel::paper_rig().ray([100.0, 200.0], 100.0).is_ok());

@@ -15,7 +15,7 @@
 //! // E_com at the lens's driver current and temperature (Eq. 8), with the surface the
 //! // calibration was made with; a current outside the calibrated range is refused.
 //! let (e_in_ma, temperature_c) = (150.0, 35.0);
-//! let e_com_ma = cal.thermal_surface()?.e_com_ma(temperature_c, e_in_ma)?;
+//! let e_com_ma = cal.thermal_surface()?.e_com_ma(e_in_ma, temperature_c)?;
 //! assert!((e_com_ma - 143.485).abs() < 1e-3);
 //! cal.check_current(e_com_ma, 0.0)?;
 //!

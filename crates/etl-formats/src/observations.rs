@@ -133,7 +133,7 @@ impl Observations {
             .iter()
             .map(|v| match v.e_com_ma {
                 Some(e) => Ok(e),
-                None => Ok(thermal.compensate(v.temperature_c, v.e_in_ma)?.e_com_ma),
+                None => Ok(thermal.compensate(v.e_in_ma, v.temperature_c)?.e_com_ma),
             })
             .collect()
     }
@@ -144,7 +144,7 @@ impl Observations {
             .iter()
             .map(|v| match v.e_com_ma {
                 Some(e) => Ok(e),
-                None => Ok(thermal.compensate(v.temperature_c, v.e_in_ma)?.e_com_ma),
+                None => Ok(thermal.compensate(v.e_in_ma, v.temperature_c)?.e_com_ma),
             })
             .collect()
     }

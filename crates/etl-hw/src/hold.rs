@@ -24,15 +24,15 @@ pub struct HoldConfig {
 pub struct HoldStep {
     /// Step number from 0.
     pub index: u64,
-    /// The temperature read, degC.
-    pub temperature_c: f64,
     /// The current commanded (after the driver's clamping and quantisation), mA.
     pub e_in_ma: f64,
+    /// The temperature read, degC.
+    pub temperature_c: f64,
     /// E_com the surface predicts for (T, commanded E_in), mA.
     pub e_com_ma: f64,
     /// |predicted E_com - wanted|, mA: quantisation and clamping.
     pub error_ma: f64,
-    /// (T, E_in) lies outside the surface's calibrated range.
+    /// (E_in, T) lies outside the surface's calibrated range.
     pub extrapolated: bool,
 }
 
@@ -124,11 +124,11 @@ pub fn hold<L: Lens>(
         let want = calibration.e_in_for_e_com(config.e_com_ma, t_c).map_err(HoldError::Core)?;
         let e_in_ma = lens.set_current_ma(want.e_in_ma).map_err(HoldError::Lens)?;
         report.commands_sent += 1;
-        let got = calibration.compensate(t_c, e_in_ma).map_err(HoldError::Core)?;
+        let got = calibration.compensate(e_in_ma, t_c).map_err(HoldError::Core)?;
         let step = HoldStep {
             index,
-            temperature_c: t_c,
             e_in_ma,
+            temperature_c: t_c,
             e_com_ma: got.e_com_ma,
             error_ma: (got.e_com_ma - config.e_com_ma).abs(),
             extrapolated: got.extrapolated,

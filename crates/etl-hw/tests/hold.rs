@@ -53,8 +53,8 @@ fn hold_keeps_e_com_while_the_lens_warms_10_c() {
     assert!(report.temperature_range_c[1] - report.temperature_range_c[0] > 9.5, "{report:?}");
     assert_eq!(report.commands_sent, checks);
     // Without compensation the same warming moves E_com by several mA.
-    let e_t_drift = ThermalSurface::PAPER.e_t_ma(t_start + 10.0, 150.0).unwrap()
-        - ThermalSurface::PAPER.e_t_ma(t_start, 150.0).unwrap();
+    let e_t_drift = ThermalSurface::PAPER.e_t_ma(150.0, t_start + 10.0).unwrap()
+        - ThermalSurface::PAPER.e_t_ma(150.0, t_start).unwrap();
     assert!(e_t_drift.abs() > 3.0, "{e_t_drift}");
 }
 

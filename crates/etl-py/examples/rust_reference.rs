@@ -32,8 +32,8 @@ fn main() {
         for &e in &[0.0, 40.0, 133.3, 240.0] {
             thermal.push(serde_json::json!({
                 "temperature_c": t, "e_in_ma": e,
-                "e_t_ma": s.e_t_ma(t, e).expect("in domain"),
-                "e_com_ma": s.e_com_ma(t, e).expect("in domain"),
+                "e_t_ma": s.e_t_ma(e, t).expect("in domain"),
+                "e_com_ma": s.e_com_ma(e, t).expect("in domain"),
             }));
         }
     }

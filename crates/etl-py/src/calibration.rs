@@ -288,7 +288,7 @@ impl Calibration {
         temperature_c: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let s = self.surface()?;
-        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_com_ma(t, e).py())
+        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_com_ma(e, t).py())
     }
 
     /// The driver current that gives `e_com_ma` at `temperature_c`, mA (inverse of

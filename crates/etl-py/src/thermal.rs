@@ -61,7 +61,7 @@ impl ThermalSurface {
     /// Returns: E_T in mA (a float, or an array of the broadcast shape).
     fn e_t<'py>(&self, e_in_ma: &Bound<'py, PyAny>, temperature_c: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         let s = self.inner;
-        map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_t_ma(t, e).py())
+        map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_t_ma(e, t).py())
     }
 
     /// E_com = E_in - E_T(T, E_in) in mA (Eq. 8): the current the camera model is indexed by.
@@ -75,7 +75,7 @@ impl ThermalSurface {
         temperature_c: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let s = self.inner;
-        map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_com_ma(t, e).py())
+        map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_com_ma(e, t).py())
     }
 
     /// The driver current E_in (mA) that gives `e_com_ma` at `temperature_c` (the inverse
@@ -135,7 +135,7 @@ impl ThermalSurface {
             .detach(|| {
                 let mut fit = ThermalFit::new();
                 for i in 0..e.len() {
-                    fit.add_weighted(t[i], e[i], y[i], w[i])?;
+                    fit.add_weighted(e[i], t[i], y[i], w[i])?;
                 }
                 fit.solve_calibration()
             })
@@ -173,8 +173,8 @@ pub(crate) fn column(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
 ///
 /// Args:
 ///     surface: the surface.
-///     t_range_c: (min, max) temperature of the fitted samples, degC.
-///     e_in_range_ma: (min, max) driver current of the fitted samples, mA.
+///     e_in_range_ma: (min, max) driver current of the fitted samples, mA (keyword only).
+///     t_range_c: (min, max) temperature of the fitted samples, degC (keyword only).
 ///     rms_ma: RMS of the fit residuals, mA (>= 0).
 #[pyclass(module = "etlcal", frozen, eq, from_py_object)]
 #[derive(Clone, PartialEq)]
@@ -192,8 +192,10 @@ impl ThermalCalibration {
 #[pymethods]
 impl ThermalCalibration {
     #[new]
-    #[pyo3(signature = (surface, t_range_c, e_in_range_ma, rms_ma=0.0))]
-    fn new(surface: ThermalSurface, t_range_c: (f64, f64), e_in_range_ma: (f64, f64), rms_ma: f64) -> PyResult<Self> {
+    // The two ranges are keyword-only: they are both pairs of floats, and a call written for
+    // the old positional order (t_range_c first) must fail loudly, not swap them silently.
+    #[pyo3(signature = (surface, *, e_in_range_ma, t_range_c, rms_ma=0.0))]
+    fn new(surface: ThermalSurface, e_in_range_ma: (f64, f64), t_range_c: (f64, f64), rms_ma: f64) -> PyResult<Self> {
         let c = ThermalCalibration {
             inner: CoreThermalCal {
                 surface: surface.inner,
@@ -281,7 +283,7 @@ impl ThermalCalibration {
     /// Returns: a dict with `e_in_ma`, `e_t_ma`, `e_com_ma` (mA) and `extrapolated` (True
     /// when outside the calibrated ranges).
     fn compensate<'py>(&self, py: Python<'py>, e_in_ma: f64, temperature_c: f64) -> PyResult<Bound<'py, PyAny>> {
-        let c = self.inner.compensate(temperature_c, e_in_ma).py()?;
+        let c = self.inner.compensate(e_in_ma, temperature_c).py()?;
         compensation_dict(py, &c)
     }
 
@@ -304,13 +306,13 @@ impl ThermalCalibration {
     ///     e_in_ma: driver current, mA.
     ///     temperature_c: lens temperature, degC.
     fn contains(&self, e_in_ma: f64, temperature_c: f64) -> bool {
-        self.inner.contains(temperature_c, e_in_ma)
+        self.inner.contains(e_in_ma, temperature_c)
     }
 
     fn __repr__(&self) -> String {
         format!(
-            "ThermalCalibration(t_range_c={:?}, e_in_range_ma={:?}, rms_ma={})",
-            self.inner.t_range_c, self.inner.e_in_range_ma, self.rms_ma
+            "ThermalCalibration(e_in_range_ma={:?}, t_range_c={:?}, rms_ma={})",
+            self.inner.e_in_range_ma, self.inner.t_range_c, self.rms_ma
         )
     }
 

@@ -130,15 +130,20 @@ def test_thermal_calibration_compensate_and_files(tmp_path):
     assert pickle.loads(pickle.dumps(cal)) == cal
     s = etlcal.ThermalSurface.paper()
     assert pickle.loads(pickle.dumps(s)) == s
-    made = etlcal.ThermalCalibration(s, (27, 37), (40, 240), rms_ma=0.2106)
+    made = etlcal.ThermalCalibration(s, e_in_range_ma=(40, 240), t_range_c=(27, 37), rms_ma=0.2106)
     assert made == cal
+    assert made.e_in_range_ma == (40.0, 240.0) and made.t_range_c == (27.0, 37.0)
+    # The ranges are keyword-only: a call in the old positional order fails, never swaps.
+    with pytest.raises(TypeError):
+        etlcal.ThermalCalibration(s, (27, 37), (40, 240))
     with pytest.raises(etlcal.InputError, match="min <= max"):
-        etlcal.ThermalCalibration(s, (37, 27), (40, 240))
+        etlcal.ThermalCalibration(s, e_in_range_ma=(40, 240), t_range_c=(37, 27))
     with pytest.raises(etlcal.InputError, match="rms_ma"):
-        etlcal.ThermalCalibration(s, (27, 37), (40, 240), rms_ma=-1.0)
+        etlcal.ThermalCalibration(s, e_in_range_ma=(40, 240), t_range_c=(27, 37), rms_ma=-1.0)
     with pytest.raises(etlcal.FileError):
         etlcal.ThermalCalibration.load(tmp_path / "missing.json")
     (tmp_path / "c.json").write_text('{"format": "etlcal.calibration/1"}')
     with pytest.raises(etlcal.InputError, match="is not supported"):
         etlcal.ThermalCalibration.load(tmp_path / "c.json")
-    assert "ThermalCalibration(" in repr(cal) and "ThermalSurface(" in repr(s)
+    assert repr(cal) == "ThermalCalibration(e_in_range_ma=[40.0, 240.0], t_range_c=[27.0, 37.0], rms_ma=0.2106)"
+    assert "ThermalSurface(" in repr(s)

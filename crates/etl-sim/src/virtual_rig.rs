@@ -123,9 +123,9 @@ impl Climate for VirtualClimate<'_> {
 pub fn surface_error_ma(
     result: &ProcedureResult,
     truth: &ThermalSurface,
-    t_ref_c: f64,
-    t_range_c: [f64; 2],
     e_in_range_ma: [f64; 2],
+    t_range_c: [f64; 2],
+    t_ref_c: f64,
 ) -> Result<(f64, f64)> {
     let fitted = &result.calibration.surface;
     let (mut referenced, mut absolute, mut n) = (0.0, 0.0, 0usize);
@@ -133,11 +133,11 @@ pub fn surface_error_ma(
         for b in 0..=20 {
             let t = t_range_c[0] + (t_range_c[1] - t_range_c[0]) * a as f64 / 20.0;
             let e = e_in_range_ma[0] + (e_in_range_ma[1] - e_in_range_ma[0]) * b as f64 / 20.0;
-            let got = fitted.e_t_ma(t, e)?;
-            let want = truth.e_t_ma(t, e)?;
+            let got = fitted.e_t_ma(e, t)?;
+            let want = truth.e_t_ma(e, t)?;
             let e_com = e - want;
             let e_ref = truth.e_in_for_e_com(e_com, t_ref_c)?;
-            let want_ref = want - truth.e_t_ma(t_ref_c, e_ref)?;
+            let want_ref = want - truth.e_t_ma(e_ref, t_ref_c)?;
             referenced += (got - want_ref) * (got - want_ref);
             absolute += (got - want) * (got - want);
             n += 1;

@@ -29,7 +29,7 @@ fn the_procedure_recovers_the_virtual_lens_surface() {
     let r = run_procedure(&mut client, &mut camera, &mut climate, &options, &etl_core::progress::NoProgress).unwrap();
     assert_eq!(r.samples.len(), 25);
     let (referenced, absolute) =
-        surface_error_ma(&r, &ThermalSurface::PAPER, 27.0, [27.0, 37.0], [40.0, 240.0]).unwrap();
+        surface_error_ma(&r, &ThermalSurface::PAPER, [40.0, 240.0], [27.0, 37.0], 27.0).unwrap();
     println!("fit RMS {:.3} mA; surface error {referenced:.3} mA (referenced to 27 degC), {absolute:.3} mA (absolute); {} frames", r.rms_ma, r.frames);
     assert!(referenced < 0.3, "{referenced} mA");
     // Every commanded current stayed inside the driver's limits.

@@ -58,7 +58,7 @@ pub fn run(args: Args) -> Result<()> {
     board.validate()?;
     let cal = Calibration::load(&args.calibration)?;
     let thermal = ThermalCalibration { surface: cal.thermal_surface()?, ..ThermalCalibration::PAPER };
-    let e_com = thermal.compensate(args.temperature_c, args.e_in_ma)?.e_com_ma;
+    let e_com = thermal.compensate(args.e_in_ma, args.temperature_c)?.e_com_ma;
     cal.check_current(e_com, CURRENT_MARGIN_MA)?;
     let model = cal.model();
     let det = default_detector();

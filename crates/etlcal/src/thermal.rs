@@ -1,6 +1,6 @@
 //! `etlcal thermal ...`: temperature compensation (section 4.1, 5.2.2).
 //!
-//! - `eval --t C --e-in MA [--thermal FILE]`: E_T and E_com = E_in - E_T with the paper's
+//! - `eval --e-in MA --t C [--thermal FILE]`: E_T and E_com = E_in - E_T with the paper's
 //!   surface or a fitted `etlcal.thermal/1` file;
 //! - `fit TABLE.csv --out thermal.json`: fits the cubic surface to a table
 //!   `temperature_c,e_in_ma,e_t_ma` and writes `etlcal.thermal/1`.
@@ -72,12 +72,12 @@ pub struct CalibrateArgs {
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct EvalArgs {
-    /// Lens temperature, degC.
-    #[arg(long = "t", value_name = "C")]
-    pub t_c: f64,
     /// Driver current E_in, mA.
     #[arg(long = "e-in", value_name = "MA")]
     pub e_in_ma: f64,
+    /// Lens temperature, degC.
+    #[arg(long = "t", value_name = "C")]
+    pub t_c: f64,
     /// A fitted surface (etlcal.thermal/1) instead of the paper's.
     #[arg(long, value_name = "FILE")]
     pub thermal: Option<PathBuf>,
@@ -138,7 +138,7 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     let r = run_procedure(&mut client, &mut camera, &mut climate, &options, &crate::progress::Bar::new(!args.json))?;
     let t0 = options.temperatures_c.first().copied().unwrap_or(27.0);
     let (referenced, absolute) =
-        surface_error_ma(&r, &truth, t0, r.calibration.t_range_c, r.calibration.e_in_range_ma)?;
+        surface_error_ma(&r, &truth, r.calibration.e_in_range_ma, r.calibration.t_range_c, t0)?;
     etl_formats::thermal::write_thermal_table(&table, &r.samples)?;
     let file = ThermalFile::new(&r.calibration, r.rms_ma);
     file.save(&args.out)?;
@@ -178,7 +178,7 @@ pub fn run_eval(args: EvalArgs) -> Result<()> {
         Some(path) => ThermalFile::load(path)?.calibration(),
         None => ThermalCalibration::PAPER,
     };
-    let c = cal.compensate(args.t_c, args.e_in_ma)?;
+    let c = cal.compensate(args.e_in_ma, args.t_c)?;
     if args.json {
         print_json(&json!({
             "e_t_ma": c.e_t_ma,
@@ -190,8 +190,8 @@ pub fn run_eval(args: EvalArgs) -> Result<()> {
     } else {
         if c.extrapolated {
             eprintln!(
-                "etlcal: warning: (T, E_in) = ({} degC, {} mA) is outside the fitted ranges {:?} degC x {:?} mA: extrapolated",
-                args.t_c, args.e_in_ma, cal.t_range_c, cal.e_in_range_ma
+                "etlcal: warning: (E_in, T) = ({} mA, {} degC) is outside the fitted ranges {:?} mA x {:?} degC: extrapolated",
+                args.e_in_ma, args.t_c, cal.e_in_range_ma, cal.t_range_c
             );
         }
         outln!("E_T = {:.6} mA, E_com = {:.6} mA", c.e_t_ma, c.e_com_ma);

@@ -100,7 +100,7 @@ fn model_bad_input_is_a_one_line_error() {
 #[test]
 fn thermal_eval_uses_the_paper_surface() {
     let v = json_ok(&["thermal", "eval", "--t", "33.5", "--e-in", "150", "--json"]);
-    let e_t = ThermalSurface::PAPER.e_t_ma(33.5, 150.0).unwrap();
+    let e_t = ThermalSurface::PAPER.e_t_ma(150.0, 33.5).unwrap();
     assert!((num(&v["e_t_ma"]) - e_t).abs() < 1e-12);
     assert!((num(&v["e_com_ma"]) - (150.0 - e_t)).abs() < 1e-12);
     assert_eq!(v["extrapolated"], false);
@@ -135,7 +135,7 @@ fn write_table(path: &Path, noise_ma: f64, seed: u64) {
     for it in 0..=10 {
         for ie in 0..=10 {
             let (t, e) = (27.0 + it as f64, 40.0 + 20.0 * ie as f64);
-            let y = truth.e_t_ma(t, e).unwrap() + if noise_ma > 0.0 { noise.sample(&mut rng) } else { 0.0 };
+            let y = truth.e_t_ma(e, t).unwrap() + if noise_ma > 0.0 { noise.sample(&mut rng) } else { 0.0 };
             text.push_str(&format!("{t},{e},{y}\n"));
         }
     }

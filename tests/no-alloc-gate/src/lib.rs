@@ -41,8 +41,8 @@ pub extern "C" fn etl_gate_undistort(u: f64, v: f64, e_ma: f64) -> f64 {
 
 /// Temperature compensation with the paper's surface: E_com, or NaN on error.
 #[no_mangle]
-pub extern "C" fn etl_gate_e_com(t_c: f64, e_in_ma: f64) -> f64 {
-    ThermalSurface::PAPER.e_com_ma(t_c, e_in_ma).unwrap_or(f64::NAN)
+pub extern "C" fn etl_gate_e_com(e_in_ma: f64, t_c: f64) -> f64 {
+    ThermalSurface::PAPER.e_com_ma(e_in_ma, t_c).unwrap_or(f64::NAN)
 }
 
 /// The inverse of the compensation on a perturbed surface (exercises the root search).
@@ -55,10 +55,10 @@ pub extern "C" fn etl_gate_e_in_for_e_com(e_com_ma: f64, t_c: f64, c9: f64) -> f
 
 /// Flagged compensation over a calibration with a caller-chosen lower temperature bound.
 #[no_mangle]
-pub extern "C" fn etl_gate_compensate(t_c: f64, e_in_ma: f64, t_lo_c: f64) -> f64 {
+pub extern "C" fn etl_gate_compensate(e_in_ma: f64, t_c: f64, t_lo_c: f64) -> f64 {
     let mut c = ThermalCalibration::PAPER;
     c.t_range_c[0] = t_lo_c;
-    match c.compensate(t_c, e_in_ma) {
+    match c.compensate(e_in_ma, t_c) {
         Ok(r) => r.e_com_ma + if r.extrapolated { 1.0 } else { 0.0 },
         Err(_) => f64::NAN,
     }
@@ -70,7 +70,7 @@ pub extern "C" fn etl_gate_thermal_fit(x0: f64, dx: f64, n: usize) -> f64 {
     let mut f = ThermalFit::new();
     for i in 0..n {
         let x = x0 + dx * i as f64;
-        let _ = f.add_weighted(x, x * 2.0, x * 3.0, x);
+        let _ = f.add_weighted(x * 2.0, x, x * 3.0, x);
     }
     match f.solve() {
         Ok((s, rms)) => s.coefficients[3] + rms,

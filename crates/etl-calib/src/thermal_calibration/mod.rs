@@ -105,9 +105,9 @@ pub fn fit_samples(samples: &[ThermalSample]) -> Result<(ThermalCalibration, f64
         t = [t[0].min(r.temperature_c), t[1].max(r.temperature_c)];
         e = [e[0].min(r.e_in_ma), e[1].max(r.e_in_ma)];
     }
-    let mut fit = ThermalFit::with_ranges(t, e).unwrap_or_default();
+    let mut fit = ThermalFit::with_ranges(e, t).unwrap_or_default();
     for (i, r) in samples.iter().enumerate() {
-        fit.add(r.temperature_c, r.e_in_ma, r.e_t_ma)
+        fit.add(r.e_in_ma, r.temperature_c, r.e_t_ma)
             .map_err(|err| Error::InvalidInput(format!("data row {}: {err}", i + 1)))?;
     }
     fit.solve_calibration().map_err(|err| Error::InvalidInput(format!("cannot fit the surface: {err}")))

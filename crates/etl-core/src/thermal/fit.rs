@@ -54,7 +54,7 @@ impl Distinct {
 /// for it in 0..=10 {
 ///     for ie in 0..=10 {
 ///         let (t, e) = (27.0 + it as f64, 40.0 + 20.0 * ie as f64);
-///         fit.add(t, e, truth.e_t_ma(t, e).unwrap()).unwrap();
+///         fit.add(e, t, truth.e_t_ma(e, t).unwrap()).unwrap();
 ///     }
 /// }
 /// let (surface, rms_ma) = fit.solve().unwrap();
@@ -83,29 +83,29 @@ impl Default for ThermalFit {
 impl ThermalFit {
     /// An empty fit scaled for the paper's procedure (27..37 degC, 40..240 mA).
     pub fn new() -> Self {
-        Self::scaled(32.0, 5.0, 140.0, 100.0)
+        Self::scaled(140.0, 100.0, 32.0, 5.0)
     }
 
-    /// An empty fit scaled for samples expected over `t_range_c` x `e_in_range_ma`
+    /// An empty fit scaled for samples expected over `e_in_range_ma` x `t_range_c`
     /// ([min, max] each). Samples outside these ranges are still accepted.
     ///
     /// Errors: a non-finite bound ([`Error::NotFinite`]); a bound outside the domain
     /// ([`Error::OutOfRange`]); min >= max ([`Error::InvalidArgument`]).
-    pub fn with_ranges(t_range_c: [f64; 2], e_in_range_ma: [f64; 2]) -> Result<Self> {
-        check_domain(t_range_c[0], e_in_range_ma[0])?;
-        check_domain(t_range_c[1], e_in_range_ma[1])?;
+    pub fn with_ranges(e_in_range_ma: [f64; 2], t_range_c: [f64; 2]) -> Result<Self> {
+        check_domain(e_in_range_ma[0], t_range_c[0])?;
+        check_domain(e_in_range_ma[1], t_range_c[1])?;
         if !(t_range_c[0] < t_range_c[1] && e_in_range_ma[0] < e_in_range_ma[1]) {
             return Err(Error::InvalidArgument { what: "fit ranges must be [min, max] with min < max" });
         }
         Ok(Self::scaled(
-            0.5 * (t_range_c[0] + t_range_c[1]),
-            0.5 * (t_range_c[1] - t_range_c[0]),
             0.5 * (e_in_range_ma[0] + e_in_range_ma[1]),
             0.5 * (e_in_range_ma[1] - e_in_range_ma[0]),
+            0.5 * (t_range_c[0] + t_range_c[1]),
+            0.5 * (t_range_c[1] - t_range_c[0]),
         ))
     }
 
-    fn scaled(t_centre_c: f64, t_half_c: f64, e_centre_ma: f64, e_half_ma: f64) -> Self {
+    fn scaled(e_centre_ma: f64, e_half_ma: f64, t_centre_c: f64, t_half_c: f64) -> Self {
         let empty = Distinct { values: [0.0; DISTINCT_NEEDED], count: 0 };
         ThermalFit {
             t_centre_c,
@@ -135,9 +135,9 @@ impl ThermalFit {
         (self.samples() > 0).then_some(self.e_in_range_ma)
     }
 
-    /// Adds the measurement E_T = `e_t_ma` at (`t_c`, `e_in_ma`) with weight 1.
-    pub fn add(&mut self, t_c: f64, e_in_ma: f64, e_t_ma: f64) -> Result<()> {
-        self.add_weighted(t_c, e_in_ma, e_t_ma, 1.0)
+    /// Adds the measurement E_T = `e_t_ma` at (`e_in_ma`, `t_c`) with weight 1.
+    pub fn add(&mut self, e_in_ma: f64, t_c: f64, e_t_ma: f64) -> Result<()> {
+        self.add_weighted(e_in_ma, t_c, e_t_ma, 1.0)
     }
 
     /// Adds a measurement with weight `weight` (>= 0; e.g. 1 / variance; 0 ignores it).
@@ -145,8 +145,8 @@ impl ThermalFit {
     /// Errors (the fit is unchanged): a non-finite value ([`Error::NotFinite`]); T or E_in
     /// outside the domain of [`ThermalSurface`] ([`Error::OutOfRange`]); a negative weight
     /// ([`Error::InvalidArgument`]).
-    pub fn add_weighted(&mut self, t_c: f64, e_in_ma: f64, e_t_ma: f64, weight: f64) -> Result<()> {
-        check_domain(t_c, e_in_ma)?;
+    pub fn add_weighted(&mut self, e_in_ma: f64, t_c: f64, e_t_ma: f64, weight: f64) -> Result<()> {
+        check_domain(e_in_ma, t_c)?;
         finite(e_t_ma, "e_t_ma")?;
         let ct = chebyshev_values((t_c - self.t_centre_c) / self.t_half_c);
         let ce = chebyshev_values((e_in_ma - self.e_centre_ma) / self.e_half_ma);
@@ -263,15 +263,15 @@ mod tests {
     fn noise_free_fit_recovers_the_paper_coefficients() {
         let truth = ThermalSurface::PAPER;
         let mut fit = ThermalFit::new();
-        let mut ranged = ThermalFit::with_ranges([27.0, 37.0], [40.0, 240.0]).unwrap();
+        let mut ranged = ThermalFit::with_ranges([40.0, 240.0], [27.0, 37.0]).unwrap();
         // A wider, off-centre grid through the default scaling.
         let mut wide = ThermalFit::new();
         for (t, e) in paper_grid() {
-            let y = truth.e_t_ma(t, e).unwrap();
-            fit.add(t, e, y).unwrap();
-            ranged.add(t, e, y).unwrap();
+            let y = truth.e_t_ma(e, t).unwrap();
+            fit.add(e, t, y).unwrap();
+            ranged.add(e, t, y).unwrap();
             let (t2, e2) = (2.0 * t - 30.0, 1.2 * e - 40.0);
-            wide.add(t2, e2, truth.e_t_ma(t2, e2).unwrap()).unwrap();
+            wide.add(e2, t2, truth.e_t_ma(e2, t2).unwrap()).unwrap();
         }
         assert_recovers(&fit, &truth);
         assert_recovers(&ranged, &truth);
@@ -292,14 +292,14 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let mut fit = ThermalFit::new();
             for (t, e) in paper_grid() {
-                fit.add(t, e, truth.e_t_ma(t, e).unwrap() + noise.sample(&mut rng)).unwrap();
+                fit.add(e, t, truth.e_t_ma(e, t).unwrap() + noise.sample(&mut rng)).unwrap();
             }
             let (s, rms) = fit.solve().unwrap();
             assert!((rms - 0.2).abs() < 0.03, "seed {seed}: rms {rms}");
             // The fitted surface follows the truth to ~ sqrt(10 / 121) * 0.2 = 0.06 mA RMS.
             let mut sq = 0.0;
             for (t, e) in paper_grid() {
-                sq += (s.e_t_ma(t, e).unwrap() - truth.e_t_ma(t, e).unwrap()).powi(2);
+                sq += (s.e_t_ma(e, t).unwrap() - truth.e_t_ma(e, t).unwrap()).powi(2);
             }
             let rms_err = (sq / 121.0).sqrt();
             assert!(rms_err < 0.1, "seed {seed}: surface RMS error {rms_err}");
@@ -313,9 +313,9 @@ mod tests {
         let mut a = ThermalFit::new();
         let mut b = ThermalFit::new();
         for (k, (t, e)) in paper_grid().enumerate() {
-            let y = truth.e_t_ma(t, e).unwrap() + 0.1 * ((k % 7) as f64 - 3.0);
-            a.add(t, e, y).unwrap();
-            b.add_weighted(t, e, y, 4.0).unwrap();
+            let y = truth.e_t_ma(e, t).unwrap() + 0.1 * ((k % 7) as f64 - 3.0);
+            a.add(e, t, y).unwrap();
+            b.add_weighted(e, t, y, 4.0).unwrap();
         }
         let (sa, ra) = a.solve().unwrap();
         let (sb, rb) = b.solve().unwrap();
@@ -334,25 +334,25 @@ mod tests {
         // All at one temperature.
         for ie in 0..20 {
             let e = 10.0 * ie as f64;
-            fit.add(30.0, e, truth.e_t_ma(30.0, e).unwrap()).unwrap();
+            fit.add(e, 30.0, truth.e_t_ma(e, 30.0).unwrap()).unwrap();
         }
         assert_eq!(fit.solve().unwrap_err(), Error::Degenerate { what: "all samples at one temperature" });
         // Three temperatures are not enough for a cubic in T.
         for &t in &[31.0, 32.0] {
-            fit.add(t, 100.0, 0.0).unwrap();
+            fit.add(100.0, t, 0.0).unwrap();
         }
         assert_eq!(fit.solve().unwrap_err(), Error::TooFew { what: "distinct temperatures", needed: 4, got: 3 });
         // All at one current.
         let mut one_e = ThermalFit::new();
         for it in 0..12 {
-            one_e.add(27.0 + it as f64, 100.0, 0.0).unwrap();
+            one_e.add(100.0, 27.0 + it as f64, 0.0).unwrap();
         }
         assert_eq!(one_e.solve().unwrap_err(), Error::Degenerate { what: "all samples at one current" });
         // Enough distinct values, but all on the line E = 10 T: rank-deficient.
         let mut line = ThermalFit::new();
         for k in 0..20 {
             let t = 20.0 + k as f64;
-            line.add(t, 10.0 * t - 100.0, 1.0).unwrap();
+            line.add(10.0 * t - 100.0, t, 1.0).unwrap();
         }
         assert!(matches!(line.solve(), Err(Error::Degenerate { .. })));
     }
@@ -360,16 +360,16 @@ mod tests {
     #[test]
     fn bad_samples_are_refused_and_leave_the_fit_unchanged() {
         let mut fit = ThermalFit::new();
-        fit.add(30.0, 100.0, 0.5).unwrap();
+        fit.add(100.0, 30.0, 0.5).unwrap();
         let before = fit;
-        assert_eq!(fit.add(f64::NAN, 100.0, 0.0), Err(Error::NotFinite { what: "t_c" }));
-        assert_eq!(fit.add(30.0, f64::NAN, 0.0), Err(Error::NotFinite { what: "e_in_ma" }));
-        assert_eq!(fit.add(30.0, 100.0, f64::NAN), Err(Error::NotFinite { what: "e_t_ma" }));
-        assert!(matches!(fit.add(303.15, 100.0, 0.0), Err(Error::OutOfRange { what: "t_c", .. })));
-        assert!(matches!(fit.add(30.0, 0.1e6, 0.0), Err(Error::OutOfRange { what: "e_in_ma", .. })));
-        assert!(matches!(fit.add_weighted(30.0, 100.0, 0.0, -1.0), Err(Error::InvalidArgument { .. })));
+        assert_eq!(fit.add(100.0, f64::NAN, 0.0), Err(Error::NotFinite { what: "t_c" }));
+        assert_eq!(fit.add(f64::NAN, 30.0, 0.0), Err(Error::NotFinite { what: "e_in_ma" }));
+        assert_eq!(fit.add(100.0, 30.0, f64::NAN), Err(Error::NotFinite { what: "e_t_ma" }));
+        assert!(matches!(fit.add(100.0, 303.15, 0.0), Err(Error::OutOfRange { what: "t_c", .. })));
+        assert!(matches!(fit.add(0.1e6, 30.0, 0.0), Err(Error::OutOfRange { what: "e_in_ma", .. })));
+        assert!(matches!(fit.add_weighted(100.0, 30.0, 0.0, -1.0), Err(Error::InvalidArgument { .. })));
         assert_eq!(fit, before);
-        assert!(matches!(ThermalFit::with_ranges([37.0, 27.0], [0.0, 1.0]), Err(Error::InvalidArgument { .. })));
-        assert!(matches!(ThermalFit::with_ranges([27.0, 37.0], [0.0, f64::NAN]), Err(Error::NotFinite { .. })));
+        assert!(matches!(ThermalFit::with_ranges([0.0, 1.0], [37.0, 27.0]), Err(Error::InvalidArgument { .. })));
+        assert!(matches!(ThermalFit::with_ranges([0.0, f64::NAN], [27.0, 37.0]), Err(Error::NotFinite { .. })));
     }
 }

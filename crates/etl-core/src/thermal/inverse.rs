@@ -23,6 +23,16 @@ pub const INVERSE_SEGMENTS: usize = 64;
 /// shrink a segment to one ulp).
 const MAX_ITER: usize = 100;
 
+/// A segment [a, b] of the driver range over which g changes sign (or touches zero), with
+/// g(a) and g(b).
+#[derive(Debug, Clone, Copy)]
+struct Bracket {
+    a: f64,
+    b: f64,
+    ga: f64,
+    gb: f64,
+}
+
 impl ThermalSurface {
     /// The driver current E_in (mA) at which E_in - E_T(`t_c`, E_in) = `e_com_ma`, to
     /// [`INVERSE_TOL_MA`].
@@ -38,22 +48,44 @@ impl ThermalSurface {
     /// ([`Error::NotConverged`], not expected for finite coefficients of sane size).
     pub fn e_in_for_e_com(&self, e_com_ma: f64, t_c: f64) -> Result<f64> {
         finite(e_com_ma, "e_com_ma")?;
-        check_domain(t_c, 0.0)?;
+        check_domain(0.0, t_c)?;
         self.validate()?;
-        let g = |e: f64| e - self.eval_unchecked(t_c, e) - e_com_ma;
+        let bracket = self.bracket_e_in(e_com_ma, t_c)?;
+        if bracket.ga == 0.0 {
+            return Ok(bracket.a);
+        }
+        if bracket.gb == 0.0 {
+            return Ok(bracket.b);
+        }
+        self.polish_e_in(e_com_ma, t_c, bracket)
+    }
+
+    /// g(E_in) = E_in - E_T(T, E_in) - E_com at driver current `e_in_ma` and temperature
+    /// `t_c`, without domain checks (the callers have checked T and the coefficients).
+    #[inline]
+    fn inverse_residual_ma(&self, e_in_ma: f64, t_c: f64, e_com_ma: f64) -> f64 {
+        e_in_ma - self.eval_unchecked(e_in_ma, t_c) - e_com_ma
+    }
+
+    /// Scans the driver range in [`INVERSE_SEGMENTS`] segments for the sign change of g
+    /// nearest to E_in ~ `e_com_ma` (distance from `e_com_ma` to the segment; the first
+    /// segment wins a tie).
+    ///
+    /// Errors: g not finite somewhere on the scan ([`Error::NotFinite`]); no sign change
+    /// ([`Error::OutOfRange`] with the span of E_com the driver range reaches).
+    fn bracket_e_in(&self, e_com_ma: f64, t_c: f64) -> Result<Bracket> {
         let [lo, hi] = E_IN_DOMAIN_MA;
         let step = (hi - lo) / INVERSE_SEGMENTS as f64;
-
-        // Scan for the sign change nearest to E_in ~ E_com.
         let mut a = lo;
-        let mut ga = g(a);
+        let mut ga = self.inverse_residual_ma(a, t_c, e_com_ma);
         finite(ga, "E_com over the driver range (check the thermal coefficients)")?;
         let (mut reach_min, mut reach_max) = (ga, ga);
-        let mut best: Option<(f64, f64, f64, f64)> = None;
+        let mut best: Option<Bracket> = None;
         let mut best_dist = f64::INFINITY;
         for i in 1..=INVERSE_SEGMENTS {
+            // The last end is `hi` itself, not lo + 64 steps rounded.
             let b = if i == INVERSE_SEGMENTS { hi } else { lo + step * i as f64 };
-            let gb = g(b);
+            let gb = self.inverse_residual_ma(b, t_c, e_com_ma);
             finite(gb, "E_com over the driver range (check the thermal coefficients)")?;
             reach_min = reach_min.min(gb);
             reach_max = reach_max.max(gb);
@@ -67,29 +99,31 @@ impl ThermalSurface {
                 };
                 if dist < best_dist {
                     best_dist = dist;
-                    best = Some((a, b, ga, gb));
+                    best = Some(Bracket { a, b, ga, gb });
                 }
             }
             a = b;
             ga = gb;
         }
-        let Some((a, b, ga, gb)) = best else {
-            return Err(Error::OutOfRange {
-                what: "e_com_ma (no driver current reaches it at this temperature)",
-                value: e_com_ma,
-                min: reach_min + e_com_ma,
-                max: reach_max + e_com_ma,
-            });
-        };
-        if ga == 0.0 {
-            return Ok(a);
-        }
-        if gb == 0.0 {
-            return Ok(b);
-        }
+        best.ok_or(Error::OutOfRange {
+            what: "e_com_ma (no driver current reaches it at this temperature)",
+            value: e_com_ma,
+            min: reach_min + e_com_ma,
+            max: reach_max + e_com_ma,
+        })
+    }
 
-        // Safeguarded Newton in [a, b]: keep g(x_neg) < 0 < g(x_pos).
+    /// Newton's method on g inside `bracket`, safeguarded by bisection: the bracket
+    /// [x_neg, x_pos] with g(x_neg) < 0 < g(x_pos) shrinks every step, and a Newton step
+    /// leaving it is replaced by the midpoint. Returns the best E_in seen.
+    ///
+    /// Precondition: g(a) and g(b) are non-zero with opposite signs.
+    /// Errors: the best |g| above [`INVERSE_TOL_MA`] after [`MAX_ITER`] steps
+    /// ([`Error::NotConverged`]).
+    fn polish_e_in(&self, e_com_ma: f64, t_c: f64, bracket: Bracket) -> Result<f64> {
+        let Bracket { a, b, ga, gb } = bracket;
         let (mut x_neg, mut x_pos) = if ga < 0.0 { (a, b) } else { (b, a) };
+        // E_T is small, so E_in ~ E_com is the natural first guess when it is inside.
         let mut x = if e_com_ma > a && e_com_ma < b { e_com_ma } else { 0.5 * (a + b) };
         let (mut best_x, mut best_g) = (a, ga.abs());
         if gb.abs() < best_g {
@@ -97,7 +131,7 @@ impl ThermalSurface {
             best_g = gb.abs();
         }
         for _ in 0..MAX_ITER {
-            let gx = g(x);
+            let gx = self.inverse_residual_ma(x, t_c, e_com_ma);
             if gx.abs() < best_g {
                 best_x = x;
                 best_g = gx.abs();
@@ -114,7 +148,7 @@ impl ThermalSurface {
             if h - l <= 4.0 * f64::EPSILON * h.abs().max(l.abs()).max(1.0) {
                 break;
             }
-            let slope = 1.0 - self.d_e_t_d_e_unchecked(t_c, x);
+            let slope = 1.0 - self.d_e_t_d_e_unchecked(x, t_c);
             let newton = x - gx / slope;
             x = if newton > l && newton < h { newton } else { 0.5 * (l + h) };
         }
@@ -140,7 +174,7 @@ mod tests {
             for ie in 0..=56 {
                 let e_com = 5.0 * ie as f64 - 20.0; // -20..260 mA
                 let e_in = s.e_in_for_e_com(e_com, t).unwrap();
-                let r = (e_in - s.e_t_ma(t, e_in).unwrap() - e_com).abs();
+                let r = (e_in - s.e_t_ma(e_in, t).unwrap() - e_com).abs();
                 worst = worst.max(r);
                 // The physical root: E_in stays within a few tens of mA of E_com.
                 assert!((e_in - e_com).abs() < 60.0, "T {t} E_com {e_com}: E_in {e_in}");
@@ -153,7 +187,7 @@ mod tests {
     fn inverse_of_forward_is_identity() {
         let s = ThermalSurface::PAPER;
         for &(t, e) in &[(27.0, 40.0), (32.5, 133.3), (37.0, 240.0), (36.0, 0.0), (29.0, -50.0)] {
-            let e_com = s.e_com_ma(t, e).unwrap();
+            let e_com = s.e_com_ma(e, t).unwrap();
             let back = s.e_in_for_e_com(e_com, t).unwrap();
             assert!((back - e).abs() < 1e-9, "{t} {e}: {back}");
         }

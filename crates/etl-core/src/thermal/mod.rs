@@ -7,6 +7,10 @@
 //! wanted E_com, [`ThermalSurface::e_in_for_e_com`]), the streamed least-squares fit of it
 //! ([`ThermalFit`]) and the calibrated range with the extrapolation policy
 //! ([`ThermalCalibration`]).
+//!
+//! Argument order: every function here (and in the rest of etlcal, Rust and Python) takes
+//! the current before the temperature, `(e_in_ma, t_c)`; swapping two `f64` would be a
+//! silent bug, so there is one order. The equations keep the paper's notation E_T(T, E_in).
 
 pub mod fit;
 pub mod inverse;
@@ -27,9 +31,10 @@ pub const T_DOMAIN_C: [f64; 2] = [-40.0, 125.0];
 /// 4096 steps each way). The inverse searches E_in within it.
 pub const E_IN_DOMAIN_MA: [f64; 2] = [-292.84, 292.84];
 
-/// Checks that (T, E_in) are finite and inside [`T_DOMAIN_C`] x [`E_IN_DOMAIN_MA`].
+/// Checks that (E_in, T) are finite and inside [`E_IN_DOMAIN_MA`] x [`T_DOMAIN_C`]; the
+/// temperature is checked first, so a bad temperature is the error named when both are bad.
 #[inline]
-pub(crate) fn check_domain(t_c: f64, e_in_ma: f64) -> Result<()> {
+pub(crate) fn check_domain(e_in_ma: f64, t_c: f64) -> Result<()> {
     finite(t_c, "t_c")?;
     finite(e_in_ma, "e_in_ma")?;
     if !(T_DOMAIN_C[0]..=T_DOMAIN_C[1]).contains(&t_c) {

@@ -25,8 +25,8 @@ use crate::error::{all_finite, finite, Error, Result};
 /// use etl_core::thermal::ThermalSurface;
 /// let s = ThermalSurface::PAPER;
 /// // At the reference temperature of the paper's calibration E_T is about 0.
-/// assert!(s.e_t_ma(27.0, 120.0).unwrap().abs() < 0.5);
-/// let e_com = s.e_com_ma(33.0, 120.0).unwrap();
+/// assert!(s.e_t_ma(120.0, 27.0).unwrap().abs() < 0.5);
+/// let e_com = s.e_com_ma(120.0, 33.0).unwrap();
 /// let e_in = s.e_in_for_e_com(e_com, 33.0).unwrap();
 /// assert!((e_in - 120.0).abs() < 1e-9);
 /// ```
@@ -42,18 +42,18 @@ impl ThermalSurface {
         coefficients: [-348.1, 36.03, -0.414, -1.266, 0.02957, 1.176e-4, 0.01514, -5.276e-4, -4.632e-6, 2.761e-8],
     };
 
-    /// The surface without domain checks (callers check).
+    /// The surface at (E_in = `e`, T = `t`) without domain checks (callers check).
     #[inline]
-    pub(crate) fn eval_unchecked(&self, t: f64, e: f64) -> f64 {
+    pub(crate) fn eval_unchecked(&self, e: f64, t: f64) -> f64 {
         let c = &self.coefficients;
         c[0] + t * (c[1] + t * (c[3] + t * c[6]))
             + e * (c[2] + e * (c[5] + e * c[9]))
             + t * e * (c[4] + t * c[7] + e * c[8])
     }
 
-    /// dE_T / dE_in without domain checks.
+    /// dE_T / dE_in at (E_in = `e`, T = `t`) without domain checks.
     #[inline]
-    pub(crate) fn d_e_t_d_e_unchecked(&self, t: f64, e: f64) -> f64 {
+    pub(crate) fn d_e_t_d_e_unchecked(&self, e: f64, t: f64) -> f64 {
         let c = &self.coefficients;
         c[2] + e * (2.0 * c[5] + 3.0 * c[9] * e) + t * (c[4] + t * c[7] + 2.0 * c[8] * e)
     }
@@ -63,23 +63,24 @@ impl ThermalSurface {
         all_finite(&self.coefficients, "thermal coefficients")
     }
 
-    /// E_T(T, E_in) in mA (Eq. 7) at temperature `t_c` (degC) and driver current
-    /// `e_in_ma` (mA).
+    /// E_T(T, E_in) in mA (Eq. 7) at driver current `e_in_ma` (mA) and temperature `t_c`
+    /// (degC).
     ///
     /// Errors: a non-finite input or result ([`Error::NotFinite`]); an input outside the
     /// domain [`T_DOMAIN_C`](crate::thermal::T_DOMAIN_C) x [`E_IN_DOMAIN_MA`](crate::thermal::E_IN_DOMAIN_MA) ([`Error::OutOfRange`]).
     #[inline]
-    pub fn e_t_ma(&self, t_c: f64, e_in_ma: f64) -> Result<f64> {
-        check_domain(t_c, e_in_ma)?;
-        finite(self.eval_unchecked(t_c, e_in_ma), "E_T (check the thermal coefficients)")
+    pub fn e_t_ma(&self, e_in_ma: f64, t_c: f64) -> Result<f64> {
+        check_domain(e_in_ma, t_c)?;
+        finite(self.eval_unchecked(e_in_ma, t_c), "E_T (check the thermal coefficients)")
     }
 
-    /// E_com = E_in - E_T(T, E_in) in mA (Eq. 8): the current the camera model is indexed by.
+    /// E_com = E_in - E_T(T, E_in) in mA (Eq. 8) at driver current `e_in_ma` (mA) and
+    /// temperature `t_c` (degC): the current the camera model is indexed by.
     ///
     /// Errors as [`Self::e_t_ma`].
     #[inline]
-    pub fn e_com_ma(&self, t_c: f64, e_in_ma: f64) -> Result<f64> {
-        let e_t = self.e_t_ma(t_c, e_in_ma)?;
+    pub fn e_com_ma(&self, e_in_ma: f64, t_c: f64) -> Result<f64> {
+        let e_t = self.e_t_ma(e_in_ma, t_c)?;
         finite(e_in_ma - e_t, "E_com")
     }
 }
@@ -132,22 +133,23 @@ impl ThermalCalibration {
         Ok(())
     }
 
-    /// Whether (T, E_in) lies inside the calibrated ranges (false for NaN).
-    pub fn contains(&self, t_c: f64, e_in_ma: f64) -> bool {
+    /// Whether (`e_in_ma`, `t_c`) lies inside the calibrated ranges (false for NaN).
+    pub fn contains(&self, e_in_ma: f64, t_c: f64) -> bool {
         t_c >= self.t_range_c[0]
             && t_c <= self.t_range_c[1]
             && e_in_ma >= self.e_in_range_ma[0]
             && e_in_ma <= self.e_in_range_ma[1]
     }
 
-    /// E_T and E_com at (T, E_in), flagged when outside the calibrated ranges.
+    /// E_T and E_com at driver current `e_in_ma` (mA) and temperature `t_c` (degC), flagged
+    /// when outside the calibrated ranges.
     ///
     /// Errors as [`ThermalSurface::e_t_ma`], and [`Self::validate`]'s.
-    pub fn compensate(&self, t_c: f64, e_in_ma: f64) -> Result<Compensation> {
+    pub fn compensate(&self, e_in_ma: f64, t_c: f64) -> Result<Compensation> {
         self.validate()?;
-        let e_t_ma = self.surface.e_t_ma(t_c, e_in_ma)?;
+        let e_t_ma = self.surface.e_t_ma(e_in_ma, t_c)?;
         let e_com_ma = finite(e_in_ma - e_t_ma, "E_com")?;
-        Ok(Compensation { e_in_ma, e_t_ma, e_com_ma, extrapolated: !self.contains(t_c, e_in_ma) })
+        Ok(Compensation { e_in_ma, e_t_ma, e_com_ma, extrapolated: !self.contains(e_in_ma, t_c) })
     }
 
     /// The driver current that gives `e_com_ma` at `t_c` ([`ThermalSurface::e_in_for_e_com`]),
@@ -155,8 +157,8 @@ impl ThermalCalibration {
     pub fn e_in_for_e_com(&self, e_com_ma: f64, t_c: f64) -> Result<Compensation> {
         self.validate()?;
         let e_in_ma = self.surface.e_in_for_e_com(e_com_ma, t_c)?;
-        let e_t_ma = self.surface.e_t_ma(t_c, e_in_ma)?;
-        Ok(Compensation { e_in_ma, e_t_ma, e_com_ma, extrapolated: !self.contains(t_c, e_in_ma) })
+        let e_t_ma = self.surface.e_t_ma(e_in_ma, t_c)?;
+        Ok(Compensation { e_in_ma, e_t_ma, e_com_ma, extrapolated: !self.contains(e_in_ma, t_c) })
     }
 }
 
@@ -171,11 +173,11 @@ mod tests {
         let mut worst = 0.0f64;
         for i in 0..=240 {
             let e = i as f64;
-            worst = worst.max(s.e_t_ma(27.0, e).unwrap().abs());
+            worst = worst.max(s.e_t_ma(e, 27.0).unwrap().abs());
         }
         assert!(worst < 0.5, "max |E_T(27 C, E)| = {worst} mA");
         // And it grows with temperature: a few mA at 37 degC.
-        let hot = s.e_t_ma(37.0, 120.0).unwrap();
+        let hot = s.e_t_ma(120.0, 37.0).unwrap();
         assert!(hot.abs() > 1.0, "{hot}");
     }
 
@@ -188,23 +190,23 @@ mod tests {
                 - 4.632e-6 * t * e * e
                 + 2.761e-8 * e * e * e;
         let s = ThermalSurface::PAPER;
-        assert!((s.e_t_ma(t, e).unwrap() - expect).abs() < 1e-11);
-        assert!((s.e_com_ma(t, e).unwrap() - (e - expect)).abs() < 1e-11);
+        assert!((s.e_t_ma(e, t).unwrap() - expect).abs() < 1e-11);
+        assert!((s.e_com_ma(e, t).unwrap() - (e - expect)).abs() < 1e-11);
         let h = 1e-4;
-        let fd = (s.eval_unchecked(t, e + h) - s.eval_unchecked(t, e - h)) / (2.0 * h);
-        assert!((fd - s.d_e_t_d_e_unchecked(t, e)).abs() < 1e-8);
+        let fd = (s.eval_unchecked(e + h, t) - s.eval_unchecked(e - h, t)) / (2.0 * h);
+        assert!((fd - s.d_e_t_d_e_unchecked(e, t)).abs() < 1e-8);
     }
 
     #[test]
     fn bad_input_is_a_typed_error() {
         let s = ThermalSurface::PAPER;
-        assert_eq!(s.e_t_ma(f64::NAN, 100.0), Err(Error::NotFinite { what: "t_c" }));
-        assert_eq!(s.e_com_ma(30.0, f64::INFINITY), Err(Error::NotFinite { what: "e_in_ma" }));
+        assert_eq!(s.e_t_ma(100.0, f64::NAN), Err(Error::NotFinite { what: "t_c" }));
+        assert_eq!(s.e_com_ma(f64::INFINITY, 30.0), Err(Error::NotFinite { what: "e_in_ma" }));
         // 300 K passed as degC, 0.1 A passed as 100 000 uA...
-        assert!(matches!(s.e_t_ma(300.0, 100.0), Err(Error::OutOfRange { what: "t_c", .. })));
-        assert!(matches!(s.e_t_ma(30.0, 1e5), Err(Error::OutOfRange { what: "e_in_ma", .. })));
+        assert!(matches!(s.e_t_ma(100.0, 300.0), Err(Error::OutOfRange { what: "t_c", .. })));
+        assert!(matches!(s.e_t_ma(1e5, 30.0), Err(Error::OutOfRange { what: "e_in_ma", .. })));
         let bad = ThermalSurface { coefficients: [f64::NAN; 10] };
-        assert!(matches!(bad.e_t_ma(30.0, 100.0), Err(Error::NotFinite { .. })));
+        assert!(matches!(bad.e_t_ma(100.0, 30.0), Err(Error::NotFinite { .. })));
     }
 
     /// The policy: outside the calibrated range, a flagged result; outside the domain, an
@@ -212,17 +214,17 @@ mod tests {
     #[test]
     fn extrapolation_is_flagged() {
         let cal = ThermalCalibration::PAPER;
-        let inside = cal.compensate(30.0, 100.0).unwrap();
+        let inside = cal.compensate(100.0, 30.0).unwrap();
         assert!(!inside.extrapolated);
-        assert!((inside.e_com_ma - ThermalSurface::PAPER.e_com_ma(30.0, 100.0).unwrap()).abs() == 0.0);
-        assert!(cal.compensate(45.0, 100.0).unwrap().extrapolated);
-        assert!(cal.compensate(30.0, 260.0).unwrap().extrapolated);
-        assert!(cal.compensate(30.0, 10.0).unwrap().extrapolated);
-        assert!(matches!(cal.compensate(30.0, 400.0), Err(Error::OutOfRange { .. })));
+        assert!((inside.e_com_ma - ThermalSurface::PAPER.e_com_ma(100.0, 30.0).unwrap()).abs() == 0.0);
+        assert!(cal.compensate(100.0, 45.0).unwrap().extrapolated);
+        assert!(cal.compensate(260.0, 30.0).unwrap().extrapolated);
+        assert!(cal.compensate(10.0, 30.0).unwrap().extrapolated);
+        assert!(matches!(cal.compensate(400.0, 30.0), Err(Error::OutOfRange { .. })));
         let back = cal.e_in_for_e_com(inside.e_com_ma, 30.0).unwrap();
         assert!((back.e_in_ma - 100.0).abs() < 1e-9 && !back.extrapolated);
         let swapped = ThermalCalibration { t_range_c: [37.0, 27.0], ..cal };
-        assert!(matches!(swapped.compensate(30.0, 100.0), Err(Error::InvalidArgument { .. })));
-        assert!(!cal.contains(f64::NAN, 100.0));
+        assert!(matches!(swapped.compensate(100.0, 30.0), Err(Error::InvalidArgument { .. })));
+        assert!(!cal.contains(100.0, f64::NAN));
     }
 }

@@ -167,7 +167,7 @@ impl Model {
 
     pub fn state(&self) -> LensState {
         let e_in_ma = self.e_in_ma();
-        let e_t_ma = self.surface.e_t_ma(self.temperature_c, e_in_ma).unwrap_or(f64::NAN);
+        let e_t_ma = self.surface.e_t_ma(e_in_ma, self.temperature_c).unwrap_or(f64::NAN);
         let e_com_ma = e_in_ma - e_t_ma;
         let f_liq_mm = self.physics.f_liq_mm(e_com_ma).unwrap_or(f64::NAN);
         let f_com_mm = self.physics.f_com_mm(e_com_ma).unwrap_or(f64::NAN);
@@ -250,7 +250,7 @@ mod tests {
         m.apply_code(crate::codec::scaling::current_code(150.0, 292.84));
         m.temperature_c = 37.0;
         let s = m.state();
-        let e_t = ThermalSurface::PAPER.e_t_ma(37.0, s.e_in_ma).unwrap();
+        let e_t = ThermalSurface::PAPER.e_t_ma(s.e_in_ma, 37.0).unwrap();
         assert!((s.e_com_ma - (s.e_in_ma - e_t)).abs() < 1e-12);
         assert!((s.f_liq_mm - LensPhysics::paper().f_liq_mm(s.e_com_ma).unwrap()).abs() < 1e-12);
         assert!((s.f_com_mm - LensPhysics::paper().f_com_mm(s.e_com_ma).unwrap()).abs() < 1e-12);

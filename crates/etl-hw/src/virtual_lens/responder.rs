@@ -200,7 +200,7 @@ fn fp_range(m: &Model, fw: FirmwareType) -> (i16, i16) {
     let lo = current_ma(m.lower_limit_code, mm).max(0.0);
     let hi = current_ma(m.upper_limit_code, mm);
     let p = |e: f64| {
-        let e_t = m.surface.e_t_ma(m.temperature_c, e).unwrap_or(0.0);
+        let e_t = m.surface.e_t_ma(e, m.temperature_c).unwrap_or(0.0);
         fw.fp_code(m.power_dpt_at(e - e_t))
     };
     (p(lo), p(hi))

@@ -83,8 +83,9 @@ class ThermalCalibration:
     def __new__(
         cls,
         surface: ThermalSurface,
-        t_range_c: Tuple[float, float],
+        *,
         e_in_range_ma: Tuple[float, float],
+        t_range_c: Tuple[float, float],
         rms_ma: float = 0.0,
     ) -> ThermalCalibration: ...
     @staticmethod

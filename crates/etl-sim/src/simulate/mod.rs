@@ -345,7 +345,7 @@ mod tests {
         let s = paper_rig(&NoiseModel::NONE, 0);
         assert_eq!(s.observations.views.iter().map(|v| v.points.len()).sum::<usize>(), 2311);
         for v in &s.observations.views {
-            let e = ThermalSurface::PAPER.e_com_ma(v.temperature_c, v.e_in_ma).unwrap();
+            let e = ThermalSurface::PAPER.e_com_ma(v.e_in_ma, v.temperature_c).unwrap();
             assert!((e - v.e_com_ma.unwrap()).abs() < 1e-8);
         }
         assert_eq!(focused_z_mm(225.0), 2.0);
