@@ -282,3 +282,34 @@ fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result
     let a = out.pop().unwrap_or_default();
     Ok((a, b))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demo_without_images_recovers_the_paper_rig_and_tabulates_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let options = DemoOptions { seed: 1, stage_noise_um: 10.0, images: false };
+        let d = run_demo(&options, dir.path(), &etl_core::progress::NoProgress).unwrap();
+        // Nothing written without images: the caller saves.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        assert!(d.dataset.is_none());
+        assert_eq!(d.views_detected, 15);
+        assert_eq!(d.observations.offstate_views.len(), 10);
+        // The acceptance figures of the paper rig (as `etlcal demo` checks them).
+        assert!(d.paper_validation.fx_curve_max_rel_err < 0.01, "{:?}", d.paper_validation);
+        assert!(d.eiv_validation.fx_curve_max_rel_err < 0.005, "{:?}", d.eiv_validation);
+        assert_eq!(d.paper_validation.pnp_displacement_err_um.len(), VALIDATION_E_MA.len());
+        // One table row per parameter, its truth column the true model's parameter.
+        let truth = to_params(&d.sim.truth);
+        let rows: Vec<&str> =
+            d.summary_md.lines().filter(|l| PARAM_NAMES.iter().any(|n| l.starts_with(&format!("| {n} |")))).collect();
+        assert_eq!(rows.len(), 25);
+        for (row, (name, t)) in rows.iter().zip(PARAM_NAMES.iter().zip(truth)) {
+            let cell: f64 = row.split('|').nth(2).unwrap().trim().parse().unwrap();
+            assert!((cell - t).abs() <= 1e-6 * t.abs(), "{name}: {cell} vs {t}");
+        }
+        assert!(d.summary_md.contains(" simulated, the paper's noise model"));
+    }
+}
