@@ -7,6 +7,7 @@
 //! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports.
 
 pub mod dataset;
+pub mod measure;
 mod view_focal;
 
 pub use view_focal::view_focal;
