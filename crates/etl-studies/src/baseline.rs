@@ -164,7 +164,37 @@ impl Baseline {
             .collect();
         let ((ratio, ratio_se), (ratio_eiv, ratio_eiv_se)) =
             (self.ratio_at_highest_with_se(false), self.ratio_at_highest_with_se(true));
-        let md = format!(
+        let md = self.markdown(&setting_rows, &pnp_rows, [ratio, ratio_se, ratio_eiv, ratio_eiv_se]);
+        let j = json!({
+            "trials": self.trials.len(),
+            "failures": self.failures,
+            "settings": setting_rows.iter().map(|r| json!({"e_com_ma": r.0, "tilt_limit_deg": r.1,
+                "zhang_fx_rel_std": r.2, "zhang_fx_max_abs_rel_err": r.3})).collect::<Vec<_>>(),
+            "fx_curve": es.iter().enumerate().map(|(i, e)| json!({"e_com_ma": e,
+                "paper_ba_mean_abs_rel_err": curves[0][i], "eiv_ba_mean_abs_rel_err": curves[1][i],
+                "baseline_mean_abs_rel_err": curves[2][i]})).collect::<Vec<_>>(),
+            "pnp": PNP_E_MA.iter().enumerate().map(|(k, e)| json!({"e_com_ma": e,
+                "paper_ba_um": self.pnp(0, k).0, "paper_ba_std_um": self.pnp(0, k).1,
+                "eiv_ba_um": self.pnp(1, k).0, "eiv_ba_std_um": self.pnp(1, k).1,
+                "baseline_um": self.pnp(2, k).0, "baseline_std_um": self.pnp(2, k).1})).collect::<Vec<_>>(),
+            "baseline_over_proposed_at_250ma": ratio,
+            "baseline_over_eiv_at_250ma": ratio_eiv,
+            "baseline_over_proposed_at_250ma_se": ratio_se,
+            "baseline_over_eiv_at_250ma_se": ratio_eiv_se,
+            "default_estimator": "eiv",
+            "checks": {"proposed_3x_better_at_250ma": ratio >= 3.0, "eiv_3x_better_at_250ma": ratio_eiv >= 3.0,
+                "default_3x_better_at_250ma": ratio_eiv >= 3.0},
+        });
+        let fig = self.figure(&es, &curves, &settings);
+        StudyOutput { name: "baseline".into(), json: j, markdown: md, figures: vec![fig] }
+    }
+
+    /// The markdown summary: the settings' Zhang errors (rows `(E, tilt limit, rel. std,
+    /// max |rel. err|)`), the curves' errors, the PnP table and the ratios at 250 mA
+    /// (`[paper, its se, eiv, its se]`).
+    fn markdown(&self, setting_rows: &[(f64, f64, f64, f64)], pnp_rows: &[Vec<String>], ratios: [f64; 4]) -> String {
+        let [ratio, ratio_se, ratio_eiv, ratio_eiv_se] = ratios;
+        format!(
             "# Fig. 12: the baseline (per-setting Zhang + cubic) against the proposed method\n\n\
              {} trials ({} failed), the paper rig with the paper's noise model; the baseline's 7 settings of 15 views, \
              tilted as far as the depth of field allows.\n\n## (a) Focal length\n\n{}\n{}\n## (b) PnP error of a 2 mm move \
@@ -201,33 +231,19 @@ impl Baseline {
                     })
                     .collect::<Vec<_>>()
             ),
-            md_table(&["E (mA)", METHODS[0], METHODS[1], METHODS[2]], &pnp_rows),
+            md_table(&["E (mA)", METHODS[0], METHODS[1], METHODS[2]], pnp_rows),
             ratio,
             ratio_se,
             ratio_eiv,
             ratio_eiv_se
-        );
-        let j = json!({
-            "trials": self.trials.len(),
-            "failures": self.failures,
-            "settings": setting_rows.iter().map(|r| json!({"e_com_ma": r.0, "tilt_limit_deg": r.1,
-                "zhang_fx_rel_std": r.2, "zhang_fx_max_abs_rel_err": r.3})).collect::<Vec<_>>(),
-            "fx_curve": es.iter().enumerate().map(|(i, e)| json!({"e_com_ma": e,
-                "paper_ba_mean_abs_rel_err": curves[0][i], "eiv_ba_mean_abs_rel_err": curves[1][i],
-                "baseline_mean_abs_rel_err": curves[2][i]})).collect::<Vec<_>>(),
-            "pnp": PNP_E_MA.iter().enumerate().map(|(k, e)| json!({"e_com_ma": e,
-                "paper_ba_um": self.pnp(0, k).0, "paper_ba_std_um": self.pnp(0, k).1,
-                "eiv_ba_um": self.pnp(1, k).0, "eiv_ba_std_um": self.pnp(1, k).1,
-                "baseline_um": self.pnp(2, k).0, "baseline_std_um": self.pnp(2, k).1})).collect::<Vec<_>>(),
-            "baseline_over_proposed_at_250ma": ratio,
-            "baseline_over_eiv_at_250ma": ratio_eiv,
-            "baseline_over_proposed_at_250ma_se": ratio_se,
-            "baseline_over_eiv_at_250ma_se": ratio_eiv_se,
-            "default_estimator": "eiv",
-            "checks": {"proposed_3x_better_at_250ma": ratio >= 3.0, "eiv_3x_better_at_250ma": ratio_eiv >= 3.0,
-                "default_3x_better_at_250ma": ratio_eiv >= 3.0},
-        });
-        let fig = Figure {
+        )
+    }
+
+    /// Fig. 12: (a) the mean |relative error| of fx(E) per method at the currents `es`
+    /// (`curves[m]`) with each setting's Zhang fx (`settings`: `(E, rel. err)`), (b) the PnP
+    /// error of a 2 mm move per method.
+    fn figure(&self, es: &[f64], curves: &[Vec<f64>], settings: &[(f64, f64)]) -> Figure {
+        Figure {
             name: "baseline".into(),
             grid: (1, 2),
             panels: vec![
@@ -267,7 +283,6 @@ impl Baseline {
                         .collect(),
                 },
             ],
-        };
-        StudyOutput { name: "baseline".into(), json: j, markdown: md, figures: vec![fig] }
+        }
     }
 }

@@ -1,15 +1,29 @@
-//! The demo's validation (`etlcal demo`): errors users feel of a calibration of the
-//! simulated paper rig against its truth, on fresh views not used in the calibration.
+//! The demo (`etlcal demo`): the main job on the simulated paper rig ([`run_demo`]) and its
+//! validation ([`validate`]): errors users feel of a calibration of the simulated paper rig
+//! against its truth, on fresh views not used in the calibration.
 
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::PARAM_NAMES;
+use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
 use etl_core::pnp::{displacement_mm, solve_pnp};
+use etl_core::progress::Progress;
+use etl_core::thermal::ThermalCalibration;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
-use etl_calib::pipeline::CalibrationResult;
+use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
+use etl_calib::pipeline::{a0_from_offstate, calibrate, CalibrateOptions, CalibrationResult};
+use etl_formats::dataset::Dataset;
+use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
-use etl_sim::simulate::{focused_z_mm, observe_board};
+use etl_sim::simulate::images::{render_rig, ImageOptions};
+use etl_sim::simulate::{focused_z_mm, noise_from, observe_board, paper_rig, Simulation};
 
 use crate::common::curve_errors;
 
@@ -29,6 +43,159 @@ pub struct Validation {
     pub rms_reprojection_px: f64,
     /// PnP error of a 2 mm stage move, per current.
     pub pnp_displacement_err_um: Vec<serde_json::Value>,
+}
+
+/// What the demo does: the simulation's seed and stage noise, and whether the corners come
+/// from rendered images.
+#[derive(Debug, Clone, Copy)]
+pub struct DemoOptions {
+    /// Random seed of the simulation and of the validation.
+    pub seed: u64,
+    /// Stage-position noise per view, um (the paper's: 10).
+    pub stage_noise_um: f64,
+    /// Render every view and detect its corners (else the simulated corners, with the
+    /// paper's pixel noise, go straight to the calibration, as in the paper's simulations).
+    pub images: bool,
+}
+
+/// The demo's outcome: the data, both calibrations, their validations and the summary.
+pub struct Demo {
+    /// The simulated rig (truth, A0, simulated observations).
+    pub sim: Simulation,
+    /// The rendered views (with `images`), to be saved as `dataset.json` in the image
+    /// directory.
+    pub dataset: Option<Dataset>,
+    /// The observations calibrated from (detected with `images`, else simulated).
+    pub observations: Observations,
+    /// Views whose board was found (all views without `images`).
+    pub views_detected: usize,
+    /// The paper's estimator (Eq. 24).
+    pub paper: CalibrationResult,
+    /// Errors-in-variables.
+    pub eiv: CalibrationResult,
+    /// Validation of `paper` on fresh views.
+    pub paper_validation: Validation,
+    /// Validation of `eiv` on the same fresh views.
+    pub eiv_validation: Validation,
+    /// Wall time of the demo, s.
+    pub seconds: f64,
+    /// The markdown summary: errors users feel, then every parameter against the truth.
+    pub summary_md: String,
+}
+
+/// The main job on the simulated paper rig: simulates its 15 views and 10 lens-off views
+/// with the paper's noise model (current noise 0.4 mA, pixel noise 0.2 px); with `images`,
+/// renders every view into `image_dir` (`views/`, `offstate/`) and detects the corners;
+/// takes A0 from the lens-off views by Zhang's method (section 4.2); calibrates with the
+/// paper's estimator and with errors-in-variables; validates both on fresh views.
+///
+/// Writes only the rendered images (into `image_dir`, which must exist); the caller saves
+/// the rest of [`Demo`].
+pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress) -> Result<Demo> {
+    let start = Instant::now();
+    let noise = noise_from(options.stage_noise_um, 0.4, 0.2)?;
+    let sim = paper_rig(&noise, options.seed);
+    let (dataset, observations, views_detected) = if options.images {
+        // Render, record, detect: the user's chain from images.
+        let dataset = render_rig(&sim, image_dir, &ImageOptions::default(), options.seed, progress)?;
+        let dataset_path = image_dir.join("dataset.json");
+        let (obs, summary) = observations_from_dataset(&dataset, &dataset_path, &default_detector(), progress)?;
+        (Some(dataset), obs, summary.views_detected)
+    } else {
+        (None, sim.observations.clone(), sim.observations.views.len())
+    };
+    let thermal = ThermalCalibration::PAPER;
+    let a0 = a0_from_offstate(&observations)?.a0();
+    let paper_options = CalibrateOptions { estimator: Estimator::Paper, ..Default::default() };
+    let paper = calibrate(&observations, &a0, &thermal, &paper_options)?;
+    let eiv_est = Estimator::Eiv { sigma_z_mm: noise.z_mm.max(1e-4), sigma_e_ma: 0.4, sigma_px: None };
+    let eiv = calibrate(&observations, &a0, &thermal, &CalibrateOptions { estimator: eiv_est, ..Default::default() })?;
+    let paper_validation = validate(&paper, &sim.truth, options.seed, options.images)?;
+    let eiv_validation = validate(&eiv, &sim.truth, options.seed, options.images)?;
+    let mut demo = Demo {
+        sim,
+        dataset,
+        observations,
+        views_detected,
+        paper,
+        eiv,
+        paper_validation,
+        eiv_validation,
+        seconds: 0.0,
+        summary_md: String::new(),
+    };
+    demo.seconds = start.elapsed().as_secs_f64();
+    demo.summary_md = summary_markdown(&demo, options);
+    Ok(demo)
+}
+
+/// The demo's summary: a heading, the figures of [`figures_table`] and the parameters of
+/// [`parameter_table`].
+pub fn summary_markdown(demo: &Demo, options: &DemoOptions) -> String {
+    let figures = figures_table(&demo.paper_validation, &demo.eiv_validation);
+    let table = parameter_table(&demo.sim.truth, &demo.paper, &demo.eiv);
+    format!(
+        "# etlcal demo (seed {}, stage noise {} um)\n\nThe paper rig (NOTES.md), {} views, {} points{}, the paper's noise model; \
+         A0 by Zhang's method from {} lens-off views.\n\n## Errors users feel (validated on fresh views)\n\n{figures}\n## Every parameter\n\n{table}\n({:.2} s)\n",
+        options.seed,
+        options.stage_noise_um,
+        demo.views_detected,
+        demo.observations.views.iter().map(|v| v.points.len()).sum::<usize>(),
+        if options.images { " detected in rendered images" } else { " simulated" },
+        demo.observations.offstate_views.len(),
+        demo.seconds,
+    )
+}
+
+/// The markdown table of every parameter: truth, both estimates and their standard
+/// deviations (square roots of the covariance's diagonal).
+pub fn parameter_table(truth: &CameraModel, paper: &CalibrationResult, eiv: &CalibrationResult) -> String {
+    let truth = to_params(truth);
+    let (xp, xe) = (to_params(&paper.report.model), to_params(&eiv.report.model));
+    let mut table = String::new();
+    let _ = writeln!(table, "| parameter | truth | paper BA | std | eiv BA | std |");
+    let _ = writeln!(table, "|---|---|---|---|---|---|");
+    let rows = PARAM_NAMES.iter().zip(truth).zip(xp).zip(xe).zip(paper.report.std.iter().zip(&eiv.report.std));
+    for ((((name, t), p), e), (sp, se)) in rows {
+        let _ = writeln!(table, "| {name} | {t:.6e} | {p:.6e} | {sp:.1e} | {e:.6e} | {se:.1e} |");
+    }
+    table
+}
+
+/// The markdown table of the errors users feel, paper's estimator against
+/// errors-in-variables.
+pub fn figures_table(vp: &Validation, ve: &Validation) -> String {
+    let mut figures = String::new();
+    let _ = writeln!(figures, "| figure | paper BA | eiv BA |\n|---|---|---|");
+    let _ = writeln!(
+        figures,
+        "| max rel. error of fx(E) | {:.3} % | {:.3} % |",
+        100.0 * vp.fx_curve_max_rel_err,
+        100.0 * ve.fx_curve_max_rel_err
+    );
+    let _ = writeln!(
+        figures,
+        "| max rel. error of fy(E) | {:.3} % | {:.3} % |",
+        100.0 * vp.fy_curve_max_rel_err,
+        100.0 * ve.fy_curve_max_rel_err
+    );
+    let _ = writeln!(
+        figures,
+        "| principal point error | {:.2} px | {:.2} px |",
+        vp.principal_point_err_px, ve.principal_point_err_px
+    );
+    let _ =
+        writeln!(figures, "| RMS reprojection | {:.3} px | {:.3} px |", vp.rms_reprojection_px, ve.rms_reprojection_px);
+    for (a, b) in vp.pnp_displacement_err_um.iter().zip(&ve.pnp_displacement_err_um) {
+        let _ = writeln!(
+            figures,
+            "| 2 mm move at {} mA | {:.1} um | {:.1} um |",
+            a["e_com_ma"],
+            a["err_um"].as_f64().unwrap_or(f64::NAN),
+            b["err_um"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
+    figures
 }
 
 /// Validates `result` against `truth` with fresh PnP measurements (same seed for every
@@ -115,4 +282,35 @@ fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result
     let b = out.pop().unwrap_or_default();
     let a = out.pop().unwrap_or_default();
     Ok((a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn demo_without_images_recovers_the_paper_rig_and_tabulates_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let options = DemoOptions { seed: 1, stage_noise_um: 10.0, images: false };
+        let d = run_demo(&options, dir.path(), &etl_core::progress::NoProgress).unwrap();
+        // Nothing written without images: the caller saves.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        assert!(d.dataset.is_none());
+        assert_eq!(d.views_detected, 15);
+        assert_eq!(d.observations.offstate_views.len(), 10);
+        // The acceptance figures of the paper rig (as `etlcal demo` checks them).
+        assert!(d.paper_validation.fx_curve_max_rel_err < 0.01, "{:?}", d.paper_validation);
+        assert!(d.eiv_validation.fx_curve_max_rel_err < 0.005, "{:?}", d.eiv_validation);
+        assert_eq!(d.paper_validation.pnp_displacement_err_um.len(), VALIDATION_E_MA.len());
+        // One table row per parameter, its truth column the true model's parameter.
+        let truth = to_params(&d.sim.truth);
+        let rows: Vec<&str> =
+            d.summary_md.lines().filter(|l| PARAM_NAMES.iter().any(|n| l.starts_with(&format!("| {n} |")))).collect();
+        assert_eq!(rows.len(), 25);
+        for (row, (name, t)) in rows.iter().zip(PARAM_NAMES.iter().zip(truth)) {
+            let cell: f64 = row.split('|').nth(2).unwrap().trim().parse().unwrap();
+            assert!((cell - t).abs() <= 1e-6 * t.abs(), "{name}: {cell} vs {t}");
+        }
+        assert!(d.summary_md.contains(" simulated, the paper's noise model"));
+    }
 }

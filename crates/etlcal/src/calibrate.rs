@@ -61,13 +61,14 @@ pub struct Args {
     /// baseline.
     #[arg(long, value_enum, default_value = "proposed")]
     pub method: MethodArg,
-    /// Also write the observations detected in a dataset's images here.
+    /// Also write the observations detected in a dataset's images here (its directory is
+    /// created if missing).
     #[arg(long, value_name = "FILE", requires = "dataset")]
     pub observations_out: Option<PathBuf>,
     /// Lens-off intrinsics (etlcal.a0/1); default: Zhang's method on the lens-off views.
     #[arg(long, value_name = "FILE")]
     pub a0: Option<PathBuf>,
-    /// Where to write etlcal.calibration/1 (its directory must exist).
+    /// Where to write etlcal.calibration/1 (its directory is created if missing).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
     /// Bundle-adjustment estimator [default: eiv]: under the paper's noise model it reaches
@@ -91,8 +92,8 @@ pub struct Args {
     /// Thermal surface (etlcal.thermal/1) for views without e_com_ma (default: the paper's).
     #[arg(long, value_name = "FILE")]
     pub thermal: Option<PathBuf>,
-    /// Print the calibration object written, as one JSON object.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -136,15 +137,6 @@ pub fn run(args: Args) -> Result<()> {
             ],
         )?;
     }
-    for out in std::iter::once(&args.out).chain(&args.observations_out) {
-        let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        if !parent.is_dir() {
-            return Err(Error::Io {
-                path: out.clone(),
-                source: std::io::Error::new(std::io::ErrorKind::NotFound, "the output directory does not exist"),
-            });
-        }
-    }
     let obs = load_input(args.observations.as_deref(), args.dataset.as_deref(), !args.json)?;
     let thermal = match &args.thermal {
         Some(p) => ThermalFile::load(p)?.calibration(),
@@ -154,6 +146,9 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::PerSetting => etl_calib::baseline::per_setting(&obs, &thermal)?.calibration,
         MethodArg::Proposed => calibrate_proposed(&args, &obs, &thermal)?,
     };
+    for out in std::iter::once(&args.out).chain(&args.observations_out) {
+        crate::output::create_parent(out)?;
+    }
     if let Some(p) = &args.observations_out {
         obs.save(p)?;
     }

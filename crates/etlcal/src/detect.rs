@@ -5,12 +5,12 @@
 //! ...]}]}` (`corners_px` empty when not found). Without: one line per image, then one line
 //! `i j u v` per corner.
 //!
-//! Exit status: 0 when every image could be read, whether or not its board was found (a
-//! board not found is a result, reported per image); 1 when any file is missing, unreadable
-//! or not a decodable image (the output still lists every image, the failed ones with their
-//! error, and stderr names the first failure).
+//! Exit status: 0 when the board was found in every image; 1 when any image failed (file
+//! missing, unreadable or not a decodable image, or board not found): the output still lists
+//! every image, the failed ones with their error, and stderr has one line per failed image.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
 use serde_json::json;
 
@@ -27,8 +27,8 @@ pub struct Args {
     /// Inner corners, columns x rows (e.g. 14x12).
     #[arg(long, value_parser = parse_pattern)]
     pub pattern: Pattern,
-    /// Print one JSON object.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -36,10 +36,11 @@ fn parse_pattern(s: &str) -> std::result::Result<Pattern, String> {
     s.parse::<Pattern>().map_err(|e| e.to_string())
 }
 
-/// Runs `etlcal detect`.
-pub fn run(args: Args) -> Result<()> {
+/// Runs `etlcal detect`: `FAILURE` when any image failed (after listing every image and
+/// one stderr line per failed one), `SUCCESS` otherwise.
+pub fn run(args: Args) -> Result<ExitCode> {
     let results = detect_many(&args.images, args.pattern);
-    let mut first_unreadable: Option<Error> = None;
+    let mut failures = Vec::new();
     let mut entries = Vec::with_capacity(results.len());
     for (path, r) in args.images.iter().zip(results) {
         match r {
@@ -59,17 +60,23 @@ pub fn run(args: Args) -> Result<()> {
                 } else {
                     outln!("{}: not found: {e}", path.display());
                 }
-                if matches!(e, Error::Io { .. } | Error::Image { .. }) && first_unreadable.is_none() {
-                    first_unreadable = Some(e);
-                }
+                failures.push(failure_line(path, &e));
             }
         }
     }
     if args.json {
         print_json(&json!({"images": entries}));
     }
-    match first_unreadable {
-        Some(e) => Err(e),
-        None => Ok(()),
+    for line in &failures {
+        eprintln!("{line}");
+    }
+    Ok(if failures.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+}
+
+/// The stderr line of a failed image, naming it once (file errors already carry the path).
+fn failure_line(path: &Path, e: &Error) -> String {
+    match e {
+        Error::Io { .. } | Error::Image { .. } => format!("etlcal: error: {e}"),
+        _ => format!("etlcal: error: {}: {e}", path.display()),
     }
 }

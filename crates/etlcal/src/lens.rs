@@ -1,5 +1,6 @@
 //! `etlcal lens (--port PATH | --virtual) info|set-current MA|get-current|temperature|hold
-//! --e-com MA [--thermal FILE]` (add `--json` for one JSON object on stdout).
+//! --e-com MA [--thermal FILE]` (add `--json` for one JSON object on stdout). `--port`,
+//! `--virtual` and `--json` go before or after the subcommand.
 //!
 //! Safety policy of `set-current`: a request beyond the driver's software limits is
 //! **clamped** to the nearest limit, sent so, and reported with a warning on stderr
@@ -37,23 +38,25 @@ pub struct Args {
     /// Reply timeout, ms.
     #[arg(long, default_value_t = 500, value_name = "MS")]
     pub timeout_ms: u64,
-    /// Print one JSON object on stdout.
-    #[arg(long, global = true)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
     /// What to do.
     #[command(subcommand)]
     pub command: LensCommand,
 }
 
-/// A real port or the virtual lens.
+/// A real port or the virtual lens: exactly one, before or after the subcommand
+/// (`etlcal lens --virtual info` or `etlcal lens info --virtual`).
+// Global arguments cannot be required nor grouped by clap, so `target_path` checks "exactly
+// one".
 #[derive(clap::Args, Debug)]
-#[group(required = true, multiple = false)]
 pub struct Target {
     /// Serial port of the Optotune Lens Driver 4 (e.g. /dev/ttyACM0).
-    #[arg(long, value_name = "PATH")]
+    #[arg(long, value_name = "PATH", global = true)]
     pub port: Option<PathBuf>,
     /// An in-process virtual lens (paper physics and thermal surface).
-    #[arg(long = "virtual")]
+    #[arg(long = "virtual", global = true)]
     pub virtual_lens: bool,
 }
 
@@ -103,23 +106,7 @@ pub struct HoldArgs {
 
 /// Runs `etlcal lens`.
 pub fn run(args: Args) -> Result<()> {
-    let (device, path) = match (&args.target.port, args.target.virtual_lens) {
-        (Some(p), _) => (None, p.clone()),
-        (None, _) => {
-            let time_scale = match &args.command {
-                LensCommand::Hold(h) => h.time_scale,
-                _ => 1.0,
-            };
-            let config = VirtualLensConfig {
-                time_scale,
-                thermal: ThermalModel { ambient_c: 27.0, ..Default::default() },
-                ..Default::default()
-            };
-            let d = VirtualLens::spawn(config).map_err(Error::lens)?;
-            let p = d.path().to_owned();
-            (Some(d), p)
-        }
-    };
+    let (device, path) = open_target(&args)?;
     let options = OpenOptions {
         handshake: args.handshake,
         timeout: Duration::from_millis(args.timeout_ms),
@@ -197,6 +184,30 @@ pub fn run(args: Args) -> Result<()> {
         LensCommand::Hold(h) => run_hold(&client, device.as_ref(), h, args.json)?,
     }
     Ok(())
+}
+
+/// The lens to talk to: the `--port` path, or a fresh virtual lens and its pseudo-terminal.
+fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
+    let target = match (&args.target.port, args.target.virtual_lens) {
+        (Some(_), true) => return Err(Error::InvalidInput("pass --port PATH or --virtual, not both".into())),
+        (None, false) => return Err(Error::InvalidInput("pass --port PATH (a Lens Driver 4) or --virtual".into())),
+        (Some(p), false) => (None, p.clone()),
+        (None, true) => {
+            let time_scale = match &args.command {
+                LensCommand::Hold(h) => h.time_scale,
+                _ => 1.0,
+            };
+            let config = VirtualLensConfig {
+                time_scale,
+                thermal: ThermalModel { ambient_c: 27.0, ..Default::default() },
+                ..Default::default()
+            };
+            let d = VirtualLens::spawn(config).map_err(Error::lens)?;
+            let p = d.path().to_owned();
+            (Some(d), p)
+        }
+    };
+    Ok(target)
 }
 
 fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json_out: bool) -> Result<()> {

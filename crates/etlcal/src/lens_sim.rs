@@ -27,8 +27,8 @@ pub struct Args {
     /// Lower software current limit, mA.
     #[arg(long, default_value_t = -292.84, value_name = "MA")]
     pub lower_limit: f64,
-    /// Print one JSON object on stdout.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 

@@ -1,10 +1,19 @@
 //! The `etlcal` command line. Each verb lives in its own file with an `Args` struct (clap)
-//! and a `run(args) -> Result<()>`; `main` dispatches, prints a failure as one line on
-//! stderr and exits with status 1. `--json` output is one JSON object on stdout.
+//! and a `run(args) -> Result<()>`; `main` dispatches and prints a failure as one line on
+//! stderr. `--json` (before or after the verb) makes the output one JSON object on stdout.
+//!
+//! Exit status: 0 on success (`--help` and `--version` included, printed on stdout); 1 when
+//! the verb failed (bad input value, unreadable file, device error, ...; `detect` also when
+//! any image failed); 2 when the command line does not parse (clap's usage errors, as clap
+//! and the BSD `EX_USAGE` convention have it), rendered as one line
+//! `etlcal: error: <what>; see etlcal VERB --help` instead of clap's usage block.
+use std::process::ExitCode;
+
 use clap::{Parser, Subcommand};
 
 use etl_formats::Result;
 
+mod output;
 mod progress;
 
 /// `println!` for everything the verbs print on stdout (human-readable lines and
@@ -35,6 +44,9 @@ pub mod zhang;
 #[derive(Parser)]
 #[command(name = "etlcal", version, about, propagate_version = true)]
 pub struct Cli {
+    /// Print one JSON object on stdout (accepted before or after the verb).
+    #[arg(long, global = true)]
+    json: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -82,29 +94,71 @@ pub fn print_json(value: &serde_json::Value) {
     outln!("{value}");
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(cli: Cli) -> Result<ExitCode> {
+    let json = cli.json;
+    let done = |r: Result<()>| r.map(|()| ExitCode::SUCCESS);
     match cli.command {
-        Command::Model(a) => model::run(a),
-        Command::Thermal(a) => thermal::run(a),
-        Command::Demo(a) => demo::run(a),
-        Command::Simulate(a) => simulate::run(a),
-        Command::Calibrate(a) => calibrate::run(a),
-        Command::Report(a) => report::run(a),
-        Command::Zhang(a) => zhang::run(a),
-        Command::Measure(a) => measure::run(a),
-        Command::Study(a) => study::run(a),
-        Command::Sharpness(a) => sharpness::run(a),
-        Command::Detect(a) => detect::run(a),
-        Command::Render(a) => render::run(a),
-        Command::Lens(a) => lens::run(a),
-        Command::LensSim(a) => lens_sim::run(a),
+        Command::Model(a) => done(model::run(model::Args { json, ..a })),
+        Command::Thermal(a) => done(thermal::run(a, json)),
+        Command::Demo(a) => done(demo::run(demo::Args { json, ..a })),
+        Command::Simulate(a) => done(simulate::run(simulate::Args { json, ..a })),
+        Command::Calibrate(a) => done(calibrate::run(calibrate::Args { json, ..a })),
+        Command::Report(a) => done(report::run(report::Args { json, ..a })),
+        Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
+        Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
+        Command::Study(a) => done(study::run(study::Args { json, ..a })),
+        Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
+        Command::Detect(a) => detect::run(detect::Args { json, ..a }),
+        Command::Render(a) => done(render::run(render::Args { json, ..a })),
+        Command::Lens(a) => done(lens::run(lens::Args { json, ..a })),
+        Command::LensSim(a) => done(lens_sim::run(lens_sim::Args { json, ..a })),
     }
 }
 
-fn main() {
-    let cli = Cli::parse();
-    if let Err(e) = run(cli) {
-        eprintln!("etlcal: error: {e}");
-        std::process::exit(1);
+/// Clap's error as one line: its first line (with the list that follows a trailing `:`,
+/// e.g. the missing required arguments) and the `--help` of the verb it concerns.
+fn one_line_usage_error(e: &clap::Error, argv: &[String]) -> String {
+    let text = e.render().to_string();
+    let mut lines = text.lines();
+    let mut what = lines.next().unwrap_or("invalid command line").trim_start_matches("error: ").to_owned();
+    if what.ends_with(':') {
+        let items: Vec<&str> = lines.take_while(|l| l.starts_with(' ')).map(str::trim).collect();
+        what = format!("{} {}", what, items.join(", "));
+    }
+    format!("etlcal: error: {what}; see {} --help", verb_of(argv))
+}
+
+/// The verb (and subcommand) named on the command line, e.g. `etlcal lens info`: the
+/// words of `argv` that name a subcommand of the one before, in order.
+fn verb_of(argv: &[String]) -> String {
+    let mut command = <Cli as clap::CommandFactory>::command();
+    let mut words = vec!["etlcal".to_owned()];
+    for arg in argv.iter().skip(1) {
+        let Some(sub) = command.find_subcommand(arg).cloned() else { continue };
+        words.push(sub.get_name().to_owned());
+        command = sub;
+    }
+    words.join(" ")
+}
+
+fn main() -> ExitCode {
+    let argv: Vec<String> = std::env::args().collect();
+    let cli = match Cli::try_parse_from(&argv) {
+        Ok(cli) => cli,
+        Err(e) if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) => {
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("{}", one_line_usage_error(&e, &argv));
+            return ExitCode::from(2);
+        }
+    };
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("etlcal: error: {e}");
+            ExitCode::FAILURE
+        }
     }
 }

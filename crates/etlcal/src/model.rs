@@ -27,8 +27,8 @@ pub struct Args {
     /// (Fig. 5).
     #[arg(long)]
     pub fit_degrees: bool,
-    /// Print one JSON object on stdout.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 

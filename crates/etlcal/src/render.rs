@@ -3,21 +3,23 @@
 //! one synthetic image of a checkerboard on the paper rig's stage seen through the paper
 //! rig's camera at a current, and its true corners.
 //!
-//! Writes IMAGE (PNG, 8- or 16-bit grayscale) and, beside it, IMAGE.corners.json:
+//! Writes IMAGE (8- or 16-bit grayscale, in the format its extension names: `.png`,
+//! `.tif`/`.tiff`, or `.jpg`/`.jpeg` for 8-bit only; any other extension is refused before
+//! rendering; its directory is created if missing) and, beside it, IMAGE.corners.json:
 //! `{"format": "etlcal.corners/1", "pattern": [c, r], "square_mm", "e_com_ma", "z_w_mm",
 //! "corners_px": [[u, v], ...], "in_image": [bool, ...], "blur_sigma_px"}`, corners row by
 //! row (i fastest) in the order `etlcal detect` reports them. Defocus follows the paper
 //! rig's focus at the current (`--aperture-mm`, 0 = none); `--blur-px` adds a uniform blur.
 //! Both files are written atomically, and only when the render succeeded.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use etl_core::model::CameraModel;
 use serde_json::json;
 
 use super::print_json;
 use etl_formats::dataset::Board;
-use etl_formats::write_json;
+use etl_formats::{write_atomic, write_json};
 use etl_formats::{Error, Result};
 use etl_image::detect::Pattern;
 use etl_sim::render::{render, BitDepth, Optics, Photometry, RenderOptions, Scene};
@@ -26,7 +28,8 @@ use etl_sim::simulate::focused_z_mm;
 /// Arguments of `etlcal render`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The image to write (PNG).
+    /// The image to write: .png, .tif/.tiff, or .jpg/.jpeg (8-bit); its directory is
+    /// created if missing.
     #[arg(long, value_name = "IMAGE.png")]
     pub out: PathBuf,
     /// Compensated lens current, mA.
@@ -56,8 +59,8 @@ pub struct Args {
     /// Noise seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Print one JSON object (the corners file's content).
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -68,11 +71,7 @@ pub fn run(args: Args) -> Result<()> {
         16 => BitDepth::Sixteen,
         b => return Err(Error::InvalidInput(format!("--bit-depth must be 8 or 16, got {b}"))),
     };
-    if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        if !parent.is_dir() {
-            return Err(Error::InvalidInput(format!("{}: output directory does not exist", parent.display())));
-        }
-    }
+    let format = image_format(&args.out, bit_depth)?;
     let truth = CameraModel::paper_rig();
     let e = args.e_com;
     let z = args.z_mm.unwrap_or_else(|| focused_z_mm(e));
@@ -99,7 +98,13 @@ pub fn run(args: Args) -> Result<()> {
     });
     let mut corners_path = args.out.clone().into_os_string();
     corners_path.push(".corners.json");
-    r.image.save_png(&args.out)?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    r.image
+        .to_dynamic()
+        .write_to(&mut bytes, format)
+        .map_err(|e| Error::Image { path: args.out.clone(), message: format!("cannot encode: {e}") })?;
+    crate::output::create_parent(&args.out)?;
+    write_atomic(&args.out, bytes.get_ref())?;
     write_json(&PathBuf::from(corners_path), &corners)?;
     if args.json {
         print_json(&corners);
@@ -113,4 +118,23 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The image format `path`'s extension names (case-insensitive): PNG, TIFF, or JPEG for
+/// 8-bit images (JPEG has no 16-bit grey); anything else is refused, naming the choices.
+fn image_format(path: &Path, bit_depth: BitDepth) -> Result<image::ImageFormat> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match (ext.as_str(), bit_depth) {
+        ("png", _) => Ok(image::ImageFormat::Png),
+        ("tif" | "tiff", _) => Ok(image::ImageFormat::Tiff),
+        ("jpg" | "jpeg", BitDepth::Eight) => Ok(image::ImageFormat::Jpeg),
+        ("jpg" | "jpeg", BitDepth::Sixteen) => Err(Error::InvalidInput(format!(
+            "{}: JPEG is 8-bit only: pass --bit-depth 8 or write .png, .tif or .tiff",
+            path.display()
+        ))),
+        _ => Err(Error::InvalidInput(format!(
+            "{}: unsupported image extension \"{ext}\": use .png, .tif, .tiff, .jpg or .jpeg",
+            path.display()
+        ))),
+    }
 }

@@ -3,7 +3,7 @@
 //! view's own estimate; k1, p1, p2 against current; with observations, a residual vector
 //! map and a residual histogram) and an index.html that shows them with the numbers.
 //!
-//! DIR is created if missing; its parent must exist.
+//! DIR is created if missing (with its missing parents).
 
 use std::path::PathBuf;
 
@@ -14,7 +14,7 @@ use super::print_json;
 use etl_formats::calibration::Calibration;
 use etl_formats::observations::Observations;
 use etl_formats::thermal::ThermalFile;
-use etl_formats::{Error, Result};
+use etl_formats::Result;
 use etl_report::write_report;
 
 /// Arguments of `etlcal report`.
@@ -30,30 +30,12 @@ pub struct Args {
     /// calibration's own, else the paper's).
     #[arg(long, value_name = "FILE")]
     pub thermal: Option<PathBuf>,
-    /// Output directory (created if missing; its parent must exist).
+    /// Output directory (created with its missing parents).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Print the files written as one JSON object.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
-}
-
-/// Creates `dir` if missing, refusing when its parent does not exist.
-pub fn ensure_out_dir(dir: &std::path::Path) -> Result<()> {
-    if dir.is_dir() {
-        return Ok(());
-    }
-    let parent = match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    if !parent.is_dir() {
-        return Err(Error::Io {
-            path: dir.to_owned(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "the parent directory does not exist"),
-        });
-    }
-    std::fs::create_dir(dir).map_err(|source| Error::Io { path: dir.to_owned(), source })
 }
 
 /// Runs `etlcal report`.
@@ -64,7 +46,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => ThermalFile::load(p)?.calibration(),
         None => ThermalCalibration { surface: cal.thermal_surface()?, ..ThermalCalibration::PAPER },
     };
-    ensure_out_dir(&args.out)?;
+    crate::output::create_dir(&args.out)?;
     let r = write_report(&cal, obs.as_ref(), &thermal, &args.out)?;
     if args.json {
         print_json(&json!({"files": r.files, "text": r.text}));

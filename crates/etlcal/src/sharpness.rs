@@ -27,8 +27,8 @@ pub struct Args {
     /// The measure: cpbd, tenengrad, laplacian, brenner or normvar.
     #[arg(long, value_parser = parse_metric, default_value = "cpbd")]
     pub metric: Metric,
-    /// Print one JSON object.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 

@@ -8,8 +8,7 @@
 //! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
 //! given on the command line override it.
 //!
-//! Rendering images (without `--observations-only`) needs the synthetic camera, which is
-//! not implemented yet; asking for it is an error that says so.
+//! DIR is created if missing (with its missing parents).
 
 use std::path::PathBuf;
 
@@ -23,7 +22,7 @@ use etl_sim::simulate::{simulate, write_simulation, SettingRig, SimConfig};
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Output directory (must exist).
+    /// Output directory (created with its missing parents).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Write corner observations only (no images).
@@ -48,8 +47,8 @@ pub struct Args {
     /// has one.
     #[arg(long)]
     pub setting_views: bool,
-    /// Print a JSON summary.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -78,17 +77,15 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 
 /// Runs `etlcal simulate`.
 pub fn run(args: Args) -> Result<()> {
-    if !args.out.is_dir() {
-        return Err(Error::InvalidInput(format!("{}: output directory does not exist", args.out.display())));
-    }
     let config = config_from(&args)?;
-    let sim = simulate(&config);
     if !args.observations_only && config.setting_rig.is_some() {
         return Err(Error::InvalidInput(
             "rendering the per-setting baseline's views is not supported: pass --observations-only with --setting-views"
                 .into(),
         ));
     }
+    crate::output::create_dir(&args.out)?;
+    let sim = simulate(&config);
     write_simulation(&sim, &args.out)?;
     let mut images = 0;
     if !args.observations_only {

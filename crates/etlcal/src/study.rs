@@ -46,11 +46,11 @@ pub struct Args {
     /// Base random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output directory (created if missing).
+    /// Output directory (created with its missing parents).
     #[arg(long, value_name = "DIR", default_value = "etlcal-study")]
     pub out: PathBuf,
-    /// Print one JSON object on stdout instead of the markdown summary.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -59,7 +59,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.trials == Some(0) {
         return Err(Error::InvalidInput("--trials must be at least 1".into()));
     }
-    std::fs::create_dir_all(&args.out).map_err(|source| Error::Io { path: args.out.clone(), source })?;
+    crate::output::create_dir(&args.out)?;
     let bar = Bar::new(true);
     let opts = StudyOptions { trials: args.trials.unwrap_or(0), seed: args.seed, progress: &bar };
     let studies = match args.name {

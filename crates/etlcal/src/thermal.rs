@@ -50,11 +50,12 @@ pub struct CalibrateArgs {
     /// synthetic camera. Required: a real rig needs a camera binding (from Python or Rust).
     #[arg(long, required = true)]
     pub r#virtual: bool,
-    /// Where to write the fitted surface (etlcal.thermal/1).
+    /// Where to write the fitted surface (etlcal.thermal/1; its directory is created if
+    /// missing).
     #[arg(long, value_name = "thermal.json")]
     pub out: PathBuf,
     /// Where to write the raw table (CSV `temperature_c,e_in_ma,e_t_ma`; default: beside
-    /// --out, with .csv).
+    /// --out, with .csv; its directory is created if missing).
     #[arg(long, value_name = "TABLE.csv")]
     pub table: Option<PathBuf>,
     /// Half width of each refocus search, mA.
@@ -63,8 +64,8 @@ pub struct CalibrateArgs {
     /// A 5 x 5 grid (40..240 mA by 50, 27..37 degC by 2.5) instead of the paper's 11 x 11.
     #[arg(long)]
     pub quick: bool,
-    /// Print one JSON object.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -81,8 +82,8 @@ pub struct EvalArgs {
     /// A fitted surface (etlcal.thermal/1) instead of the paper's.
     #[arg(long, value_name = "FILE")]
     pub thermal: Option<PathBuf>,
-    /// Print one JSON object on stdout.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
@@ -92,20 +93,21 @@ pub struct FitArgs {
     /// CSV table with header `temperature_c,e_in_ma,e_t_ma`.
     #[arg(value_name = "TABLE.csv")]
     pub table: PathBuf,
-    /// Where to write the fitted surface (etlcal.thermal/1); written only on success.
+    /// Where to write the fitted surface (etlcal.thermal/1); written only on success (its
+    /// directory is created if missing).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Print one JSON object on stdout.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 
-/// Runs `etlcal thermal`.
-pub fn run(args: Args) -> Result<()> {
+/// Runs `etlcal thermal` (`json`: the global `--json`).
+pub fn run(args: Args, json: bool) -> Result<()> {
     match args.command {
-        ThermalCommand::Eval(a) => run_eval(a),
-        ThermalCommand::Fit(a) => run_fit(a),
-        ThermalCommand::Calibrate(a) => run_calibrate(a),
+        ThermalCommand::Eval(a) => run_eval(EvalArgs { json, ..a }),
+        ThermalCommand::Fit(a) => run_fit(FitArgs { json, ..a }),
+        ThermalCommand::Calibrate(a) => run_calibrate(CalibrateArgs { json, ..a }),
     }
 }
 
@@ -117,11 +119,7 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     use etl_sim::virtual_rig::{surface_error_ma, VirtualCamera, VirtualClimate};
     let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
     for p in [&args.out, &table] {
-        if let Some(parent) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if !parent.is_dir() {
-                return Err(Error::InvalidInput(format!("{}: output directory does not exist", parent.display())));
-            }
-        }
+        crate::output::create_parent(p)?;
     }
     let mut options = ProcedureOptions { search_half_width_ma: args.search_ma, ..ProcedureOptions::default() };
     if args.quick {
@@ -205,6 +203,7 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
     let (cal, rms_ma) = etl_calib::thermal_calibration::fit_samples(&rows)
         .map_err(|err| Error::InvalidInput(format!("{}: {err}", args.table.display())))?;
     let file = ThermalFile::new(&cal, rms_ma);
+    crate::output::create_parent(&args.out)?;
     file.save(&args.out)?;
     if args.json {
         print_json(&json!({

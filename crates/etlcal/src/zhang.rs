@@ -34,8 +34,8 @@ pub struct Args {
     /// Side of a square, mm.
     #[arg(long, value_name = "MM")]
     pub square: f64,
-    /// Print one JSON object.
-    #[arg(long)]
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
     pub json: bool,
 }
 

@@ -1,5 +1,6 @@
-//! `etlcal detect` on real photographs (fixtures/detect/SOURCE.md): JSON per image, the
-//! exit status on unreadable files, the pattern parser.
+//! `etlcal detect` on real photographs (fixtures/detect/SOURCE.md): JSON per image, exit
+//! status 1 and one stderr line per failed image (board not found, unreadable, missing),
+//! the pattern parser.
 
 use std::path::{Path, PathBuf};
 
@@ -8,7 +9,7 @@ fn fixtures() -> PathBuf {
 }
 
 #[test]
-fn cli_prints_json_per_image_and_fails_on_unreadable_files() {
+fn cli_prints_json_per_image_and_fails_on_any_failed_image() {
     let exe = env!("CARGO_BIN_EXE_etlcal");
     let good = fixtures().join("stereo_left01.jpg");
     let run = |args: &[&std::ffi::OsStr]| std::process::Command::new(exe).args(args).output().unwrap();
@@ -17,31 +18,49 @@ fn cli_prints_json_per_image_and_fails_on_unreadable_files() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["images"][0]["found"], true);
     assert_eq!(v["images"][0]["corners_px"].as_array().unwrap().len(), 54);
-    // A board not found is a result (exit 0) with its reason.
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+    // A board not found fails the run (exit 1), listed with its reason, named on stderr.
     let out = run(&["detect".as_ref(), good.as_os_str(), "--pattern".as_ref(), "10x6".as_ref(), "--json".as_ref()]);
-    assert!(out.status.success());
+    assert_eq!(out.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["images"][0]["found"], false);
     assert!(v["images"][0]["error"].as_str().unwrap().contains("board not found"));
-    // An unreadable file: still listed, exit status 1, the reason on stderr.
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().collect::<Vec<_>>().len(), 1, "{err}");
+    assert!(err.starts_with("etlcal: error: ") && err.contains("stereo_left01.jpg: board not found"), "{err}");
+    // An unreadable file and a missing one among good ones: every image listed, exit 1,
+    // one stderr line for each failed image and none for the good ones.
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.png");
     std::fs::write(&bad, b"\x89PNG\r\n\x1a\n truncated").unwrap();
+    let missing = dir.path().join("missing.png");
     let out = run(&[
         "detect".as_ref(),
         good.as_os_str(),
         bad.as_os_str(),
+        missing.as_os_str(),
         "--pattern".as_ref(),
         "9x6".as_ref(),
         "--json".as_ref(),
     ]);
     assert_eq!(out.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(v["images"][0]["found"], true);
-    assert_eq!(v["images"][1]["found"], false);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("bad.png"));
+    let found: Vec<_> = v["images"].as_array().unwrap().iter().map(|i| i["found"].as_bool().unwrap()).collect();
+    assert_eq!(found, [true, false, false]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 2, "{err}");
+    assert!(lines[0].starts_with("etlcal: error: ") && lines[0].contains("bad.png"), "{err}");
+    assert!(lines[1].starts_with("etlcal: error: ") && lines[1].contains("missing.png"), "{err}");
+    assert!(!err.contains("stereo_left01"), "{err}");
+    // Without --json too: exit 1 and the failed image on stderr.
+    let out = run(&["detect".as_ref(), missing.as_os_str(), "--pattern".as_ref(), "9x6".as_ref()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(String::from_utf8_lossy(&out.stderr).lines().count(), 1);
     // A bad pattern is refused by the argument parser.
     let out = run(&["detect".as_ref(), good.as_os_str(), "--pattern".as_ref(), "9by6".as_ref()]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("pattern"));
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("pattern") && err.contains("see etlcal detect --help"), "{err}");
 }

@@ -49,18 +49,50 @@ fn bad_input_fails_in_one_line_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let img = dir.path().join("x.png");
     let p = img.to_str().unwrap();
-    let missing = dir.path().join("no/such/dir/x.png");
-    for (args, needle) in [
-        (vec!["render", "--out", p, "--bit-depth", "12"], "bit-depth"),
-        (vec!["render", "--out", p, "--square=-1"], "square"),
-        (vec!["render", "--out", p, "--pattern", "2x12"], "3"),
-        (vec!["render", "--out", missing.to_str().unwrap()], "does not exist"),
-        (vec!["render", "--out", p, "--e-com", "NaN"], ""),
+    let bmp = dir.path().join("new/x.bmp");
+    let jpg16 = dir.path().join("new/x.jpg");
+    // Exit status 2: refused by the argument parser; 1: refused by the verb.
+    for (args, needle, code) in [
+        (vec!["render", "--out", p, "--bit-depth", "12"], "bit-depth", 1),
+        (vec!["render", "--out", p, "--square=-1"], "square", 1),
+        (vec!["render", "--out", p, "--pattern", "2x12"], "3", 2),
+        (vec!["render", "--out", bmp.to_str().unwrap()], "use .png, .tif, .tiff, .jpg or .jpeg", 1),
+        (vec!["render", "--out", jpg16.to_str().unwrap(), "--bit-depth", "16"], "JPEG is 8-bit only", 1),
+        (vec!["render", "--out", p, "--e-com", "NaN"], "", 1),
     ] {
         let out = etlcal(&args);
         assert!(!out.status.success(), "{args:?} should fail");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{args:?}: {err}");
         assert!(!img.exists(), "{args:?} wrote an image");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert_eq!(out.status.code(), Some(code), "{args:?}");
     }
+    // A refused extension is refused before any work: not even the directory is made.
+    assert!(!dir.path().join("new").exists());
+}
+
+#[test]
+fn writes_the_format_its_extension_names_and_creates_the_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    // (file, bit depth, the format's magic bytes, grey levels the decoder must give back).
+    for (name, depth, magic) in [
+        ("a/b.png", "16", &b"\x89PNG"[..]),
+        ("a/b.tif", "16", b"II*\0"),
+        ("a/b.TIFF", "8", b"II*\0"),
+        ("a/b.jpg", "8", b"\xff\xd8\xff"),
+    ] {
+        let path = dir.path().join(name);
+        let out = etlcal(&["render", "--out", path.to_str().unwrap(), "--bit-depth", depth, "--noise", "0"]);
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(bytes.starts_with(magic), "{name}: starts {:02x?}", &bytes[..4]);
+        let img = image::load_from_memory(&bytes).unwrap();
+        assert_eq!((img.width(), img.height()), (CameraModel::PAPER_IMAGE_SIZE[0], CameraModel::PAPER_IMAGE_SIZE[1]));
+        let want_16 = depth == "16";
+        assert_eq!(matches!(img, image::DynamicImage::ImageLuma16(_)), want_16, "{name}: {:?}", img.color());
+    }
+    // The JPEG is found by the detector like the PNG.
+    let det = etlcal(&["detect", dir.path().join("a/b.jpg").to_str().unwrap(), "--pattern", "14x12", "--json"]);
+    assert!(det.status.success(), "{}", String::from_utf8_lossy(&det.stderr));
 }

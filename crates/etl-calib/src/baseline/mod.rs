@@ -131,6 +131,14 @@ pub fn refuse_bundle_adjust_options(method: &str, given: BundleAdjustOptionsGive
 /// Errors: no setting views; a setting with fewer than 3 views; fewer than 3 settings;
 /// Zhang's errors at a setting (named with its current).
 pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<BaselineResult> {
+    let settings = setting_estimates(obs, thermal)?;
+    let calibration = calibration_of(&settings, obs.image_size, thermal)?;
+    Ok(BaselineResult { settings, calibration })
+}
+
+/// Zhang's method at each setting of `obs.setting_views`: views grouped by E_com (within
+/// `SETTING_TOLERANCE_MA`), sorted by E_com; at least 3 settings of at least 3 views each.
+fn setting_estimates(obs: &Observations, thermal: &ThermalCalibration) -> Result<Vec<SettingEstimate>> {
     obs.validate()?;
     if obs.setting_views.is_empty() {
         return Err(Error::InvalidInput(
@@ -176,6 +184,18 @@ pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<B
         let points = views.iter().map(|v| v.pixels.len()).sum();
         settings.push(SettingEstimate { e_com_ma: e, views: g.len(), points, zhang: z });
     }
+    Ok(settings)
+}
+
+/// The calibration the per-setting estimates give: fx, fy as weighted polynomials of
+/// E_com (cubic, or of degree settings - 1), (u0, v0) as weighted means, k1, p1, p2 as
+/// quadratics in w = 1 / f_mean (Eq. 18). Precondition: `settings` sorted by E_com, not
+/// empty.
+fn calibration_of(
+    settings: &[SettingEstimate],
+    image_size: [u32; 2],
+    thermal: &ThermalCalibration,
+) -> Result<Calibration> {
     let es: Vec<f64> = settings.iter().map(|s| s.e_com_ma).collect();
     let deg = 3.min(settings.len() - 1);
     let col = |f: &dyn Fn(&ZhangResult) -> (f64, f64)| -> (Vec<f64>, Vec<f64>) {
@@ -187,7 +207,7 @@ pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<B
     let (kf_y, cy) = poly_fit(&es, &fy, &sfy, deg)?;
     let wmean = |f: &dyn Fn(&ZhangResult) -> (f64, f64)| {
         let (mut s, mut w) = (0.0, 0.0);
-        for st in &settings {
+        for st in settings {
             let (v, sd) = f(&st.zhang);
             let wi = 1.0 / (sd * sd).max(1e-300);
             s += wi * v;
@@ -221,7 +241,7 @@ pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<B
         .sqrt();
     let calibration = Calibration {
         format: FORMAT.into(),
-        image_size: obs.image_size,
+        image_size,
         rotation_rodrigues: [0.0; 3],
         translation_mm: [0.0; 3],
         kf_x,
@@ -255,5 +275,5 @@ pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<B
             })
             .collect(),
     };
-    Ok(BaselineResult { settings, calibration })
+    Ok(calibration)
 }

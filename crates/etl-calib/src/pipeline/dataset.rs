@@ -76,25 +76,7 @@ pub fn observations_from_dataset(
     progress: &dyn Progress,
 ) -> Result<(Observations, DetectionSummary)> {
     dataset.validate()?;
-    // (kind, image, board asked of the detector, index of its corner (0, 0) on the board).
-    let mut jobs: Vec<(Kind, PathBuf, Board, [usize; 2])> = vec![];
-    for (i, v) in dataset.views.iter().enumerate() {
-        let board = v.board.unwrap_or(dataset.board);
-        jobs.push((Kind::View(i), Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
-    }
-    for v in &dataset.offstate_views {
-        let board = v.board.unwrap_or(dataset.offstate_board());
-        jobs.push((Kind::Offstate, Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
-    }
-    for (i, v) in dataset.setting_views.iter().enumerate() {
-        let board = v.board.unwrap_or(dataset.board);
-        jobs.push((
-            Kind::Setting(i),
-            Dataset::resolve(dataset_path, &v.image),
-            board,
-            v.first_corner.unwrap_or([0, 0]),
-        ));
-    }
+    let jobs = detection_jobs(dataset, dataset_path);
     // Missing files fail the run before any detection work.
     for (_, path, _, _) in &jobs {
         std::fs::metadata(path).map_err(|source| Error::Io { path: path.clone(), source })?;
@@ -172,37 +154,70 @@ pub fn observations_from_dataset(
         }
     }
     if !dataset.views.is_empty() {
-        // A setting is its recorded E_com, or its (E_in, T) pair.
-        let mut currents: Vec<(f64, f64)> = obs
-            .views
-            .iter()
-            .map(|v| match v.e_com_ma {
-                Some(e) => (e, f64::NAN),
-                None => (v.e_in_ma, v.temperature_c),
-            })
-            .collect();
-        currents.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        currents.dedup_by(|a, b| a.0 == b.0 && (a.1 == b.1 || (a.1.is_nan() && b.1.is_nan())));
-        if currents.len() < 3 {
-            let names: Vec<String> = summary
-                .skipped
-                .iter()
-                .filter(|s| s.kind == "view")
-                .map(|s| {
-                    s.image.file_name().map_or_else(|| s.image.display().to_string(), |n| n.to_string_lossy().into())
-                })
-                .collect();
-            return Err(Error::BoardNotFound(format!(
-                "the board was found in {} of {} views (not in: {}); the views left span {} distinct currents, \
-                 the method needs at least 3",
-                summary.views_detected,
-                dataset.views.len(),
-                names.join(", "),
-                currents.len()
-            )));
-        }
+        check_distinct_settings(&obs, &summary, dataset.views.len())?;
     }
     Ok((obs, summary))
+}
+
+/// A detection job: (kind, image, board asked of the detector, index of its corner (0, 0)
+/// on the board).
+type Job = (Kind, PathBuf, Board, [usize; 2]);
+
+/// The jobs of every image of `dataset` (views, lens-off views, setting views, in this
+/// order), image paths resolved against `dataset_path`.
+fn detection_jobs(dataset: &Dataset, dataset_path: &Path) -> Vec<Job> {
+    let mut jobs: Vec<Job> = vec![];
+    for (i, v) in dataset.views.iter().enumerate() {
+        let board = v.board.unwrap_or(dataset.board);
+        jobs.push((Kind::View(i), Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
+    }
+    for v in &dataset.offstate_views {
+        let board = v.board.unwrap_or(dataset.offstate_board());
+        jobs.push((Kind::Offstate, Dataset::resolve(dataset_path, &v.image), board, v.first_corner.unwrap_or([0, 0])));
+    }
+    for (i, v) in dataset.setting_views.iter().enumerate() {
+        let board = v.board.unwrap_or(dataset.board);
+        jobs.push((
+            Kind::Setting(i),
+            Dataset::resolve(dataset_path, &v.image),
+            board,
+            v.first_corner.unwrap_or([0, 0]),
+        ));
+    }
+    jobs
+}
+
+/// Refuses observations whose views span fewer than 3 distinct settings (a setting is its
+/// recorded E_com, or its (E_in, T) pair), naming the views whose board was not found.
+fn check_distinct_settings(obs: &Observations, summary: &DetectionSummary, views: usize) -> Result<()> {
+    // A setting is its recorded E_com, or its (E_in, T) pair.
+    let mut currents: Vec<(f64, f64)> = obs
+        .views
+        .iter()
+        .map(|v| match v.e_com_ma {
+            Some(e) => (e, f64::NAN),
+            None => (v.e_in_ma, v.temperature_c),
+        })
+        .collect();
+    currents.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    currents.dedup_by(|a, b| a.0 == b.0 && (a.1 == b.1 || (a.1.is_nan() && b.1.is_nan())));
+    if currents.len() < 3 {
+        let names: Vec<String> = summary
+            .skipped
+            .iter()
+            .filter(|s| s.kind == "view")
+            .map(|s| s.image.file_name().map_or_else(|| s.image.display().to_string(), |n| n.to_string_lossy().into()))
+            .collect();
+        return Err(Error::BoardNotFound(format!(
+            "the board was found in {} of {} views (not in: {}); the views left span {} distinct currents, \
+             the method needs at least 3",
+            summary.views_detected,
+            views,
+            names.join(", "),
+            currents.len()
+        )));
+    }
+    Ok(())
 }
 
 /// The detector of the `etlcal` command line: reads the image file and finds the board

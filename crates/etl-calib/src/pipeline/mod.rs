@@ -7,6 +7,7 @@
 //! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports.
 
 pub mod dataset;
+pub mod measure;
 mod planar_views;
 mod view_focal;
 

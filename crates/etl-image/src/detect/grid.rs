@@ -288,48 +288,9 @@ pub(crate) enum Reject {
 fn check_cells(s: &Plane, map: &HashMap<Pos, usize>, c: &[Corner]) -> Result<(Option<usize>, bool), Reject> {
     let (i0, i1, j0, j1) = bbox(map);
     let (nc, nr) = ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize);
-    // Corners extended by one on every side (linear extrapolation).
-    let (ec, er) = (nc + 2, nr + 2);
-    let mut e = vec![[0.0f32; 2]; ec * er];
-    for j in 0..nr {
-        for i in 0..nc {
-            e[(j + 1) * ec + i + 1] = c[map[&(i0 + i as i32, j0 + j as i32)]].p;
-        }
-    }
-    let lerp2 = |a: [f32; 2], b: [f32; 2]| [2.0 * a[0] - b[0], 2.0 * a[1] - b[1]];
-    for j in 1..=nr {
-        e[j * ec] = lerp2(e[j * ec + 1], e[j * ec + 2]);
-        e[j * ec + ec - 1] = lerp2(e[j * ec + ec - 2], e[j * ec + ec - 3]);
-    }
-    for i in 0..ec {
-        e[i] = lerp2(e[ec + i], e[2 * ec + i]);
-        e[(er - 1) * ec + i] = lerp2(e[(er - 2) * ec + i], e[(er - 3) * ec + i]);
-    }
-    // Cells (ci, cj), ci in 0..=nc, cj in 0..=nr (cell 0 is the outer ring).
+    let e = extended_corners(map, c, [i0, j0], [nc, nr]);
+    let v = cell_values(s, &e, [nc, nr])?;
     let (cc, cr) = (nc + 1, nr + 1);
-    let mut v = vec![0.0f32; cc * cr];
-    for cj in 0..cr {
-        for ci in 0..cc {
-            let q = [e[cj * ec + ci], e[cj * ec + ci + 1], e[(cj + 1) * ec + ci], e[(cj + 1) * ec + ci + 1]];
-            let real = |i: usize, j: usize| (1..=nc).contains(&i) && (1..=nr).contains(&j);
-            let inner = [real(ci, cj), real(ci + 1, cj), real(ci, cj + 1), real(ci + 1, cj + 1)];
-            v[cj * cc + ci] = match cell_value(s, q, inner) {
-                Some(x) => x,
-                // Squares of the grid must be visible; the outer ring may leave the image.
-                None if inner.iter().all(|&b| b) => return Err(Reject::AtBorder),
-                None => f32::NAN,
-            };
-        }
-    }
-    // At most half of each side of the outer ring out of the image.
-    let unknown = |f: &dyn Fn(usize) -> usize, n: usize| (0..n).filter(|&t| v[f(t)].is_nan()).count() * 2 > n;
-    if unknown(&|t| t * cc, cr)
-        || unknown(&|t| t * cc + cc - 1, cr)
-        || unknown(&|t| t, cc)
-        || unknown(&|t| (cr - 1) * cc + t, cc)
-    {
-        return Err(Reject::AtBorder);
-    }
     // Polarity and contrast from the inner cells.
     let (mut m0, mut n0, mut m1, mut n1) = (0.0f32, 0usize, 0.0f32, 0usize);
     for cj in 1..cr - 1 {
@@ -389,6 +350,68 @@ fn check_cells(s: &Plane, map: &HashMap<Pos, usize>, c: &[Corner]) -> Result<(Op
     // Cell (0,0) of the grid is cell (1,1) here; dark is the darker class.
     let cell00_dark = sign > 0.0;
     Ok(((side_fail[worst] > 0).then_some(worst), cell00_dark))
+}
+
+/// The `nc x nr` grid corners (grid position `[i0, j0]` first) extended by one on every
+/// side by linear extrapolation, `2 a - b`: `(nc + 2) x (nr + 2)`, row-major.
+fn extended_corners(
+    map: &HashMap<Pos, usize>,
+    c: &[Corner],
+    [i0, j0]: [i32; 2],
+    [nc, nr]: [usize; 2],
+) -> Vec<[f32; 2]> {
+    // Corners extended by one on every side (linear extrapolation).
+    let (ec, er) = (nc + 2, nr + 2);
+    let mut e = vec![[0.0f32; 2]; ec * er];
+    for j in 0..nr {
+        for i in 0..nc {
+            e[(j + 1) * ec + i + 1] = c[map[&(i0 + i as i32, j0 + j as i32)]].p;
+        }
+    }
+    let lerp2 = |a: [f32; 2], b: [f32; 2]| [2.0 * a[0] - b[0], 2.0 * a[1] - b[1]];
+    for j in 1..=nr {
+        e[j * ec] = lerp2(e[j * ec + 1], e[j * ec + 2]);
+        e[j * ec + ec - 1] = lerp2(e[j * ec + ec - 2], e[j * ec + ec - 3]);
+    }
+    for i in 0..ec {
+        e[i] = lerp2(e[ec + i], e[2 * ec + i]);
+        e[(er - 1) * ec + i] = lerp2(e[(er - 2) * ec + i], e[(er - 3) * ec + i]);
+    }
+    e
+}
+
+/// Mean grey level of every cell of the extended corners `e` of an `nc x nr` grid: cells
+/// `(ci, cj)`, `ci` in `0..=nc`, `cj` in `0..=nr`, row-major; NaN for an outer-ring cell out
+/// of the image. Rejects a grid whose own squares leave the image, or whose outer ring is
+/// more than half out on a side.
+fn cell_values(s: &Plane, e: &[[f32; 2]], [nc, nr]: [usize; 2]) -> Result<Vec<f32>, Reject> {
+    let ec = nc + 2;
+    // Cells (ci, cj), ci in 0..=nc, cj in 0..=nr (cell 0 is the outer ring).
+    let (cc, cr) = (nc + 1, nr + 1);
+    let mut v = vec![0.0f32; cc * cr];
+    for cj in 0..cr {
+        for ci in 0..cc {
+            let q = [e[cj * ec + ci], e[cj * ec + ci + 1], e[(cj + 1) * ec + ci], e[(cj + 1) * ec + ci + 1]];
+            let real = |i: usize, j: usize| (1..=nc).contains(&i) && (1..=nr).contains(&j);
+            let inner = [real(ci, cj), real(ci + 1, cj), real(ci, cj + 1), real(ci + 1, cj + 1)];
+            v[cj * cc + ci] = match cell_value(s, q, inner) {
+                Some(x) => x,
+                // Squares of the grid must be visible; the outer ring may leave the image.
+                None if inner.iter().all(|&b| b) => return Err(Reject::AtBorder),
+                None => f32::NAN,
+            };
+        }
+    }
+    // At most half of each side of the outer ring out of the image.
+    let unknown = |f: &dyn Fn(usize) -> usize, n: usize| (0..n).filter(|&t| v[f(t)].is_nan()).count() * 2 > n;
+    if unknown(&|t| t * cc, cr)
+        || unknown(&|t| t * cc + cc - 1, cr)
+        || unknown(&|t| t, cc)
+        || unknown(&|t| (cr - 1) * cc + t, cc)
+    {
+        return Err(Reject::AtBorder);
+    }
+    Ok(v)
 }
 
 /// The outcome of one seed.

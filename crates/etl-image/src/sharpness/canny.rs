@@ -168,7 +168,15 @@ pub fn classify(
     // values around the Sobel outputs, Gaussian radius around the smoothed values.
     let (rm, cm) = (clip(ra - 1, rb + 1, h), clip(ca - 1, cb + 1, w));
     let (rs, cs) = (clip(ra - 2, rb + 2, h), clip(ca - 2, cb + 2, w));
+    smooth(image, w, h, bleed, rs.clone(), cs.clone(), s);
+    sobel(s, w, h, [rs, cs, rm.clone(), cm.clone()]);
+    suppress(s, w, h, [ra, rb, ca, cb], [rm, cm], [rows.start, cols.start], out, stride)
+}
 
+/// Stage 1 of [`classify`]: the Gaussian (sigma 1, radius 4, zeros outside the image) of
+/// `image` on `rs x cs`, divided by the bleed-over correction, into `s.smoothed`
+/// (row-major, width `cs.len()`).
+fn smooth(image: &[u8], w: usize, h: usize, bleed: &Bleed, rs: Range<usize>, cs: Range<usize>, s: &mut Scratch) {
     // 1a. Axis 0 Gaussian over the smoothed rows, on columns cs +- radius with zeros
     // outside the image, so that axis 1 needs no bounds tests.
     let vw = cs.len() + 2 * RADIUS;
@@ -223,7 +231,13 @@ pub fn classify(
             out_s[k] = gauss_tap(x4[k], [x0[k] + x8[k], x1[k] + x7[k], x2[k] + x6[k], x3[k] + x5[k]]) / den[k];
         }
     }
+}
 
+/// Stage 2 of [`classify`]: the Sobel derivatives of `s.smoothed` (on `rs x cs`) into
+/// `s.isobel`, `s.jsobel` and their magnitude into `s.magnitude`, on `rm x cm`
+/// (`[rs, cs, rm, cm]`).
+fn sobel(s: &mut Scratch, w: usize, h: usize, [rs, cs, rm, cm]: [Range<usize>; 4]) {
+    let sw = cs.len();
     // 2. Sobel. Derivative passes (SciPy's antisymmetric branch x*0 + (x[-1] - x[+1]) * -1,
     // the product by -1 being an exact negation),
     // di along axis 0 on rm x cs, dj along axis 1 on rs x cm; then the [1 2 1] passes
@@ -263,7 +277,24 @@ pub fn classify(
             om[k] = m.sqrt();
         }
     }
+}
 
+/// Stage 3 of [`classify`]: non-maximum suppression and the two thresholds on the interior
+/// pixels of the busy box `[ra, rb, ca, cb]`, classes written to `out` (whose row 0, column
+/// 0 is pixel `[rows_start, cols_start]`); the magnitudes are on `rm x cm`. Returns the
+/// numbers of strong and weak pixels.
+#[allow(clippy::too_many_arguments)]
+fn suppress(
+    s: &Scratch,
+    w: usize,
+    h: usize,
+    [ra, rb, ca, cb]: [isize; 4],
+    [rm, cm]: [Range<usize>; 2],
+    [rows_start, cols_start]: [usize; 2],
+    out: &mut [u8],
+    stride: usize,
+) -> (usize, usize) {
+    let mw = cm.len();
     // 3. scikit-image's `_nonmaximum_suppression_bilinear` and the two thresholds, on
     // the interior only. Its four cases differ in which ratio is the weight and which
     // neighbours are interpolated; choosing both by index rather than by branch keeps
@@ -282,7 +313,7 @@ pub fn classify(
     let nr = clip(ra.max(1), rb.min(h as isize - 1), h);
     let nc = clip(ca.max(1), cb.min(w as isize - 1), w);
     for x in nr {
-        let o = &mut out[(x - rows.start) * stride..];
+        let o = &mut out[(x - rows_start) * stride..];
         for y in nc.clone() {
             let k = (x - rm.start) * mw + (y - cm.start);
             let m = mag[k];
@@ -305,7 +336,7 @@ pub fn classify(
             let is_strong = m >= HIGH;
             strong += (keep & is_strong) as usize;
             weak += (keep & !is_strong) as usize;
-            o[y - cols.start] = keep as u8 * if is_strong { STRONG } else { WEAK };
+            o[y - cols_start] = keep as u8 * if is_strong { STRONG } else { WEAK };
         }
     }
     (strong, weak)

@@ -1,0 +1,66 @@
+//! `etlcal measure` as the built binary: a 2 mm stage move between two rendered images of
+//! the paper rig, measured with the demo's calibration, and a refused image.
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn etlcal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
+}
+
+fn json_of(args: &[&str]) -> Value {
+    let out = etlcal(args);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn measures_a_2_mm_stage_move_in_rendered_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    json_of(&["demo", "--no-images", "--out", &p("demo"), "--json"]);
+    let cal = p("demo/calibration-eiv.json");
+    // The board must stay in the image: at this current and 2 mm nearer it does.
+    // The compensated current of (E_in, T) = (153 mA, 30 degC) through the paper's surface,
+    // which the demo's calibration records.
+    let e_com = json_of(&["thermal", "eval", "--t", "30", "--e-in", "153", "--json"])["e_com_ma"].as_f64().unwrap();
+    let e = format!("{e_com}");
+    let a = json_of(&["render", "--out", &p("a.png"), "--e-com", &e, "--pattern", "9x7", "--seed", "1", "--json"]);
+    let z_b = format!("{}", a["z_w_mm"].as_f64().unwrap() - 2.0);
+    json_of(&[
+        "render",
+        "--out",
+        &p("b.png"),
+        "--e-com",
+        &e,
+        "--z-mm",
+        &z_b,
+        "--pattern",
+        "9x7",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    let measure = |a: &str, b: &str, json: bool| {
+        let mut args = vec!["measure", "--calibration", &cal, "--e-in", "153", "--t", "30", a, b];
+        args.extend(["--pattern", "9x7", "--square", "1.5"]);
+        if json {
+            args.push("--json");
+        }
+        etlcal(&args)
+    };
+    let out = measure(&p("a.png"), &p("b.png"), true);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let m: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!((m["e_com_ma"].as_f64().unwrap() - e_com).abs() < 1e-9, "{m}");
+    let dist = m["distance_mm"].as_f64().unwrap();
+    assert!((dist - 2.0).abs() < 0.02, "distance {dist} mm for a 2 mm move");
+    // An image of the wrong size: one line naming it, exit 1.
+    let small = dir.path().join("small.png");
+    image::GrayImage::new(64, 48).save(&small).unwrap();
+    let out = measure(&p("a.png"), small.to_str().unwrap(), false);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("small.png"), "{err}");
+}
