@@ -141,19 +141,17 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     let file = ThermalFile::new(&r.calibration, r.rms_ma);
     file.save(&args.out)?;
     if args.json {
-        print_json(&json!({
-            "format": file.format,
-            "coefficients": file.coefficients,
-            "rms_ma": file.rms_ma,
-            "t_range_c": file.t_range_c,
-            "e_in_range_ma": file.e_in_range_ma,
-            "samples": r.samples.len(),
-            "frames": r.frames,
-            "surface_error_ma": referenced,
-            "surface_error_absolute_ma": absolute,
-            "out": args.out.display().to_string(),
-            "table": table.display().to_string(),
-        }));
+        print_json(&file_json(
+            &file,
+            json!({
+                "samples": r.samples.len(),
+                "frames": r.frames,
+                "surface_error_ma": referenced,
+                "surface_error_absolute_ma": absolute,
+                "out": args.out.display().to_string(),
+                "table": table.display().to_string(),
+            }),
+        ));
     } else {
         outln!(
             "{} samples from {} frames; fit RMS {:.3} mA; against the virtual lens's true surface: {:.3} mA RMS \
@@ -206,15 +204,7 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
     crate::output::create_parent(&args.out)?;
     file.save(&args.out)?;
     if args.json {
-        print_json(&json!({
-            "format": file.format,
-            "coefficients": file.coefficients,
-            "rms_ma": file.rms_ma,
-            "t_range_c": file.t_range_c,
-            "e_in_range_ma": file.e_in_range_ma,
-            "samples": rows.len(),
-            "out": args.out.display().to_string(),
-        }));
+        print_json(&file_json(&file, json!({"samples": rows.len(), "out": args.out.display().to_string()})));
     } else {
         outln!(
             "Fitted E_T(T, E_in) to {} samples: RMS {:.4} mA over {:?} degC x {:?} mA; wrote {}",
@@ -226,4 +216,13 @@ pub fn run_fit(args: FitArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The `--json` object of a verb that wrote `file`: the file's keys, then `extra`'s.
+fn file_json(file: &ThermalFile, extra: serde_json::Value) -> serde_json::Value {
+    let mut j = json!(file);
+    if let (Some(j), serde_json::Value::Object(extra)) = (j.as_object_mut(), extra) {
+        j.extend(extra);
+    }
+    j
 }
