@@ -16,13 +16,12 @@
 //! the nearest rotation. Distortion and the slight change of s with E are ignored: RAC is
 //! an initialiser; bundle adjustment removes what it leaves.
 
-#![allow(clippy::needless_range_loop)]
-
 use super::observations::{point_count, validate, View};
 use crate::error::{Error, Result};
 use crate::fit::GivensQr;
 use crate::linalg::svd::Svd;
-use crate::model::rotation::{matrix_to_rodrigues, Mat3};
+use crate::model::rotation::{matrix_to_rodrigues, nearest_rotation, Mat3};
+use nalgebra::Vector3;
 
 /// What RAC determines.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,20 +90,18 @@ pub fn rac(views: &[View<'_>], principal_point: [f64; 2]) -> Result<RacSolution>
         }
     }
     // Rank check before solving: a plane of constant Z makes column 3 a multiple of 4.
-    let r = *qr.r_factor();
-    let svd = Svd::of_rows(&r);
-    if svd.rank(1e-9) < 7 {
+    // The rank from etl-core's one-sided Jacobi SVD, accurate to high relative precision.
+    if Svd::of_rows(qr.r_factor()).rank(1e-9) < 7 {
         return Err(Error::Degenerate {
             what: "RAC needs depth: the points lie on one plane (views at several stage positions Z_W are needed)",
         });
     }
     let l = qr.solve()?;
     // Undo the scaling: L1..3 and L5..7 multiply world coordinates (in units of ws).
-    let l13 = [l[0] / ws, l[1] / ws, l[2] / ws];
+    let l13 = Vector3::new(l[0], l[1], l[2]) / ws;
     let l4 = l[3];
-    let l57 = [l[4] / ws, l[5] / ws, l[6] / ws];
-    let n57 = libm::sqrt(l57[0] * l57[0] + l57[1] * l57[1] + l57[2] * l57[2]);
-    let n13 = libm::sqrt(l13[0] * l13[0] + l13[1] * l13[1] + l13[2] * l13[2]);
+    let l57 = Vector3::new(l[4], l[5], l[6]) / ws;
+    let (n57, n13) = (l57.norm(), l13.norm());
     if !(n57 > 0.0 && n13 > 0.0) {
         return Err(Error::Degenerate { what: "RAC solution has a zero row of R" });
     }
@@ -122,48 +119,16 @@ pub fn rac(views: &[View<'_>], principal_point: [f64; 2]) -> Result<RacSolution>
             }
         }
     }
-    let (w, uv) = (best.1, best.2);
-    let xc = (l13[0] * w[0] + l13[1] * w[1] + l13[2] * w[2] + l4) * ty / s;
-    let yc = (l57[0] * w[0] + l57[1] * w[1] + l57[2] * w[2] + 1.0) * ty;
+    let (w, uv) = (Vector3::from(best.1), best.2);
+    let xc = (l13.dot(&w) + l4) * ty / s;
+    let yc = (l57.dot(&w) + 1.0) * ty;
     if xc * uv[0] + yc * uv[1] < 0.0 {
         ty = -ty;
     }
-    let r1 = [l13[0] * ty / s, l13[1] * ty / s, l13[2] * ty / s];
-    let r2 = [l57[0] * ty, l57[1] * ty, l57[2] * ty];
+    let r1 = l13 * ty / s;
+    let r2 = l57 * ty;
     let tx = l4 * ty / s;
-    let r3 = [r1[1] * r2[2] - r1[2] * r2[1], r1[2] * r2[0] - r1[0] * r2[2], r1[0] * r2[1] - r1[1] * r2[0]];
-    let rot = nearest_rotation(&[r1, r2, r3]);
+    // R's rows are r1, r2, r1 x r2.
+    let rot = nearest_rotation(&[r1.into(), r2.into(), r1.cross(&r2).into()]);
     Ok(RacSolution { rotation_rodrigues: matrix_to_rodrigues(&rot), rotation: rot, tx_mm: tx, ty_mm: ty, aspect: s })
-}
-
-/// The rotation nearest to `m` in the Frobenius norm: U V^T of its SVD (with the sign
-/// fixed so the determinant is +1).
-pub fn nearest_rotation(m: &Mat3) -> Mat3 {
-    let svd = Svd::of_rows(m);
-    // m = sum_k s_k u_k v_k^T; the nearest rotation is sum_k u_k v_k^T (det +1).
-    let mut r = [[0.0; 3]; 3];
-    for k in 0..3 {
-        for i in 0..3 {
-            for j in 0..3 {
-                r[i][j] += svd.u[k][i] * svd.v[k][j];
-            }
-        }
-    }
-    let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
-        + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
-    if det < 0.0 {
-        // Flip the direction of the smallest singular value.
-        let mut kmin = 0;
-        for k in 1..3 {
-            if svd.s[k] < svd.s[kmin] {
-                kmin = k;
-            }
-        }
-        for i in 0..3 {
-            for j in 0..3 {
-                r[i][j] -= 2.0 * svd.u[kmin][i] * svd.v[kmin][j];
-            }
-        }
-    }
-    r
 }

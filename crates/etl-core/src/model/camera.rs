@@ -3,7 +3,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::distortion::Distortion;
-use super::rotation::{mat_vec, rodrigues_to_matrix, Mat3};
+use nalgebra::Vector3;
+
+use super::rotation::{rodrigues_to_matrix, to_matrix3, Mat3};
 use crate::error::{all_finite, finite, Error, Result};
 
 /// The 25 numbers of the paper's camera model, exactly as the paper defines them.
@@ -122,9 +124,7 @@ impl CameraModel {
     /// World point (mm) -> camera coordinates (mm), Eq. 13.
     #[inline]
     pub fn world_to_camera(&self, world_mm: [f64; 3]) -> [f64; 3] {
-        let c = mat_vec(&self.rotation_matrix(), world_mm);
-        let t = self.translation_mm;
-        [c[0] + t[0], c[1] + t[1], c[2] + t[2]]
+        (to_matrix3(&self.rotation_matrix()) * Vector3::from(world_mm) + Vector3::from(self.translation_mm)).into()
     }
 
     /// Projects a world point (mm) to the observed pixel at compensated current `e_com_ma`
@@ -150,12 +150,11 @@ impl CameraModel {
         }
         let k = self.intrinsics(e_com_ma)?;
         let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
-        let r = self.rotation_matrix();
-        let t = self.translation_mm;
+        let r = to_matrix3(&self.rotation_matrix());
+        let t = Vector3::from(self.translation_mm);
         for (w, o) in world_mm.iter().zip(out.iter_mut()) {
             all_finite(w, "world_mm")?;
-            let c = mat_vec(&r, *w);
-            *o = project_camera_point([c[0] + t[0], c[1] + t[1], c[2] + t[2]], &k, &d)?;
+            *o = project_camera_point((r * Vector3::from(*w) + t).into(), &k, &d)?;
         }
         Ok(())
     }

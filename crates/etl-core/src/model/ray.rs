@@ -1,7 +1,9 @@
 //! The viewing ray of a pixel.
 
 use super::camera::CameraModel;
-use super::rotation::mat_t_vec;
+use nalgebra::Vector3;
+
+use super::rotation::to_matrix3;
 use crate::error::{all_finite, Result};
 
 /// A ray in world coordinates: the points `origin_mm + s * direction`, s > 0.
@@ -33,12 +35,11 @@ impl CameraModel {
     pub fn ray(&self, pixel: [f64; 2], e_com_ma: f64) -> Result<Ray> {
         let k = self.intrinsics(e_com_ma)?;
         let [x, y] = self.undistort(pixel, e_com_ma)?;
-        let dc = [(x - k.u0) / k.fx, (y - k.v0) / k.fy, 1.0];
-        let n = libm::sqrt(dc[0] * dc[0] + dc[1] * dc[1] + 1.0);
-        let r = self.rotation_matrix();
-        let dir = mat_t_vec(&r, [dc[0] / n, dc[1] / n, dc[2] / n]);
-        let t = self.translation_mm;
-        let o = mat_t_vec(&r, [-t[0], -t[1], -t[2]]);
+        let dc = Vector3::new((x - k.u0) / k.fx, (y - k.v0) / k.fy, 1.0);
+        // World = R^T (camera - T): the direction R^T dc / |dc|, the origin -R^T T.
+        let r = to_matrix3(&self.rotation_matrix());
+        let dir: [f64; 3] = r.tr_mul(&(dc / dc.norm())).into();
+        let o: [f64; 3] = r.tr_mul(&-Vector3::from(self.translation_mm)).into();
         // A NaN rotation or translation (or an overflow) must not come back as a ray.
         all_finite(&o, "ray origin (check rotation_rodrigues and translation_mm)")?;
         all_finite(&dir, "ray direction (check rotation_rodrigues)")?;

@@ -2,11 +2,11 @@
 
 use super::homography::homography;
 use crate::calib::jacobian::{to_params, Projector};
-use crate::calib::rac::nearest_rotation;
 use crate::error::{all_finite, Error, Result};
 use crate::lm::{solve, Options, Problem, RowSink};
-use crate::model::rotation::matrix_to_rodrigues;
+use crate::model::rotation::{matrix_to_rodrigues, rotation_from_two_columns, to_matrix3};
 use crate::model::CameraModel;
+use nalgebra::Vector3;
 
 /// Most points [`solve_pnp`] takes (its normalised points live on the stack: 32 bytes each).
 pub const MAX_PNP_POINTS: usize = 4096;
@@ -105,26 +105,20 @@ pub fn solve_pnp(model: &CameraModel, e_com_ma: f64, board_mm: &[[f64; 3]], pixe
         *ii = [(und[0] - k.u0) / k.fx, (und[1] - k.v0) / k.fy];
         *bi = [w[0], w[1]];
     }
-    let h = homography(brd, img)?;
-    let c1 = [h[0][0], h[1][0], h[2][0]];
-    let c2 = [h[0][1], h[1][1], h[2][1]];
-    let c3 = [h[0][2], h[1][2], h[2][2]];
-    let n1 = libm::sqrt(c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2]);
-    let n2 = libm::sqrt(c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2]);
+    // The columns of H (nalgebra's array form of a matrix is its columns; owned vectors,
+    // since arithmetic on column views keeps panicking bounds checks the gate rejects).
+    let [c1, c2, c3]: [[f64; 3]; 3] = to_matrix3(&homography(brd, img)?).into();
+    let (c1, c2, c3) = (Vector3::from(c1), Vector3::from(c2), Vector3::from(c3));
+    let (n1, n2) = (c1.norm(), c2.norm());
     if !(n1 > 0.0 && n2 > 0.0) {
         return Err(Error::Degenerate { what: "PnP homography is singular" });
     }
     let mut lambda = 2.0 / (n1 + n2);
-    if c3[2] * lambda < 0.0 {
+    if c3.z * lambda < 0.0 {
         lambda = -lambda; // the board is in front of the camera
     }
-    let r1 = c1.map(|v| v * lambda);
-    let r2 = c2.map(|v| v * lambda);
-    let r3 = [r1[1] * r2[2] - r1[2] * r2[1], r1[2] * r2[0] - r1[0] * r2[2], r1[0] * r2[1] - r1[1] * r2[0]];
-    // Rows of R are (r1 r2 r3) as columns.
-    let m = [[r1[0], r2[0], r3[0]], [r1[1], r2[1], r3[1]], [r1[2], r2[2], r3[2]]];
-    let rot = nearest_rotation(&m);
-    let t = c3.map(|v| v * lambda);
+    let rot = rotation_from_two_columns((c1 * lambda).into(), (c2 * lambda).into());
+    let t = c3 * lambda;
     let om = matrix_to_rodrigues(&rot);
     let mut problem = Reprojection { model: *model, e_com_ma, board_mm, pixels };
     let x0 = [om[0], om[1], om[2], t[0], t[1], t[2]];
