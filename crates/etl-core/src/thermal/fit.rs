@@ -1,8 +1,6 @@
 //! [`ThermalFit`]: the least-squares fit of the cubic surface E_T(T, E_in) from streamed
 //! samples (section 4.1: refocusing experiments give E_T at a grid of T and E_in).
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use super::check_domain;
 use super::surface::{ThermalCalibration, ThermalSurface};
 use crate::error::{finite, Error, Result};

@@ -7,8 +7,6 @@
 //! root is bracketed first (a scan of the whole driver range) and then polished by Newton's
 //! method safeguarded by bisection inside the bracket.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use super::surface::ThermalSurface;
 use super::{check_domain, E_IN_DOMAIN_MA};
 use crate::error::{finite, Error, Result};

@@ -2,8 +2,6 @@
 //! (Eq. 7, section 5.2.2), and [`ThermalCalibration`]: a surface with the range it was
 //! calibrated over.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` is meant: NaN must fail the check.
-
 use serde::{Deserialize, Serialize};
 
 use super::check_domain;
