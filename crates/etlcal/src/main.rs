@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand};
 
 use etl_formats::Result;
 
+mod board;
 mod output;
 mod progress;
 

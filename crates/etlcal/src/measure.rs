@@ -10,11 +10,10 @@ use etl_core::pnp::BoardPose;
 use serde_json::json;
 
 use super::print_json;
-use super::zhang::parse_pattern;
+use crate::board::BoardArgs;
 use etl_calib::pipeline::dataset::default_detector;
 use etl_calib::pipeline::measure::measure_displacement;
 use etl_formats::calibration::Calibration;
-use etl_formats::dataset::Board;
 use etl_formats::Result;
 
 /// Arguments of `etlcal measure`.
@@ -34,12 +33,9 @@ pub struct Args {
     pub image_a: PathBuf,
     /// The image after the move.
     pub image_b: PathBuf,
-    /// Inner corners, columns x rows (e.g. 14x12).
-    #[arg(long, value_parser = parse_pattern)]
-    pub pattern: [usize; 2],
-    /// Side of a square, mm.
-    #[arg(long, value_name = "MM")]
-    pub square: f64,
+    /// The board.
+    #[command(flatten)]
+    pub board: BoardArgs,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -51,7 +47,7 @@ fn pose_json(p: &BoardPose) -> serde_json::Value {
 
 /// Runs `etlcal measure`: [`measure_displacement`] with the default detector.
 pub fn run(args: Args) -> Result<()> {
-    let board = Board { inner_corners: args.pattern, square_mm: args.square };
+    let board = args.board.board();
     let cal = Calibration::load(&args.calibration)?;
     let images = [args.image_a.as_path(), args.image_b.as_path()];
     let m = measure_displacement(&cal, args.e_in_ma, args.temperature_c, &board, images, &default_detector())?;

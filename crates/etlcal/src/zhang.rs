@@ -9,17 +9,10 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
+use crate::board::BoardArgs;
 use etl_calib::pipeline::detect_views;
 use etl_calib::zhang::zhang;
-use etl_formats::dataset::Board;
 use etl_formats::{Error, Result};
-
-/// Parses a pattern `CxR` (inner corners, columns x rows), e.g. `14x12`.
-pub fn parse_pattern(s: &str) -> std::result::Result<[usize; 2], String> {
-    let (c, r) = s.split_once(['x', 'X']).ok_or_else(|| format!("pattern \"{s}\" is not CxR (e.g. 14x12)"))?;
-    let parse = |t: &str| t.trim().parse::<usize>().map_err(|_| format!("pattern \"{s}\" is not CxR (e.g. 14x12)"));
-    Ok([parse(c)?, parse(r)?])
-}
 
 /// Arguments of `etlcal zhang`.
 #[derive(clap::Args, Debug)]
@@ -28,12 +21,9 @@ pub struct Args {
     /// Images of the board (at least 3 in distinct orientations).
     #[arg(required = true, value_name = "IMAGE")]
     pub images: Vec<PathBuf>,
-    /// Inner corners, columns x rows (e.g. 14x12).
-    #[arg(long, value_parser = parse_pattern)]
-    pub pattern: [usize; 2],
-    /// Side of a square, mm.
-    #[arg(long, value_name = "MM")]
-    pub square: f64,
+    /// The board.
+    #[command(flatten)]
+    pub board: BoardArgs,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -41,7 +31,7 @@ pub struct Args {
 
 /// Runs `etlcal zhang`.
 pub fn run(args: Args) -> Result<()> {
-    let board = Board { inner_corners: args.pattern, square_mm: args.square };
+    let board = args.board.board();
     let found = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
     for m in &found.skipped {
         eprintln!("etlcal: warning: skipped: {m}");

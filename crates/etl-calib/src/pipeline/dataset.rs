@@ -108,15 +108,7 @@ pub fn observations_from_dataset(
             }
             Err(e) => return Err(e),
         };
-        if det.image_size != dataset.image_size {
-            return Err(Error::Image {
-                path: path.clone(),
-                message: format!(
-                    "the image is {} x {} px, the dataset says {} x {}",
-                    det.image_size[0], det.image_size[1], dataset.image_size[0], dataset.image_size[1]
-                ),
-            });
-        }
+        super::check_image_size(path, det.image_size, dataset.image_size, "the dataset says")?;
         summary.detected += 1;
         let z = match kind {
             Kind::View(i) => dataset.views[*i].z_w_mm,

@@ -54,15 +54,7 @@ pub fn measure_displacement(
     for path in images {
         std::fs::metadata(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
         let d = detector.detect(path, board.inner_corners)?;
-        if d.image_size != cal.image_size {
-            return Err(Error::Image {
-                path: path.to_owned(),
-                message: format!(
-                    "{} x {} px, the calibration is for {} x {}",
-                    d.image_size[0], d.image_size[1], cal.image_size[0], cal.image_size[1]
-                ),
-            });
-        }
+        super::check_image_size(path, d.image_size, cal.image_size, "the calibration is for")?;
         let sq = board.square_mm;
         let pts: Vec<[f64; 3]> = d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq, 0.0]).collect();
         let px: Vec<[f64; 2]> = d.corners.iter().map(|c| c.1).collect();

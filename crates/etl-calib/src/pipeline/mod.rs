@@ -23,7 +23,7 @@ use etl_core::thermal::ThermalCalibration;
 
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
 use etl_formats::observations::Observations;
-use etl_formats::Result;
+use etl_formats::{Error, Result};
 
 /// Options of [`calibrate`]. The default is errors-in-variables with the paper's noise
 /// levels ([`Estimator::EIV_PAPER`]), no robust loss, A0 free; [`Estimator::Paper`] is the
@@ -55,6 +55,18 @@ pub struct CalibrationResult {
     pub report: BundleAdjustReport,
     /// The initial (linear) model.
     pub initial: CameraModel,
+}
+
+/// Refuses an image whose size is not the `expected` one, which `whose` names (e.g. "the
+/// dataset says"): corners of another sensor or crop would calibrate a wrong camera.
+pub(crate) fn check_image_size(path: &std::path::Path, got: [u32; 2], expected: [u32; 2], whose: &str) -> Result<()> {
+    if got == expected {
+        return Ok(());
+    }
+    Err(Error::Image {
+        path: path.to_owned(),
+        message: format!("the image is {} x {} px, {whose} {} x {}", got[0], got[1], expected[0], expected[1]),
+    })
 }
 
 /// A0 from the observations' lens-off views by Zhang's method (section 4.2).
