@@ -3,6 +3,9 @@
 //! package, and the gradient measures of etl-core over images, [`sharpness`]).
 
 pub mod detect;
+mod read;
 pub mod sharpness;
+
+pub use read::read_image;
 
 pub use etl_formats::{Error, Result};

@@ -8,15 +8,14 @@
 //! no colour conversion and must be given the same gray image to agree). An unreadable,
 //! corrupt or too small image fails the whole command, naming the file.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use image::DynamicImage;
 use rayon::prelude::*;
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::{Error, Result};
-use etl_image::sharpness::{sharpness, sharpness_u16, Metric};
+use etl_formats::Result;
+use etl_image::sharpness::{sharpness_file, Metric};
 
 /// Arguments of `etlcal sharpness`.
 #[derive(clap::Args, Debug)]
@@ -36,30 +35,10 @@ fn parse_metric(s: &str) -> std::result::Result<Metric, String> {
     s.parse::<Metric>().map_err(|e| e.to_string())
 }
 
-/// The sharpness of the image file at `path` by `metric`.
-pub fn measure_file(path: &Path, metric: Metric) -> Result<f64> {
-    let img = image::ImageReader::open(path)
-        .map_err(|e| Error::Io { path: path.to_owned(), source: e })?
-        .with_guessed_format()
-        .map_err(|e| Error::Io { path: path.to_owned(), source: e })?
-        .decode()
-        .map_err(|e| Error::Image { path: path.to_owned(), message: e.to_string() })?;
-    let in_file = |e: Error| Error::Image { path: path.to_owned(), message: e.to_string() };
-    match img {
-        DynamicImage::ImageLuma8(g) => sharpness(&g, metric),
-        DynamicImage::ImageLuma16(g) => sharpness_u16(&g, metric),
-        other if other.color().bytes_per_pixel() / other.color().channel_count() > 1 => {
-            sharpness_u16(&other.to_luma16(), metric)
-        }
-        other => sharpness(&other.to_luma8(), metric),
-    }
-    .map_err(in_file)
-}
-
 /// Runs `etlcal sharpness`.
 pub fn run(args: Args) -> Result<()> {
     let values: Vec<f64> =
-        args.images.par_iter().map(|p| measure_file(p, args.metric)).collect::<Result<Vec<f64>>>()?;
+        args.images.par_iter().map(|p| sharpness_file(p, args.metric)).collect::<Result<Vec<f64>>>()?;
     if args.json {
         let images: Vec<_> = args
             .images

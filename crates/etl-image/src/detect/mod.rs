@@ -182,13 +182,7 @@ pub fn detect_dynamic(image: &DynamicImage, pattern: Pattern) -> Result<Detectio
 /// Reads an image file (PNG, JPEG, TIFF) and finds the board. An unreadable file is
 /// [`Error::Image`]; a board not found is [`Error::BoardNotFound`].
 pub fn detect_file(path: &Path, pattern: Pattern) -> Result<Detection> {
-    let img = image::ImageReader::open(path)
-        .map_err(|source| Error::Io { path: path.to_owned(), source })?
-        .with_guessed_format()
-        .map_err(|source| Error::Io { path: path.to_owned(), source })?
-        .decode()
-        .map_err(|e| Error::Image { path: path.to_owned(), message: e.to_string() })?;
-    detect_dynamic(&img, pattern)
+    detect_dynamic(&crate::read_image(path)?, pattern)
 }
 
 /// [`detect_file`] on many images in parallel (rayon); one result per path, in order.

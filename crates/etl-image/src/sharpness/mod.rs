@@ -9,10 +9,11 @@
 //! `round(v / 257)`, the exact inverse of the usual 8-to-16-bit scaling `v * 257`: an
 //! 8-bit image widened that way gives the same CPBD.
 
+use std::path::Path;
 use std::str::FromStr;
 
 use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView, Pixel};
-use image::{GrayImage, ImageBuffer, Luma};
+use image::{DynamicImage, GrayImage, ImageBuffer, Luma};
 
 use etl_formats::{Error, Result};
 
@@ -123,6 +124,24 @@ pub fn sharpness_u16(image: &Gray16Image, metric: Metric) -> Result<f64> {
 /// `round(v / 257)` in integers (257 * 255 = 65535, so the result is at most 255).
 fn to_8bit(v: u16) -> u8 {
     ((v as u32 + 128) / 257) as u8
+}
+
+/// The sharpness of the image file at `path` by `metric`: 8-bit grey as is, 16-bit grey
+/// by [`sharpness_u16`], colour after conversion to luminance (the `image` crate's
+/// `to_luma8`/`to_luma16`: the reference CPBD package does no colour conversion and must
+/// be given the same grey image to agree). Errors name the file.
+pub fn sharpness_file(path: &Path, metric: Metric) -> Result<f64> {
+    let img = crate::read_image(path)?;
+    let in_file = |e: Error| Error::Image { path: path.to_owned(), message: e.to_string() };
+    match img {
+        DynamicImage::ImageLuma8(g) => sharpness(&g, metric),
+        DynamicImage::ImageLuma16(g) => sharpness_u16(&g, metric),
+        other if other.color().bytes_per_pixel() / other.color().channel_count() > 1 => {
+            sharpness_u16(&other.to_luma16(), metric)
+        }
+        other => sharpness(&other.to_luma8(), metric),
+    }
+    .map_err(in_file)
 }
 
 #[cfg(test)]
