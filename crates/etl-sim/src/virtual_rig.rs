@@ -18,9 +18,11 @@ use etl_hw::virtual_lens::VirtualLens;
 use image::GrayImage;
 
 use crate::render::{render, Optics, RenderOptions, Scene};
-use etl_calib::thermal_calibration::{Camera, Climate, ProcedureResult};
+use etl_calib::thermal_calibration::{run_procedure, Camera, Climate, ProcedureOptions, ProcedureResult};
+use etl_core::progress::Progress;
 use etl_formats::dataset::Board;
 use etl_formats::{Error, Result};
+use etl_hw::client::{LensClient, OpenOptions};
 
 /// Image distance of the virtual camera, mm.
 pub const IMAGE_DISTANCE_MM: f64 = 26.0;
@@ -144,4 +146,37 @@ pub fn surface_error_ma(
         }
     }
     Ok(((referenced / n as f64).sqrt(), (absolute / n as f64).sqrt()))
+}
+/// The temperature procedure run on the virtual rig, and how far its surface is from the
+/// virtual lens's true one.
+#[derive(Debug, Clone)]
+pub struct VirtualProcedure {
+    /// What the procedure measured and fitted.
+    pub result: ProcedureResult,
+    /// The temperature the procedure references its E_T to (its first), degC.
+    pub t_ref_c: f64,
+    /// RMS error of the fitted surface against the truth, referenced to `t_ref_c` as the
+    /// procedure is, mA.
+    pub surface_error_ma: f64,
+    /// The same without the reference, mA.
+    pub surface_error_absolute_ma: f64,
+}
+
+/// Runs the section 4.1 procedure with `options` on a virtual lens (the paper's physics
+/// and thermal surface) served on a pseudo-terminal and driven through the real serial
+/// client, the synthetic camera looking through it and its climate; compares the fitted
+/// surface with the truth over the procedure's ranges.
+pub fn run_virtual_procedure(options: &ProcedureOptions, progress: &dyn Progress) -> Result<VirtualProcedure> {
+    let config = etl_hw::virtual_lens::VirtualLensConfig::default();
+    let truth = config.surface;
+    let device = VirtualLens::spawn(config).map_err(Error::lens)?;
+    let mut client = LensClient::open(device.path(), OpenOptions::default()).map_err(Error::lens)?;
+    let mut camera = VirtualCamera::new(&device);
+    let mut climate = VirtualClimate(&device);
+    let result = run_procedure(&mut client, &mut camera, &mut climate, options, progress)?;
+    let t_ref_c = options.temperatures_c.first().copied().unwrap_or(27.0);
+    let c = &result.calibration;
+    let (surface_error_ma, surface_error_absolute_ma) =
+        surface_error_ma(&result, &truth, c.e_in_range_ma, c.t_range_c, t_ref_c)?;
+    Ok(VirtualProcedure { result, t_ref_c, surface_error_ma, surface_error_absolute_ma })
 }

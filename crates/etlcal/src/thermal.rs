@@ -113,10 +113,7 @@ pub fn run(args: Args, json: bool) -> Result<()> {
 
 /// Runs `etlcal thermal calibrate --virtual`.
 pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
-    use etl_calib::thermal_calibration::{run_procedure, ProcedureOptions};
-    use etl_hw::client::{LensClient, OpenOptions};
-    use etl_hw::virtual_lens::{VirtualLens, VirtualLensConfig};
-    use etl_sim::virtual_rig::{surface_error_ma, VirtualCamera, VirtualClimate};
+    use etl_calib::thermal_calibration::ProcedureOptions;
     let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
     for p in [&args.out, &table] {
         crate::output::create_parent(p)?;
@@ -126,17 +123,9 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
         options.e_in_grid_ma = vec![40.0, 90.0, 140.0, 190.0, 240.0];
         options.temperatures_c = vec![27.0, 29.5, 32.0, 34.5, 37.0];
     }
-    let config = VirtualLensConfig::default();
-    let truth = config.surface;
-    let device = VirtualLens::spawn(config).map_err(|e| Error::InvalidInput(format!("virtual lens: {e}")))?;
-    let mut client = LensClient::open(device.path(), OpenOptions::default())
-        .map_err(|e| Error::InvalidInput(format!("{}: {e}", device.path().display())))?;
-    let mut camera = VirtualCamera::new(&device);
-    let mut climate = VirtualClimate(&device);
-    let r = run_procedure(&mut client, &mut camera, &mut climate, &options, &crate::progress::Bar::new(!args.json))?;
-    let t0 = options.temperatures_c.first().copied().unwrap_or(27.0);
-    let (referenced, absolute) =
-        surface_error_ma(&r, &truth, r.calibration.e_in_range_ma, r.calibration.t_range_c, t0)?;
+    let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &crate::progress::Bar::new(!args.json))?;
+    let (r, t0) = (&v.result, v.t_ref_c);
+    let (referenced, absolute) = (v.surface_error_ma, v.surface_error_absolute_ma);
     etl_formats::thermal::write_thermal_table(&table, &r.samples)?;
     let file = ThermalFile::new(&r.calibration, r.rms_ma);
     file.save(&args.out)?;

@@ -1,0 +1,28 @@
+//! `etlcal thermal calibrate --virtual --quick`: the section 4.1 procedure on the virtual
+//! rig recovers the virtual lens's true surface (the paper's), and writes the thermal file
+//! and its table.
+
+use std::process::Command;
+
+#[test]
+fn the_virtual_procedure_recovers_the_true_surface_and_writes_both_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("new/thermal.json");
+    let out_s = out.to_str().unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_etlcal"))
+        .args(["thermal", "calibrate", "--virtual", "--quick", "--out", out_s, "--json"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(v["samples"], 25, "{v}");
+    // Against the truth, referenced to the first temperature as the procedure is.
+    let err = v["surface_error_ma"].as_f64().unwrap();
+    assert!(err < 0.3, "surface error {err} mA");
+    assert_eq!(v["format"], "etlcal.thermal/1");
+    let written: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(written["coefficients"], v["coefficients"]);
+    let table = std::fs::read_to_string(out.with_extension("csv")).unwrap();
+    assert_eq!(table.lines().next(), Some("temperature_c,e_in_ma,e_t_ma"));
+    assert_eq!(table.lines().count(), 26);
+}
