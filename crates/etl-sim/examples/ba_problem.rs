@@ -2,7 +2,7 @@
 //! etlcal's solve of it: prints one JSON object with the observations, the linear start,
 //! etlcal's final cost and its mean time per solve (one core).
 //!
-//! `cargo run --release -p etl-calib --example ba_problem`
+//! `cargo run --release -p etl-sim --example ba_problem`
 use std::time::Instant;
 
 use etl_core::calib::jacobian::to_params;

@@ -7,7 +7,7 @@
 //! paper's board, the lens of `Optics::smooth_focus` (aperture 2.5 mm, diffraction blur
 //! 0.5 px), so the best focus is exactly the current whose plane in focus is the board's.
 //!
-//! `cargo run --release -p etl-calib --example autofocus_study -- [REALISATIONS]` (default 8;
+//! `cargo run --release -p etl-studies --example autofocus_study -- [REALISATIONS]` (default 8;
 //! about 4 minutes on 2 cores).
 use etl_core::focus::{autofocus, AutofocusOptions};
 use etl_core::model::CameraModel;

@@ -4,41 +4,20 @@
 //! fy(E) over 80..225 mA, the principal-point error, and the mean relative errors of
 //! kf1..kf3 (x, y), om and T (the paper's Fig. 6 measure).
 //!
-//! `cargo run --release -p etl-calib --example full_noise [-- TRIALS]`
+//! `cargo run --release -p etl-studies --example full_noise [-- TRIALS]`
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalCalibration;
 use etl_sim::simulate::{paper_rig, NoiseModel};
-use etl_studies::common::curve_errors;
+use etl_studies::common::model_errors;
 use rayon::prelude::*;
-
-fn rel(a: f64, b: f64) -> f64 {
-    ((a - b) / b).abs()
-}
-
-fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
 
 /// [fx curve, fy curve, pp, kf1x, kf2x, kf3x, kf1y, kf2y, kf3y, om, T]
 fn errors(m: &CameraModel, t: &CameraModel) -> [f64; 11] {
-    let (ex, ey) = curve_errors(m, t, [80.0, 225.0]);
-    let pp = (m.principal_point[0] - t.principal_point[0]).hypot(m.principal_point[1] - t.principal_point[1]);
-    let d = |a: [f64; 3], b: [f64; 3]| norm([a[0] - b[0], a[1] - b[1], a[2] - b[2]]) / norm(b);
-    [
-        ex,
-        ey,
-        pp,
-        rel(m.kf_x[1], t.kf_x[1]),
-        rel(m.kf_x[2], t.kf_x[2]),
-        rel(m.kf_x[3], t.kf_x[3]),
-        rel(m.kf_y[1], t.kf_y[1]),
-        rel(m.kf_y[2], t.kf_y[2]),
-        rel(m.kf_y[3], t.kf_y[3]),
-        d(m.rotation_rodrigues, t.rotation_rodrigues),
-        d(m.translation_mm, t.translation_mm),
-    ]
+    let e = model_errors(m, t);
+    let [k0, k1, k2, k3, k4, k5] = e.kf_rel;
+    [e.fx_curve_max_rel, e.fy_curve_max_rel, e.principal_point_px, k0, k1, k2, k3, k4, k5, e.om_rel, e.t_rel]
 }
 
 /// One trial's 11 errors: (paper BA, eiv BA).

@@ -2,7 +2,7 @@
 //! RMS and the largest parameter distance (in formal std) from the converged estimate.
 //! `NOISE_NONE=1` runs it on noise-free data.
 //!
-//! `cargo run --release -p etl-calib --example subset_trace -- [VIEWS] [TRIAL]`, VIEWS as
+//! `cargo run --release -p etl-studies --example subset_trace -- [VIEWS] [TRIAL]`, VIEWS as
 //! the study labels them (e.g. 135789, 1-based in the nine).
 use etl_core::calib::jacobian::to_params;
 use etl_core::calib::params::{PARAMS, PARAM_NAMES};

@@ -8,7 +8,7 @@ use etl_formats::{Error, Result};
 
 /// Creates the directory `dir` and its missing parents; nothing to do when it exists.
 pub fn create_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|source| Error::Io { path: dir.to_owned(), source })
+    std::fs::create_dir_all(dir).map_err(|source| Error::Output { path: dir.to_owned(), source })
 }
 
 /// Creates the parent directory of the output file `file` (and its missing parents); a
