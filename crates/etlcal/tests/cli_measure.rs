@@ -73,10 +73,23 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
     old.as_object_mut().unwrap().remove("covariance").unwrap();
     let old_cal = p("old.json");
     std::fs::write(&old_cal, old.to_string()).unwrap();
-    let mut args = vec!["measure", "--calibration", &old_cal, "--e-in", "153", "--t", "30", &p("a.png")];
-    let b_png = p("b.png");
-    args.extend([b_png.as_str(), "--pattern", "9x7", "--square", "1.5", "--json"]);
-    let out = etlcal(&args);
+    let (a_png, b_png) = (p("a.png"), p("b.png"));
+    let out = etlcal(&[
+        "measure",
+        "--calibration",
+        &old_cal,
+        "--e-in",
+        "153",
+        "--t",
+        "30",
+        &a_png,
+        &b_png,
+        "--pattern",
+        "9x7",
+        "--square",
+        "1.5",
+        "--json",
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let o: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(o["std_includes_calibration"], Value::Bool(false), "{o}");
