@@ -59,7 +59,8 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
     // R (0, 0, -2) of the rendered rig, lies within 4 of them on each axis, and they are
     // microns, not nothing.
     assert_eq!(m["std_includes_calibration"], Value::Bool(true), "{m}");
-    let r = etl_core::model::rotation::rodrigues_to_matrix(etl_core::model::CameraModel::paper_rig().rotation_rodrigues);
+    let r =
+        etl_core::model::rotation::rodrigues_to_matrix(etl_core::model::CameraModel::paper_rig().rotation_rodrigues);
     for i in 0..3 {
         let d = m["displacement_mm"][i].as_f64().unwrap();
         let s = m["displacement_std_mm"][i].as_f64().unwrap();
