@@ -36,11 +36,18 @@ pub fn sandwich<const R: usize>(j: &[[f64; PARAMS]; R], c: &[[f64; PARAMS]; PARA
         }
     }
     let mut out = [[0.0; R]; R];
+    for (oa, ta) in out.iter_mut().zip(t.iter()) {
+        for (oab, jb) in oa.iter_mut().zip(j.iter()) {
+            *oab = ta.iter().zip(jb.iter()).map(|(x, y)| x * y).sum();
+        }
+    }
+    // Mirror the upper triangle (the two products differ by rounding).
     for a in 0..R {
-        for b in a..R {
-            let v: f64 = t[a].iter().zip(j[b].iter()).map(|(x, y)| x * y).sum();
-            out[a][b] = v;
-            out[b][a] = v;
+        for b in 0..a {
+            let v = out.get(b).and_then(|r| r.get(a)).copied().unwrap_or(0.0);
+            if let Some(x) = out.get_mut(a).and_then(|r| r.get_mut(b)) {
+                *x = v;
+            }
         }
     }
     out
@@ -75,7 +82,8 @@ pub fn projection_uncertainty(
     check_covariance(covariance)?;
     let p = Projector::new(&to_params(model)).project(world_mm, e_com_ma, true)?;
     let cov = sandwich(&p.d_params, covariance);
-    let std_px = [libm::sqrt(cov[0][0].max(0.0)), libm::sqrt(cov[1][1].max(0.0))];
+    let [[uu, _], [_, vv]] = cov;
+    let std_px = [libm::sqrt(uu.max(0.0)), libm::sqrt(vv.max(0.0))];
     if !(std_px[0].is_finite() && std_px[1].is_finite()) {
         return Err(Error::NotFinite { what: "projection standard deviation" });
     }

@@ -115,11 +115,9 @@ pub fn pose_uncertainty(
         all_finite(w, "board point")?;
         all_finite(px, "pixel")?;
         let p = proj.project(*w, e_com_ma, true)?;
-        for (row, d) in p.d_params.iter().enumerate() {
-            let r = p.pixel[row] - px[row];
-            cost += r * r;
-            for (i, (ni, bi)) in n.iter_mut().zip(b.iter_mut()).enumerate() {
-                let ji = d[i];
+        for (d, (&u, &o)) in p.d_params.iter().zip(p.pixel.iter().zip(px.iter())) {
+            cost += (u - o) * (u - o);
+            for ((ni, bi), &ji) in n.iter_mut().zip(b.iter_mut()).zip(d.iter()) {
                 for (nik, &dk) in ni.iter_mut().zip(d.iter()) {
                     *nik += ji * dk;
                 }
@@ -135,7 +133,7 @@ pub fn pose_uncertainty(
         PixelNoise::Known(_) => {
             return Err(Error::InvalidArgument { what: "pixel noise sigma must be finite and >= 0" });
         }
-        PixelNoise::FromResidual => libm::sqrt(cost / (2 * board_mm.len() - POSE) as f64),
+        PixelNoise::FromResidual => libm::sqrt(cost / (2 * board_mm.len()).saturating_sub(POSE).max(1) as f64),
     };
     let ninv = spd_inverse(&n, 1e-14).ok_or(Error::Degenerate { what: "the points do not determine the PnP pose" })?;
     let mut pixel_covariance = ninv;
@@ -165,25 +163,42 @@ pub fn displacement_covariance_mm2(
     ub: &PoseUncertainty,
     calibration_covariance: Option<&[[f64; PARAMS]; PARAMS]>,
 ) -> Result<[[f64; 3]; 3]> {
-    let t = |c: &[[f64; POSE]; POSE]| -> [[f64; 3]; 3] {
-        core::array::from_fn(|i| core::array::from_fn(|j| c[3 + i][3 + j]))
-    };
-    let mut out = t(&ua.pixel_covariance);
-    add(&mut out, &t(&ub.pixel_covariance));
+    let mut out = translation_block(&ua.pixel_covariance);
+    add(&mut out, &translation_block(&ub.pixel_covariance));
     if let Some(c) = calibration_covariance {
         check_covariance(c)?;
-        let diff: [[f64; PARAMS]; 3] = core::array::from_fn(|i| {
-            core::array::from_fn(|k| ub.d_pose_d_params[3 + i][k] - ua.d_pose_d_params[3 + i][k])
-        });
+        // The translation rows of S_b - S_a.
+        let mut diff = [[0.0; PARAMS]; 3];
+        let rows = ub.d_pose_d_params.iter().skip(3).zip(ua.d_pose_d_params.iter().skip(3));
+        for (d, (rb, ra)) in diff.iter_mut().zip(rows) {
+            for (x, (b, a)) in d.iter_mut().zip(rb.iter().zip(ra.iter())) {
+                *x = b - a;
+            }
+        }
         add(&mut out, &sandwich(&diff, c));
     }
     Ok(out)
 }
 
+/// The translation's 3 x 3 block of a pose covariance (rows and columns 3..6).
+fn translation_block(c: &[[f64; POSE]; POSE]) -> [[f64; 3]; 3] {
+    let mut out = [[0.0; 3]; 3];
+    for (o, row) in out.iter_mut().zip(c.iter().skip(3)) {
+        for (x, &v) in o.iter_mut().zip(row.iter().skip(3)) {
+            *x = v;
+        }
+    }
+    out
+}
+
 /// One standard deviation of each component of the displacement, mm: the square roots of
 /// the diagonal of [`displacement_covariance_mm2`].
 pub fn displacement_std_mm(cov_mm2: &[[f64; 3]; 3]) -> [f64; 3] {
-    core::array::from_fn(|i| libm::sqrt(cov_mm2[i][i].max(0.0)))
+    let mut out = [0.0; 3];
+    for (k, (o, row)) in out.iter_mut().zip(cov_mm2.iter()).enumerate() {
+        *o = libm::sqrt(row.get(k).copied().unwrap_or(0.0).max(0.0));
+    }
+    out
 }
 
 #[cfg(test)]
