@@ -17,7 +17,7 @@ venv="$root/target/test-venv"
 rm -rf "$venv" "$root/target/wheels-test"
 python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet "maturin>=1.5,<2" "pytest>=7" "numpy>=1.21" opencv-python-headless mypy
+"$venv/bin/python" -m pip install --quiet "maturin>=1.5,<2" "pytest>=7" "numpy>=1.21" opencv-python-headless mypy pyyaml types-PyYAML
 "$venv/bin/maturin" build --quiet --profile dev --manifest-path crates/etl-py/Cargo.toml \
   --out "$root/target/wheels-test" --interpreter "$venv/bin/python"
 "$venv/bin/python" -m pip install --quiet "$root"/target/wheels-test/*.whl

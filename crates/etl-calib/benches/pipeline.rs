@@ -5,8 +5,8 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_core::calib::Estimator;
-use etl_core::thermal::ThermalCalibration;
 use etl_formats::observations::Observations;
+use etl_formats::ThermalRef;
 use etl_sim::simulate::{paper_rig, NoiseModel};
 use std::hint::black_box;
 
@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
         c.bench_function(&format!("observations_to_calibration_file_{name}"), |b| {
             b.iter(|| {
                 let obs = Observations::load(black_box(&obs_path)).unwrap();
-                let r = calibrate(&obs, &sim.a0, &ThermalCalibration::PAPER, &options).unwrap();
+                let r = calibrate(&obs, &sim.a0, Some(&ThermalRef::paper()), &options).unwrap();
                 r.calibration.save(&cal_path).unwrap();
             })
         });

@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_core::calib::Estimator;
-use etl_core::thermal::ThermalCalibration;
 use etl_formats::observations::Observations;
+use etl_formats::ThermalRef;
 use etl_sim::simulate::{paper_rig, NoiseModel};
 
 fn main() {
@@ -29,7 +29,7 @@ fn main() {
     let start = Instant::now();
     for _ in 0..runs {
         let obs = Observations::load(&obs_path).expect("read observations");
-        let r = calibrate(&obs, &sim.a0, &ThermalCalibration::PAPER, &options).expect("calibrate");
+        let r = calibrate(&obs, &sim.a0, Some(&ThermalRef::paper()), &options).expect("calibrate");
         r.calibration.save(&cal_path).expect("write calibration");
     }
     let per_run_ms = start.elapsed().as_secs_f64() * 1e3 / runs.max(1) as f64;

@@ -5,7 +5,7 @@ use etl_calib::baseline::per_setting;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
-use etl_core::thermal::ThermalCalibration;
+use etl_formats::ThermalRef;
 use etl_sim::simulate::{add_setting_views, paper_rig, NoiseModel, SettingRig};
 
 fn rel_err(m: &CameraModel, e: f64) -> f64 {
@@ -34,14 +34,14 @@ fn baseline_error_grows_with_current_and_the_proposed_method_beats_it_there() {
     // the paper's plain estimator 0.36 % .. 0.85 % (it absorbs the 10 um stage and 0.4 mA
     // current errors, NOTES.md).
     let rig = SettingRig::default();
-    let thermal = ThermalCalibration::PAPER;
+    let thermal = ThermalRef::paper();
     let t = CameraModel::paper_rig();
     let (mut base_lo, mut base_hi, mut curve_hi, mut eiv_hi) = (0.0, 0.0, 0.0, 0.0);
     let trials = 8;
     for seed in 0..trials {
         let mut sim = paper_rig(&NoiseModel::PAPER, 40 + seed);
         add_setting_views(&mut sim.observations, &rig, &NoiseModel::PAPER, 40 + seed);
-        let b = per_setting(&sim.observations, &thermal).unwrap();
+        let b = per_setting(&sim.observations, Some(&thermal)).unwrap();
         assert_eq!(b.settings.len(), 7);
         assert_eq!(b.calibration.estimator, "per-setting");
         let (s_lo, s_hi) = (&b.settings[0], &b.settings[6]);
@@ -50,7 +50,7 @@ fn baseline_error_grows_with_current_and_the_proposed_method_beats_it_there() {
         curve_hi += rel_err(&b.calibration.model(), 225.0) / trials as f64;
         let a0 = etl_calib::pipeline::a0_from_offstate(&sim.observations).unwrap().a0();
         let opts = CalibrateOptions { estimator: Estimator::EIV_PAPER, ..CalibrateOptions::default() };
-        let p = calibrate(&sim.observations, &a0, &thermal, &opts).unwrap();
+        let p = calibrate(&sim.observations, &a0, Some(&thermal), &opts).unwrap();
         eiv_hi += rel_err(&p.calibration.model(), 225.0) / trials as f64;
     }
     println!(
@@ -72,16 +72,16 @@ fn baseline_error_grows_with_current_and_the_proposed_method_beats_it_there() {
 fn baseline_refuses_too_few_settings_or_views() {
     let rig = SettingRig { e_com_ma: vec![100.0, 150.0], ..SettingRig::default() };
     let mut sim = paper_rig(&NoiseModel::NONE, 1);
-    let thermal = ThermalCalibration::PAPER;
-    let e = per_setting(&sim.observations, &thermal).unwrap_err().to_string();
+    let thermal = ThermalRef::paper();
+    let e = per_setting(&sim.observations, Some(&thermal)).unwrap_err().to_string();
     assert!(e.contains("setting_views"), "{e}");
     add_setting_views(&mut sim.observations, &rig, &NoiseModel::NONE, 1);
-    let e = per_setting(&sim.observations, &thermal).unwrap_err().to_string();
+    let e = per_setting(&sim.observations, Some(&thermal)).unwrap_err().to_string();
     assert!(e.contains(">= 3 distinct currents, got 2"), "{e}");
     let rig = SettingRig { e_com_ma: vec![100.0, 150.0, 200.0], views_per_setting: 2, ..SettingRig::default() };
     let mut sim = paper_rig(&NoiseModel::NONE, 1);
     add_setting_views(&mut sim.observations, &rig, &NoiseModel::NONE, 1);
-    let e = per_setting(&sim.observations, &thermal).unwrap_err().to_string();
+    let e = per_setting(&sim.observations, Some(&thermal)).unwrap_err().to_string();
     assert!(e.contains("has 2 views"), "{e}");
 }
 
@@ -90,7 +90,7 @@ fn noise_free_baseline_recovers_the_curve() {
     let rig = SettingRig::default();
     let mut sim = paper_rig(&NoiseModel::NONE, 1);
     add_setting_views(&mut sim.observations, &rig, &NoiseModel::NONE, 1);
-    let b = per_setting(&sim.observations, &ThermalCalibration::PAPER).unwrap();
+    let b = per_setting(&sim.observations, Some(&ThermalRef::paper())).unwrap();
     let m = b.calibration.model();
     for e in [80.0, 120.0, 170.0, 225.0] {
         assert!(rel_err(&m, e) < 1e-7, "{e}: {}", rel_err(&m, e));

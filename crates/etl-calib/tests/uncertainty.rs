@@ -15,7 +15,6 @@ use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::pnp::{
     displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, solve_pnp, PixelNoise,
 };
-use etl_core::thermal::ThermalCalibration;
 use etl_sim::simulate::{focused_z_mm, observe_board, paper_rig, NoiseModel};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -44,7 +43,7 @@ fn z(a: f64, b: f64, s: f64) -> f64 {
 
 fn trial(seed: u64) -> Trial {
     let sim = paper_rig(&NoiseModel::PAPER, seed);
-    let r = calibrate(&sim.observations, &sim.a0, &ThermalCalibration::PAPER, &CalibrateOptions::default()).unwrap();
+    let r = calibrate(&sim.observations, &sim.a0, None, &CalibrateOptions::default()).unwrap();
     let cov = r.calibration.covariance_matrix().expect("the pipeline records the covariance");
     let (x, truth) = (to_params(&r.report.model), to_params(&sim.truth));
     let params = core::array::from_fn(|i| z(x[i], truth[i], cov[i][i].sqrt()));
@@ -134,7 +133,7 @@ fn one_sigma_intervals_cover_the_truth_68_percent_of_the_time() {
 #[test]
 fn the_calibration_file_records_the_covariance_with_std_as_its_diagonal() {
     let sim = paper_rig(&NoiseModel::PAPER, 7);
-    let r = calibrate(&sim.observations, &sim.a0, &ThermalCalibration::PAPER, &CalibrateOptions::default()).unwrap();
+    let r = calibrate(&sim.observations, &sim.a0, None, &CalibrateOptions::default()).unwrap();
     let cov = r.calibration.covariance_matrix().unwrap();
     let std = r.report.std;
     for i in 0..PARAMS {

@@ -1,6 +1,8 @@
 //! Projection and undistortion of a paper-rig view, and the temperature compensation
-//! (issue 2's targets: < 2 us for 168 projections, < 20 ns per E_com, on one core).
+//! (issue 2's targets: < 2 us for 168 projections, < 20 ns per E_com, on one core), and
+//! the run-time camera at a setting (issue 17: `Camera::at` under 100 ns).
 use criterion::{criterion_group, criterion_main, Criterion};
+use etl_core::camera::{Camera, ThermalTrust};
 use etl_core::model::CameraModel;
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use std::hint::black_box;
@@ -27,6 +29,13 @@ fn bench(c: &mut Criterion) {
     });
 }
 
+fn bench_camera_at(c: &mut Criterion) {
+    let thermal = ThermalTrust::from_calibration(&ThermalCalibration::PAPER);
+    let cam = Camera::new(CameraModel::paper_rig(), Some(thermal), [80.0, 225.0]).unwrap();
+    // (E_in, T) -> E_com (Eq. 7), range checks, K and distortion (Eq. 16, 18).
+    c.bench_function("camera_at", |b| b.iter(|| cam.at(black_box(150.0), black_box(31.7)).unwrap()));
+}
+
 fn bench_thermal(c: &mut Criterion) {
     let s = ThermalSurface::PAPER;
     c.bench_function("e_com_one", |b| b.iter(|| s.e_com_ma(black_box(143.2), black_box(31.7)).unwrap()));
@@ -48,5 +57,5 @@ fn bench_thermal(c: &mut Criterion) {
     c.bench_function("e_in_for_e_com_one", |b| b.iter(|| s.e_in_for_e_com(black_box(143.2), black_box(31.7)).unwrap()));
 }
 
-criterion_group!(benches, bench, bench_thermal);
+criterion_group!(benches, bench, bench_thermal, bench_camera_at);
 criterion_main!(benches);

@@ -26,6 +26,7 @@
 #![warn(missing_docs)]
 
 pub mod calib;
+pub mod camera;
 pub mod error;
 pub mod fit;
 pub mod focus;

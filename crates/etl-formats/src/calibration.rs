@@ -10,11 +10,13 @@ use std::path::Path;
 use etl_core::calib::jacobian::to_params;
 use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
+use etl_core::camera::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::model::CameraModel;
-use etl_core::thermal::ThermalSurface;
+use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use serde::{Deserialize, Serialize};
 
 use super::{parse_json, read_json, write_json};
+use crate::thermal::ThermalFile;
 use crate::{Error, Result};
 
 /// The format tag.
@@ -66,12 +68,94 @@ fn to_params_std(s: &ModelStd) -> [f64; PARAMS] {
     })
 }
 
-/// The thermal surface a calibration was made with.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// The temperature compensation a calibration was made with and is used with: the whole
+/// thermal calibration (surface, the ranges it was fitted over, its RMS) and where it came
+/// from. Files written before the ranges were kept hold `coefficients` only; they stay
+/// readable, and the run-time camera then treats every setting as outside the ranges
+/// ([`etl_core::camera::ThermalTrust`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ThermalRef {
-    /// The 10 coefficients of E_T(T, E_in) (NOTES.md order).
+    /// The 10 coefficients of E_T(T, E_in) (docs/METHOD.md order).
     pub coefficients: [f64; 10],
+    /// [min, max] temperature of the samples the surface was fitted to, degC.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_range_c: Option<[f64; 2]>,
+    /// [min, max] driver current of those samples, mA.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub e_in_range_ma: Option<[f64; 2]>,
+    /// RMS of the surface fit, mA.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms_ma: Option<f64>,
+    /// Where it came from: `"paper"` (the paper's surface, chosen explicitly) or the
+    /// `etlcal.thermal/1` file it was read from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+/// The word that chooses the paper's thermal surface where a thermal file is expected
+/// (`--thermal paper`, `thermal="paper"`).
+pub const PAPER_THERMAL: &str = "paper";
+
+impl ThermalRef {
+    /// The paper's surface over its procedure's ranges (27..37 degC, 40..240 mA, RMS
+    /// 0.2106 mA), recorded as `"source": "paper"`.
+    pub fn paper() -> Self {
+        Self::from_file(&ThermalFile::paper(), PAPER_THERMAL)
+    }
+
+    /// The content of a thermal file, recorded with `source` (the file's path).
+    pub fn from_file(file: &ThermalFile, source: &str) -> Self {
+        ThermalRef {
+            coefficients: file.coefficients,
+            t_range_c: Some(file.t_range_c),
+            e_in_range_ma: Some(file.e_in_range_ma),
+            rms_ma: Some(file.rms_ma),
+            source: Some(source.to_owned()),
+        }
+    }
+
+    /// What the user chose: [`PAPER_THERMAL`] for the paper's surface, else the path of an
+    /// `etlcal.thermal/1` file (read and checked; a file named `paper` is `./paper`).
+    pub fn choose(choice: &Path) -> Result<Self> {
+        if choice == Path::new(PAPER_THERMAL) {
+            return Ok(Self::paper());
+        }
+        Ok(Self::from_file(&ThermalFile::load(choice)?, &choice.display().to_string()))
+    }
+
+    /// The surface with its ranges, as the run-time camera checks them.
+    pub fn trust(&self) -> ThermalTrust {
+        ThermalTrust {
+            surface: ThermalSurface { coefficients: self.coefficients },
+            t_range_c: self.t_range_c,
+            e_in_range_ma: self.e_in_range_ma,
+        }
+    }
+
+    /// The thermal calibration with its ranges. Errors: a file that does not keep them.
+    pub fn calibration(&self) -> Result<ThermalCalibration> {
+        match (self.t_range_c, self.e_in_range_ma) {
+            (Some(t_range_c), Some(e_in_range_ma)) => Ok(ThermalCalibration {
+                surface: ThermalSurface { coefficients: self.coefficients },
+                t_range_c,
+                e_in_range_ma,
+            }),
+            _ => Err(Error::InvalidInput(
+                "the thermal part of this calibration has no calibrated ranges (an older file): re-run calibrate \
+                 with --thermal FILE or --thermal paper"
+                    .into(),
+            )),
+        }
+    }
+
+    /// E_com of a view at (`e_in_ma`, `temperature_c`), refused outside the calibrated
+    /// ranges (with their margins, [`etl_core::camera`]): a calibration must not be built
+    /// on extrapolated currents.
+    pub fn e_com_ma(&self, e_in_ma: f64, temperature_c: f64) -> Result<f64> {
+        let (e_t, _) = self.trust().e_t_ma(e_in_ma, temperature_c, Trust::Refuse)?;
+        Ok(e_in_ma - e_t)
+    }
 }
 
 /// Per-view summary.
@@ -291,11 +375,29 @@ impl Calibration {
     /// The thermal surface the calibration was made with. A file without one is refused
     /// here rather than given a default: a surface assumed silently changes every E_com.
     pub fn thermal_surface(&self) -> Result<ThermalSurface> {
-        self.thermal.map(|t| ThermalSurface { coefficients: t.coefficients }).ok_or_else(|| {
+        Ok(self.thermal_ref()?.trust().surface)
+    }
+
+    /// The thermal part, refused when absent (as [`Self::thermal_surface`]).
+    pub fn thermal_ref(&self) -> Result<&ThermalRef> {
+        self.thermal.as_ref().ok_or_else(|| {
             Error::InvalidInput(
                 "this calibration has no temperature compensation (thermal); pass E_com directly or add one".into(),
             )
         })
+    }
+
+    /// The run-time camera of this calibration (etl-core, no allocation): model, thermal
+    /// part with its ranges, calibrated E_com range.
+    pub fn camera(&self) -> Result<Camera> {
+        Ok(Camera::new(self.model(), self.thermal.as_ref().map(ThermalRef::trust), self.e_com_range_ma)?)
+    }
+
+    /// The camera at driver current `e_in_ma` and temperature `temperature_c`, refused
+    /// outside the calibrated ranges unless `trust` is [`Trust::Extrapolate`]
+    /// ([`Camera::at_with`]).
+    pub fn at(&self, e_in_ma: f64, temperature_c: f64, trust: Trust) -> Result<CameraAt> {
+        Ok(self.camera()?.at_with(e_in_ma, temperature_c, trust)?)
     }
 
     /// The one check of a calibration, made by every reader and writer (CLI and Python):
@@ -315,8 +417,11 @@ impl Calibration {
             return bad(format!("e_com_range_ma {:?} must be a finite [min, max]", self.e_com_range_ma));
         }
         if let Some(t) = &self.thermal {
-            if let Err(e) = (ThermalSurface { coefficients: t.coefficients }).validate() {
-                return bad(e.to_string());
+            if let Err(e) = t.trust().validate() {
+                return bad(format!("thermal: {e}"));
+            }
+            if !t.rms_ma.is_none_or(|r| r.is_finite() && r >= 0.0) {
+                return bad(format!("thermal.rms_ma = {:?} must be a finite number >= 0", t.rms_ma));
             }
         }
         if !(self.rms_reprojection_px.is_finite() && self.rms_reprojection_px >= 0.0) {
@@ -343,20 +448,5 @@ impl Calibration {
     pub fn save(&self, path: &Path) -> Result<()> {
         self.validate(path)?;
         write_json(path, self)
-    }
-
-    /// Refuses a current outside the calibrated range (by more than `margin_ma`): the
-    /// cubic fx(E) is not trustworthy there.
-    pub fn check_current(&self, e_com_ma: f64, margin_ma: f64) -> Result<()> {
-        let [lo, hi] = self.e_com_range_ma;
-        if !e_com_ma.is_finite() {
-            return Err(Error::InvalidInput("current is NaN or infinite".into()));
-        }
-        if e_com_ma < lo - margin_ma || e_com_ma > hi + margin_ma {
-            return Err(Error::InvalidInput(format!(
-                "E_com = {e_com_ma} mA is outside the calibrated range [{lo}, {hi}] mA (+- {margin_ma})"
-            )));
-        }
-        Ok(())
     }
 }

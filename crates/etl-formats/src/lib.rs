@@ -5,25 +5,24 @@
 //!
 //! ```
 //! use std::path::Path;
-//! use etl_formats::Calibration;
+//! use etl_formats::{Calibration, Trust};
 //!
 //! # fn main() -> etl_formats::Result<()> {
 //! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/service/calibration.json");
 //! let cal = Calibration::load(Path::new(path))?; // refuses a file that fails its checks
-//! let camera = cal.model();
-//!
-//! // E_com at the lens's driver current and temperature (Eq. 8), with the surface the
-//! // calibration was made with; a current outside the calibrated range is refused.
+//! // The camera at the lens's driver current and temperature: E_com = E_in - E_T(T, E_in)
+//! // (Eq. 7-8) with the thermal calibration the file keeps; a temperature, current or
+//! // E_com outside the calibrated ranges is refused unless extrapolation is asked for.
 //! let (e_in_ma, temperature_c) = (150.0, 35.0);
-//! let e_com_ma = cal.thermal_surface()?.e_com_ma(e_in_ma, temperature_c)?;
-//! assert!((e_com_ma - 143.485).abs() < 1e-3);
-//! cal.check_current(e_com_ma, 0.0)?;
+//! let camera = cal.at(e_in_ma, temperature_c, Trust::Refuse)?;
+//! assert!((camera.e_com_ma() - 143.485).abs() < 1e-3);
+//! assert!(cal.at(150.0, 80.0, Trust::Refuse).is_err());
 //!
 //! // K at that setting, a world point's pixel, and a pixel without distortion.
-//! let k = camera.intrinsics(e_com_ma)?;
+//! let k = camera.intrinsics();
 //! assert!(k.fx > 1000.0 && k.fy > 1000.0);
-//! let pixel = camera.project([10.0, 8.0, 20.0], e_com_ma)?;
-//! let ideal = camera.undistort(pixel, e_com_ma)?;
+//! let pixel = camera.project([10.0, 8.0, 20.0])?;
+//! let ideal = camera.undistort_point(pixel)?;
 //! assert!((ideal[0] - pixel[0]).abs() < 5.0 && (ideal[1] - pixel[1]).abs() < 5.0);
 //! # Ok(())
 //! # }
@@ -49,14 +48,16 @@ pub mod a0;
 pub mod calibration;
 pub mod dataset;
 mod error;
+pub mod export;
 pub mod observations;
 pub mod thermal;
 
 pub use error::{Error, ErrorKind, Result};
 
 pub use a0::A0File;
-pub use calibration::Calibration;
+pub use calibration::{Calibration, ThermalRef};
 pub use dataset::{Board, Dataset};
+pub use etl_core::camera::{Camera, CameraAt, Extrapolated, Trust};
 pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
 pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use observations::Observations;

@@ -13,8 +13,8 @@
 
 use std::path::Path;
 
+use crate::calibration::ThermalRef;
 use etl_core::calib::Point;
-use etl_core::thermal::ThermalCalibration;
 use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
@@ -127,26 +127,20 @@ impl Observations {
         Ok(())
     }
 
-    /// E_com of every setting view: as recorded, or compensated.
-    pub fn setting_e_com_ma(&self, thermal: &ThermalCalibration) -> Result<Vec<f64>> {
-        self.setting_views
-            .iter()
-            .map(|v| match v.e_com_ma {
-                Some(e) => Ok(e),
-                None => Ok(thermal.compensate(v.e_in_ma, v.temperature_c)?.e_com_ma),
-            })
-            .collect()
+    /// E_com of every setting view: as recorded, or compensated ([`view_e_com_ma`]).
+    pub fn setting_e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
+        self.setting_views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, "setting view", i, thermal)).collect()
     }
 
-    /// E_com of every view: as recorded, or compensated from (e_in_ma, temperature_c).
-    pub fn e_com_ma(&self, thermal: &ThermalCalibration) -> Result<Vec<f64>> {
-        self.views
-            .iter()
-            .map(|v| match v.e_com_ma {
-                Some(e) => Ok(e),
-                None => Ok(thermal.compensate(v.e_in_ma, v.temperature_c)?.e_com_ma),
-            })
-            .collect()
+    /// E_com of every view: as recorded, or compensated ([`view_e_com_ma`]).
+    pub fn e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
+        self.views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, "view", i, thermal)).collect()
+    }
+
+    /// Whether some ETL or setting view has no recorded E_com (so a thermal calibration
+    /// must be chosen to calibrate it).
+    pub fn needs_thermal(&self) -> bool {
+        self.views.iter().chain(&self.setting_views).any(|v| v.e_com_ma.is_none())
     }
 
     /// The points of every view as core [`Point`]s.
@@ -156,4 +150,20 @@ impl Observations {
             .map(|v| v.points.iter().map(|p| Point { world_mm: p.world_mm, pixel: p.pixel }).collect())
             .collect()
     }
+}
+
+/// E_com of one view: its recorded `e_com_ma`, or E_in - E_T(T, E_in) through `thermal`,
+/// refused outside the thermal calibration's ranges. No surface is assumed: a view without
+/// E_com and no thermal calibration chosen is an error naming the view.
+fn view_e_com_ma(v: &ViewObs, name: &str, i: usize, thermal: Option<&ThermalRef>) -> Result<f64> {
+    if let Some(e) = v.e_com_ma {
+        return Ok(e);
+    }
+    let Some(t) = thermal else {
+        return Err(Error::InvalidInput(format!(
+            "{name} {i} has no e_com_ma and no thermal calibration was chosen: give one (--thermal FILE, or \
+             --thermal paper for the paper's surface)"
+        )));
+    };
+    t.e_com_ma(v.e_in_ma, v.temperature_c).map_err(|e| Error::InvalidInput(format!("{name} {i}: {e}")))
 }

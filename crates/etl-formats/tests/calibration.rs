@@ -125,3 +125,60 @@ fn a_bad_covariance_is_refused_naming_it_and_nothing_is_written() {
         assert!(!out.exists(), "{name}: a refused calibration was written");
     }
 }
+
+/// The temperature trust policy (issue 17): inside the calibrated ranges the camera is
+/// returned; outside, the quantity that left its range is named; extrapolation is explicit
+/// and marked.
+#[test]
+fn the_camera_at_a_setting_refuses_outside_the_calibrated_ranges() {
+    use etl_formats::Trust;
+    let c = Calibration::load(&fixture()).unwrap();
+    let at = c.at(150.0, 35.0, Trust::Refuse).unwrap();
+    assert!(!at.extrapolated());
+    let e_com = etl_formats::ThermalSurface::PAPER.e_com_ma(150.0, 35.0).unwrap();
+    assert_eq!(at.e_com_ma(), e_com);
+    for (e_in, t, what) in [(150.0, 80.0, "temperature_c"), (260.0, 30.0, "e_in_ma"), (60.0, 30.0, "e_com_ma")] {
+        let e = c.at(e_in, t, Trust::Refuse).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Precondition, "{e}");
+        assert!(e.to_string().contains(what), "{what}: {e}");
+        assert!(!e.to_string().contains('\n'));
+        let x = c.at(e_in, t, Trust::Extrapolate).unwrap();
+        assert!(x.extrapolated(), "{what}");
+    }
+}
+
+/// A file written before the thermal ranges were kept stays readable; its camera refuses
+/// (E_in, T) lookups unless extrapolation is asked for, and says why.
+#[test]
+fn an_older_thermal_part_without_ranges_is_read_and_not_trusted() {
+    use etl_formats::Trust;
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let coefficients = v["thermal"]["coefficients"].clone();
+    v["thermal"] = serde_json::json!({ "coefficients": coefficients });
+    let old = Calibration::parse(&v.to_string(), &fixture()).unwrap();
+    assert!(old.thermal.as_ref().unwrap().t_range_c.is_none());
+    let e = old.at(150.0, 35.0, Trust::Refuse).unwrap_err();
+    assert!(e.to_string().contains("no calibrated ranges"), "{e}");
+    assert!(old.at(150.0, 35.0, Trust::Extrapolate).unwrap().flags().temperature);
+    // Written back, it is the same file: nothing invented.
+    let back: serde_json::Value = serde_json::to_value(&old).unwrap();
+    assert_eq!(back["thermal"], serde_json::json!({ "coefficients": coefficients }));
+}
+
+#[test]
+fn a_bad_thermal_part_is_refused_by_the_reader() {
+    let good = Calibration::load(&fixture()).unwrap();
+    let spoils: [Spoil; 3] = [
+        ("t_range_c", |c| c.thermal.as_mut().unwrap().t_range_c = Some([37.0, 27.0])),
+        ("e_in_range_ma", |c| c.thermal.as_mut().unwrap().e_in_range_ma = Some([f64::NAN, 1.0])),
+        ("rms_ma", |c| c.thermal.as_mut().unwrap().rms_ma = Some(-1.0)),
+    ];
+    for (what, spoil) in spoils {
+        let mut c = good.clone();
+        spoil(&mut c);
+        let text = serde_json::to_string(&c).unwrap();
+        let e = Calibration::parse(&text, &fixture()).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Parse, "{what}: {e}");
+    }
+}

@@ -14,9 +14,10 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::arrays::{mat3_out, matrix_out, points, points_out, vec_out};
+use crate::camera::{trust, CameraAt};
 use crate::errors::{input_error, CoreResultExt};
 use crate::pose::BoardPose;
-use crate::thermal::ThermalSurface;
+use crate::thermal::{ThermalCalibration, ThermalSurface};
 
 /// Points above which `project` / `undistort` release the GIL (below it the release
 /// costs more than it lets other threads gain).
@@ -42,7 +43,10 @@ fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
 ///     distortion_a: a1..a9 of Eq. 18 (9 numbers).
 ///     image_size: (width, height), px.
 ///     e_com_range_ma: (min, max) compensated current the calibration covers, mA.
-///     thermal: the temperature compensation (a ThermalSurface), or None.
+///     thermal: the temperature compensation: a ThermalCalibration (a surface with the
+///         ranges it was fitted over: `at` and `e_com` refuse outside them), a bare
+///         ThermalSurface (no ranges known: only `allow_extrapolation=True` evaluates it),
+///         or None.
 ///     rms_px: RMS reprojection error, px, or None.
 ///
 /// Raises: InputError for NaN or infinite numbers, a non-positive image size, an
@@ -86,7 +90,7 @@ impl Calibration {
         distortion_a: &Bound<'_, PyAny>,
         image_size: (u32, u32),
         e_com_range_ma: (f64, f64),
-        thermal: Option<ThermalSurface>,
+        thermal: Option<&Bound<'_, PyAny>>,
         rms_px: f64,
     ) -> PyResult<Self> {
         use crate::arrays::fixed;
@@ -101,7 +105,7 @@ impl Calibration {
         model.validate().py()?;
         etl_core::error::finite(rms_px, "rms_px").py()?;
         let mut c = Calibration::from_model(model, [image_size.0, image_size.1], [e_com_range_ma.0, e_com_range_ma.1]);
-        c.file.thermal = thermal.map(|t| ThermalRef { coefficients: t.inner.coefficients });
+        c.file.thermal = thermal.map(thermal_ref).transpose()?;
         c.file.rms_reprojection_px = rms_px;
         c.file.validate(Path::new("<Calibration>")).py()?;
         Ok(c)
@@ -113,7 +117,7 @@ impl Calibration {
     fn paper_rig() -> Self {
         let [w, h] = CameraModel::PAPER_IMAGE_SIZE;
         let mut c = Calibration::from_model(CameraModel::paper_rig(), [w, h], [80.0, 225.0]);
-        c.file.thermal = Some(ThermalRef { coefficients: CoreSurface::PAPER.coefficients });
+        c.file.thermal = Some(ThermalRef::paper());
         c
     }
 
@@ -212,7 +216,40 @@ impl Calibration {
     /// The temperature compensation (a ThermalSurface), or None.
     #[getter]
     fn thermal(&self) -> Option<ThermalSurface> {
-        self.file.thermal.map(|t| ThermalSurface { inner: CoreSurface { coefficients: t.coefficients } })
+        self.file.thermal.as_ref().map(|t| ThermalSurface { inner: CoreSurface { coefficients: t.coefficients } })
+    }
+
+    /// The whole thermal calibration (surface and calibrated ranges), or None when the
+    /// calibration has no thermal part or keeps no ranges (an older file).
+    #[getter]
+    fn thermal_calibration(&self) -> Option<ThermalCalibration> {
+        let t = self.file.thermal.as_ref()?;
+        Some(ThermalCalibration { inner: t.calibration().ok()?, rms_ma: t.rms_ma.unwrap_or(0.0) })
+    }
+
+    /// Where the thermal part came from: "paper" (chosen explicitly), a thermal file's
+    /// path, or None (no thermal part, or an older file that does not say).
+    #[getter]
+    fn thermal_source(&self) -> Option<String> {
+        self.file.thermal.as_ref()?.source.clone()
+    }
+
+    /// The camera at driver current `e_in_ma` and lens temperature `temperature_c`
+    /// (E_com = E_in - E_T(T, E_in), then K and distortion at E_com).
+    ///
+    /// Args:
+    ///     e_in_ma: driver current, mA.
+    ///     temperature_c: lens temperature, degC.
+    ///     allow_extrapolation: return the camera outside the calibrated temperature,
+    ///         E_in and E_com ranges too (then `extrapolated` is True).
+    ///
+    /// Raises: InputError naming the quantity outside its calibrated range (margins:
+    /// 1 degC, 5 mA, 5 mA), or when the calibration has no thermal part.
+    #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
+    fn at(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
+        let inner =
+            self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
+        Ok(CameraAt { inner })
     }
 
     /// RMS reprojection error of the calibration, px (0 for a model given, not estimated).
@@ -283,15 +320,23 @@ impl Calibration {
     ///     e_in_ma: driver current, mA (a float or an array).
     ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
     ///
+    ///     allow_extrapolation: evaluate outside the calibrated temperature and E_in
+    ///         ranges too (keyword only).
+    ///
     /// Raises: InputError when the calibration has no thermal part, or for values
-    /// outside the lens's domain.
+    /// outside the calibrated ranges (naming the quantity; margins 1 degC, 5 mA).
+    #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
     fn e_com<'py>(
         &self,
         e_in_ma: &Bound<'py, PyAny>,
         temperature_c: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.surface()?;
-        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| s.e_com_ma(e, t).py())
+        let t = self.file.thermal_ref().map_err(crate::errors::calib_err)?.trust();
+        let policy = trust(allow_extrapolation);
+        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, c| {
+            Ok(e - t.e_t_ma(e, c, policy).py()?.0)
+        })
     }
 
     /// The driver current that gives `e_com_ma` at `temperature_c`, mA (inverse of
@@ -300,21 +345,30 @@ impl Calibration {
     /// Args:
     ///     e_com_ma: wanted compensated current, mA (a float or an array).
     ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
+    ///     allow_extrapolation: as in `e_com` (the E_in found is checked).
+    #[pyo3(signature = (e_com_ma, temperature_c, *, allow_extrapolation=false))]
     fn e_in_for_e_com<'py>(
         &self,
         e_com_ma: &Bound<'py, PyAny>,
         temperature_c: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.surface()?;
-        crate::arrays::map2(e_com_ma, temperature_c, ("e_com_ma", "temperature_c"), |e, t| s.e_in_for_e_com(e, t).py())
+        let t = self.file.thermal_ref().map_err(crate::errors::calib_err)?.trust();
+        let policy = trust(allow_extrapolation);
+        crate::arrays::map2(e_com_ma, temperature_c, ("e_com_ma", "temperature_c"), |e, c| {
+            let e_in = t.surface.e_in_for_e_com(e, c).py()?;
+            t.e_t_ma(e_in, c, policy).py()?;
+            Ok(e_in)
+        })
     }
 
     /// (fx, fy) at the compensated current, px (Eq. 16).
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA.
-    fn focal_lengths(&self, e_com_ma: f64) -> PyResult<(f64, f64)> {
-        let k = self.model.intrinsics(e_com_ma).py()?;
+    #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
+    fn focal_lengths(&self, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<(f64, f64)> {
+        let k = *self.at_e_com(e_com_ma, allow_extrapolation)?.intrinsics();
         Ok((k.fx, k.fy))
     }
 
@@ -324,8 +378,14 @@ impl Calibration {
     ///     e_com_ma: compensated current, mA.
     ///
     /// Returns: a 3 x 3 float64 array.
-    fn intrinsics<'py>(&self, py: Python<'py>, e_com_ma: f64) -> PyResult<Bound<'py, PyAny>> {
-        let k = self.model.intrinsics(e_com_ma).py()?;
+    #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
+    fn intrinsics<'py>(
+        &self,
+        py: Python<'py>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let k = *self.at_e_com(e_com_ma, allow_extrapolation)?.intrinsics();
         Ok(mat3_out(py, k.matrix()))
     }
 
@@ -335,8 +395,9 @@ impl Calibration {
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA.
-    fn distortion(&self, e_com_ma: f64) -> PyResult<(f64, f64, f64)> {
-        let d = self.model.distortion(e_com_ma).py()?;
+    #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
+    fn distortion(&self, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<(f64, f64, f64)> {
+        let d = *self.at_e_com(e_com_ma, allow_extrapolation)?.distortion();
         Ok((d.k1, d.p1, d.p2))
     }
 
@@ -351,7 +412,14 @@ impl Calibration {
     ///
     /// Raises: InputError for a NaN, a point at or behind the camera, a current where
     /// the focal length is not positive.
-    fn project<'py>(&self, world_mm: &Bound<'py, PyAny>, e_com_ma: f64) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (world_mm, e_com_ma, *, allow_extrapolation=false))]
+    fn project<'py>(
+        &self,
+        world_mm: &Bound<'py, PyAny>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.at_e_com(e_com_ma, allow_extrapolation)?;
         let py = world_mm.py();
         let p = points::<3>(world_mm, "world_mm")?;
         let model = self.model;
@@ -375,7 +443,14 @@ impl Calibration {
     ///
     /// Raises: InputError for a NaN or a pixel beyond the fold of the distortion model;
     /// NotConvergedError if the inversion misses its tolerance.
-    fn undistort<'py>(&self, pixels: &Bound<'py, PyAny>, e_com_ma: f64) -> PyResult<Bound<'py, PyAny>> {
+    #[pyo3(signature = (pixels, e_com_ma, *, allow_extrapolation=false))]
+    fn undistort<'py>(
+        &self,
+        pixels: &Bound<'py, PyAny>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.at_e_com(e_com_ma, allow_extrapolation)?;
         let py = pixels.py();
         let p = points::<2>(pixels, "pixels")?;
         let model = self.model;
@@ -394,13 +469,15 @@ impl Calibration {
     ///
     /// Returns: (origin_mm, direction): the centre of projection in world coordinates
     /// (mm) and the unit direction, float64 arrays of shape (3,).
+    #[pyo3(signature = (pixel, e_com_ma, *, allow_extrapolation=false))]
     fn ray<'py>(
         &self,
         py: Python<'py>,
         pixel: (f64, f64),
         e_com_ma: f64,
+        allow_extrapolation: bool,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let r = self.model.ray([pixel.0, pixel.1], e_com_ma).py()?;
+        let r = self.at_e_com(e_com_ma, allow_extrapolation)?.ray([pixel.0, pixel.1]).py()?;
         Ok((vec_out(py, &r.origin_mm), vec_out(py, &r.direction)))
     }
 
@@ -424,8 +501,9 @@ impl Calibration {
     /// Returns: a BoardPose (board -> camera).
     ///
     /// Raises: InputError for fewer than 4 points, a length mismatch, Z != 0, collinear
-    /// points, NaN, a negative sigma_px; NotConvergedError if the solver fails.
-    #[pyo3(signature = (board_mm, pixels, e_com_ma, sigma_px=None))]
+    /// points, NaN, a negative sigma_px, a current outside the calibrated range (unless
+    /// allow_extrapolation); NotConvergedError if the solver fails.
+    #[pyo3(signature = (board_mm, pixels, e_com_ma, sigma_px=None, *, allow_extrapolation=false))]
     fn solve_pnp(
         &self,
         py: Python<'_>,
@@ -433,7 +511,9 @@ impl Calibration {
         pixels: &Bound<'_, PyAny>,
         e_com_ma: f64,
         sigma_px: Option<f64>,
+        allow_extrapolation: bool,
     ) -> PyResult<BoardPose> {
+        self.at_e_com(e_com_ma, allow_extrapolation)?;
         let b = points::<3>(board_mm, "board_mm")?;
         let p = points::<2>(pixels, "pixels")?;
         let model = self.model;
@@ -470,8 +550,16 @@ impl Calibration {
     /// (2,)).
     ///
     /// Raises: InputError for a calibration without a covariance, a NaN, a point at or
-    /// behind the camera.
-    fn projection_std<'py>(&self, world_mm: &Bound<'py, PyAny>, e_com_ma: f64) -> PyResult<Bound<'py, PyAny>> {
+    /// behind the camera, a current outside the calibrated range (unless
+    /// allow_extrapolation).
+    #[pyo3(signature = (world_mm, e_com_ma, *, allow_extrapolation=false))]
+    fn projection_std<'py>(
+        &self,
+        world_mm: &Bound<'py, PyAny>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.at_e_com(e_com_ma, allow_extrapolation)?;
         let py = world_mm.py();
         let p = points::<3>(world_mm, "world_mm")?;
         let cov = self.file.require_covariance().py()?;
@@ -490,20 +578,66 @@ impl Calibration {
     /// The camera at one current in OpenCV's conventions, for `cv2.projectPoints`,
     /// `cv2.undistortPoints`, `cv2.solvePnP`.
     ///
-    /// OpenCV's distortion acts on normalised coordinates (u / f): k1_cv = k1 f^2 and the
-    /// decentering terms swap names, p1_cv = p2 f, p2_cv = p1 f, with f the mean focal
-    /// length; k2 = k3 = 0. Exact when fx = fy, an approximation otherwise.
+    /// OpenCV's distortion acts on normalised coordinates (x = X / Z); etlcal's (Eq. 17)
+    /// on centred pixels. They agree exactly only when fx = fy (k1_cv = k1 f^2,
+    /// p1_cv = p2 f, p2_cv = p1 f); otherwise the coefficients are the least-squares fit
+    /// over the image, whose error (a few hundredths of a pixel on the paper rig) `export`
+    /// returns and writes.
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA.
+    ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
     ///
     /// Returns: (K, dist): the 3 x 3 camera matrix (px) and the 5 coefficients
     /// (k1, k2, p1, p2, k3).
-    fn to_opencv<'py>(&self, py: Python<'py>, e_com_ma: f64) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let k = self.model.intrinsics(e_com_ma).py()?;
-        let d = self.model.distortion(e_com_ma).py()?;
-        let dist = d.to_opencv(0.5 * (k.fx + k.fy));
-        Ok((mat3_out(py, k.matrix()), vec_out(py, &dist)))
+    #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
+    fn to_opencv<'py>(
+        &self,
+        py: Python<'py>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let at = self.at_e_com(e_com_ma, allow_extrapolation)?;
+        let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), self.file.image_size).py()?;
+        Ok((mat3_out(py, at.intrinsics().matrix()), vec_out(py, &fit.dist_coeffs)))
+    }
+
+    /// Writes the camera at one setting for another tool (atomically; nothing on error).
+    ///
+    /// Args:
+    ///     path: the file to write.
+    ///     e_in_ma: driver current, mA.
+    ///     temperature_c: lens temperature, degC.
+    ///     format: "opencv" (FileStorage YAML: camera_matrix, distortion_coefficients,
+    ///         image_width, image_height), "ros" (camera_info YAML) or "mrcal"
+    ///         (.cameramodel, LENSMODEL_OPENCV5).
+    ///     allow_extrapolation: export outside the calibrated ranges too (keyword only).
+    ///
+    /// Returns: a dict with "e_com_ma", "camera_matrix" (3 x 3), "dist_coeffs" (k1, k2,
+    /// p1, p2, k3: the least-squares fit of etlcal's distortion over the image) and the
+    /// fit's error "fit_rms_px", "fit_max_px" (also written into the file).
+    #[pyo3(signature = (path, e_in_ma, temperature_c, format, *, allow_extrapolation=false))]
+    fn export<'py>(
+        &self,
+        py: Python<'py>,
+        path: PathBuf,
+        e_in_ma: f64,
+        temperature_c: f64,
+        format: &str,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        use etl_formats::export::{export, ExportFormat};
+        let format: ExportFormat = format.parse().map_err(crate::errors::calib_err)?;
+        let at = self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
+        let e = export(&self.file, &at, format, &path).map_err(crate::errors::calib_err)?;
+        let d = PyDict::new(py);
+        d.set_item("e_com_ma", at.e_com_ma())?;
+        d.set_item("extrapolated", at.extrapolated())?;
+        d.set_item("camera_matrix", mat3_out(py, e.camera_matrix))?;
+        d.set_item("dist_coeffs", vec_out(py, &e.fit.dist_coeffs))?;
+        d.set_item("fit_rms_px", e.fit.rms_px)?;
+        d.set_item("fit_max_px", e.fit.max_px)?;
+        Ok(d)
     }
 
     fn __repr__(&self) -> String {
@@ -529,9 +663,39 @@ impl Calibration {
 }
 
 impl Calibration {
-    fn surface(&self) -> PyResult<CoreSurface> {
-        self.file.thermal_surface().py()
+    /// The camera at a known E_com, refused outside the calibrated E_com range (margin
+    /// 5 mA) unless `allow_extrapolation`: the one range check of every method taking
+    /// `e_com_ma`.
+    fn at_e_com(&self, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<etl_core::camera::CameraAt> {
+        let camera = self.file.camera().map_err(crate::errors::calib_err)?;
+        camera.at_e_com(e_com_ma, trust(allow_extrapolation)).py()
     }
+}
+
+/// A `thermal=` argument: a ThermalCalibration (kept with its ranges), the string
+/// "paper" (the paper's surface and ranges, chosen explicitly) or a bare ThermalSurface
+/// (no ranges known).
+pub(crate) fn thermal_ref(t: &Bound<'_, PyAny>) -> PyResult<ThermalRef> {
+    if let Ok(word) = t.extract::<String>() {
+        return match word.as_str() {
+            etl_formats::calibration::PAPER_THERMAL => Ok(ThermalRef::paper()),
+            _ => Err(input_error(&format!("thermal = {word:?}: the only word accepted is \"paper\""))),
+        };
+    }
+    if let Ok(c) = t.extract::<ThermalCalibration>() {
+        let file = etl_formats::thermal::ThermalFile::new(&c.inner, c.rms_ma);
+        return Ok(ThermalRef { source: None, ..ThermalRef::from_file(&file, "") });
+    }
+    let s: ThermalSurface = t
+        .extract()
+        .map_err(|_| input_error("thermal must be a ThermalCalibration, \"paper\", a ThermalSurface or None"))?;
+    Ok(ThermalRef {
+        coefficients: s.inner.coefficients,
+        t_range_c: None,
+        e_in_range_ma: None,
+        rms_ma: None,
+        source: None,
+    })
 }
 
 /// A `ModelStd` as a dict of float64 arrays under the model's keys.

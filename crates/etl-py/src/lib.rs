@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 
 pub mod arrays;
 pub mod calibration;
+pub mod camera;
 pub mod dataset;
 pub mod errors;
 pub mod focus;
@@ -31,6 +32,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_function(wrap_pyfunction!(errors::_raise_rust_error, m)?)?;
     m.add_class::<calibration::Calibration>()?;
+    m.add_class::<camera::CameraAt>()?;
     m.add_class::<thermal::ThermalSurface>()?;
     m.add_class::<thermal::ThermalCalibration>()?;
     m.add_class::<physics::LensPhysics>()?;

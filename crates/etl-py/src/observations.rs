@@ -11,7 +11,6 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::arrays::{points, points_out};
 use crate::errors::{input_error, CoreResultExt};
-use crate::thermal::ThermalCalibration;
 
 /// Points of one view from (N, 3) world points and (N, 2) pixels.
 fn view_points(world_mm: &Bound<'_, PyAny>, pixels: &Bound<'_, PyAny>) -> PyResult<Vec<PointObs>> {
@@ -265,11 +264,15 @@ impl Observations {
     /// temperature_c) through `thermal`.
     ///
     /// Args:
-    ///     thermal: a ThermalCalibration (default: the paper's).
+    ///     thermal: a ThermalCalibration or "paper", needed when a view has no recorded
+    ///         E_com (none is assumed).
+    ///
+    /// Raises: InputError naming a view without E_com when no thermal calibration is
+    /// given, or a view outside the thermal calibration's ranges.
     #[pyo3(signature = (thermal=None))]
-    fn e_com_ma(&self, thermal: Option<ThermalCalibration>) -> PyResult<Vec<f64>> {
-        let t = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
-        self.file.e_com_ma(&t).py()
+    fn e_com_ma(&self, thermal: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<f64>> {
+        let t = thermal.map(crate::calibration::thermal_ref).transpose()?;
+        self.file.e_com_ma(t.as_ref()).map_err(crate::errors::calib_err)
     }
 
     fn __repr__(&self) -> String {

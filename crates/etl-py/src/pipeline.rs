@@ -8,7 +8,6 @@ use pyo3::prelude::*;
 use crate::calibration::Calibration;
 use crate::errors::{input_error, CoreResultExt};
 use crate::observations::{Observations, A0};
-use crate::thermal::ThermalCalibration;
 
 /// Calibrates an ETL camera from observations (paper section 4): E_com of each view
 /// through the thermal surface (unless recorded), RAC (Eq. 19-20), the focal polynomial
@@ -20,8 +19,10 @@ use crate::thermal::ThermalCalibration;
 ///     a0: the lens-off intrinsics (an `A0`: kf0x, kf0y, u0, v0 in px), e.g. from
 ///         `zhang(...)` on lens-off views. None: Zhang's method on the observations'
 ///         lens-off views (section 4.2), as `etlcal calibrate` does without `--a0`.
-///     thermal: the temperature compensation used for views without a recorded E_com
-///         (a `ThermalCalibration`; default: the paper's).
+///     thermal: the temperature compensation used for views without a recorded E_com:
+///         a `ThermalCalibration`, or "paper" for the paper's surface. Required when a
+///         view has no E_com (none is assumed); kept whole in the calibration, which
+///         uses it at run time (`Calibration.at`).
 ///     estimator: "eiv" (errors-in-variables: a stage and a current correction per view
 ///         with Gaussian priors sigma_z_mm and sigma_e_ma; under the paper's noise model
 ///         it reaches the Cramer-Rao bound) or "paper" (Eq. 24: recorded stage positions
@@ -52,7 +53,7 @@ pub fn calibrate(
     py: Python<'_>,
     observations: &Observations,
     a0: Option<&A0>,
-    thermal: Option<ThermalCalibration>,
+    thermal: Option<&Bound<'_, PyAny>>,
     estimator: Option<&str>,
     hold_a0: bool,
     robust: Option<&str>,
@@ -62,7 +63,7 @@ pub fn calibrate(
     sigma_px: Option<f64>,
     method: &str,
 ) -> PyResult<Calibration> {
-    let thermal = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
+    let thermal = thermal.map(crate::calibration::thermal_ref).transpose()?;
     match method {
         "proposed" => {}
         "per-setting" => {
@@ -79,7 +80,7 @@ pub fn calibrate(
             )
             .py()?;
             let obs = observations.file.clone();
-            let result = py.detach(|| etl_calib::baseline::per_setting(&obs, &thermal)).py()?;
+            let result = py.detach(|| etl_calib::baseline::per_setting(&obs, thermal.as_ref())).py()?;
             return Ok(Calibration::from_file(result.calibration));
         }
         other => return Err(input_error(format!("method must be \"proposed\" or \"per-setting\", got {other:?}"))),
@@ -104,7 +105,7 @@ pub fn calibrate(
                 Some(a0) => a0,
                 None => etl_calib::pipeline::a0_from_offstate(&obs)?.a0(),
             };
-            run_pipeline(&obs, &a0, &thermal, &options)
+            run_pipeline(&obs, &a0, thermal.as_ref(), &options)
         })
         .py()?;
     Ok(Calibration::from_file(result.calibration))
@@ -123,8 +124,8 @@ pub fn calibrate(
 ///         stage positions exact, the paper's model).
 ///     sigma_e_ma: prior standard deviation of each view's current, mA (given together
 ///         with sigma_z_mm).
-///     thermal: temperature compensation for views without a recorded E_com (default:
-///         the paper's).
+///     thermal: temperature compensation for views without a recorded E_com (a
+///         `ThermalCalibration` or "paper"; required when a view has none).
 ///
 /// Returns: a dict like `Calibration.std` (one standard deviation per number; NaN for
 /// directions the data do not identify).
@@ -137,7 +138,7 @@ pub fn cramer_rao_std<'py>(
     sigma_px: f64,
     sigma_z_mm: Option<f64>,
     sigma_e_ma: Option<f64>,
-    thermal: Option<ThermalCalibration>,
+    thermal: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
     let priors = match (sigma_z_mm, sigma_e_ma) {
         (None, None) => None,
@@ -147,10 +148,10 @@ pub fn cramer_rao_std<'py>(
     if !(sigma_px > 0.0 && sigma_px.is_finite()) {
         return Err(input_error(format!("sigma_px = {sigma_px} must be a finite number > 0")));
     }
-    let thermal = thermal.map_or(etl_core::thermal::ThermalCalibration::PAPER, |t| t.inner);
+    let thermal = thermal.map(crate::calibration::thermal_ref).transpose()?;
     let obs = &observations.file;
     obs.validate().py()?;
-    let e_com = obs.e_com_ma(&thermal).py()?;
+    let e_com = obs.e_com_ma(thermal.as_ref()).map_err(crate::errors::calib_err)?;
     let pts = obs.core_points();
     let model = truth.model;
     let cov = py

@@ -98,8 +98,17 @@ def test_ray_goes_through_the_point(cal):
 
 
 def test_e_com_uses_the_thermal_surface(cal, rust_reference):
+    th = cal.thermal_calibration
+    (t0, t1), (e0, e1) = th.t_range_c, th.e_in_range_ma
     for ref in rust_reference["thermal"]:
-        e = cal.e_com(ref["e_in_ma"], ref["temperature_c"])
+        t, e_in = ref["temperature_c"], ref["e_in_ma"]
+        inside = t0 - 1.0 <= t <= t1 + 1.0 and e0 - 5.0 <= e_in <= e1 + 5.0
+        if not inside:
+            # Outside the calibrated 27..37 degC x 40..240 mA (margins 1 degC, 5 mA):
+            # refused, naming the quantity.
+            with pytest.raises(etlcal.InputError, match="temperature_c|e_in_ma"):
+                cal.e_com(e_in, t)
+        e = cal.e_com(ref["e_in_ma"], ref["temperature_c"], allow_extrapolation=not inside)
         assert isinstance(e, float) and abs(e - ref["e_com_ma"]) <= 1e-12
     grid = cal.e_com(np.array([40.0, 120.0, 200.0]), 33.0)
     assert grid.shape == (3,)
@@ -171,19 +180,24 @@ def test_bad_inputs_raise_the_rust_message(cal):
          "point is at or behind the camera (Z_C <= 0); check the pose and units (mm)"),
         (lambda: cal.project([[0, 0, 48]], math.inf), etlcal.InputError,
          "e_com_ma is NaN or infinite; pass finite numbers"),
-        (lambda: cal.intrinsics(2000.0), etlcal.InputError,
+        # Outside the calibrated E_com range (80..225 mA, margin 5): refused by name...
+        (lambda: cal.intrinsics(2000.0), etlcal.InputError, "e_com_ma = 2000 is outside [75, 230]"),
+        # ...and where asked to extrapolate, the model's own limit still holds.
+        (lambda: cal.intrinsics(2000.0, allow_extrapolation=True), etlcal.InputError,
          "degenerate input: focal length is not positive at this current"),
         (lambda: cal.distortion(math.nan), etlcal.InputError,
          "e_com_ma is NaN or infinite; pass finite numbers"),
-        (lambda: cal.focal_lengths(2000.0), etlcal.InputError,
-         "degenerate input: focal length is not positive at this current"),
-        (lambda: cal.to_opencv(2000.0), etlcal.InputError,
-         "degenerate input: focal length is not positive at this current"),
+        (lambda: cal.focal_lengths(400.0), etlcal.InputError, "e_com_ma = 400 is outside [75, 230]"),
+        (lambda: cal.to_opencv(2000.0), etlcal.InputError, "e_com_ma = 2000 is outside [75, 230]"),
         (lambda: cal.undistort([[math.nan, 3.0]], 100.0), etlcal.InputError,
          "pixel is NaN or infinite; pass finite numbers"),
         (lambda: cal.ray((1e7, 1e7), 100.0), etlcal.InputError, None),
-        (lambda: cal.e_com(100.0, 300.0), etlcal.InputError, "t_c = 300 is outside [-40, 125]"),
-        (lambda: cal.e_com(1e5, 30.0), etlcal.InputError, "e_in_ma = 100000 is outside [-292.84, 292.84]"),
+        # The thermal calibration's ranges (27..37 degC, 40..240 mA, margins 1 degC, 5 mA).
+        (lambda: cal.e_com(150.0, 80.0), etlcal.InputError, "temperature_c = 80 is outside [26, 38]"),
+        (lambda: cal.e_com(1e5, 30.0), etlcal.InputError, "e_in_ma = 100000 is outside [35, 245]"),
+        # Beyond the lens's operating domain even extrapolation is refused.
+        (lambda: cal.e_com(100.0, 300.0, allow_extrapolation=True), etlcal.InputError,
+         "t_c = 300 is outside [-40, 125]"),
         (lambda: cal.e_com(math.nan, 30.0), etlcal.InputError, "e_in_ma is NaN or infinite; pass finite numbers"),
         (lambda: cal.e_in_for_e_com(math.nan, 30.0), etlcal.InputError,
          "e_com_ma is NaN or infinite; pass finite numbers"),
@@ -200,7 +214,7 @@ def test_undistort_beyond_the_fold_is_an_error_not_a_wrong_answer():
     a = [0, 0, -1e-6, 0, 0, 0, 0, 0, 0]
     c = etlcal.Calibration([0, 0, 0], [0, 0, 100], [1000, 0, 0, 0], [1000, 0, 0, 0], (0, 0), a)
     with pytest.raises(etlcal.Error) as info:
-        c.undistort([[2000.0, 0.0]], 0.0)
+        c.undistort([[2000.0, 0.0]], 100.0)
     assert isinstance(info.value, (etlcal.InputError, etlcal.NotConvergedError))
 
 
@@ -222,16 +236,21 @@ def test_no_thermal_part(cal):
         c.e_com(100.0, 30.0)
 
 
-def test_to_opencv_conventions(cal):
-    k, dist = cal.to_opencv(100.0)
-    assert k.tolist() == cal.intrinsics(100.0).tolist()
-    k1, p1, p2 = cal.distortion(100.0)
-    f = 4875.0
+def test_to_opencv_conventions():
+    # fx = fy: OpenCV's model holds etlcal's exactly (k1_cv = k1 f^2, p1_cv = p2 f,
+    # p2_cv = p1 f, k2 = k3 = 0), and the fit finds those numbers.
+    kf = [5380.0, -7.0, 0.02, -3e-5]
+    a = [-0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6]
+    c = etlcal.Calibration([0.2, 0.2, 0.2], [-11.0, -4.0, 48.0], kf, kf, (900.0, 550.0), a)
+    k, dist = c.to_opencv(100.0)
+    assert k.tolist() == c.intrinsics(100.0).tolist()
+    k1, p1, p2 = c.distortion(100.0)
+    f = 4850.0
     assert dist.shape == (5,)
-    assert dist[0] == pytest.approx(k1 * f * f, rel=1e-14)
-    assert dist[1] == 0.0 and dist[4] == 0.0
-    assert dist[2] == pytest.approx(p2 * f, rel=1e-14)  # OpenCV's p1 is the paper's p2
-    assert dist[3] == pytest.approx(p1 * f, rel=1e-14)
+    assert dist[0] == pytest.approx(k1 * f * f, rel=1e-9)
+    assert abs(dist[1]) < 1e-9 and abs(dist[4]) < 1e-9
+    assert dist[2] == pytest.approx(p2 * f, rel=1e-9)  # OpenCV's p1 is the paper's p2
+    assert dist[3] == pytest.approx(p1 * f, rel=1e-9)
 
 
 def test_repr(cal):

@@ -126,7 +126,12 @@ def test_observations_build_save_load(sim, tmp_path):
     o = etlcal.Observations((100, 100))
     o.add_view([[0, 0, 10], [1, 0, 10]], [[1, 2], [3, 4]], e_in_ma=120.0, temperature_c=33.0)
     assert o.view(0)["e_com_ma"] is None
-    assert o.e_com_ma()[0] == pytest.approx(etlcal.ThermalSurface.paper().e_com(120.0, 33.0), abs=1e-12)
+    # None is assumed: the thermal calibration must be chosen ("paper" names the paper's).
+    with pytest.raises(etlcal.InputError, match="view 0 has no e_com_ma and no thermal calibration"):
+        o.e_com_ma()
+    assert o.e_com_ma("paper")[0] == pytest.approx(etlcal.ThermalSurface.paper().e_com(120.0, 33.0), abs=1e-12)
+    with pytest.raises(etlcal.InputError, match='only word accepted is "paper"'):
+        o.e_com_ma("papr")  # type: ignore[arg-type]
     hot = etlcal.ThermalCalibration(etlcal.ThermalSurface([1.0] + [0.0] * 9), e_in_range_ma=(0, 250), t_range_c=(20, 40))
     assert o.e_com_ma(hot) == [119.0]
     o.add_offstate_view([[0, 0, 0], [4, 0, 0]], [[10, 10], [50, 10]])

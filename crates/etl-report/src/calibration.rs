@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 use etl_core::calib::distortion_init::view_distortion;
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
-use etl_core::thermal::ThermalCalibration;
+use etl_formats::calibration::ThermalRef;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -269,7 +269,7 @@ fn finish_plot(dir: &Path, name: &str, buf: Vec<u8>, svg: &str, files: &mut Vec<
     Ok(())
 }
 
-fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: &ThermalCalibration) -> Result<Data> {
+fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Option<&ThermalRef>) -> Result<Data> {
     let model = cal.model();
     let mut view_focal: Vec<(f64, f64, f64)> = cal.views.iter().map(|v| (v.e_com_ma, v.fx_px, v.fy_px)).collect();
     let mut view_dist = vec![];
@@ -378,7 +378,7 @@ fn html(d: &Data, text: bool) -> String {
 pub fn write_report(
     cal: &Calibration,
     obs: Option<&Observations>,
-    thermal: &ThermalCalibration,
+    thermal: Option<&ThermalRef>,
     dir: &Path,
 ) -> Result<ReportFiles> {
     if !dir.is_dir() {

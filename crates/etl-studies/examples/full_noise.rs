@@ -8,7 +8,7 @@
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
-use etl_core::thermal::ThermalCalibration;
+use etl_formats::ThermalRef;
 use etl_sim::simulate::{paper_rig, NoiseModel};
 use etl_studies::common::model_errors;
 use rayon::prelude::*;
@@ -30,11 +30,11 @@ fn main() {
         .into_par_iter()
         .map(|seed| {
             let sim = paper_rig(&NoiseModel::PAPER, 50_000 + seed);
-            let th = ThermalCalibration::PAPER;
+            let th = ThermalRef::paper();
             let paper = CalibrateOptions { estimator: Estimator::Paper, ..Default::default() };
-            let p = calibrate(&sim.observations, &sim.a0, &th, &paper).expect("paper BA");
+            let p = calibrate(&sim.observations, &sim.a0, Some(&th), &paper).expect("paper BA");
             let eiv = CalibrateOptions { estimator: Estimator::EIV_PAPER, ..Default::default() };
-            let e = calibrate(&sim.observations, &sim.a0, &th, &eiv).expect("eiv BA");
+            let e = calibrate(&sim.observations, &sim.a0, Some(&th), &eiv).expect("eiv BA");
             (errors(&p.report.model, &sim.truth), errors(&e.report.model, &sim.truth))
         })
         .collect();

@@ -10,7 +10,7 @@
 //! same views for every method; 250 mA lies beyond the calibrated 80..225 mA, as in the
 //! paper's experiment).
 
-use etl_core::thermal::ThermalCalibration;
+use etl_formats::ThermalRef;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
@@ -62,7 +62,7 @@ fn one(seed: u64) -> Result<BaselineTrial> {
     let rig = SettingRig::default();
     add_setting_views(&mut sim.observations, &rig, &noise, seed);
     let pair = calibrate_pair(&sim.observations, &sim.a0, noise.z_mm, noise.e_ma)?;
-    let base = etl_calib::baseline::per_setting(&sim.observations, &ThermalCalibration::PAPER)?;
+    let base = etl_calib::baseline::per_setting(&sim.observations, Some(&ThermalRef::paper()))?;
     let models = [pair.paper.model, pair.eiv.model, base.calibration.model()];
     let es = curve_currents();
     let t = &sim.truth;

@@ -15,7 +15,7 @@ use etl_core::calib::{
 use etl_core::model::CameraModel;
 use etl_core::pnp::{displacement_mm, solve_pnp};
 use etl_core::progress::{NoProgress, Progress};
-use etl_core::thermal::ThermalCalibration;
+use etl_formats::ThermalRef;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -198,7 +198,7 @@ pub const EIV_INITIAL_DAMPING: f64 = 1e-8;
 /// The views of `obs` (E_com through the paper's thermal surface) as core points.
 fn core_views(obs: &Observations) -> Result<(Vec<Vec<etl_core::calib::Point>>, Vec<f64>)> {
     obs.validate()?;
-    Ok((obs.core_points(), obs.e_com_ma(&ThermalCalibration::PAPER)?))
+    Ok((obs.core_points(), obs.e_com_ma(Some(&ThermalRef::paper()))?))
 }
 
 /// The paper's calibration of `obs` with `a0`: the linear initialisation (RAC, focal

@@ -12,7 +12,7 @@ use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
 use etl_core::pnp::{displacement_mm, solve_pnp};
 use etl_core::progress::Progress;
-use etl_core::thermal::ThermalCalibration;
+use etl_formats::ThermalRef;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
@@ -104,12 +104,15 @@ pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress
     } else {
         (None, sim.observations.clone(), sim.observations.views.len())
     };
-    let thermal = ThermalCalibration::PAPER;
+    // The simulated lens follows the paper's surface: the demo chooses it, and the
+    // calibrations record that choice ("source": "paper").
+    let thermal = ThermalRef::paper();
     let a0 = a0_from_offstate(&observations)?.a0();
     let paper_options = CalibrateOptions { estimator: Estimator::Paper, ..Default::default() };
-    let paper = calibrate(&observations, &a0, &thermal, &paper_options)?;
+    let paper = calibrate(&observations, &a0, Some(&thermal), &paper_options)?;
     let eiv_est = Estimator::Eiv { sigma_z_mm: noise.z_mm.max(1e-4), sigma_e_ma: 0.4, sigma_px: None };
-    let eiv = calibrate(&observations, &a0, &thermal, &CalibrateOptions { estimator: eiv_est, ..Default::default() })?;
+    let eiv =
+        calibrate(&observations, &a0, Some(&thermal), &CalibrateOptions { estimator: eiv_est, ..Default::default() })?;
     let paper_validation = validate(&paper, &sim.truth, options.seed, options.images)?;
     let eiv_validation = validate(&eiv, &sim.truth, options.seed, options.images)?;
     let mut demo = Demo {

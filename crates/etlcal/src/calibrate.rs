@@ -16,17 +16,15 @@
 use std::path::PathBuf;
 
 use etl_core::calib::{Estimator, RobustLoss};
-use etl_core::thermal::ThermalCalibration;
 
 use super::print_json;
 use etl_calib::baseline::refuse_bundle_adjust_options;
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_formats::a0::A0File;
-use etl_formats::calibration::Calibration;
+use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::dataset::Dataset;
 use etl_formats::observations::Observations;
-use etl_formats::thermal::ThermalFile;
 use etl_formats::{Error, Result};
 
 /// The bundle adjustment's estimator.
@@ -89,8 +87,10 @@ pub struct Args {
     /// Huber loss with this threshold (px) for bad corners.
     #[arg(long, value_name = "PX")]
     pub huber_px: Option<f64>,
-    /// Thermal surface (etlcal.thermal/1) for views without e_com_ma (default: the paper's).
-    #[arg(long, value_name = "FILE")]
+    /// Thermal calibration for views without e_com_ma: an etlcal.thermal/1 file, or
+    /// `paper` for the paper's surface. Required when a view has no e_com_ma (none is
+    /// assumed); kept whole in the calibration, which uses it at run time.
+    #[arg(long, value_name = "FILE|paper")]
     pub thermal: Option<PathBuf>,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
@@ -137,14 +137,11 @@ pub fn run(args: Args) -> Result<()> {
             ],
         )?;
     }
+    let thermal = args.thermal.as_deref().map(ThermalRef::choose).transpose()?;
     let obs = load_input(args.observations.as_deref(), args.dataset.as_deref(), !args.json)?;
-    let thermal = match &args.thermal {
-        Some(p) => ThermalFile::load(p)?.calibration(),
-        None => ThermalCalibration::PAPER,
-    };
     let calibration = match args.method {
-        MethodArg::PerSetting => etl_calib::baseline::per_setting(&obs, &thermal)?.calibration,
-        MethodArg::Proposed => calibrate_proposed(&args, &obs, &thermal)?,
+        MethodArg::PerSetting => etl_calib::baseline::per_setting(&obs, thermal.as_ref())?.calibration,
+        MethodArg::Proposed => calibrate_proposed(&args, &obs, thermal.as_ref())?,
     };
     for out in std::iter::once(&args.out).chain(&args.observations_out) {
         crate::output::create_parent(out)?;
@@ -170,7 +167,7 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn calibrate_proposed(args: &Args, obs: &Observations, thermal: &ThermalCalibration) -> Result<Calibration> {
+fn calibrate_proposed(args: &Args, obs: &Observations, thermal: Option<&ThermalRef>) -> Result<Calibration> {
     let a0 = match &args.a0 {
         Some(p) => A0File::load(p)?.a0(),
         None => etl_calib::pipeline::a0_from_offstate(obs)?.a0(),

@@ -17,7 +17,6 @@
 
 use std::path::PathBuf;
 
-use etl_core::thermal::ThermalCalibration;
 use serde_json::json;
 
 use super::print_json;
@@ -62,7 +61,7 @@ pub fn run(args: Args) -> Result<()> {
     for (name, r) in [("report", &demo.paper), ("report-eiv", &demo.eiv)] {
         let dir = args.out.join(name);
         crate::output::create_dir(&dir)?;
-        etl_report::write_report(&r.calibration, Some(&demo.observations), &ThermalCalibration::PAPER, &dir)?;
+        etl_report::write_report(&r.calibration, Some(&demo.observations), r.calibration.thermal.as_ref(), &dir)?;
     }
     if args.json {
         let to_json = |v| serde_json::to_value(v).map_err(|e| Error::InvalidInput(e.to_string()));

@@ -16,14 +16,13 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use etl_core::thermal::ThermalCalibration;
 use etl_hw::client::{LensClient, OpenOptions};
 use etl_hw::hold::{hold, HoldConfig, HoldError};
 use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig};
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::thermal::ThermalFile;
+use etl_formats::calibration::ThermalRef;
 use etl_formats::{Error, Result};
 
 /// Arguments of `etlcal lens`.
@@ -87,9 +86,10 @@ pub struct HoldArgs {
     /// The E_com to hold, mA.
     #[arg(long = "e-com", value_name = "MA")]
     pub e_com_ma: f64,
-    /// A fitted surface (etlcal.thermal/1) instead of the paper's.
-    #[arg(long, value_name = "FILE")]
-    pub thermal: Option<PathBuf>,
+    /// The thermal calibration: an etlcal.thermal/1 file, or `paper` for the paper's
+    /// surface (none is assumed).
+    #[arg(long, value_name = "FILE|paper")]
+    pub thermal: PathBuf,
     /// Loop rate, Hz (0: as fast as the link allows).
     #[arg(long, default_value_t = 10.0, value_name = "HZ")]
     pub rate: f64,
@@ -211,10 +211,7 @@ fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
 }
 
 fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json_out: bool) -> Result<()> {
-    let cal = match &h.thermal {
-        Some(p) => ThermalFile::load(p)?.calibration(),
-        None => ThermalCalibration::PAPER,
-    };
+    let cal = ThermalRef::choose(&h.thermal)?.calibration()?;
     if !(h.rate.is_finite() && h.rate >= 0.0) {
         return Err(Error::InvalidInput(format!("--rate {} must be a finite number >= 0", h.rate)));
     }

@@ -29,6 +29,7 @@ macro_rules! outln {
 pub mod calibrate;
 pub mod demo;
 pub mod detect;
+pub mod export;
 pub mod lens;
 pub mod lens_sim;
 pub mod measure;
@@ -73,6 +74,8 @@ enum Command {
     Zhang(zhang::Args),
     /// The board's pose in two images at a lens current and the displacement between them.
     Measure(measure::Args),
+    /// The camera at a lens current and temperature for OpenCV, ROS or mrcal.
+    Export(export::Args),
     /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
@@ -95,6 +98,16 @@ pub fn print_json(value: &serde_json::Value) {
     outln!("{value}");
 }
 
+/// The out-of-range policy of a verb's `--allow-extrapolation` flag (one policy for every
+/// verb: refuse outside the calibrated ranges unless asked).
+pub fn trust(allow_extrapolation: bool) -> etl_formats::Trust {
+    if allow_extrapolation {
+        etl_formats::Trust::Extrapolate
+    } else {
+        etl_formats::Trust::Refuse
+    }
+}
+
 fn run(cli: Cli) -> Result<ExitCode> {
     let json = cli.json;
     let done = |r: Result<()>| r.map(|()| ExitCode::SUCCESS);
@@ -107,6 +120,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Report(a) => done(report::run(report::Args { json, ..a })),
         Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
+        Command::Export(a) => done(export::run(export::Args { json, ..a })),
         Command::Study(a) => done(study::run(study::Args { json, ..a })),
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),

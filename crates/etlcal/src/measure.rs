@@ -1,6 +1,7 @@
 //! `etlcal measure --calibration FILE --e-in MA --t C IMAGE_A IMAGE_B --pattern CxR
-//! --square MM [--json]`: the board's pose in both images at the compensated current
-//! (E_com from E_in and T through the calibration's thermal surface) by plane-based PnP,
+//! --square MM [--allow-extrapolation] [--json]`: the board's pose in both images at the
+//! compensated current (E_com from E_in and T through the calibration's thermal part;
+//! refused outside its calibrated ranges unless extrapolation is asked for) by plane-based PnP,
 //! and the displacement of the board between them, mm (the paper's measurement of a
 //! stage move, section 5.2.3), with one standard deviation per component from the pixel
 //! noise (estimated from each PnP's residual) and the calibration's covariance together
@@ -40,6 +41,10 @@ pub struct Args {
     /// The board.
     #[command(flatten)]
     pub board: BoardArgs,
+    /// Measure even outside the calibrated temperature, current and E_com ranges (the
+    /// result is marked `"extrapolated": true`).
+    #[arg(long)]
+    pub allow_extrapolation: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -55,7 +60,15 @@ pub fn run(args: Args) -> Result<()> {
     let board = args.board.board();
     let cal = Calibration::load(&args.calibration)?;
     let images = [args.image_a.as_path(), args.image_b.as_path()];
-    let m = measure_displacement(&cal, args.e_in_ma, args.temperature_c, &board, images, &default_detector())?;
+    let m = measure_displacement(
+        &cal,
+        args.e_in_ma,
+        args.temperature_c,
+        crate::trust(args.allow_extrapolation),
+        &board,
+        images,
+        &default_detector(),
+    )?;
     let (d, dist, e_com, s) = (m.displacement_mm, m.distance_mm, m.e_com_ma, m.displacement_std_mm);
     if !m.std_includes_calibration {
         eprintln!(
@@ -67,9 +80,13 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&json!({"e_com_ma": e_com, "pose_a": pose_json(&m.poses[0], ua),
             "pose_b": pose_json(&m.poses[1], ub), "displacement_mm": d, "displacement_std_mm": s,
-            "std_includes_calibration": m.std_includes_calibration, "distance_mm": dist}));
+            "std_includes_calibration": m.std_includes_calibration, "distance_mm": dist,
+            "extrapolated": m.extrapolated}));
     } else {
-        outln!("E_com {e_com:.3} mA");
+        outln!(
+            "E_com {e_com:.3} mA{}",
+            if m.extrapolated { " (EXTRAPOLATED: outside the calibrated ranges)" } else { "" }
+        );
         for (name, p) in ["A", "B"].iter().zip(&m.poses) {
             let t = p.translation_mm;
             outln!("pose {name}: T = [{:.4}, {:.4}, {:.4}] mm, rms {:.3} px", t[0], t[1], t[2], p.rms_px);

@@ -1,4 +1,4 @@
-//! `etlcal report --calibration FILE [--observations FILE] [--thermal FILE] --out DIR
+//! `etlcal report --calibration FILE [--observations FILE] [--thermal FILE|paper] --out DIR
 //! [--json]`: PNG and SVG plots of a calibration (fx, fy against current with every
 //! view's own estimate; k1, p1, p2 against current; with observations, a residual vector
 //! map and a residual histogram) and an index.html that shows them with the numbers.
@@ -7,13 +7,11 @@
 
 use std::path::PathBuf;
 
-use etl_core::thermal::ThermalCalibration;
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::calibration::Calibration;
+use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::observations::Observations;
-use etl_formats::thermal::ThermalFile;
 use etl_formats::Result;
 use etl_report::write_report;
 
@@ -26,8 +24,8 @@ pub struct Args {
     /// The observations it was made from (etlcal.observations/1), for the residual plots.
     #[arg(long, value_name = "FILE")]
     pub observations: Option<PathBuf>,
-    /// Thermal surface (etlcal.thermal/1) for views without e_com_ma (default: the
-    /// calibration's own, else the paper's).
+    /// Thermal calibration (etlcal.thermal/1, or `paper`) for views without e_com_ma
+    /// (default: the calibration's own; none is assumed).
     #[arg(long, value_name = "FILE")]
     pub thermal: Option<PathBuf>,
     /// Output directory (created with its missing parents).
@@ -42,12 +40,12 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let cal = Calibration::load(&args.calibration)?;
     let obs = args.observations.as_deref().map(Observations::load).transpose()?;
-    let thermal = match &args.thermal {
-        Some(p) => ThermalFile::load(p)?.calibration(),
-        None => ThermalCalibration { surface: cal.thermal_surface()?, ..ThermalCalibration::PAPER },
-    };
+    // Views without E_com are compensated by the thermal calibration chosen here, else
+    // the one the calibration keeps; none is assumed.
+    let chosen = args.thermal.as_deref().map(ThermalRef::choose).transpose()?;
+    let thermal = chosen.as_ref().or(cal.thermal.as_ref());
     crate::output::create_dir(&args.out)?;
-    let r = write_report(&cal, obs.as_ref(), &thermal, &args.out)?;
+    let r = write_report(&cal, obs.as_ref(), thermal, &args.out)?;
     if args.json {
         print_json(&json!({"files": r.files, "text": r.text}));
     } else {

@@ -16,10 +16,12 @@
 
 use std::path::PathBuf;
 
-use etl_core::thermal::ThermalCalibration;
+use etl_core::camera::ThermalTrust;
+use etl_core::thermal::Compensation;
 use serde_json::json;
 
 use super::print_json;
+use etl_formats::calibration::ThermalRef;
 use etl_formats::thermal::{read_thermal_table, ThermalFile};
 use etl_formats::{Error, Result};
 
@@ -79,9 +81,14 @@ pub struct EvalArgs {
     /// Lens temperature, degC.
     #[arg(long = "t", value_name = "C")]
     pub t_c: f64,
-    /// A fitted surface (etlcal.thermal/1) instead of the paper's.
-    #[arg(long, value_name = "FILE")]
-    pub thermal: Option<PathBuf>,
+    /// The thermal calibration: an etlcal.thermal/1 file, or `paper` for the paper's
+    /// surface (none is assumed).
+    #[arg(long, value_name = "FILE|paper")]
+    pub thermal: PathBuf,
+    /// Evaluate outside the calibrated temperature and current ranges too (the result is
+    /// marked `"extrapolated": true`); refused otherwise.
+    #[arg(long)]
+    pub allow_extrapolation: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -159,11 +166,15 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
 
 /// Runs `etlcal thermal eval`.
 pub fn run_eval(args: EvalArgs) -> Result<()> {
-    let cal = match &args.thermal {
-        Some(path) => ThermalFile::load(path)?.calibration(),
-        None => ThermalCalibration::PAPER,
+    let cal = ThermalRef::choose(&args.thermal)?.calibration()?;
+    let trust = crate::trust(args.allow_extrapolation);
+    let (e_t_ma, flags) = ThermalTrust::from_calibration(&cal).e_t_ma(args.e_in_ma, args.t_c, trust)?;
+    let c = Compensation {
+        e_in_ma: args.e_in_ma,
+        e_t_ma,
+        e_com_ma: args.e_in_ma - e_t_ma,
+        extrapolated: flags.temperature || flags.e_in,
     };
-    let c = cal.compensate(args.e_in_ma, args.t_c)?;
     if args.json {
         print_json(&json!({
             "e_t_ma": c.e_t_ma,

@@ -70,9 +70,9 @@ fn thermal_fit_creates_the_parent_directory_of_its_output_file() {
 
 #[test]
 fn json_is_accepted_before_or_after_the_verb() {
-    let after = json_of(&["thermal", "eval", "--t", "35", "--e-in", "150", "--json"]);
-    let before = json_of(&["--json", "thermal", "eval", "--t", "35", "--e-in", "150"]);
-    let between = json_of(&["thermal", "--json", "eval", "--t", "35", "--e-in", "150"]);
+    let after = json_of(&["thermal", "eval", "--t", "35", "--e-in", "150", "--thermal", "paper", "--json"]);
+    let before = json_of(&["--json", "thermal", "eval", "--t", "35", "--e-in", "150", "--thermal", "paper"]);
+    let between = json_of(&["thermal", "--json", "eval", "--t", "35", "--e-in", "150", "--thermal", "paper"]);
     assert_eq!(after, before);
     assert_eq!(after, between);
     assert!(after["e_com_ma"].as_f64().unwrap() < 150.0, "{after}");

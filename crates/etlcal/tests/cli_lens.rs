@@ -52,6 +52,8 @@ fn hold_keeps_e_com_while_the_virtual_lens_warms() {
         "hold",
         "--e-com",
         "150",
+        "--thermal",
+        "paper",
         "--duration",
         "2",
         "--warm",

@@ -23,7 +23,9 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
     // The board must stay in the image: at this current and 2 mm nearer it does.
     // The compensated current of (E_in, T) = (153 mA, 30 degC) through the paper's surface,
     // which the demo's calibration records.
-    let e_com = json_of(&["thermal", "eval", "--t", "30", "--e-in", "153", "--json"])["e_com_ma"].as_f64().unwrap();
+    let e_com = json_of(&["thermal", "eval", "--t", "30", "--e-in", "153", "--thermal", "paper", "--json"])["e_com_ma"]
+        .as_f64()
+        .unwrap();
     let e = format!("{e_com}");
     let a = json_of(&["render", "--out", &p("a.png"), "--e-com", &e, "--pattern", "9x7", "--seed", "1", "--json"]);
     let z_b = format!("{}", a["z_w_mm"].as_f64().unwrap() - 2.0);
@@ -41,14 +43,23 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
         "2",
         "--json",
     ]);
-    let measure = |a: &str, b: &str, json: bool| {
-        let mut args = vec!["measure", "--calibration", &cal, "--e-in", "153", "--t", "30", a, b];
+    let measure_at = |t: &str, a: &str, b: &str, extra: &[&str]| {
+        let mut args = vec!["measure", "--calibration", &cal, "--e-in", "153", "--t", t, a, b];
         args.extend(["--pattern", "9x7", "--square", "1.5"]);
-        if json {
-            args.push("--json");
-        }
+        args.extend(extra);
         etlcal(&args)
     };
+    let measure = |a: &str, b: &str, json: bool| measure_at("30", a, b, if json { &["--json"] } else { &[] });
+    // 80 degC is outside the calibration's thermal range (27..37 degC): the temperature is
+    // named (not the current), unless extrapolation is asked for, and then it is marked.
+    let out = measure_at("80", &p("a.png"), &p("b.png"), &[]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("temperature_c = 80 is outside [26, 38]") && err.lines().count() == 1, "{err}");
+    let out = measure_at("37.5", &p("a.png"), &p("b.png"), &["--allow-extrapolation", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let m: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(m["extrapolated"], Value::Bool(false), "37.5 degC is within the 1 degC margin: {m}");
     let out = measure(&p("a.png"), &p("b.png"), true);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let m: Value = serde_json::from_slice(&out.stdout).unwrap();

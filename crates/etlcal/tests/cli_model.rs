@@ -98,25 +98,50 @@ fn model_bad_input_is_a_one_line_error() {
 }
 
 #[test]
-fn thermal_eval_uses_the_paper_surface() {
-    let v = json_ok(&["thermal", "eval", "--t", "33.5", "--e-in", "150", "--json"]);
+fn thermal_eval_uses_the_paper_surface_when_chosen() {
+    let v = json_ok(&["thermal", "eval", "--t", "33.5", "--e-in", "150", "--thermal", "paper", "--json"]);
     let e_t = ThermalSurface::PAPER.e_t_ma(150.0, 33.5).unwrap();
     assert!((num(&v["e_t_ma"]) - e_t).abs() < 1e-12);
     assert!((num(&v["e_com_ma"]) - (150.0 - e_t)).abs() < 1e-12);
     assert_eq!(v["extrapolated"], false);
-    // Near 0 at 27 degC; flagged outside the paper's 27..37 degC x 40..240 mA.
-    let v = json_ok(&["thermal", "eval", "--t", "27", "--e-in", "100", "--json"]);
+    // Near 0 at 27 degC.
+    let v = json_ok(&["thermal", "eval", "--t", "27", "--e-in", "100", "--thermal", "paper", "--json"]);
     assert!(num(&v["e_t_ma"]).abs() < 0.5);
-    let v = json_ok(&["thermal", "eval", "--t", "30", "--e-in", "-5", "--json"]);
+    // Outside the paper's 27..37 degC x 40..240 mA (margins 1 degC, 5 mA): refused, the
+    // quantity named; evaluated and marked only when asked for.
+    let e = fails(&["thermal", "eval", "--t", "30", "--e-in", "-5", "--thermal", "paper"]);
+    assert!(e.contains("e_in_ma = -5 is outside [35, 245]"), "{e}");
+    let e = fails(&["thermal", "eval", "--t", "80", "--e-in", "150", "--thermal", "paper"]);
+    assert!(e.contains("temperature_c = 80 is outside [26, 38]"), "{e}");
+    let v = json_ok(&[
+        "thermal",
+        "eval",
+        "--t",
+        "30",
+        "--e-in",
+        "-5",
+        "--thermal",
+        "paper",
+        "--allow-extrapolation",
+        "--json",
+    ]);
     assert_eq!(v["extrapolated"], true);
+    // No surface is assumed: without --thermal, a usage error (exit 2).
+    let out = etlcal(&["thermal", "eval", "--t", "30", "--e-in", "100"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--thermal"));
 }
 
 #[test]
 fn thermal_eval_bad_input_is_a_one_line_error() {
-    assert!(fails(&["thermal", "eval", "--t", "30", "--e-in", "NaN", "--json"]).contains("e_in_ma"));
-    assert!(fails(&["thermal", "eval", "--t", "inf", "--e-in", "100"]).contains("t_c"));
-    // 303 K passed as degC: outside the operating domain.
-    assert!(fails(&["thermal", "eval", "--t", "303.15", "--e-in", "100"]).contains("outside"));
+    fn with<'a>(a: &[&'a str]) -> Vec<&'a str> {
+        [a, &["--thermal", "paper"]].concat()
+    }
+    assert!(fails(&with(&["thermal", "eval", "--t", "30", "--e-in", "NaN", "--json"])).contains("e_in_ma"));
+    assert!(fails(&with(&["thermal", "eval", "--t", "inf", "--e-in", "100"])).contains("temperature_c"));
+    // 303 K passed as degC: outside the operating domain, even when extrapolating.
+    assert!(fails(&with(&["thermal", "eval", "--t", "303.15", "--e-in", "100", "--allow-extrapolation"]))
+        .contains("t_c = 303.15 is outside [-40, 125]"));
     let dir = tempfile::tempdir().unwrap();
     let wrong = dir.path().join("wrong.json");
     std::fs::write(&wrong, r#"{"format": "etlcal.calibration/1"}"#).unwrap();
@@ -161,7 +186,7 @@ fn thermal_fit_recovers_the_surface_and_eval_reads_it_back() {
     assert!(num(&file["rms_ma"]) < 1e-9);
     assert_eq!(file["t_range_c"], serde_json::json!([27.0, 37.0]));
     assert_eq!(file["e_in_range_ma"], serde_json::json!([40.0, 240.0]));
-    let paper = json_ok(&["thermal", "eval", "--t", "35", "--e-in", "120", "--json"]);
+    let paper = json_ok(&["thermal", "eval", "--t", "35", "--e-in", "120", "--thermal", "paper", "--json"]);
     let fitted =
         json_ok(&["thermal", "eval", "--t", "35", "--e-in", "120", "--thermal", out.to_str().unwrap(), "--json"]);
     assert!((num(&paper["e_com_ma"]) - num(&fitted["e_com_ma"])).abs() < 1e-9);

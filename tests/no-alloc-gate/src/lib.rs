@@ -190,3 +190,18 @@ pub extern "C" fn etl_gate_autofocus(centre_ma: f64, lo: f64, hi: f64, coarse: u
     let f = |e: f64| if e > 1e6 { Err(etl_core::Error::Degenerate { what: "gate" }) } else { Ok(-(e - centre_ma) * (e - centre_ma)) };
     autofocus(f, &opts).map(|r| r.best_ma + r.evaluations as f64).unwrap_or(f64::NAN)
 }
+
+/// The run-time camera at (E_in, T) with a caller's policy, then a projection and a ray
+/// through it, and the OpenCV fit of its distortion; u + v + fit RMS, or NaN on error.
+#[no_mangle]
+pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, w: u32, h: u32) -> f64 {
+    use etl_core::camera::{Camera, ThermalTrust, Trust};
+    let thermal = ThermalTrust::from_calibration(&ThermalCalibration::PAPER);
+    let Ok(cam) = Camera::new(CameraModel::paper_rig(), Some(thermal), [80.0, 225.0]) else { return f64::NAN };
+    let trust = if extrapolate { Trust::Extrapolate } else { Trust::Refuse };
+    let Ok(at) = cam.at_with(e_in_ma, t_c, trust) else { return f64::NAN };
+    let Ok([u, v]) = at.project([3.0, 4.5, 22.0]) else { return f64::NAN };
+    let Ok(ray) = at.ray([u, v]) else { return f64::NAN };
+    let Ok(fit) = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), [w, h]) else { return f64::NAN };
+    u + v + ray.direction[2] + fit.rms_px
+}

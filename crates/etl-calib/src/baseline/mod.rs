@@ -12,7 +12,6 @@
 //! as zero: the result serves measurements (PnP), not stage geometry.
 
 use etl_core::linalg::svd::sym_pinv;
-use etl_core::thermal::ThermalCalibration;
 
 use crate::zhang::{zhang, PlanarView, ZhangResult};
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
@@ -130,7 +129,7 @@ pub fn refuse_bundle_adjust_options(method: &str, given: BundleAdjustOptionsGive
 ///
 /// Errors: no setting views; a setting with fewer than 3 views; fewer than 3 settings;
 /// Zhang's errors at a setting (named with its current).
-pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<BaselineResult> {
+pub fn per_setting(obs: &Observations, thermal: Option<&ThermalRef>) -> Result<BaselineResult> {
     let settings = setting_estimates(obs, thermal)?;
     let calibration = calibration_of(&settings, obs.image_size, thermal)?;
     Ok(BaselineResult { settings, calibration })
@@ -138,7 +137,7 @@ pub fn per_setting(obs: &Observations, thermal: &ThermalCalibration) -> Result<B
 
 /// Zhang's method at each setting of `obs.setting_views`: views grouped by E_com (within
 /// `SETTING_TOLERANCE_MA`), sorted by E_com; at least 3 settings of at least 3 views each.
-fn setting_estimates(obs: &Observations, thermal: &ThermalCalibration) -> Result<Vec<SettingEstimate>> {
+fn setting_estimates(obs: &Observations, thermal: Option<&ThermalRef>) -> Result<Vec<SettingEstimate>> {
     obs.validate()?;
     if obs.setting_views.is_empty() {
         return Err(Error::InvalidInput(
@@ -194,7 +193,7 @@ fn setting_estimates(obs: &Observations, thermal: &ThermalCalibration) -> Result
 fn calibration_of(
     settings: &[SettingEstimate],
     image_size: [u32; 2],
-    thermal: &ThermalCalibration,
+    thermal: Option<&ThermalRef>,
 ) -> Result<Calibration> {
     let es: Vec<f64> = settings.iter().map(|s| s.e_com_ma).collect();
     let deg = 3.min(settings.len() - 1);
@@ -248,7 +247,7 @@ fn calibration_of(
         kf_y,
         principal_point: [u0, v0],
         distortion_a: a,
-        thermal: Some(ThermalRef { coefficients: thermal.surface.coefficients }),
+        thermal: thermal.cloned(),
         e_com_range_ma: [es[0], es[es.len() - 1]],
         rms_reprojection_px: rms,
         std: ModelStd {

@@ -7,25 +7,24 @@
 
 use std::path::Path;
 
+use etl_core::camera::Trust;
 use etl_core::pnp::{
-    displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, solve_pnp, BoardPose,
-    PixelNoise, PoseUncertainty,
+    displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, BoardPose, PixelNoise,
+    PoseUncertainty,
 };
-use etl_core::thermal::ThermalCalibration;
 
 use super::dataset::CornerDetector;
 use etl_formats::calibration::Calibration;
 use etl_formats::dataset::Board;
 use etl_formats::{Error, Result};
 
-/// How far outside the calibrated current range a measurement may go, mA.
-pub const CURRENT_MARGIN_MA: f64 = 5.0;
-
 /// The board's poses in two images and its displacement between them.
 #[derive(Debug, Clone)]
 pub struct Measurement {
     /// The compensated current both poses were solved at, mA.
     pub e_com_ma: f64,
+    /// The setting lies outside a calibrated range (only with [`Trust::Extrapolate`]).
+    pub extrapolated: bool,
     /// The board's pose in the first and in the second image.
     pub poses: [BoardPose; 2],
     /// Translation of the board from the first pose to the second, camera frame, mm.
@@ -51,22 +50,21 @@ pub struct Measurement {
 /// the board), each pose by PnP with the calibrated model at E_com, and the displacement
 /// t_b - t_a, with its covariance (module docs).
 ///
-/// Errors: E_com more than [`CURRENT_MARGIN_MA`] outside the calibrated range; an image
+/// Errors: a setting outside the calibrated ranges (temperature, E_in, E_com, with the
+/// margins of [`etl_core::camera`]) unless `trust` is [`Trust::Extrapolate`]; an image
 /// missing, unreadable, of another size than the calibration's, or without the board; a
 /// PnP failure.
 pub fn measure_displacement(
     cal: &Calibration,
     e_in_ma: f64,
     temperature_c: f64,
+    trust: Trust,
     board: &Board,
     images: [&Path; 2],
     detector: &dyn CornerDetector,
 ) -> Result<Measurement> {
     board.validate()?;
-    let thermal = ThermalCalibration { surface: cal.thermal_surface()?, ..ThermalCalibration::PAPER };
-    let e_com_ma = thermal.compensate(e_in_ma, temperature_c)?.e_com_ma;
-    cal.check_current(e_com_ma, CURRENT_MARGIN_MA)?;
-    let model = cal.model();
+    let camera = cal.at(e_in_ma, temperature_c, trust)?;
     let mut poses = Vec::with_capacity(2);
     let mut uncertainty = Vec::with_capacity(2);
     for path in images {
@@ -76,8 +74,9 @@ pub fn measure_displacement(
         let sq = board.square_mm;
         let pts: Vec<[f64; 3]> = d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq, 0.0]).collect();
         let px: Vec<[f64; 2]> = d.corners.iter().map(|c| c.1).collect();
-        let pose = solve_pnp(&model, e_com_ma, &pts, &px)?;
-        uncertainty.push(pose_uncertainty(&model, e_com_ma, &pts, &px, &pose, PixelNoise::FromResidual)?);
+        let pose = camera.solve_pnp(&pts, &px)?;
+        let u = pose_uncertainty(camera.model(), camera.e_com_ma(), &pts, &px, &pose, PixelNoise::FromResidual)?;
+        uncertainty.push(u);
         poses.push(pose);
     }
     let [a, b]: [BoardPose; 2] =
@@ -89,7 +88,8 @@ pub fn measure_displacement(
     let calibration_covariance = cal.covariance_matrix();
     let cov = displacement_covariance_mm2(&ua, &ub, calibration_covariance.as_ref())?;
     Ok(Measurement {
-        e_com_ma,
+        e_com_ma: camera.e_com_ma(),
+        extrapolated: camera.extrapolated(),
         poses: [a, b],
         displacement_mm: d,
         distance_mm,

@@ -19,7 +19,6 @@ use etl_core::calib::{
     View, ViewCorrection, ViewScratch, A0,
 };
 use etl_core::model::CameraModel;
-use etl_core::thermal::ThermalCalibration;
 
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
 use etl_formats::observations::Observations;
@@ -97,17 +96,18 @@ pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult>
 /// use etl_calib::pipeline::{calibrate, CalibrateOptions};
 /// use etl_sim::simulate::{paper_rig, NoiseModel};
 /// use etl_core::calib::Estimator;
-/// use etl_core::thermal::ThermalCalibration;
+/// use etl_formats::ThermalRef;
 ///
 /// let sim = paper_rig(&NoiseModel::PAPER, 1);
-/// let th = ThermalCalibration::PAPER;
+/// // The simulated rig's lens follows the paper's surface: chosen explicitly, recorded.
+/// let th = ThermalRef::paper();
 /// // The default: errors-in-variables, each view's stage and current corrected.
-/// let eiv = calibrate(&sim.observations, &sim.a0, &th, &CalibrateOptions::default())?;
+/// let eiv = calibrate(&sim.observations, &sim.a0, Some(&th), &CalibrateOptions::default())?;
 /// assert_eq!(eiv.calibration.estimator, "eiv");
 /// assert!(eiv.calibration.views.iter().any(|v| v.dz_mm != 0.0));
 /// // The paper's Eq. 24: recorded stage positions and currents taken as exact.
 /// let opts = CalibrateOptions { estimator: Estimator::Paper, ..CalibrateOptions::default() };
-/// let paper = calibrate(&sim.observations, &sim.a0, &th, &opts)?;
+/// let paper = calibrate(&sim.observations, &sim.a0, Some(&th), &opts)?;
 /// assert_eq!(paper.calibration.estimator, "paper");
 /// let fx_true = sim.truth.focal_lengths(150.0).0;
 /// assert!((eiv.report.model.focal_lengths(150.0).0 / fx_true - 1.0).abs() < 0.005);
@@ -116,7 +116,7 @@ pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult>
 pub fn calibrate(
     obs: &Observations,
     a0: &A0,
-    thermal: &ThermalCalibration,
+    thermal: Option<&ThermalRef>,
     options: &CalibrateOptions,
 ) -> Result<CalibrationResult> {
     obs.validate()?;
@@ -167,7 +167,7 @@ pub fn calibrate(
     let lo = e_com.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = e_com.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let mut calibration = Calibration {
-        thermal: Some(ThermalRef { coefficients: thermal.surface.coefficients }),
+        thermal: thermal.cloned(),
         rms_reprojection_px: report.rms_px,
         std: ModelStd::from_params(&report.std),
         estimator: match options.estimator {

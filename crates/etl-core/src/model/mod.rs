@@ -6,10 +6,12 @@
 
 pub mod camera;
 pub mod distortion;
+pub mod opencv;
 pub mod ray;
 pub mod rotation;
 pub mod undistort;
 
 pub use camera::{CameraModel, Intrinsics};
 pub use distortion::Distortion;
+pub use opencv::{fit_opencv5, OpenCvFit};
 pub use ray::Ray;

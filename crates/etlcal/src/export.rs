@@ -1,0 +1,76 @@
+//! `etlcal export --calibration FILE --e-in MA --t C --format opencv|ros|mrcal --out FILE
+//! [--allow-extrapolation] [--json]`: the camera at one setting as an OpenCV FileStorage
+//! YAML, a ROS camera_info YAML or an mrcal .cameramodel (etl_formats::export). The
+//! distortion is OpenCV's five coefficients fitted to etlcal's model; the fit error is
+//! printed and written into the file.
+
+use std::path::PathBuf;
+
+use serde_json::json;
+
+use super::print_json;
+use etl_formats::calibration::Calibration;
+use etl_formats::export::{export, ExportFormat};
+use etl_formats::Result;
+
+/// Arguments of `etlcal export`.
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// The calibration (etlcal.calibration/1).
+    #[arg(long, value_name = "FILE")]
+    pub calibration: PathBuf,
+    /// Driver current, mA.
+    #[arg(long = "e-in", value_name = "MA")]
+    pub e_in_ma: f64,
+    /// Lens temperature, degC.
+    #[arg(long = "t", value_name = "C")]
+    pub temperature_c: f64,
+    /// opencv (FileStorage YAML), ros (camera_info YAML) or mrcal (.cameramodel).
+    #[arg(long, value_name = "opencv|ros|mrcal")]
+    pub format: String,
+    /// The file to write (atomically; its directory is created if missing).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Export even outside the calibrated temperature, current and E_com ranges (the
+    /// file says so).
+    #[arg(long)]
+    pub allow_extrapolation: bool,
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
+    pub json: bool,
+}
+
+/// Runs `etlcal export`.
+pub fn run(args: Args) -> Result<()> {
+    let format: ExportFormat = args.format.parse()?;
+    let cal = Calibration::load(&args.calibration)?;
+    let camera = cal.at(args.e_in_ma, args.temperature_c, crate::trust(args.allow_extrapolation))?;
+    crate::output::create_parent(&args.out)?;
+    let e = export(&cal, &camera, format, &args.out)?;
+    if args.json {
+        print_json(&json!({
+            "format": args.format,
+            "out": args.out.display().to_string(),
+            "e_in_ma": args.e_in_ma,
+            "temperature_c": args.temperature_c,
+            "e_com_ma": camera.e_com_ma(),
+            "extrapolated": camera.extrapolated(),
+            "camera_matrix": e.camera_matrix,
+            "dist_coeffs": e.fit.dist_coeffs,
+            "fit_rms_px": e.fit.rms_px,
+            "fit_max_px": e.fit.max_px,
+        }));
+    } else {
+        outln!(
+            "wrote {} ({} at E_com {:.3} mA{}); OpenCV distortion fit: rms {:.4} px, max {:.4} px",
+            args.out.display(),
+            args.format,
+            camera.e_com_ma(),
+            if camera.extrapolated() { ", EXTRAPOLATED" } else { "" },
+            e.fit.rms_px,
+            e.fit.max_px
+        );
+    }
+    Ok(())
+}
