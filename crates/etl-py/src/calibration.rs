@@ -249,7 +249,7 @@ impl Calibration {
     fn at(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
         let inner =
             self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
-        Ok(CameraAt { inner })
+        Ok(CameraAt { inner, calibration_covariance: self.file.covariance_matrix().map(Arc::new) })
     }
 
     /// RMS reprojection error of the calibration, px (0 for a model given, not estimated).
