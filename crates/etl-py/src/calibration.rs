@@ -679,7 +679,7 @@ pub(crate) fn thermal_ref(t: &Bound<'_, PyAny>) -> PyResult<ThermalRef> {
     if let Ok(word) = t.extract::<String>() {
         return match word.as_str() {
             etl_formats::calibration::PAPER_THERMAL => Ok(ThermalRef::paper()),
-            _ => Err(input_error(&format!("thermal = {word:?}: the only word accepted is \"paper\""))),
+            _ => Err(input_error(format!("thermal = {word:?}: the only word accepted is \"paper\""))),
         };
     }
     if let Ok(c) = t.extract::<ThermalCalibration>() {
