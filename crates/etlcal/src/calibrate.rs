@@ -187,5 +187,9 @@ fn calibrate_proposed(args: &Args, obs: &Observations, thermal: &ThermalCalibrat
         }
     };
     let opts = CalibrateOptions { estimator, hold_a0: args.hold_a0, robust };
-    Ok(calibrate(obs, &a0, thermal, &opts)?.calibration)
+    let result = calibrate(obs, &a0, thermal, &opts)?;
+    if let Some(why) = &result.focus_law_warning {
+        eprintln!("etlcal: warning: {why}");
+    }
+    Ok(result.calibration)
 }
