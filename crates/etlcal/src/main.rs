@@ -29,6 +29,7 @@ macro_rules! outln {
 pub mod calibrate;
 pub mod demo;
 pub mod detect;
+pub mod focus;
 pub mod lens;
 pub mod lens_sim;
 pub mod measure;
@@ -73,6 +74,8 @@ enum Command {
     Zhang(zhang::Args),
     /// The board's pose in two images at a lens current and the displacement between them.
     Measure(measure::Args),
+    /// The lens current that focuses the calibrated camera at a distance (the focus law).
+    Focus(focus::Args),
     /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
@@ -107,6 +110,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Report(a) => done(report::run(report::Args { json, ..a })),
         Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
+        Command::Focus(a) => done(focus::run(focus::Args { json, ..a })),
         Command::Study(a) => done(study::run(study::Args { json, ..a })),
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),

@@ -38,3 +38,35 @@ pub fn focus_samples(model: &CameraModel, views: &[View<'_>]) -> Vec<FocusSample
 pub fn fit_focus_law(model: &CameraModel, views: &[View<'_>]) -> Result<FocusLaw, String> {
     FocusLaw::fit(&focus_samples(model, views)).map_err(|e| format!("no focus law: {e}"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use etl_core::calib::Point;
+
+    #[test]
+    fn samples_are_corner_centroid_depths_and_too_few_currents_are_said() {
+        let model = CameraModel::paper_rig();
+        let pts: Vec<Vec<Point>> = (0..4)
+            .map(|k| {
+                let z = 10.0 * k as f64;
+                [[0.0, 0.0], [3.0, 0.0], [0.0, 6.0], [3.0, 6.0]]
+                    .iter()
+                    .map(|&[x, y]| Point { world_mm: [x, y, z], pixel: [0.0, 0.0] })
+                    .collect()
+            })
+            .collect();
+        let views: Vec<View<'_>> =
+            pts.iter().enumerate().map(|(k, p)| View { e_com_ma: 200.0 - 30.0 * k as f64, points: p }).collect();
+        let s = focus_samples(&model, &views);
+        assert_eq!(s.len(), 4);
+        for (k, x) in s.iter().enumerate() {
+            let want = model.world_to_camera([1.5, 3.0, 10.0 * k as f64])[2];
+            assert!((x.distance_mm - want).abs() < 1e-12 && x.e_com_ma == views[k].e_com_ma);
+        }
+        assert!(fit_focus_law(&model, &views).is_ok());
+        let why = fit_focus_law(&model, &views[..3]).unwrap_err();
+        assert!(why.starts_with("no focus law: too few calibration views at distinct currents"), "{why}");
+        assert_eq!(why.lines().count(), 1);
+    }
+}
