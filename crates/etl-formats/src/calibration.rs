@@ -221,7 +221,8 @@ impl Calibration {
     pub fn focus_law(&self) -> Result<&FocusLaw> {
         self.focus_law.as_ref().ok_or_else(|| {
             Error::InvalidInput(
-                "this calibration has no focus law (focus_law); recalibrate with views at >= 4 distinct currents".into(),
+                "this calibration has no focus law (focus_law); recalibrate with views at >= 4 distinct currents"
+                    .into(),
             )
         })
     }

@@ -81,11 +81,14 @@ fn out_of_range_inputs_are_refused_naming_the_quantity() {
     assert!(c.focus_e_in(80.0, 27.0).unwrap_err().to_string().contains("no temperature compensation"));
 }
 
+/// A way to spoil a good law, named by what the error says.
+type Spoil = (&'static str, fn(&mut FocusLaw));
+
 #[test]
 fn a_bad_focus_law_is_refused_and_nothing_is_written() {
     let good = Calibration::load(&fixture()).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let spoils: [(&str, fn(&mut FocusLaw)); 4] = [
+    let spoils: [Spoil; 4] = [
         ("monotone", |l| l.coefficients_ma = [0.0, 10.0, -0.5]),
         ("distance_range_mm", |l| l.distance_range_mm = [120.0, 50.0]),
         ("rms_ma", |l| l.rms_ma = -1.0),

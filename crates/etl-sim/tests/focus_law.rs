@@ -70,7 +70,8 @@ fn board_sharpness(depth_mm: f64, e_com_ma: f64, seed: u64) -> f64 {
     let x = (0.5 * f64::from(size[0]) - u0) * depth_mm / fx;
     let y = (0.5 * f64::from(size[1]) - v0) * depth_mm / fy;
     let centre = [0.5 * 0.5 * 29.0, 0.5 * 0.5 * 23.0];
-    let cam = CameraModel { rotation_rodrigues: [0.0; 3], translation_mm: [x - centre[0], y - centre[1], depth_mm], ..truth };
+    let cam =
+        CameraModel { rotation_rodrigues: [0.0; 3], translation_mm: [x - centre[0], y - centre[1], depth_mm], ..truth };
     let scene = Scene::new(cam, e_com_ma, board, 0.0, size);
     let optics = Optics { base_sigma_px: 0.5, ..Optics::paper_focus(&truth, e_com_ma, 2.5) };
     let img = render(&scene, &RenderOptions { optics, seed, ..Default::default() }).unwrap().image;
@@ -135,4 +136,3 @@ fn the_calibrated_law_predicts_the_sharpest_current_within_0_3_ma() {
     println!("worst |predicted - sharpest| = {worst:.3} mA");
     assert!(worst < 0.3, "worst {worst} mA");
 }
-
