@@ -256,8 +256,11 @@ fn distinct_currents(samples: &[FocusSample]) -> usize {
     let mut seen = [0.0; FOCUS_LAW_MIN_CURRENTS];
     let mut n = 0;
     for s in samples {
-        if n < seen.len() && !seen[..n].contains(&s.e_com_ma) {
-            seen[n] = s.e_com_ma;
+        if seen.iter().take(n).any(|&v| v == s.e_com_ma) {
+            continue;
+        }
+        if let Some(slot) = seen.get_mut(n) {
+            *slot = s.e_com_ma;
             n += 1;
         }
     }
