@@ -365,7 +365,11 @@ impl Calibration {
         Ok(match direction {
             Direction::EComForEIn => self.at(current_ma, temperature_c, trust)?.e_com_ma(),
             Direction::EInForECom => {
-                let e_in_ma = self.thermal_surface()?.e_in_for_e_com(current_ma, temperature_c)?;
+                // The temperature is judged before the inverse, whose own message would
+                // otherwise blame the current.
+                let thermal = self.thermal_ref()?.trust();
+                thermal.check_temperature(temperature_c, trust)?;
+                let e_in_ma = thermal.surface.e_in_for_e_com(current_ma, temperature_c)?;
                 self.at(e_in_ma, temperature_c, trust)?;
                 e_in_ma
             }

@@ -51,7 +51,8 @@ fn focuses_at_a_distance_and_refuses_what_is_out_of_range() {
     let cal = calibration(dir.path());
     let f = json_of(&["focus", "--calibration", &cal, "--distance-mm", "80", "--t", "30", "--json"]);
     let keys: Vec<&str> = f.as_object().unwrap().keys().map(String::as_str).collect();
-    assert_eq!(keys, ["distance_mm", "e_com_ma", "e_in_ma"]);
+    assert_eq!(keys, ["distance_mm", "e_com_ma", "e_in_ma", "extrapolated"]);
+    assert_eq!(f["extrapolated"], false);
     assert_eq!(f["distance_mm"], 80.0);
     let (e_in, e_com) = (f["e_in_ma"].as_f64().unwrap(), f["e_com_ma"].as_f64().unwrap());
     // The rig's lens focuses 80 mm at 127.1 mA; the calibration's law is close to it.
