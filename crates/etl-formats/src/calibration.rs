@@ -11,6 +11,7 @@ use etl_core::calib::jacobian::to_params;
 use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
 use etl_core::camera::{Camera, CameraAt, ThermalTrust, Trust};
+use etl_core::focus::FocusLaw;
 use etl_core::model::CameraModel;
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use serde::{Deserialize, Serialize};
@@ -181,6 +182,13 @@ pub struct ViewSummary {
     pub fy_px: f64,
 }
 
+/// Which way [`Calibration::focus_thermal`] converts.
+#[derive(Debug, Clone, Copy)]
+enum Direction {
+    EComForEIn,
+    EInForECom,
+}
+
 /// The whole file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -229,6 +237,11 @@ pub struct Calibration {
     /// per-view corrections marginalised out (the Schur complement).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub covariance: Option<Vec<Vec<f64>>>,
+    /// The focus law: the distance in focus (mm, along the optical axis from the camera's
+    /// centre) against E_com, fitted to the views (optional; absent when the views did not
+    /// allow one, and in files written before it existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_law: Option<FocusLaw>,
 }
 
 /// Relative tolerance of the covariance checks of [`Calibration::validate`]: symmetry
@@ -259,6 +272,7 @@ impl Calibration {
             initial_rms_px: 0.0,
             views: vec![],
             covariance: None,
+            focus_law: None,
         }
     }
 
@@ -427,7 +441,66 @@ impl Calibration {
         if !(self.rms_reprojection_px.is_finite() && self.rms_reprojection_px >= 0.0) {
             return bad(format!("rms_reprojection_px = {} must be a finite number >= 0", self.rms_reprojection_px));
         }
+        if let Some(law) = &self.focus_law {
+            if let Err(e) = law.validate() {
+                return bad(e.to_string());
+            }
+        }
         self.validate_covariance().or_else(bad)
+    }
+
+    /// The focus law, or an error saying that this calibration has none.
+    pub fn focus_law(&self) -> Result<&FocusLaw> {
+        self.focus_law.as_ref().ok_or_else(|| {
+            Error::InvalidInput(
+                "this calibration has no focus law (focus_law); recalibrate with views at >= 4 distinct currents"
+                    .into(),
+            )
+        })
+    }
+
+    /// The driver current E_in (mA) that focuses the camera at `distance_mm` (the depth of
+    /// the plane in focus, i.e. its distance along the optical axis from the camera's
+    /// centre) at lens temperature `temperature_c`: E_com = law(distance), then E_in such
+    /// that E_in - E_T(T, E_in) = E_com.
+    ///
+    /// Errors: no focus law; a distance outside the law's calibrated distances (+- 2 %,
+    /// [`etl_core::focus::FOCUS_LAW_RANGE_MARGIN`]); no thermal part; a setting outside
+    /// the calibrated ranges unless `trust` is [`Trust::Extrapolate`] ([`Self::at`]).
+    pub fn focus_e_in(&self, distance_mm: f64, temperature_c: f64, trust: Trust) -> Result<f64> {
+        let e_com_ma = self.focus_law()?.e_com_ma(distance_mm)?;
+        self.focus_thermal(e_com_ma, temperature_c, Direction::EInForECom, trust)
+    }
+
+    /// The distance in focus (mm, as [`Self::focus_e_in`]) at driver current `e_in_ma` and
+    /// lens temperature `temperature_c`: E_com through the thermal surface, then the law.
+    ///
+    /// Errors: no focus law; no thermal part; a setting outside the calibrated ranges
+    /// unless `trust` is [`Trust::Extrapolate`]; an E_com outside the law's calibrated
+    /// currents (+- 2 %).
+    pub fn focus_distance_mm(&self, e_in_ma: f64, temperature_c: f64, trust: Trust) -> Result<f64> {
+        let law = self.focus_law()?;
+        let e_com_ma = self.focus_thermal(e_in_ma, temperature_c, Direction::EComForEIn, trust)?;
+        Ok(law.distance_mm(e_com_ma)?)
+    }
+
+    /// The one use of the thermal conversion by the focus functions (so that the range
+    /// policy of the temperature compensation applies to them in one place): E_com of
+    /// (E_in, T), or the E_in of (E_com, T).
+    /// The setting is checked by [`Self::at`], the one range policy.
+    fn focus_thermal(&self, current_ma: f64, temperature_c: f64, direction: Direction, trust: Trust) -> Result<f64> {
+        Ok(match direction {
+            Direction::EComForEIn => self.at(current_ma, temperature_c, trust)?.e_com_ma(),
+            Direction::EInForECom => {
+                // The temperature is judged before the inverse, whose own message would
+                // otherwise blame the current.
+                let thermal = self.thermal_ref()?.trust();
+                thermal.check_temperature(temperature_c, trust)?;
+                let e_in_ma = thermal.surface.e_in_for_e_com(current_ma, temperature_c)?;
+                self.at(e_in_ma, temperature_c, trust)?;
+                e_in_ma
+            }
+        })
     }
 
     /// Reads and checks a file.

@@ -362,6 +362,62 @@ impl Calibration {
         })
     }
 
+    /// The focus law of the calibration, or None when it has none: a dict with
+    /// coefficients_ma (c0 mA, c1 mA/dpt, c2 mA/dpt^2 of E_com = c0 + c1 V + c2 V^2 with
+    /// V = 1000 / distance_mm), distance_range_mm and e_com_range_ma (the fitted views'
+    /// (min, max)), rms_ma (the views' current residual) and views (how many were fitted).
+    /// The distance is the depth of the plane in focus: along the optical axis from the
+    /// camera's centre, mm.
+    #[getter]
+    fn focus_law<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(law) = &self.file.focus_law else { return Ok(None) };
+        let d = PyDict::new(py);
+        let c = law.coefficients_ma;
+        d.set_item("coefficients_ma", (c[0], c[1], c[2]))?;
+        d.set_item("distance_range_mm", (law.distance_range_mm[0], law.distance_range_mm[1]))?;
+        d.set_item("e_com_range_ma", (law.e_com_range_ma[0], law.e_com_range_ma[1]))?;
+        d.set_item("rms_ma", law.rms_ma)?;
+        d.set_item("views", law.views)?;
+        Ok(Some(d))
+    }
+
+    /// The driver current E_in (mA) that focuses the camera at `distance_mm` at lens
+    /// temperature `temperature_c`: E_com from the focus law, then the E_in that gives it
+    /// through the thermal surface.
+    ///
+    /// Args:
+    ///     distance_mm: depth of the plane to focus on (along the optical axis from the
+    ///         camera's centre), mm.
+    ///     temperature_c: lens temperature, degC.
+    ///     allow_extrapolation: outside the calibrated temperature and current ranges too
+    ///         (keyword only; the law's distance range is always enforced).
+    ///
+    /// Raises: InputError when the calibration has no focus law ("this calibration has no
+    /// focus law") or no thermal part, for a distance outside the law's calibrated
+    /// distances (+- 2 % of their span), or a setting outside the calibrated ranges.
+    #[pyo3(signature = (distance_mm, temperature_c, *, allow_extrapolation=false))]
+    fn focus_e_in(&self, distance_mm: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
+        self.file.focus_e_in(distance_mm, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)
+    }
+
+    /// The distance in focus (mm, as in `focus_e_in`) at driver current `e_in_ma` and lens
+    /// temperature `temperature_c`.
+    ///
+    /// Args:
+    ///     e_in_ma: driver current, mA.
+    ///     temperature_c: lens temperature, degC.
+    ///     allow_extrapolation: as in `focus_e_in`.
+    ///
+    /// Raises: InputError when the calibration has no focus law or no thermal part, for
+    /// an E_com outside the law's calibrated currents (+- 2 % of their span), or a
+    /// setting outside the calibrated ranges.
+    #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
+    fn focus_distance_mm(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
+        self.file
+            .focus_distance_mm(e_in_ma, temperature_c, trust(allow_extrapolation))
+            .map_err(crate::errors::calib_err)
+    }
+
     /// (fx, fy) at the compensated current, px (Eq. 16).
     ///
     /// Args:

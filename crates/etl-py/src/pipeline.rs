@@ -108,6 +108,11 @@ pub fn calibrate(
             run_pipeline(&obs, &a0, thermal.as_ref(), &options)
         })
         .py()?;
+    if let Some(why) = &result.focus_law_warning {
+        // Said, not silent: the calibration is returned without a focus law.
+        let message = std::ffi::CString::new(why.as_str()).map_err(|e| input_error(e.to_string()))?;
+        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
+    }
     Ok(Calibration::from_file(result.calibration))
 }
 

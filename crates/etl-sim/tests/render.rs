@@ -189,12 +189,19 @@ fn sharp_coverage_matches_supersampling_through_the_ray() {
     assert!(sum / (count as f64) < 0.5, "mean {}", sum / count as f64);
 }
 
+/// A lens focused at the camera depth of the paper board's centre with the stage where the
+/// paper's view at `e` stands, aperture 2.5 mm.
+fn stage_focus(truth: &CameraModel, e: f64) -> Optics {
+    Optics { focus_depth_mm: Some(etl_sim::rig::focus_depth_mm(truth, e)), aperture_mm: 2.5, base_sigma_px: 0.0 }
+}
+
 #[test]
 fn thin_lens_blur_at_the_board_centre() {
     let truth = CameraModel::paper_rig();
     let e = 150.0;
-    // In focus: the stage where the paper's view at 150 mA stands.
-    let optics = Optics::paper_focus(&truth, e, 2.5);
+    // In focus: at the board centre's depth with the stage where the paper's view at
+    // 150 mA stands (the renderer's physics, not the rig's focus law).
+    let optics = stage_focus(&truth, e);
     let mut scene = Scene::paper_view(&truth, e, 22.0);
     scene.image_size = [64, 48];
     assert!(render(&scene, &clean(optics)).unwrap().blur_sigma_px < 1e-9);
@@ -212,7 +219,7 @@ fn varying_defocus_matches_a_uniform_blur_where_the_sigmas_agree() {
     let truth = CameraModel::paper_rig();
     let e = 150.0;
     let scene = Scene::paper_view(&truth, e, 24.0);
-    let optics = Optics::paper_focus(&truth, e, 2.5);
+    let optics = stage_focus(&truth, e);
     let varying = render(&scene, &clean(optics)).unwrap();
     // The depth of field is shallow (0.6 px of sigma per mm here): compare around corner
     // (6, 6) with the uniform blur of that corner's own depth.

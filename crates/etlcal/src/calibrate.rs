@@ -7,6 +7,9 @@
 //! failure). From a dataset, boards are detected in every image (in parallel, with a
 //! progress bar on a terminal); views whose board is not found are named on stderr and
 //! skipped, and the run fails only if what remains breaks a precondition.
+//! The calibration holds the focus law (the distance in focus against E_com, fitted to the
+//! views; `etlcal focus` uses it) when the views allow one (>= 4 distinct currents);
+//! otherwise a warning on stderr says why it is left out.
 //! `--json` prints the object written. Without `--a0`, A0 comes from the lens-off views
 //! by Zhang's method. The bundle adjustment is errors-in-variables unless `--estimator
 //! paper` asks for the paper's Eq. 24. `--method per-setting` is the paper's baseline (Zhang
@@ -184,5 +187,9 @@ fn calibrate_proposed(args: &Args, obs: &Observations, thermal: Option<&ThermalR
         }
     };
     let opts = CalibrateOptions { estimator, hold_a0: args.hold_a0, robust };
-    Ok(calibrate(obs, &a0, thermal, &opts)?.calibration)
+    let result = calibrate(obs, &a0, thermal, &opts)?;
+    if let Some(why) = &result.focus_law_warning {
+        eprintln!("etlcal: warning: {why}");
+    }
+    Ok(result.calibration)
 }

@@ -30,6 +30,7 @@ pub mod calibrate;
 pub mod demo;
 pub mod detect;
 pub mod export;
+pub mod focus;
 pub mod lens;
 pub mod lens_sim;
 pub mod measure;
@@ -76,6 +77,8 @@ enum Command {
     Measure(measure::Args),
     /// The camera at a lens current and temperature for OpenCV, ROS or mrcal.
     Export(export::Args),
+    /// The lens current that focuses the calibrated camera at a distance (the focus law).
+    Focus(focus::Args),
     /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
@@ -121,6 +124,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
         Command::Export(a) => done(export::run(export::Args { json, ..a })),
+        Command::Focus(a) => done(focus::run(focus::Args { json, ..a })),
         Command::Study(a) => done(study::run(study::Args { json, ..a })),
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),

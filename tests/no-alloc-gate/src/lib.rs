@@ -95,6 +95,22 @@ pub extern "C" fn etl_gate_poly_fit(x0: f64, dx: f64, n: usize, d: usize, lo: f6
     }
 }
 
+/// The focus law fitted to `n` views (E from `e0` by `de`, distance from `d0` by `dd`), then
+/// evaluated both ways at `d`.
+#[no_mangle]
+pub extern "C" fn etl_gate_focus_law(e0: f64, de: f64, d0: f64, dd: f64, n: usize, d: f64) -> f64 {
+    use etl_core::focus::{FocusLaw, FocusSample};
+    let mut samples = [FocusSample { e_com_ma: 0.0, distance_mm: 0.0 }; 16];
+    for (i, s) in samples.iter_mut().enumerate() {
+        *s = FocusSample { e_com_ma: e0 + de * i as f64, distance_mm: d0 + dd * i as f64 };
+    }
+    let Ok(law) = FocusLaw::fit(samples.get(..n).unwrap_or(&samples)) else { return f64::NAN };
+    match law.e_com_ma(d) {
+        Ok(e) => e + law.distance_mm(e).unwrap_or(f64::NAN),
+        Err(_) => f64::NAN,
+    }
+}
+
 /// A Givens QR accumulator of caller-chosen size.
 #[no_mangle]
 pub extern "C" fn etl_gate_givens(n: usize, a: f64, b: f64) -> f64 {

@@ -265,6 +265,9 @@ fn calibration_of(
         covariance: None,
         iterations: settings.iter().map(|s| s.zhang.iterations).max().unwrap_or(0),
         initial_rms_px: rms,
+        // Each setting's boards are in their own frames and the calibration has no pose:
+        // there is no distance to fit a focus law to.
+        focus_law: None,
         views: settings
             .iter()
             .map(|s| ViewSummary {

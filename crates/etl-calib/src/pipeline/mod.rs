@@ -4,9 +4,11 @@
 //!
 //! [`calibrate`] starts from observations; [`dataset::observations_from_dataset`] turns a
 //! dataset's images into observations first (views whose board is not found are reported
-//! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports.
+//! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports;
+//! [`focus_law`] fits the distance in focus against the current from the views.
 
 pub mod dataset;
+pub mod focus_law;
 pub mod measure;
 mod planar_views;
 mod view_focal;
@@ -54,6 +56,9 @@ pub struct CalibrationResult {
     pub report: BundleAdjustReport,
     /// The initial (linear) model.
     pub initial: CameraModel,
+    /// Why the calibration has no focus law (`calibration.focus_law` is `None`), e.g. too
+    /// few distinct currents; `None` when it has one. Front ends print it as a warning.
+    pub focus_law_warning: Option<String>,
 }
 
 /// Refuses an image whose size is not the `expected` one, which `whose` names (e.g. "the
@@ -164,6 +169,10 @@ pub fn calibrate(
             }
         })
         .collect();
+    let (focus_law, focus_law_warning) = match focus_law::fit_focus_law(&m, &views) {
+        Ok(law) => (Some(law), None),
+        Err(why) => (None, Some(why)),
+    };
     let lo = e_com.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = e_com.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let mut calibration = Calibration {
@@ -177,10 +186,11 @@ pub fn calibrate(
         iterations: report.iterations,
         initial_rms_px: report.initial_rms_px,
         views: summaries,
+        focus_law,
         ..Calibration::from_model(&m, obs.image_size, [lo, hi])
     };
     // The covariance of the 25 shared numbers (for errors-in-variables, with the view
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.
     calibration.set_covariance(&report.covariance);
-    Ok(CalibrationResult { calibration, report, initial })
+    Ok(CalibrationResult { calibration, report, initial, focus_law_warning })
 }

@@ -63,6 +63,13 @@ impl ThermalTrust {
         Ok(())
     }
 
+    /// Whether `temperature_c` is outside the calibrated temperature range (margin
+    /// [`T_MARGIN_C`]); an error if it is and `trust` refuses. For callers that need the
+    /// temperature judged before a current is known (the inverse E_com -> E_in).
+    pub fn check_temperature(&self, temperature_c: f64, trust: Trust) -> Result<bool> {
+        check_opt("temperature_c", temperature_c, self.t_range_c, T_MARGIN_C, trust)
+    }
+
     /// E_T at (`e_in_ma`, `temperature_c`) and which ranges the setting is outside of
     /// (the temperature checked first). Errors: outside a range with [`Trust::Refuse`];
     /// outside the lens's operating domain; non-finite input.

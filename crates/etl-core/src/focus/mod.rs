@@ -1,4 +1,5 @@
-//! Sharpness measures and autofocus, without allocation, over a borrowed grayscale view.
+//! Sharpness measures and autofocus, without allocation, over a borrowed grayscale view;
+//! and the focus law of a calibrated camera ([`FocusLaw`]: distance in focus <-> current).
 //!
 //! The measures ([`tenengrad`], [`laplacian_variance`], [`brenner`],
 //! [`normalised_variance`]) take an [`ImageView`] of 8- or 16-bit pixels with any row
@@ -37,6 +38,7 @@ pub mod autofocus;
 pub mod brenner;
 pub mod image;
 pub mod laplacian;
+pub mod law;
 pub mod normvar;
 pub mod tenengrad;
 
@@ -44,6 +46,7 @@ pub use autofocus::{autofocus, AutofocusOptions, AutofocusResult};
 pub use brenner::brenner;
 pub use image::{ImageView, Pixel, MAX_SIDE_PX};
 pub use laplacian::laplacian_variance;
+pub use law::{FocusLaw, FocusSample, FOCUS_LAW_MIN_CURRENTS, FOCUS_LAW_RANGE_MARGIN};
 pub use normvar::normalised_variance;
 pub use tenengrad::tenengrad;
 

@@ -11,8 +11,9 @@
 //!   so each image shows the largest block of the board's squares that lies fully inside the
 //!   image with a margin (the part a user would cut, or mask, for that view), and the
 //!   dataset says which corner of the board that block starts at (`first_corner`);
-//! - the ETL views are in focus (their stage positions are the focus positions of their
-//!   currents, [`crate::render::Optics::paper_focus`]) through an aperture of
+//! - the ETL views are focused by the simulated lens's smooth focus law
+//!   ([`crate::render::Optics::paper_focus`], fitted to the paper's views; the views' whole-mm
+//!   stage positions are off it by its residual, at most about 1 px of blur) through an aperture of
 //!   [`ImageOptions::aperture_mm`]; the lens-off views are focused at 125 mm (the prime
 //!   lens's own focus) through [`ImageOptions::lens_off_aperture_mm`];
 //! - the 1 um corner-position noise of the noise model is not rendered (a printed board
