@@ -85,8 +85,11 @@ pub fn undistort_maps_into(k: &Intrinsics, d: &Distortion, out: &OutputCamera, m
     // The whole image as one band first checks every argument, without writing.
     etl_core::undistort::undistort_maps(k, d, out, 0..0, &mut [], &mut [])?;
     let (w, h) = (out.width_px, out.height_px);
-    maps.map_x.resize(w * h, 0.0);
-    maps.map_y.resize(w * h, 0.0);
+    if maps.map_x.len() != w * h || maps.map_y.len() != w * h {
+        // Fresh zeroed pages (calloc) are written once below; `resize` would fill them
+        // first, touching 22 MB twice for 1936 x 1458.
+        (maps.map_x, maps.map_y) = (vec![0.0; w * h], vec![0.0; w * h]);
+    }
     (maps.width_px, maps.height_px) = (w, h);
     let band = BAND_ROWS * w;
     maps.map_x.par_chunks_mut(band).zip(maps.map_y.par_chunks_mut(band)).enumerate().try_for_each(
