@@ -39,6 +39,7 @@ pub mod sharpness;
 pub mod simulate;
 pub mod study;
 pub mod thermal;
+pub mod undistort;
 pub mod zhang;
 
 /// Calibrate and run cameras focused by an electrically tunable lens.
@@ -73,6 +74,8 @@ enum Command {
     Zhang(zhang::Args),
     /// The board's pose in two images at a lens current and the displacement between them.
     Measure(measure::Args),
+    /// Undistort images taken at a lens current and temperature (exact maps of the model).
+    Undistort(undistort::Args),
     /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
@@ -107,6 +110,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Report(a) => done(report::run(report::Args { json, ..a })),
         Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
+        Command::Undistort(a) => done(undistort::run(undistort::Args { json, ..a })),
         Command::Study(a) => done(study::run(study::Args { json, ..a })),
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),

@@ -115,7 +115,13 @@ impl<'a, T: Sample> SourceImage<'a, T> {
 /// Errors: `map_x` and `map_y` of different lengths ([`Error::InvalidArgument`]); `dst`
 /// shorter than `map_x.len() * channels` ([`Error::BufferTooSmall`]). On error nothing is
 /// written.
-pub fn remap<T: Sample>(src: &SourceImage<'_, T>, map_x: &[f32], map_y: &[f32], border: T, dst: &mut [T]) -> Result<()> {
+pub fn remap<T: Sample>(
+    src: &SourceImage<'_, T>,
+    map_x: &[f32],
+    map_y: &[f32],
+    border: T,
+    dst: &mut [T],
+) -> Result<()> {
     if map_x.len() != map_y.len() {
         return Err(Error::InvalidArgument { what: "map_x and map_y must have the same length" });
     }
@@ -131,7 +137,13 @@ pub fn remap<T: Sample>(src: &SourceImage<'_, T>, map_x: &[f32], map_y: &[f32], 
 }
 
 /// [`remap`] with the channel count known at compile time (so the inner loop unrolls).
-fn remap_channels<T: Sample, const C: usize>(src: &SourceImage<'_, T>, mx: &[f32], my: &[f32], border: T, dst: &mut [T]) {
+fn remap_channels<T: Sample, const C: usize>(
+    src: &SourceImage<'_, T>,
+    mx: &[f32],
+    my: &[f32],
+    border: T,
+    dst: &mut [T],
+) {
     let (w, h) = (src.width, src.height);
     // Bounds as f32 (exact: sides are at most 2^20). A map entry in [0, w - 1) x [0, h - 1)
     // has its four taps inside; one in (-1, w) x (-1, h) has at least one.
@@ -257,8 +269,14 @@ mod tests {
     #[test]
     fn bad_inputs_are_named_errors_and_write_nothing() {
         let img = [1u8; 12];
-        assert!(matches!(SourceImage::new(&img, 0, 3, 1), Err(Error::OutOfRange { what: "source image width_px", .. })));
-        assert!(matches!(SourceImage::new(&img, 4, 0, 1), Err(Error::OutOfRange { what: "source image height_px", .. })));
+        assert!(matches!(
+            SourceImage::new(&img, 0, 3, 1),
+            Err(Error::OutOfRange { what: "source image width_px", .. })
+        ));
+        assert!(matches!(
+            SourceImage::new(&img, 4, 0, 1),
+            Err(Error::OutOfRange { what: "source image height_px", .. })
+        ));
         assert!(matches!(SourceImage::new(&img, 2, 2, 2), Err(Error::InvalidArgument { .. })));
         assert_eq!(
             SourceImage::new(&img, 4, 2, 3).unwrap_err(),

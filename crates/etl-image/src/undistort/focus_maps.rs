@@ -65,9 +65,7 @@ impl FocusMaps {
         model.validate()?;
         let [lo, hi] = e_com_range_ma;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(Error::InvalidInput(format!(
-                "e_com_range_ma {e_com_range_ma:?} must be a finite [min, max]"
-            )));
+            return Err(Error::InvalidInput(format!("e_com_range_ma {e_com_range_ma:?} must be a finite [min, max]")));
         }
         for e in [lo, hi] {
             output.at(&model.intrinsics(e)?)?;
@@ -88,7 +86,13 @@ impl FocusMaps {
     pub fn camera_at(&self, e_com_ma: f64) -> Result<(Intrinsics, Distortion, OutputCamera)> {
         let [lo, hi] = self.e_com_range_ma;
         if !(e_com_ma >= lo && e_com_ma <= hi) {
-            return Err(etl_core::Error::OutOfRange { what: "e_com_ma (mA) of the undistortion maps", value: e_com_ma, min: lo, max: hi }.into());
+            return Err(etl_core::Error::OutOfRange {
+                what: "e_com_ma (mA) of the undistortion maps",
+                value: e_com_ma,
+                min: lo,
+                max: hi,
+            }
+            .into());
         }
         let k = self.model.intrinsics(e_com_ma)?;
         Ok((k, self.model.distortion(e_com_ma)?, self.output.at(&k)?))

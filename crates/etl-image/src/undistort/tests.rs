@@ -98,7 +98,8 @@ fn focus_maps_are_the_exact_maps_and_refuse_outside_the_range() {
     assert_eq!(maps, before, "nothing written on error");
     let bad = FocusMaps::new(&cam, [225.0, 80.0], OutputChoice::ModelCamera { width_px: 3, height_px: 2 }).unwrap_err();
     assert!(bad.to_string().contains("e_com_range_ma"), "{bad}");
-    let zero = FocusMaps::new(&cam, [80.0, 225.0], OutputChoice::ModelCamera { width_px: 0, height_px: 2 }).unwrap_err();
+    let zero =
+        FocusMaps::new(&cam, [80.0, 225.0], OutputChoice::ModelCamera { width_px: 0, height_px: 2 }).unwrap_err();
     assert!(zero.to_string().contains("output width_px"), "{zero}");
 }
 
