@@ -20,7 +20,8 @@ use crate::model::{Distortion, Intrinsics};
 /// map_x = u_d + u0,  map_y = v_d + v0
 /// ```
 ///
-/// evaluated in f64 and rounded once to f32: every entry is the model's own projection of
+/// evaluated in f64 (along a row by Horner's rule, see `row_polynomials`) and rounded once to
+/// f32: every entry is the model's own projection of
 /// that ray to within f32 rounding (6e-8 relative, 1.2e-4 px at 2000 px). With the default
 /// output camera ([`OutputCamera::of_intrinsics`]) u = x - u0, v = y - v0.
 ///
@@ -51,15 +52,34 @@ pub fn undistort_maps(
         // The band was checked to fit: `get_mut` keeps it a checked fact, not a panic path.
         let span = i * w..(i + 1) * w;
         let (Some(row_x), Some(row_y)) = (map_x.get_mut(span.clone()), map_y.get_mut(span)) else { break };
-        let v = ay * y as f64 + by;
+        let [cx, cy] = row_polynomials(d, ay * y as f64 + by, k.u0, k.v0);
         for (x, (mx, my)) in row_x.iter_mut().zip(row_y.iter_mut()).enumerate() {
             let u = ax * x as f64 + bx;
-            let [ud, vd] = d.distort(u, v);
-            *mx = (ud + k.u0) as f32;
-            *my = (vd + k.v0) as f32;
+            *mx = (cx[0] + u * (cx[1] + u * (cx[2] + u * cx[3]))) as f32;
+            *my = (cy[0] + u * (cy[1] + u * cy[2])) as f32;
         }
     }
     Ok(())
+}
+
+/// Eq. 17 along a row: at fixed v, u_d + u0 is a cubic and v_d + v0 a quadratic in u,
+///
+/// ```text
+/// u_d + u0 = (p1 v^2 + u0) + (1 + k1 v^2 + 2 p2 v) u + 3 p1 u^2 + k1 u^3
+/// v_d + v0 = (v + k1 v^3 + 3 p2 v^2 + v0) + 2 p1 v u + (k1 v + p2) u^2
+/// ```
+///
+/// (expanding k1 u r^2 + p1 (3u^2 + v^2) + 2 p2 u v and k1 v r^2 + 2 p1 u v +
+/// p2 (u^2 + 3v^2)): five multiply-adds per pixel by Horner's rule instead of about twenty,
+/// the same numbers to f64 rounding. Returns the coefficients, lowest degree first.
+#[inline]
+fn row_polynomials(d: &Distortion, v: f64, u0: f64, v0: f64) -> [[f64; 4]; 2] {
+    let (k1, p1, p2) = (d.k1, d.p1, d.p2);
+    let vv = v * v;
+    [
+        [p1 * vv + u0, 1.0 + k1 * vv + 2.0 * p2 * v, 3.0 * p1, k1],
+        [v + k1 * vv * v + 3.0 * p2 * vv + v0, 2.0 * p1 * v, k1 * v + p2, 0.0],
+    ]
 }
 
 /// The model at one current must be usable: its fields are public, so it is checked here.
