@@ -153,23 +153,18 @@ fn remap_channels<T: Sample, const C: usize>(
     let data = src.data;
     for ((&x, &y), out) in mx.iter().zip(my).zip(dst.chunks_exact_mut(C)) {
         if x >= 0.0 && y >= 0.0 && x < w1 && y < h1 {
-            // Inside: x, y >= 0, so `as usize` is floor.
-            let (x0, y0) = (x as usize, y as usize);
+            // Inside: 0 <= x, y < 2^20, so the i32 conversion is floor, exact.
+            let (x0, y0) = (x as i32 as usize, y as i32 as usize);
             let (a, b) = (x - x0 as f32, y - y0 as f32);
             let i = y0 * stride + x0 * C;
-            // Both rows of taps are inside since x0 + 1 < w and y0 + 1 < h; `get` keeps
-            // that a checked fact rather than a panic path.
-            let (Some(r0), Some(r1)) = (data.get(i..i + 2 * C), data.get(i + stride..i + stride + 2 * C)) else {
-                out.fill(border);
-                continue;
-            };
-            let (Some((p00, p01)), Some((p10, p11))) = (r0.split_at_checked(C), r1.split_at_checked(C)) else {
-                out.fill(border);
-                continue;
-            };
-            for ((((o, s00), s01), s10), s11) in out.iter_mut().zip(p00).zip(p01).zip(p10).zip(p11) {
-                let top = s00.to_f32() + a * (s01.to_f32() - s00.to_f32());
-                let bot = s10.to_f32() + a * (s11.to_f32() - s10.to_f32());
+            // The four taps are inside since x0 + 1 < w and y0 + 1 < h; `get` keeps that a
+            // checked fact rather than a panic path (the branch is never taken).
+            let tap = |j: usize| data.get(j).map_or(0.0, |s| s.to_f32());
+            for (c, o) in out.iter_mut().enumerate() {
+                let (s00, s01) = (tap(i + c), tap(i + C + c));
+                let (s10, s11) = (tap(i + stride + c), tap(i + stride + C + c));
+                let top = s00 + a * (s01 - s00);
+                let bot = s10 + a * (s11 - s10);
                 *o = T::from_f32(top + b * (bot - top));
             }
         } else if x > -1.0 && y > -1.0 && x < wf && y < hf {
