@@ -45,8 +45,8 @@ impl OutputChoice {
 /// (measured by `benches/undistort_interpolation.py`: 0.50 px with 2 currents, 0.053 with 5,
 /// 0.018 with 8, 0.0075 with 12, 0.0040 with 16). Here the error bound is f32 rounding
 /// alone: 1.2e-4 px over the whole image (etl-core's test against the model's projection),
-/// and the time is that of [`super::undistort_maps`]: docs/BENCHMARKS.md, "Undistortion
-/// (issue 17)" (under 5 ms for 1936 x 1458 on 2 cores).
+/// and the time is that of [`super::undistort_maps_into`] (buffers reused): 4.8 ms median
+/// for 1936 x 1458 on 2 shared cores (docs/BENCHMARKS.md, "Undistortion (issue 17)").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FocusMaps {
     model: CameraModel,
