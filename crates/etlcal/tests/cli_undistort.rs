@@ -31,7 +31,7 @@ fn scene(x: f64, y: f64) -> f64 {
 /// The paper rig's calibration with the paper's thermal surface, written into `dir`.
 fn paper_calibration(dir: &Path) -> String {
     let mut cal = Calibration::from_model(&CameraModel::paper_rig(), CameraModel::PAPER_IMAGE_SIZE, [80.0, 225.0]);
-    cal.thermal = Some(ThermalRef { coefficients: ThermalSurface::PAPER.coefficients });
+    cal.thermal = Some(ThermalRef::paper());
     let path = dir.join("calibration.json");
     cal.save(&path).unwrap();
     path.to_str().unwrap().to_owned()
@@ -118,7 +118,9 @@ fn bad_inputs_are_one_line_errors_and_write_nothing() {
     let err = run(&[good], dir.path().join("missing.json").to_str().unwrap(), "153");
     assert!(err.contains("missing.json"), "{err}");
     let err = run(&[good], &cal, "60");
-    assert!(err.contains("E_com") && err.contains("outside the calibrated range"), "{err}");
+    assert!(err.contains("e_com_ma = 57.99") && err.contains("is outside [75, 230]"), "{err}");
+    let err = run(&[good], &cal, "260");
+    assert!(err.contains("e_in_ma = 260 is outside [35, 245]"), "{err}");
     let err = run(&[good, small], &cal, "153");
     assert!(err.contains("small.png") && err.contains("64 x 48 px"), "{err}");
     let err = run(&[good, good], &cal, "153");
