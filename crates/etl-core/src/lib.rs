@@ -3,7 +3,8 @@
 //! The allocation-free, panic-free core of etlcal: the camera model of a camera focused by
 //! an electrically tunable lens (ETL), real-time temperature compensation, the lens physics
 //! model, polynomial and surface fits, the linear initialisers of the calibration, a
-//! hand-written Levenberg-Marquardt solver, bundle adjustment and plane-based PnP.
+//! hand-written Levenberg-Marquardt solver, bundle adjustment, plane-based PnP, and
+//! whole-image undistortion maps and remapping over caller buffers.
 //!
 //! Equation numbers refer to the paper in `shared/paper/` as read by its NOTES.md:
 //! lengths in mm, currents in mA, temperatures in degC, pixels with (0, 0) at the centre
@@ -38,5 +39,6 @@ pub mod physics;
 pub mod pnp;
 pub mod progress;
 pub mod thermal;
+pub mod undistort;
 
 pub use error::{Error, Result};

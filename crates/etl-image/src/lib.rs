@@ -1,10 +1,12 @@
 //! etl-image: what etlcal reads from images. Checkerboard detection (sub-pixel corners
 //! in a stable order, [`detect`]) and sharpness (CPBD bit-exact against the reference
-//! package, and the gradient measures of etl-core over images, [`sharpness`]).
+//! package, and the gradient measures of etl-core over images, [`sharpness`]); and
+//! whole-image undistortion at any focus, parallel over bands of rows ([`undistort`]).
 
 pub mod detect;
 mod read;
 pub mod sharpness;
+pub mod undistort;
 
 pub use read::read_image;
 

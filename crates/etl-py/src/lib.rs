@@ -24,6 +24,7 @@ pub mod simulate;
 pub mod studies;
 pub mod thermal;
 pub mod thermal_calibration;
+pub mod undistort;
 pub mod zhang;
 
 #[pymodule]

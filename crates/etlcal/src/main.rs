@@ -41,6 +41,7 @@ pub mod sharpness;
 pub mod simulate;
 pub mod study;
 pub mod thermal;
+pub mod undistort;
 pub mod zhang;
 
 /// Calibrate and run cameras focused by an electrically tunable lens.
@@ -79,6 +80,8 @@ enum Command {
     Export(export::Args),
     /// The lens current that focuses the calibrated camera at a distance (the focus law).
     Focus(focus::Args),
+    /// Undistort images taken at a lens current and temperature (exact maps of the model).
+    Undistort(undistort::Args),
     /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
@@ -125,6 +128,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
         Command::Export(a) => done(export::run(export::Args { json, ..a })),
         Command::Focus(a) => done(focus::run(focus::Args { json, ..a })),
+        Command::Undistort(a) => done(undistort::run(undistort::Args { json, ..a })),
         Command::Study(a) => done(study::run(study::Args { json, ..a })),
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),

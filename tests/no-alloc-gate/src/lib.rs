@@ -220,4 +220,38 @@ pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, 
     let Ok(ray) = at.ray([u, v]) else { return f64::NAN };
     let Ok(fit) = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), [w, h]) else { return f64::NAN };
     u + v + ray.direction[2] + fit.rms_px
+/// Undistortion maps of a caller's band of rows at a current, then a remap of a 1- or
+/// 3-channel image of each sample type through them; the sum of the outputs, or NaN.
+#[no_mangle]
+pub extern "C" fn etl_gate_undistort_remap(
+    e_com_ma: f64,
+    width: usize,
+    height: usize,
+    first_row: usize,
+    end_row: usize,
+    channels: usize,
+    maps: &mut [f32; 128],
+    image: &[u8; 192],
+) -> f64 {
+    use etl_core::undistort::{remap, undistort_maps, OutputCamera, SourceImage};
+    let cam = CameraModel::paper_rig();
+    let (Ok(k), Ok(d)) = (cam.intrinsics(e_com_ma), cam.distortion(e_com_ma)) else { return f64::NAN };
+    let Ok(out) = OutputCamera::of_intrinsics(&k, width, height) else { return f64::NAN };
+    let (mx, my) = maps.split_at_mut(64);
+    if undistort_maps(&k, &d, &out, first_row..end_row, mx, my).is_err() {
+        return f64::NAN;
+    }
+    let mut s = 0.0;
+    let Ok(src) = SourceImage::new(image, width, height, channels) else { return f64::NAN };
+    let mut d8 = [0u8; 192];
+    s += remap(&src, mx, my, 3, &mut d8).map_or(f64::NAN, |()| d8.iter().map(|&v| v as f64).sum());
+    let i16: [u16; 192] = core::array::from_fn(|i| image[i] as u16 * 257);
+    let Ok(src) = SourceImage::new(&i16, width, height, channels) else { return f64::NAN };
+    let mut d16 = [0u16; 192];
+    s += remap(&src, mx, my, 3, &mut d16).map_or(f64::NAN, |()| d16.iter().map(|&v| v as f64).sum());
+    let f: [f32; 192] = core::array::from_fn(|i| image[i] as f32);
+    let Ok(src) = SourceImage::new(&f, width, height, channels) else { return f64::NAN };
+    let mut df = [0f32; 192];
+    s += remap(&src, mx, my, f32::NAN, &mut df).map_or(f64::NAN, |()| df.iter().map(|&v| v as f64).sum());
+    s
 }

@@ -7,6 +7,8 @@ import numpy.typing as npt
 
 _Path = Union[str, "os.PathLike[str]"]
 _F64 = npt.NDArray[np.float64]
+_F32 = npt.NDArray[np.float32]
+_Image = Union[npt.NDArray[np.uint8], npt.NDArray[np.uint16], npt.NDArray[np.float32]]
 _ArrayLike = npt.ArrayLike
 _FloatOrArray = Union[float, _F64]
 
@@ -292,6 +294,15 @@ class Calibration:
     def covariance(self) -> Optional[_F64]: ...
     def projection_std(self, world_mm: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
     def to_opencv(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> Tuple[_F64, _F64]: ...
+    def undistort_maps(
+        self,
+        e_com_ma: float,
+        new_camera_matrix: Optional[_ArrayLike] = None,
+        size: Optional[Tuple[int, int]] = None,
+        *,
+        allow_extrapolation: bool = False,
+    ) -> Tuple[_F32, _F32]: ...
+    def undistort_image(self, image: _Image, e_com_ma: float, *, allow_extrapolation: bool = False) -> _Image: ...
     def export(
         self,
         path: _Path,

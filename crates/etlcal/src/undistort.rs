@@ -1,0 +1,161 @@
+//! `etlcal undistort IMAGE... --calibration F --e-in MA --t C --out DIR [--json]`: each
+//! image, taken at the driver current E_in and lens temperature T, undistorted at the
+//! compensated current E_com (the calibration's thermal surface) as the camera K(E_com)
+//! without distortion sees it, written into DIR under its own file name and in its own
+//! format (PNG, JPEG, TIFF; 8- or 16-bit grey or RGB, 32-bit float RGB).
+//!
+//! Every image is checked (readable header, the calibration's size, a supported pixel
+//! type, no two outputs with one name, no output over its input) before anything is
+//! written; each output is written atomically.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use etl_core::model::CameraModel;
+use etl_formats::calibration::Calibration;
+use etl_formats::{write_atomic, CameraAt, Error, Result};
+use etl_image::undistort::{undistort_image, OutputCamera, Sample, SourceImage};
+use image::{ColorType, DynamicImage, ImageBuffer, ImageFormat, Pixel};
+use serde_json::json;
+
+use super::print_json;
+
+/// Arguments of `etlcal undistort`.
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// The images to undistort (taken at --e-in and --t).
+    #[arg(required = true, value_name = "IMAGE")]
+    pub images: Vec<PathBuf>,
+    /// The calibration (etlcal.calibration/1).
+    #[arg(long, value_name = "FILE")]
+    pub calibration: PathBuf,
+    /// Commanded lens current, mA.
+    #[arg(long = "e-in", value_name = "MA")]
+    pub e_in_ma: f64,
+    /// Lens temperature, degC.
+    #[arg(long = "t", value_name = "C")]
+    pub temperature_c: f64,
+    /// Output directory (created if missing); each output keeps its input's file name.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Undistort even outside the calibrated temperature, current and E_com ranges (the
+    /// JSON says `"extrapolated": true`).
+    #[arg(long)]
+    pub allow_extrapolation: bool,
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
+    pub json: bool,
+}
+
+/// The camera of (E_in, T) for this calibration: the run-time camera's one range policy
+/// (`Calibration::at`), as `measure` and `export`.
+fn camera_at(cal: &Calibration, args: &Args) -> Result<CameraAt> {
+    cal.at(args.e_in_ma, args.temperature_c, crate::trust(args.allow_extrapolation))
+}
+
+/// One image to undistort: where it is, where it goes, its format.
+struct Job {
+    input: PathBuf,
+    output: PathBuf,
+    format: ImageFormat,
+}
+
+/// Checks one input from its header only: an image, of the calibration's size and a pixel
+/// type `undistort` writes back; its output in `out_dir` is not the input itself.
+fn check_input(input: &Path, out_dir: &Path, size: [u32; 2]) -> Result<Job> {
+    let bad = |message: String| Error::Image { path: input.to_owned(), message };
+    let io = |source| Error::Io { path: input.to_owned(), source };
+    let reader = image::ImageReader::open(input).map_err(io)?.with_guessed_format().map_err(io)?;
+    let format = reader.format().ok_or_else(|| bad("not an image (PNG, JPEG or TIFF)".into()))?;
+    let decoder = reader.into_decoder().map_err(|e| bad(e.to_string()))?;
+    let (w, h) = image::ImageDecoder::dimensions(&decoder);
+    if [w, h] != size {
+        return Err(bad(format!("the image is {w} x {h} px, the calibration is for {} x {}", size[0], size[1])));
+    }
+    let color = image::ImageDecoder::color_type(&decoder);
+    if !matches!(color, ColorType::L8 | ColorType::L16 | ColorType::Rgb8 | ColorType::Rgb16 | ColorType::Rgb32F) {
+        return Err(bad(format!("pixel type {color:?} is not supported (grey or RGB of 8 or 16 bits, RGB float)")));
+    }
+    let name = input.file_name().ok_or_else(|| bad("has no file name".into()))?;
+    let output = out_dir.join(name);
+    let same = match (std::fs::canonicalize(input), std::fs::canonicalize(&output)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same {
+        return Err(bad(format!("--out {} would overwrite the input; choose another directory", out_dir.display())));
+    }
+    Ok(Job { input: input.to_owned(), output, format })
+}
+
+/// The undistorted copy of an image buffer of any supported sample type.
+fn undistort_buffer<P: Pixel<Subpixel = T>, T: Sample + Send + Sync + image::Primitive>(
+    img: &ImageBuffer<P, Vec<T>>,
+    model: &CameraModel,
+    e_com_ma: f64,
+) -> Result<ImageBuffer<P, Vec<T>>> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let (k, d) = (model.intrinsics(e_com_ma)?, model.distortion(e_com_ma)?);
+    let out = OutputCamera::of_intrinsics(&k, w, h)?;
+    let src = SourceImage::new(img.as_raw(), w, h, P::CHANNEL_COUNT as usize)?;
+    let pixels = undistort_image(&k, &d, &out, &src, T::from_f32(0.0))?;
+    ImageBuffer::from_raw(img.width(), img.height(), pixels)
+        .ok_or_else(|| Error::InvalidInput("undistorted image has an inconsistent size".into()))
+}
+
+/// Reads, undistorts, encodes and writes one image.
+fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64) -> Result<()> {
+    let img = etl_image::read_image(&job.input)?;
+    let out: DynamicImage = match &img {
+        DynamicImage::ImageLuma8(b) => undistort_buffer(b, model, e_com_ma)?.into(),
+        DynamicImage::ImageLuma16(b) => undistort_buffer(b, model, e_com_ma)?.into(),
+        DynamicImage::ImageRgb8(b) => undistort_buffer(b, model, e_com_ma)?.into(),
+        DynamicImage::ImageRgb16(b) => undistort_buffer(b, model, e_com_ma)?.into(),
+        DynamicImage::ImageRgb32F(b) => undistort_buffer(b, model, e_com_ma)?.into(),
+        other => {
+            return Err(Error::Image {
+                path: job.input.clone(),
+                message: format!("pixel type {:?} is not supported", other.color()),
+            })
+        }
+    };
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    out.write_to(&mut bytes, job.format)
+        .map_err(|e| Error::Image { path: job.output.clone(), message: format!("cannot encode: {e}") })?;
+    write_atomic(&job.output, bytes.get_ref())
+}
+
+/// Runs `etlcal undistort`.
+pub fn run(args: Args) -> Result<()> {
+    let cal = Calibration::load(&args.calibration)?;
+    let camera = camera_at(&cal, &args)?;
+    let e_com = camera.e_com_ma();
+    let mut names = HashSet::new();
+    let mut jobs = Vec::with_capacity(args.images.len());
+    for input in &args.images {
+        let job = check_input(input, &args.out, cal.image_size)?;
+        if !names.insert(job.output.clone()) {
+            return Err(Error::InvalidInput(format!(
+                "two images would be written to {}; give images of distinct file names",
+                job.output.display()
+            )));
+        }
+        jobs.push(job);
+    }
+    crate::output::create_dir(&args.out)?;
+    let model = cal.model();
+    for job in &jobs {
+        undistort_file(job, &model, e_com)?;
+        if !args.json {
+            outln!("{} -> {}", job.input.display(), job.output.display());
+        }
+    }
+    if args.json {
+        let images: Vec<_> = jobs.iter().map(|j| json!({"input": j.input, "output": j.output})).collect();
+        print_json(&json!({"e_com_ma": e_com, "extrapolated": camera.extrapolated(), "images": images}));
+    } else {
+        outln!("E_com {e_com:.3} mA: {} image(s) undistorted into {}", jobs.len(), args.out.display());
+    }
+    Ok(())
+}
