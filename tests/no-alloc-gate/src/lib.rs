@@ -220,6 +220,8 @@ pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, 
     let Ok(ray) = at.ray([u, v]) else { return f64::NAN };
     let Ok(fit) = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), [w, h]) else { return f64::NAN };
     u + v + ray.direction[2] + fit.rms_px
+}
+
 /// Undistortion maps of a caller's band of rows at a current, then a remap of a 1- or
 /// 3-channel image of each sample type through them; the sum of the outputs, or NaN.
 #[no_mangle]
