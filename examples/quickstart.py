@@ -45,6 +45,9 @@ for z in (8.0, 10.0):
     poses.append(eiv.solve_pnp(board, px, 200.0))
 move = np.linalg.norm(poses[0].displacement_mm(poses[1]))
 print(f"measured stage move: {move * 1000:.1f} um (true 2000 um), error {abs(move - 2.0) * 1000:.1f} um")
+# One standard deviation per axis, from the pixel noise and the calibration's covariance.
+std_um = poses[0].displacement_std_mm(poses[1]) * 1000
+print(f"displacement std (x, y, z): {np.round(std_um, 1)} um")
 
 # 5. Plot the focal-length curves, if matplotlib is there.
 try:

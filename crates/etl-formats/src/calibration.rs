@@ -7,6 +7,9 @@
 
 use std::path::Path;
 
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
+use etl_core::calib::{projection_uncertainty, PixelUncertainty};
 use etl_core::camera::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::focus::FocusLaw;
 use etl_core::model::CameraModel;
@@ -51,6 +54,19 @@ impl ModelStd {
             distortion_a: m.distortion_a,
         }
     }
+}
+
+/// The 25 standard deviations of `s` in parameter order (the inverse of
+/// [`ModelStd::from_params`]).
+fn to_params_std(s: &ModelStd) -> [f64; PARAMS] {
+    to_params(&CameraModel {
+        rotation_rodrigues: s.rotation_rodrigues,
+        translation_mm: s.translation_mm,
+        kf_x: s.kf_x,
+        kf_y: s.kf_y,
+        principal_point: s.principal_point,
+        distortion_a: s.distortion_a,
+    })
 }
 
 /// The temperature compensation a calibration was made with and is used with: the whole
@@ -214,12 +230,24 @@ pub struct Calibration {
     /// Per-view summaries.
     #[serde(default)]
     pub views: Vec<ViewSummary>,
+    /// Covariance of the 25 numbers (optional: older files have none), 25 rows of 25 in
+    /// the order of `etl_core::calib::params::PARAM_NAMES` (om1..om3, tx..tz, kf_x, kf_y,
+    /// u0, v0, a1..a9), each number in its own unit; its diagonal is `std` squared. For
+    /// the errors-in-variables estimator it is that of the 25 shared numbers with the
+    /// per-view corrections marginalised out (the Schur complement).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub covariance: Option<Vec<Vec<f64>>>,
     /// The focus law: the distance in focus (mm, along the optical axis from the camera's
     /// centre) against E_com, fitted to the views (optional; absent when the views did not
     /// allow one, and in files written before it existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_law: Option<FocusLaw>,
 }
+
+/// Relative tolerance of the covariance checks of [`Calibration::validate`]: symmetry
+/// (|c_ij - c_ji| <= tol sqrt(c_ii c_jj)), Cauchy-Schwarz (|c_ij| <= (1 + tol)
+/// sqrt(c_ii c_jj)) and the diagonal against `std` (|sqrt(c_ii) - std_i| <= tol std_i).
+pub const COVARIANCE_TOLERANCE: f64 = 1e-9;
 
 impl Calibration {
     /// A calibration of `model` for images of `image_size` px over `e_com_range_ma`, with
@@ -243,8 +271,107 @@ impl Calibration {
             iterations: 0,
             initial_rms_px: 0.0,
             views: vec![],
+            covariance: None,
             focus_law: None,
         }
+    }
+
+    /// Stores `covariance` (of the 25 numbers, as `etl_core`'s bundle adjustment reports
+    /// it) as the file's `"covariance"`: symmetrised as (C + C^T) / 2, since the solver's
+    /// products are symmetric only to rounding; a negative diagonal entry (rounding of a
+    /// held number, whose `std` the solver reports as 0) is stored as 0 with its row and
+    /// column, so that the diagonal stays `std` squared.
+    pub fn set_covariance(&mut self, covariance: &[[f64; PARAMS]; PARAMS]) {
+        let mut c: Vec<Vec<f64>> =
+            (0..PARAMS).map(|i| (0..PARAMS).map(|j| 0.5 * (covariance[i][j] + covariance[j][i])).collect()).collect();
+        for i in 0..PARAMS {
+            if !(c[i][i] >= 0.0) {
+                for j in 0..PARAMS {
+                    c[i][j] = 0.0;
+                    c[j][i] = 0.0;
+                }
+            }
+        }
+        self.covariance = Some(c);
+    }
+
+    /// The covariance as a matrix, or `None` when the file has none (or, in a file not
+    /// validated, one of the wrong shape).
+    pub fn covariance_matrix(&self) -> Option<[[f64; PARAMS]; PARAMS]> {
+        let rows = self.covariance.as_ref()?;
+        if rows.len() != PARAMS || rows.iter().any(|r| r.len() != PARAMS) {
+            return None;
+        }
+        Some(core::array::from_fn(|i| core::array::from_fn(|j| rows[i][j])))
+    }
+
+    /// The standard deviation of the pixel the calibrated model projects `world_mm` to
+    /// at `e_com_ma`, due to the calibration's uncertainty: Sigma_p = J_p C J_p^T
+    /// (`etl_core::calib::projection_uncertainty`), per axis and as the 2 x 2 covariance.
+    ///
+    /// Errors: a calibration without a covariance (older files); a NaN; the point at or
+    /// behind the camera.
+    pub fn projection_std(&self, world_mm: [f64; 3], e_com_ma: f64) -> Result<PixelUncertainty> {
+        let c = self.require_covariance()?;
+        Ok(projection_uncertainty(&self.model(), &c, world_mm, e_com_ma)?)
+    }
+
+    /// The covariance, or an error saying that the file has none.
+    pub fn require_covariance(&self) -> Result<[[f64; PARAMS]; PARAMS]> {
+        self.covariance_matrix().ok_or_else(|| {
+            Error::InvalidInput(
+                "this calibration has no covariance (files written before it was recorded): calibrate again to get one"
+                    .into(),
+            )
+        })
+    }
+
+    /// The checks of `"covariance"` (see [`COVARIANCE_TOLERANCE`]): 25 x 25, finite,
+    /// symmetric, a non-negative diagonal equal to `std` squared, |c_ij| <= sqrt(c_ii c_jj).
+    fn validate_covariance(&self) -> std::result::Result<(), String> {
+        let Some(rows) = &self.covariance else { return Ok(()) };
+        if rows.len() != PARAMS {
+            return Err(format!("covariance must be {PARAMS} x {PARAMS}: it has {} rows", rows.len()));
+        }
+        if let Some((i, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != PARAMS) {
+            return Err(format!("covariance must be {PARAMS} x {PARAMS}: row {i} has {} numbers", r.len()));
+        }
+        let std = to_params_std(&self.std);
+        let name = |i: usize| PARAM_NAMES[i];
+        let tol = COVARIANCE_TOLERANCE;
+        for i in 0..PARAMS {
+            let cii = rows[i][i];
+            if !(cii.is_finite() && cii >= 0.0) {
+                return Err(format!("covariance[{i}][{i}] = {cii} (variance of {}) must be finite and >= 0", name(i)));
+            }
+            if (cii.sqrt() - std[i]).abs() > tol * std[i].max(cii.sqrt()) {
+                return Err(format!(
+                    "covariance[{i}][{i}] = {cii} (variance of {}) is not std squared (std {})",
+                    name(i),
+                    std[i]
+                ));
+            }
+        }
+        for i in 0..PARAMS {
+            for j in 0..PARAMS {
+                let (cij, cji) = (rows[i][j], rows[j][i]);
+                let scale = (rows[i][i] * rows[j][j]).sqrt();
+                if !cij.is_finite() {
+                    return Err(format!("covariance[{i}][{j}] = {cij} must be finite"));
+                }
+                if (cij - cji).abs() > tol * scale {
+                    return Err(format!("covariance is not symmetric: [{i}][{j}] = {cij}, [{j}][{i}] = {cji}"));
+                }
+                if cij.abs() > (1.0 + tol) * scale {
+                    return Err(format!(
+                        "covariance[{i}][{j}] = {cij} exceeds sqrt(c_ii c_jj) = {scale} ({}, {}): not a covariance",
+                        name(i),
+                        name(j)
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The camera model.
@@ -319,7 +446,7 @@ impl Calibration {
                 return bad(e.to_string());
             }
         }
-        Ok(())
+        self.validate_covariance().or_else(bad)
     }
 
     /// The focus law, or an error saying that this calibration has none.

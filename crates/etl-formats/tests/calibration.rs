@@ -50,6 +50,82 @@ fn a_calibration_without_a_thermal_surface_gets_none_assumed() {
     assert!(e.to_string().contains("no temperature compensation"), "{e}");
 }
 
+/// A calibration whose only uncertain numbers are u0 (std 2 px) and v0 (0.5 px),
+/// correlated by 0.3, with the covariance that says so.
+fn with_principal_point_covariance() -> Calibration {
+    let mut c = Calibration::load(&fixture()).unwrap();
+    c.std = etl_formats::calibration::ModelStd::from_params(&[0.0; 25]);
+    c.std.principal_point = [2.0, 0.5];
+    let mut cov = [[0.0; 25]; 25];
+    cov[14][14] = 4.0;
+    cov[15][15] = 0.25;
+    cov[14][15] = 0.3 * 2.0 * 0.5;
+    cov[15][14] = 0.3 * 2.0 * 0.5;
+    c.set_covariance(&cov);
+    c
+}
+
+#[test]
+fn an_older_file_without_a_covariance_stays_valid_and_says_it_has_none() {
+    let c = Calibration::load(&fixture()).unwrap();
+    assert!(c.covariance.is_none());
+    assert!(!serde_json::to_string(&c).unwrap().contains("covariance"));
+    let e = c.projection_std([0.0, 0.0, 40.0], 150.0).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::InvalidInput);
+    assert!(e.to_string().contains("no covariance"), "{e}");
+}
+
+/// The covariance survives the file exactly, its diagonal is std squared, and the pixel's
+/// uncertainty from (u0, v0) alone is (u0, v0)'s own: std (2, 0.5) px, covariance 0.3.
+#[test]
+fn the_covariance_round_trips_and_gives_the_projection_std() {
+    let c = with_principal_point_covariance();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cal.json");
+    c.save(&out).unwrap();
+    let back = Calibration::load(&out).unwrap();
+    assert_eq!(back, c);
+    let m = back.covariance_matrix().unwrap();
+    assert_eq!((m[14][14], m[15][15], m[14][15]), (4.0, 0.25, 0.3));
+    let p = back.projection_std([5.0, 4.0, 40.0], 150.0).unwrap();
+    assert_eq!(p.std_px, [2.0, 0.5]);
+    assert_eq!(p.covariance_px2, [[4.0, 0.3], [0.3, 0.25]]);
+}
+
+#[test]
+fn a_bad_covariance_is_refused_naming_it_and_nothing_is_written() {
+    let good = with_principal_point_covariance();
+    let dir = tempfile::tempdir().unwrap();
+    type Bad = (&'static str, &'static str, fn(&mut Vec<Vec<f64>>));
+    let bads: [Bad; 7] = [
+        ("rows", "it has 24 rows", |c| {
+            c.pop();
+        }),
+        ("row-length", "row 3 has 24 numbers", |c| {
+            c[3].pop();
+        }),
+        ("nan", "covariance[2][5] = NaN must be finite", |c| c[2][5] = f64::NAN),
+        ("asymmetric", "not symmetric: [14][15] = 0.4, [15][14] = 0.3", |c| c[14][15] = 0.4),
+        ("negative", "covariance[0][0] = -1 (variance of om1) must be finite and >= 0", |c| c[0][0] = -1.0),
+        ("not-std", "variance of u0) is not std squared (std 2)", |c| c[14][14] = 4.5),
+        ("cauchy-schwarz", "exceeds sqrt(c_ii c_jj) = 1 (u0, v0)", |c| {
+            c[14][15] = 1.5;
+            c[15][14] = 1.5;
+        }),
+    ];
+    for (name, message, spoil) in bads {
+        let mut c = good.clone();
+        spoil(c.covariance.as_mut().unwrap());
+        let out = dir.path().join(format!("{name}.json"));
+        let e = c.save(&out).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Parse, "{name}: {e}");
+        let text = e.to_string();
+        assert!(text.contains(message) && text.contains("covariance"), "{name}: {text}");
+        assert_eq!(text.lines().count(), 1, "{name}: {text}");
+        assert!(!out.exists(), "{name}: a refused calibration was written");
+    }
+}
+
 /// The temperature trust policy (issue 17): inside the calibrated ranges the camera is
 /// returned; outside, the quantity that left its range is named; extrapolation is explicit
 /// and marked.

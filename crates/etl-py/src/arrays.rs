@@ -66,6 +66,16 @@ pub fn mat3_out<'py>(py: Python<'py>, m: [[f64; 3]; 3]) -> Bound<'py, PyAny> {
     }
 }
 
+/// An R x C float64 array from a row-major matrix.
+pub fn matrix_out<'py, const R: usize, const C: usize>(py: Python<'py>, m: &[[f64; C]; R]) -> Bound<'py, PyAny> {
+    let flat: Vec<f64> = m.iter().flatten().copied().collect();
+    // R C elements always fit an R x C shape.
+    match Array2::from_shape_vec((R, C), flat) {
+        Ok(a) => a.into_pyarray(py).into_any(),
+        Err(_) => py.None().into_bound(py),
+    }
+}
+
 /// A 1-D float64 array.
 pub fn vec_out<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
     Array1::from(v.to_vec()).into_pyarray(py).into_any()

@@ -3,14 +3,17 @@
 //! undistort / rays.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
+use etl_core::calib::projection_uncertainty;
 use etl_core::model::CameraModel;
+use etl_core::pnp::{pose_uncertainty, PixelNoise};
 use etl_core::thermal::ThermalSurface as CoreSurface;
 use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::arrays::{mat3_out, points, points_out, vec_out};
+use crate::arrays::{mat3_out, matrix_out, points, points_out, vec_out};
 use crate::camera::{trust, CameraAt};
 use crate::errors::{input_error, CoreResultExt};
 use crate::pose::BoardPose;
@@ -246,7 +249,7 @@ impl Calibration {
     fn at(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
         let inner =
             self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
-        Ok(CameraAt { inner })
+        Ok(CameraAt { inner, calibration_covariance: self.file.covariance_matrix().map(Arc::new) })
     }
 
     /// RMS reprojection error of the calibration, px (0 for a model given, not estimated).
@@ -536,33 +539,96 @@ impl Calibration {
 
     /// The pose of a planar board from its observed corners (plane-based PnP: a
     /// closed-form start from the homography, then Levenberg-Marquardt through the full
-    /// model, distortion included). The calibration's own R, T are not used.
+    /// model, distortion included), with its uncertainty. The calibration's own R, T are
+    /// not used.
+    ///
+    /// The uncertainty (`BoardPose.covariance`, `BoardPose.displacement_std_mm`) is first
+    /// order: the pixel noise's sigma^2 (J^T J)^-1, and the calibration's covariance C
+    /// carried through S = d pose / d calibration = -(J^T J)^-1 J^T J_cal.
     ///
     /// Args:
     ///     board_mm: (N, 3) board points in the board frame, mm, all with Z = 0 (N >= 4,
     ///         not all on one line).
     ///     pixels: (N, 2) observed pixels, px.
     ///     e_com_ma: compensated current, mA.
+    ///     sigma_px: the pixel noise standard deviation, px; None (the default):
+    ///         estimated from the fit's residual, sqrt(sum |r|^2 / (2 N - 6)).
     ///
     /// Returns: a BoardPose (board -> camera).
     ///
     /// Raises: InputError for fewer than 4 points, a length mismatch, Z != 0, collinear
-    /// points, NaN; NotConvergedError if the solver fails.
-    #[pyo3(signature = (board_mm, pixels, e_com_ma, *, allow_extrapolation=false))]
+    /// points, NaN, a negative sigma_px, a current outside the calibrated range (unless
+    /// allow_extrapolation); NotConvergedError if the solver fails.
+    #[pyo3(signature = (board_mm, pixels, e_com_ma, sigma_px=None, *, allow_extrapolation=false))]
     fn solve_pnp(
         &self,
         py: Python<'_>,
         board_mm: &Bound<'_, PyAny>,
         pixels: &Bound<'_, PyAny>,
         e_com_ma: f64,
+        sigma_px: Option<f64>,
         allow_extrapolation: bool,
     ) -> PyResult<BoardPose> {
         self.at_e_com(e_com_ma, allow_extrapolation)?;
         let b = points::<3>(board_mm, "board_mm")?;
         let p = points::<2>(pixels, "pixels")?;
         let model = self.model;
-        let pose = py.detach(|| etl_core::pnp::solve_pnp(&model, e_com_ma, &b.points, &p.points)).py()?;
-        Ok(BoardPose { inner: pose })
+        let noise = sigma_px.map_or(PixelNoise::FromResidual, PixelNoise::Known);
+        let (pose, u) = py
+            .detach(|| {
+                let pose = etl_core::pnp::solve_pnp(&model, e_com_ma, &b.points, &p.points)?;
+                let u = pose_uncertainty(&model, e_com_ma, &b.points, &p.points, &pose, noise)?;
+                Ok::<_, etl_core::Error>((pose, u))
+            })
+            .py()?;
+        let calibration_covariance = self.file.covariance_matrix().map(Arc::new);
+        Ok(BoardPose { inner: pose, uncertainty: Some(u), calibration_covariance })
+    }
+
+    /// The covariance of the 25 calibrated numbers, a 25 x 25 float64 array in the order
+    /// om1..om3, tx..tz, kf_x, kf_y, u0, v0, a1..a9 (its diagonal is `std` squared), or
+    /// None for a calibration without one (files written before it was recorded, a
+    /// calibration built from numbers).
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+        self.file.covariance_matrix().map(|c| matrix_out(py, &c))
+    }
+
+    /// The standard deviation of projected pixels due to the calibration's uncertainty:
+    /// sqrt of the diagonal of J_p C J_p^T, with J_p the Jacobian of the projection
+    /// (Eq. 13-18) with respect to the 25 numbers and C `covariance` (first order).
+    ///
+    /// Args:
+    ///     world_mm: world points, mm: an (N, 3) array (or one point of shape (3,)).
+    ///     e_com_ma: compensated current, mA.
+    ///
+    /// Returns: the standard deviations of u and of v, px: an (N, 2) float64 array (or
+    /// (2,)).
+    ///
+    /// Raises: InputError for a calibration without a covariance, a NaN, a point at or
+    /// behind the camera, a current outside the calibrated range (unless
+    /// allow_extrapolation).
+    #[pyo3(signature = (world_mm, e_com_ma, *, allow_extrapolation=false))]
+    fn projection_std<'py>(
+        &self,
+        world_mm: &Bound<'py, PyAny>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.at_e_com(e_com_ma, allow_extrapolation)?;
+        let py = world_mm.py();
+        let p = points::<3>(world_mm, "world_mm")?;
+        let cov = self.file.require_covariance().py()?;
+        let model = self.model;
+        let out = py
+            .detach(|| {
+                p.points
+                    .iter()
+                    .map(|w| projection_uncertainty(&model, &cov, *w, e_com_ma).map(|u| u.std_px))
+                    .collect::<etl_core::Result<Vec<[f64; 2]>>>()
+            })
+            .py()?;
+        points_out(py, out, p.single)
     }
 
     /// The camera at one current in OpenCV's conventions, for `cv2.projectPoints`,
@@ -731,7 +797,7 @@ pub(crate) fn thermal_ref(t: &Bound<'_, PyAny>) -> PyResult<ThermalRef> {
     if let Ok(word) = t.extract::<String>() {
         return match word.as_str() {
             etl_formats::calibration::PAPER_THERMAL => Ok(ThermalRef::paper()),
-            _ => Err(input_error(&format!("thermal = {word:?}: the only word accepted is \"paper\""))),
+            _ => Err(input_error(format!("thermal = {word:?}: the only word accepted is \"paper\""))),
         };
     }
     if let Ok(c) = t.extract::<ThermalCalibration>() {

@@ -2,11 +2,12 @@
 //! run-time camera of etl-core.
 
 use etl_core::camera::{CameraAt as CoreAt, Trust};
+use etl_core::pnp::{pose_uncertainty, PixelNoise};
 use pyo3::prelude::*;
 
 use crate::arrays::{mat3_out, points, points_out, vec_out};
 use crate::errors::CoreResultExt;
-use crate::pose::BoardPose;
+use crate::pose::{BoardPose, CalCovariance};
 
 /// The out-of-range policy of an `allow_extrapolation` keyword (the same in every method).
 pub(crate) fn trust(allow_extrapolation: bool) -> Trust {
@@ -24,6 +25,8 @@ pub(crate) fn trust(allow_extrapolation: bool) -> Trust {
 #[derive(Clone)]
 pub struct CameraAt {
     pub(crate) inner: CoreAt,
+    /// The calibration's covariance, for the uncertainty of `solve_pnp`'s poses.
+    pub(crate) calibration_covariance: Option<CalCovariance>,
 }
 
 #[pymethods]
@@ -88,11 +91,22 @@ impl CameraAt {
         let r = self.inner.ray([pixel.0, pixel.1]).py()?;
         Ok((vec_out(py, &r.origin_mm), vec_out(py, &r.direction)))
     }
-    /// The pose of a planar board (board_mm (N, 3) with Z = 0, pixels (N, 2)).
-    fn solve_pnp(&self, board_mm: &Bound<'_, PyAny>, pixels: &Bound<'_, PyAny>) -> PyResult<BoardPose> {
+    /// The pose of a planar board (board_mm (N, 3) with Z = 0, pixels (N, 2)), with its
+    /// uncertainty as `Calibration.solve_pnp`'s (sigma_px None: from the residual).
+    #[pyo3(signature = (board_mm, pixels, sigma_px=None))]
+    fn solve_pnp(
+        &self,
+        board_mm: &Bound<'_, PyAny>,
+        pixels: &Bound<'_, PyAny>,
+        sigma_px: Option<f64>,
+    ) -> PyResult<BoardPose> {
         let b = points::<3>(board_mm, "board_mm")?;
         let p = points::<2>(pixels, "pixels")?;
-        Ok(BoardPose { inner: self.inner.solve_pnp(&b.points, &p.points).py()? })
+        let pose = self.inner.solve_pnp(&b.points, &p.points).py()?;
+        let noise = sigma_px.map_or(PixelNoise::FromResidual, PixelNoise::Known);
+        let (model, e) = (self.inner.model(), self.inner.e_com_ma());
+        let u = pose_uncertainty(model, e, &b.points, &p.points, &pose, noise).py()?;
+        Ok(BoardPose { inner: pose, uncertainty: Some(u), calibration_covariance: self.calibration_covariance.clone() })
     }
     fn __repr__(&self) -> String {
         let k = self.inner.intrinsics();

@@ -291,3 +291,126 @@ def test_per_setting_baseline_from_python():
     with pytest.raises(etlcal.InputError, match="not finite"):
         few.add_setting_view([[0.0, 0.0, 0.0]] * 4, [[1.0, 1.0]] * 4, math.nan, 27.0)
     assert few.setting_count == 2 * 15
+
+
+def _board_pixels(cal, z_mm, e_com_ma):
+    board = np.array([[1.5 * i, 1.5 * j, 0.0] for j in range(12) for i in range(14)])
+    return board, cal.project(board + [0, 0, z_mm], e_com_ma)
+
+
+def test_solve_pnp_pixel_noise_covariance_matches_monte_carlo():
+    """sigma^2 (J^T J)^-1 against the spread of 300 PnPs of noisy pixels (0.2 px), and the
+    displacement's std of two poses against that of their differences."""
+    cal = etlcal.Calibration.paper_rig()
+    e = 140.0
+    board, px_a = _board_pixels(cal, 28.0, e)
+    _, px_b = _board_pixels(cal, 30.0, e)
+    a = cal.solve_pnp(board, px_a, e, sigma_px=0.2)
+    b = cal.solve_pnp(board, px_b, e, sigma_px=0.2)
+    assert a.sigma_px == 0.2 and a.covariance.shape == (6, 6)
+    assert np.allclose(a.covariance, a.covariance.T, rtol=0, atol=1e-18)
+    predicted = np.sqrt(np.diag(a.covariance))
+    d_std = a.displacement_std_mm(b, pixel_noise_only=True)
+    rng = np.random.default_rng(5)
+    poses, moves = [], []
+    for _ in range(300):
+        pa = cal.solve_pnp(board, px_a + rng.normal(0, 0.2, px_a.shape), e)
+        pb = cal.solve_pnp(board, px_b + rng.normal(0, 0.2, px_b.shape), e)
+        poses.append(np.concatenate([pa.rotation_rodrigues, pa.translation_mm]))
+        moves.append(pa.displacement_mm(pb))
+    # 300 trials: the observed std is uncertain by 1 / sqrt(600), 4 %.
+    observed = np.std(poses, axis=0, ddof=1)
+    assert np.all(np.abs(observed / predicted - 1) < 0.15), (observed, predicted)
+    observed_move = np.std(moves, axis=0, ddof=1)
+    assert np.all(np.abs(observed_move / d_std - 1) < 0.15), (observed_move, d_std)
+    # The residual estimate of sigma: ~0.2 px on noisy pixels, ~0 on exact ones.
+    noisy = cal.solve_pnp(board, px_a + rng.normal(0, 0.2, px_a.shape), e)
+    assert abs(noisy.sigma_px / 0.2 - 1) < 0.15
+    assert cal.solve_pnp(board, px_a, e).sigma_px < 1e-6
+    # Pickling keeps the uncertainty.
+    back = pickle.loads(pickle.dumps(a))
+    assert back == a and back.sigma_px == 0.2 and np.array_equal(back.covariance, a.covariance)
+
+
+def test_displacement_std_refuses_what_it_cannot_know():
+    cal = etlcal.Calibration.paper_rig()
+    board, px = _board_pixels(cal, 28.0, 140.0)
+    a = cal.solve_pnp(board, px, 140.0, sigma_px=0.2)
+    with pytest.raises(etlcal.InputError) as info:
+        a.displacement_std_mm(a)
+    assert str(info.value) == (
+        "the calibration has no covariance: pass pixel_noise_only=True for the pixel noise's part alone")
+    by_hand = etlcal.BoardPose((0.0, 0.0, 0.0), (0.0, 0.0, 50.0))
+    assert by_hand.sigma_px is None and by_hand.covariance is None
+    with pytest.raises(etlcal.InputError, match="the other pose has no uncertainty"):
+        a.displacement_std_mm(by_hand, pixel_noise_only=True)
+    with pytest.raises(etlcal.InputError, match="sigma must be finite and >= 0"):
+        cal.solve_pnp(board, px, 140.0, sigma_px=-1.0)
+    with pytest.raises(etlcal.InputError, match="no covariance"):
+        cal.projection_std(board, 140.0)
+
+
+def _with_covariance(cal, cov, std):
+    """The calibration with a covariance and the matching std written into its file."""
+    d = json.loads(cal.to_json())
+    names = [("rotation_rodrigues", 3), ("translation_mm", 3), ("kf_x", 4), ("kf_y", 4), ("principal_point", 2),
+             ("distortion_a", 9)]
+    k = 0
+    for name, n in names:
+        d["std"][name] = list(std[k:k + n])
+        k += n
+    d["covariance"] = cov.tolist()
+    return etlcal.Calibration.from_json(json.dumps(d))
+
+
+def test_projection_std_is_the_principal_points_for_its_covariance():
+    """A covariance on (u0, v0) alone passes to every pixel as is: std (2, 0.5) px."""
+    cov = np.zeros((25, 25))
+    cov[14, 14], cov[15, 15], cov[14, 15], cov[15, 14] = 4.0, 0.25, 0.3, 0.3
+    cal = _with_covariance(etlcal.Calibration.paper_rig(), cov, np.sqrt(np.diag(cov)))
+    assert np.array_equal(cal.covariance, cov)
+    pts = np.array([[5.0, 4.0, 40.0], [20.0, 15.0, 10.0]])
+    assert np.array_equal(cal.projection_std(pts, 150.0), [[2.0, 0.5], [2.0, 0.5]])
+    assert cal.projection_std(pts[0], 150.0).shape == (2,)
+    bad = cov.copy()
+    bad[14, 15] = 0.4
+    with pytest.raises(etlcal.InputError, match="covariance is not symmetric"):
+        _with_covariance(etlcal.Calibration.paper_rig(), bad, np.sqrt(np.diag(cov)))
+
+
+def test_calibrate_records_the_covariance_and_measures_with_it(sim):
+    cal = etlcal.calibrate(sim.observations, sim.a0)
+    c = cal.covariance
+    assert c.shape == (25, 25) and np.array_equal(c, c.T)
+    std = np.concatenate([cal.std[k] for k in ("rotation_rodrigues", "translation_mm", "kf_x", "kf_y",
+                                               "principal_point", "distortion_a")])
+    assert np.array_equal(np.sqrt(np.diag(c)), std)
+    # projection_std against J C J^T with J by central differences of the projection.
+    w, e = np.array([10.0, 8.0, 22.0]), 150.0
+    d = json.loads(cal.to_json())
+    x = np.concatenate([d[k] for k in ("rotation_rodrigues", "translation_mm", "kf_x", "kf_y",
+                                       "principal_point", "distortion_a")])
+    jac = np.zeros((2, 25))
+    for i in range(25):
+        h = 1e-6 * max(abs(x[i]), 1e-3)
+        p = []
+        for s in (h, -h):
+            xi = x.copy()
+            xi[i] += s
+            m = etlcal.Calibration(xi[0:3], xi[3:6], xi[6:10], xi[10:14], xi[14:16], xi[16:25])
+            p.append(m.project(w, e))
+        jac[:, i] = (p[0] - p[1]) / (2 * h)
+    expect = np.sqrt(np.diag(jac @ c @ jac.T))
+    assert np.allclose(cal.projection_std(w, e), expect, rtol=1e-4)
+    # A 2 mm move: the displacement's std with the calibration's covariance is larger
+    # than the pixel noise's alone, and the true move lies within 4 of them.
+    board, px_a = _board_pixels(sim.truth, 22.0, e)
+    _, px_b = _board_pixels(sim.truth, 20.0, e)
+    rng = np.random.default_rng(3)
+    a = cal.solve_pnp(board, px_a + rng.normal(0, 0.2, px_a.shape), e)
+    b = cal.solve_pnp(board, px_b + rng.normal(0, 0.2, px_b.shape), e)
+    s = a.displacement_std_mm(b)
+    s_px = a.displacement_std_mm(b, pixel_noise_only=True)
+    assert np.all(s >= s_px) and np.all(s > 0)
+    truth = sim.truth.rotation_matrix @ [0, 0, -2.0]
+    assert np.all(np.abs(a.displacement_mm(b) - truth) < 4 * s), (a.displacement_mm(b) - truth, s)

@@ -3,11 +3,15 @@
 //! compensated current (E_com from E_in and T through the calibration's thermal part;
 //! refused outside its calibrated ranges unless extrapolation is asked for) by plane-based PnP,
 //! and the displacement of the board between them, mm (the paper's measurement of a
-//! stage move, section 5.2.3).
+//! stage move, section 5.2.3), with one standard deviation per component from the pixel
+//! noise (estimated from each PnP's residual) and the calibration's covariance together
+//! (`--json` keys `displacement_mm`, `displacement_std_mm`, `distance_mm`; each pose's
+//! `sigma_px`). A calibration file without a covariance gives the pixel noise's part alone,
+//! said on stderr and by `"std_includes_calibration": false`.
 
 use std::path::PathBuf;
 
-use etl_core::pnp::BoardPose;
+use etl_core::pnp::{BoardPose, PoseUncertainty};
 use serde_json::json;
 
 use super::print_json;
@@ -46,8 +50,9 @@ pub struct Args {
     pub json: bool,
 }
 
-fn pose_json(p: &BoardPose) -> serde_json::Value {
-    json!({"rotation_rodrigues": p.rotation_rodrigues, "translation_mm": p.translation_mm, "rms_px": p.rms_px})
+fn pose_json(p: &BoardPose, u: &PoseUncertainty) -> serde_json::Value {
+    json!({"rotation_rodrigues": p.rotation_rodrigues, "translation_mm": p.translation_mm, "rms_px": p.rms_px,
+        "sigma_px": u.sigma_px})
 }
 
 /// Runs `etlcal measure`: [`measure_displacement`] with the default detector.
@@ -64,10 +69,19 @@ pub fn run(args: Args) -> Result<()> {
         images,
         &default_detector(),
     )?;
-    let (d, dist, e_com) = (m.displacement_mm, m.distance_mm, m.e_com_ma);
+    let (d, dist, e_com, s) = (m.displacement_mm, m.distance_mm, m.e_com_ma, m.displacement_std_mm);
+    if !m.std_includes_calibration {
+        eprintln!(
+            "etlcal: warning: {} has no covariance: displacement_std_mm is from the pixel noise alone",
+            args.calibration.display()
+        );
+    }
+    let [ua, ub] = &m.pose_uncertainty;
     if args.json {
-        print_json(&json!({"e_com_ma": e_com, "pose_a": pose_json(&m.poses[0]), "pose_b": pose_json(&m.poses[1]),
-            "displacement_mm": d, "distance_mm": dist, "extrapolated": m.extrapolated}));
+        print_json(&json!({"e_com_ma": e_com, "pose_a": pose_json(&m.poses[0], ua),
+            "pose_b": pose_json(&m.poses[1], ub), "displacement_mm": d, "displacement_std_mm": s,
+            "std_includes_calibration": m.std_includes_calibration, "distance_mm": dist,
+            "extrapolated": m.extrapolated}));
     } else {
         outln!(
             "E_com {e_com:.3} mA{}",
@@ -78,6 +92,7 @@ pub fn run(args: Args) -> Result<()> {
             outln!("pose {name}: T = [{:.4}, {:.4}, {:.4}] mm, rms {:.3} px", t[0], t[1], t[2], p.rms_px);
         }
         outln!("displacement [{:.4}, {:.4}, {:.4}] mm, distance {dist:.4} mm", d[0], d[1], d[2]);
+        outln!("displacement std [{:.4}, {:.4}, {:.4}] mm (one sigma per component)", s[0], s[1], s[2]);
     }
     Ok(())
 }

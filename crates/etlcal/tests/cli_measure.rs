@@ -66,6 +66,48 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
     assert!((m["e_com_ma"].as_f64().unwrap() - e_com).abs() < 1e-9, "{m}");
     let dist = m["distance_mm"].as_f64().unwrap();
     assert!((dist - 2.0).abs() < 0.02, "distance {dist} mm for a 2 mm move");
+    // The standard deviation (pixel noise and the calibration's covariance): the true move,
+    // R (0, 0, -2) of the rendered rig, lies within 4 of them on each axis, and they are
+    // microns, not nothing.
+    assert_eq!(m["std_includes_calibration"], Value::Bool(true), "{m}");
+    let r =
+        etl_core::model::rotation::rodrigues_to_matrix(etl_core::model::CameraModel::paper_rig().rotation_rodrigues);
+    for i in 0..3 {
+        let d = m["displacement_mm"][i].as_f64().unwrap();
+        let s = m["displacement_std_mm"][i].as_f64().unwrap();
+        assert!(s > 1e-5 && s < 0.02, "std {s} mm: {m}");
+        assert!((d - (-2.0 * r[i][2])).abs() < 4.0 * s, "axis {i}: {d} against {} +- {s}: {m}", -2.0 * r[i][2]);
+    }
+    assert!(m["pose_a"]["sigma_px"].as_f64().unwrap() > 0.0, "{m}");
+    // A calibration file without a covariance (older files): the pixel noise's part alone,
+    // said on stderr and in the JSON.
+    let mut old: Value = serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();
+    old.as_object_mut().unwrap().remove("covariance").unwrap();
+    let old_cal = p("old.json");
+    std::fs::write(&old_cal, old.to_string()).unwrap();
+    let (a_png, b_png) = (p("a.png"), p("b.png"));
+    let out = etlcal(&[
+        "measure",
+        "--calibration",
+        &old_cal,
+        "--e-in",
+        "153",
+        "--t",
+        "30",
+        &a_png,
+        &b_png,
+        "--pattern",
+        "9x7",
+        "--square",
+        "1.5",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let o: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(o["std_includes_calibration"], Value::Bool(false), "{o}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("has no covariance"));
+    let (s_old, s_new) = (o["displacement_std_mm"][2].as_f64().unwrap(), m["displacement_std_mm"][2].as_f64().unwrap());
+    assert!(s_old > 0.0 && s_old < s_new, "pixel alone {s_old} against with calibration {s_new}");
     // An image of the wrong size: one line naming it, exit 1.
     let small = dir.path().join("small.png");
     image::GrayImage::new(64, 48).save(&small).unwrap();

@@ -163,10 +163,15 @@ pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
         board[i] = [pts[1][i].world_mm[0], pts[1][i].world_mm[1], 0.0];
         px[i] = pts[1][i].pixel;
     }
-    match etl_core::pnp::solve_pnp(&r.model, 130.0, &board, &px) {
-        Ok(p) => r.model.kf_x[1] + p.translation_mm[2],
-        Err(_) => f64::NAN,
-    }
+    let Ok(p) = etl_core::pnp::solve_pnp(&r.model, 130.0, &board, &px) else { return f64::NAN };
+    // The uncertainty of the pose, of a displacement and of a projected pixel.
+    use etl_core::pnp::{displacement_covariance_mm2, pose_uncertainty, PixelNoise};
+    let Ok(u) = pose_uncertainty(&r.model, 130.0, &board, &px, &p, PixelNoise::FromResidual) else { return f64::NAN };
+    let Ok(d) = displacement_covariance_mm2(&u, &u, Some(&r.covariance)) else { return f64::NAN };
+    let Ok(q) = etl_core::calib::projection_uncertainty(&r.model, &r.covariance, board[0], 130.0) else {
+        return f64::NAN;
+    };
+    r.model.kf_x[1] + p.translation_mm[2] + d[2][2] + q.std_px[0]
 }
 
 /// The four sharpness measures on a caller's 8-bit frame with stride; their sum, or NaN.
@@ -215,6 +220,8 @@ pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, 
     let Ok(ray) = at.ray([u, v]) else { return f64::NAN };
     let Ok(fit) = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), [w, h]) else { return f64::NAN };
     u + v + ray.direction[2] + fit.rms_px
+}
+
 /// Undistortion maps of a caller's band of rows at a current, then a remap of a 1- or
 /// 3-channel image of each sample type through them; the sum of the outputs, or NaN.
 #[no_mangle]

@@ -259,6 +259,10 @@ fn calibration_of(
             distortion_a: sa,
         },
         estimator: "per-setting".into(),
+        // No joint covariance: kf_x, kf_y, (u0, v0) and each a-triple come from separate
+        // fits whose cross-covariances are not computed; a block-diagonal matrix would
+        // claim independence it does not have. Downstream uncertainty is refused instead.
+        covariance: None,
         iterations: settings.iter().map(|s| s.zhang.iterations).max().unwrap_or(0),
         initial_rms_px: rms,
         // Each setting's boards are in their own frames and the calibration has no pose:

@@ -1,11 +1,17 @@
 //! The paper's measurement of a stage move (section 5.2.3, `etlcal measure`): the board's
 //! pose in two images at one compensated current by plane-based PnP, and the displacement
-//! of the board between them.
+//! of the board between them, with its standard deviation from the images' pixel noise
+//! and the calibration's covariance together ([`etl_core::pnp::displacement_covariance_mm2`]:
+//! the pixel noise estimated from each PnP's residual, the calibration's error moving
+//! both poses alike through d pose / d calibration).
 
 use std::path::Path;
 
 use etl_core::camera::Trust;
-use etl_core::pnp::{displacement_mm, BoardPose};
+use etl_core::pnp::{
+    displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, BoardPose, PixelNoise,
+    PoseUncertainty,
+};
 
 use super::dataset::CornerDetector;
 use etl_formats::calibration::Calibration;
@@ -25,13 +31,24 @@ pub struct Measurement {
     pub displacement_mm: [f64; 3],
     /// Length of `displacement_mm`, mm.
     pub distance_mm: f64,
+    /// Each pose's uncertainty (pixel noise estimated from its PnP residual).
+    pub pose_uncertainty: [PoseUncertainty; 2],
+    /// Covariance of `displacement_mm`, mm^2: pixel noise and, when
+    /// `std_includes_calibration`, the calibration's covariance.
+    pub displacement_covariance_mm2: [[f64; 3]; 3],
+    /// One standard deviation of each component of `displacement_mm`, mm.
+    pub displacement_std_mm: [f64; 3],
+    /// Whether the standard deviation includes the calibration's uncertainty: false for a
+    /// calibration file without a covariance (written before it was recorded), whose
+    /// standard deviation is that of the pixel noise alone.
+    pub std_includes_calibration: bool,
 }
 
 /// Measures the move of `board` between `images` at the driver current `e_in_ma` and the
 /// lens temperature `temperature_c`: E_com = E_in - E_T(T, E_in) through the calibration's
 /// thermal surface, the corners found by `detector` (corner (i, j) at (i s, j s, 0) mm on
 /// the board), each pose by PnP with the calibrated model at E_com, and the displacement
-/// t_b - t_a.
+/// t_b - t_a, with its covariance (module docs).
 ///
 /// Errors: a setting outside the calibrated ranges (temperature, E_in, E_com, with the
 /// margins of [`etl_core::camera`]) unless `trust` is [`Trust::Extrapolate`]; an image
@@ -49,6 +66,7 @@ pub fn measure_displacement(
     board.validate()?;
     let camera = cal.at(e_in_ma, temperature_c, trust)?;
     let mut poses = Vec::with_capacity(2);
+    let mut uncertainty = Vec::with_capacity(2);
     for path in images {
         std::fs::metadata(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
         let d = detector.detect(path, board.inner_corners)?;
@@ -56,17 +74,28 @@ pub fn measure_displacement(
         let sq = board.square_mm;
         let pts: Vec<[f64; 3]> = d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq, 0.0]).collect();
         let px: Vec<[f64; 2]> = d.corners.iter().map(|c| c.1).collect();
-        poses.push(camera.solve_pnp(&pts, &px)?);
+        let pose = camera.solve_pnp(&pts, &px)?;
+        let u = pose_uncertainty(camera.model(), camera.e_com_ma(), &pts, &px, &pose, PixelNoise::FromResidual)?;
+        uncertainty.push(u);
+        poses.push(pose);
     }
     let [a, b]: [BoardPose; 2] =
         poses.try_into().map_err(|_| Error::InvalidInput("a measurement needs two images".into()))?;
+    let [ua, ub]: [PoseUncertainty; 2] =
+        uncertainty.try_into().map_err(|_| Error::InvalidInput("a measurement needs two images".into()))?;
     let d = displacement_mm(&a, &b);
     let distance_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let calibration_covariance = cal.covariance_matrix();
+    let cov = displacement_covariance_mm2(&ua, &ub, calibration_covariance.as_ref())?;
     Ok(Measurement {
         e_com_ma: camera.e_com_ma(),
         extrapolated: camera.extrapolated(),
         poses: [a, b],
         displacement_mm: d,
         distance_mm,
+        pose_uncertainty: [ua, ub],
+        displacement_covariance_mm2: cov,
+        displacement_std_mm: displacement_std_mm(&cov),
+        std_includes_calibration: calibration_covariance.is_some(),
     })
 }

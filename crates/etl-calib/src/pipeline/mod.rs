@@ -175,7 +175,7 @@ pub fn calibrate(
     };
     let lo = e_com.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = e_com.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let calibration = Calibration {
+    let mut calibration = Calibration {
         thermal: thermal.cloned(),
         rms_reprojection_px: report.rms_px,
         std: ModelStd::from_params(&report.std),
@@ -189,5 +189,8 @@ pub fn calibrate(
         focus_law,
         ..Calibration::from_model(&m, obs.image_size, [lo, hi])
     };
+    // The covariance of the 25 shared numbers (for errors-in-variables, with the view
+    // corrections marginalised out by the solver's Schur complement); std is its diagonal.
+    calibration.set_covariance(&report.covariance);
     Ok(CalibrationResult { calibration, report, initial, focus_law_warning })
 }

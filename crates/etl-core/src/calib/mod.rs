@@ -17,6 +17,7 @@ pub mod jacobian;
 pub mod observations;
 pub mod params;
 pub mod rac;
+pub mod uncertainty;
 
 pub use bundle_adjust::{
     bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
@@ -24,3 +25,4 @@ pub use bundle_adjust::{
 };
 pub use initialise::{initialise, A0};
 pub use observations::{Point, View};
+pub use uncertainty::{projection_uncertainty, PixelUncertainty};

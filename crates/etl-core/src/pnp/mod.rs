@@ -9,9 +9,15 @@
 //! 3. Levenberg-Marquardt over (Rodrigues, t) on the reprojection error in pixels with
 //!    the full model (distortion included), using the analytic Jacobian of
 //!    [`crate::calib::jacobian`].
+//! 4. The pose's uncertainty from the pixel noise and the calibration's covariance, and the
+//!    displacement's ([`pose_uncertainty`], [`displacement_covariance_mm2`]).
 
 mod homography;
 mod planar;
+mod uncertainty;
 
 pub use homography::homography;
 pub use planar::{displacement_mm, solve_pnp, BoardPose, MAX_PNP_POINTS};
+pub use uncertainty::{
+    displacement_covariance_mm2, displacement_std_mm, pose_uncertainty, PixelNoise, PoseUncertainty,
+};
