@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::calibration::Calibration;
+use crate::setting::SettingArgs;
 use etl_formats::export::{export, ExportFormat};
 use etl_formats::Result;
 
@@ -17,25 +17,15 @@ use etl_formats::Result;
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// The calibration (etlcal.calibration/1).
-    #[arg(long, value_name = "FILE")]
-    pub calibration: PathBuf,
-    /// Driver current, mA.
-    #[arg(long = "e-in", value_name = "MA")]
-    pub e_in_ma: f64,
-    /// Lens temperature, degC.
-    #[arg(long = "t", value_name = "C")]
-    pub temperature_c: f64,
+    /// The calibration and the setting.
+    #[command(flatten)]
+    pub setting: SettingArgs,
     /// opencv (FileStorage YAML), ros (camera_info YAML) or mrcal (.cameramodel).
     #[arg(long, value_name = "opencv|ros|mrcal")]
     pub format: String,
     /// The file to write (atomically; its directory is created if missing).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Export even outside the calibrated temperature, current and E_com ranges (the
-    /// file says so).
-    #[arg(long)]
-    pub allow_extrapolation: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -44,16 +34,15 @@ pub struct Args {
 /// Runs `etlcal export`.
 pub fn run(args: Args) -> Result<()> {
     let format: ExportFormat = args.format.parse()?;
-    let cal = Calibration::load(&args.calibration)?;
-    let camera = cal.at(args.e_in_ma, args.temperature_c, crate::trust(args.allow_extrapolation))?;
+    let (cal, camera) = args.setting.camera()?;
     crate::output::create_parent(&args.out)?;
     let e = export(&cal, &camera, format, &args.out)?;
     if args.json {
         print_json(&json!({
             "format": args.format,
             "out": args.out.display().to_string(),
-            "e_in_ma": args.e_in_ma,
-            "temperature_c": args.temperature_c,
+            "e_in_ma": args.setting.e_in_ma,
+            "temperature_c": args.setting.temperature_c,
             "e_com_ma": camera.e_com_ma(),
             "extrapolated": camera.extrapolated(),
             "camera_matrix": e.camera_matrix,

@@ -16,6 +16,7 @@ use etl_formats::Result;
 mod board;
 mod output;
 mod progress;
+mod setting;
 
 /// `println!` for everything the verbs print on stdout (human-readable lines and
 /// [`print_json`]), ignoring a closed stdout (`etlcal ... | head`): `println!` panics there.

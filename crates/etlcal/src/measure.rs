@@ -16,6 +16,7 @@ use serde_json::json;
 
 use super::print_json;
 use crate::board::BoardArgs;
+use crate::setting::SettingArgs;
 use etl_calib::pipeline::dataset::default_detector;
 use etl_calib::pipeline::measure::measure_displacement;
 use etl_formats::calibration::Calibration;
@@ -25,15 +26,9 @@ use etl_formats::Result;
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// The calibration (etlcal.calibration/1).
-    #[arg(long, value_name = "FILE")]
-    pub calibration: PathBuf,
-    /// Commanded lens current, mA.
-    #[arg(long = "e-in", value_name = "MA")]
-    pub e_in_ma: f64,
-    /// Lens temperature, degC.
-    #[arg(long = "t", value_name = "C")]
-    pub temperature_c: f64,
+    /// The calibration and the setting both images were taken at.
+    #[command(flatten)]
+    pub setting: SettingArgs,
     /// The image before the move.
     pub image_a: PathBuf,
     /// The image after the move.
@@ -41,10 +36,6 @@ pub struct Args {
     /// The board.
     #[command(flatten)]
     pub board: BoardArgs,
-    /// Measure even outside the calibrated temperature, current and E_com ranges (the
-    /// result is marked `"extrapolated": true`).
-    #[arg(long)]
-    pub allow_extrapolation: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -58,22 +49,15 @@ fn pose_json(p: &BoardPose, u: &PoseUncertainty) -> serde_json::Value {
 /// Runs `etlcal measure`: [`measure_displacement`] with the default detector.
 pub fn run(args: Args) -> Result<()> {
     let board = args.board.board();
-    let cal = Calibration::load(&args.calibration)?;
+    let at = &args.setting;
+    let cal = Calibration::load(&at.calibration)?;
     let images = [args.image_a.as_path(), args.image_b.as_path()];
-    let m = measure_displacement(
-        &cal,
-        args.e_in_ma,
-        args.temperature_c,
-        crate::trust(args.allow_extrapolation),
-        &board,
-        images,
-        &default_detector(),
-    )?;
+    let m = measure_displacement(&cal, at.e_in_ma, at.temperature_c, at.trust(), &board, images, &default_detector())?;
     let (d, dist, e_com, s) = (m.displacement_mm, m.distance_mm, m.e_com_ma, m.displacement_std_mm);
     if !m.std_includes_calibration {
         eprintln!(
             "etlcal: warning: {} has no covariance: displacement_std_mm is from the pixel noise alone",
-            args.calibration.display()
+            at.calibration.display()
         );
     }
     let [ua, ub] = &m.pose_uncertainty;

@@ -11,9 +11,9 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
+use crate::setting::SettingArgs;
 use etl_core::model::CameraModel;
-use etl_formats::calibration::Calibration;
-use etl_formats::{write_atomic, CameraAt, Error, Result};
+use etl_formats::{write_atomic, Error, Result};
 use etl_image::undistort::{undistort_image, OutputCamera, Sample, SourceImage};
 use image::{ColorType, DynamicImage, ImageBuffer, ImageFormat, Pixel};
 use serde_json::json;
@@ -27,31 +27,15 @@ pub struct Args {
     /// The images to undistort (taken at --e-in and --t).
     #[arg(required = true, value_name = "IMAGE")]
     pub images: Vec<PathBuf>,
-    /// The calibration (etlcal.calibration/1).
-    #[arg(long, value_name = "FILE")]
-    pub calibration: PathBuf,
-    /// Commanded lens current, mA.
-    #[arg(long = "e-in", value_name = "MA")]
-    pub e_in_ma: f64,
-    /// Lens temperature, degC.
-    #[arg(long = "t", value_name = "C")]
-    pub temperature_c: f64,
+    /// The calibration and the setting the images were taken at.
+    #[command(flatten)]
+    pub setting: SettingArgs,
     /// Output directory (created if missing); each output keeps its input's file name.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Undistort even outside the calibrated temperature, current and E_com ranges (the
-    /// JSON says `"extrapolated": true`).
-    #[arg(long)]
-    pub allow_extrapolation: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
-}
-
-/// The camera of (E_in, T) for this calibration: the run-time camera's one range policy
-/// (`Calibration::at`), as `measure` and `export`.
-fn camera_at(cal: &Calibration, args: &Args) -> Result<CameraAt> {
-    cal.at(args.e_in_ma, args.temperature_c, crate::trust(args.allow_extrapolation))
 }
 
 /// One image to undistort: where it is, where it goes, its format.
@@ -128,8 +112,7 @@ fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64) -> Result<()> {
 
 /// Runs `etlcal undistort`.
 pub fn run(args: Args) -> Result<()> {
-    let cal = Calibration::load(&args.calibration)?;
-    let camera = camera_at(&cal, &args)?;
+    let (cal, camera) = args.setting.camera()?;
     let e_com = camera.e_com_ma();
     let mut names = HashSet::new();
     let mut jobs = Vec::with_capacity(args.images.len());
