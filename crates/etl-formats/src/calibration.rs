@@ -309,10 +309,12 @@ impl Calibration {
     /// at `e_com_ma`, due to the calibration's uncertainty: Sigma_p = J_p C J_p^T
     /// (`etl_core::calib::projection_uncertainty`), per axis and as the 2 x 2 covariance.
     ///
-    /// Errors: a calibration without a covariance (older files); a NaN; the point at or
-    /// behind the camera.
-    pub fn projection_std(&self, world_mm: [f64; 3], e_com_ma: f64) -> Result<PixelUncertainty> {
+    /// Errors: a calibration without a covariance (older files); `e_com_ma` outside the
+    /// calibrated range (margin 5 mA) unless `trust` is [`Trust::Extrapolate`]; a NaN;
+    /// the point at or behind the camera.
+    pub fn projection_std(&self, world_mm: [f64; 3], e_com_ma: f64, trust: Trust) -> Result<PixelUncertainty> {
         let c = self.require_covariance()?;
+        self.camera()?.at_e_com(e_com_ma, trust)?;
         Ok(projection_uncertainty(&self.model(), &c, world_mm, e_com_ma)?)
     }
 

@@ -70,7 +70,7 @@ fn an_older_file_without_a_covariance_stays_valid_and_says_it_has_none() {
     let c = Calibration::load(&fixture()).unwrap();
     assert!(c.covariance.is_none());
     assert!(!serde_json::to_string(&c).unwrap().contains("covariance"));
-    let e = c.projection_std([0.0, 0.0, 40.0], 150.0).unwrap_err();
+    let e = c.projection_std([0.0, 0.0, 40.0], 150.0, etl_formats::Trust::Refuse).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::InvalidInput);
     assert!(e.to_string().contains("no covariance"), "{e}");
 }
@@ -87,9 +87,13 @@ fn the_covariance_round_trips_and_gives_the_projection_std() {
     assert_eq!(back, c);
     let m = back.covariance_matrix().unwrap();
     assert_eq!((m[14][14], m[15][15], m[14][15]), (4.0, 0.25, 0.3));
-    let p = back.projection_std([5.0, 4.0, 40.0], 150.0).unwrap();
+    let p = back.projection_std([5.0, 4.0, 40.0], 150.0, etl_formats::Trust::Refuse).unwrap();
     assert_eq!(p.std_px, [2.0, 0.5]);
     assert_eq!(p.covariance_px2, [[4.0, 0.3], [0.3, 0.25]]);
+    // The range policy holds here too: E_com far outside 80..225 mA is named.
+    let e = back.projection_std([5.0, 4.0, 40.0], 400.0, etl_formats::Trust::Refuse).unwrap_err();
+    assert!(e.to_string().contains("e_com_ma = 400 is outside [75, 230]"), "{e}");
+    assert!(back.projection_std([5.0, 4.0, 40.0], 240.0, etl_formats::Trust::Extrapolate).is_ok());
 }
 
 #[test]
