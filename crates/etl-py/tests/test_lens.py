@@ -174,7 +174,12 @@ def test_hold_keeps_the_true_e_com_while_the_lens_warms():
             assert r["commands_sent"] == 3 and r["worst_e_com_error_ma"] < 0.036
             assert r["last"]["index"] == 2 and not r["last"]["extrapolated"]
             s = device.state()
-            assert abs(s["e_com_ma"] - 120.0) < 0.036 and abs(s["temperature_c"] - t) < 0.2
+            assert abs(s["e_com_ma"] - 120.0) < 0.036
+            # The lens self-heats from t (time constant tau_s), faster in wall time on a
+            # loaded machine: the hold must have compensated at the temperature the lens
+            # had, whatever that was by then.
+            assert abs(s["temperature_c"] - r["last"]["temperature_c"]) < 0.2
+            assert t - 0.2 < s["temperature_c"] < t + 3.0
             e_in.append(s["e_in_ma"])
         # E_T grows with temperature: the held E_in rises with it.
         assert e_in[0] < e_in[1] < e_in[2]
