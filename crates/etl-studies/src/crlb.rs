@@ -227,7 +227,7 @@ impl Crlb {
              {} + {} trials ({} failed). Pixel only: 0.2 px, the paper's BA. Per-view errors: 10 um on Z_W and 0.4 mA \
              on E per view with 0.2 px, the errors-in-variables BA and the bound with dZ_j, dE_j unknown under their \
              priors. Efficiency = bound / observed std (the observed std is uncertain by about {:.0} %).\n\n{}\n\
-             Smallest efficiency (pixel only): {:.3} (issue 8 asks at least 0.9: {}).\n\n## fx(E) (px)\n\n{}",
+             Smallest efficiency (pixel only): {:.3} (the acceptance asks at least 0.9: {}).\n\n## fx(E) (px)\n\n{}",
             self.points,
             self.trials[0],
             self.trials[1],
