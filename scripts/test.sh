@@ -33,6 +33,6 @@ stage_done "Python test environment"
 "$venv/bin/python" -m pip install --quiet "$root"/target/wheels-test/*.whl
 stage_done "Python package built and installed"
 cd crates/etl-py/tests
-"$venv/bin/python" -m pytest -q
+"$venv/bin/python" -m pytest -q --durations=10
 stage_done "pytest"
 echo "== all tests passed in $((SECONDS - start)) s"
