@@ -11,7 +11,7 @@ It reports, one line each, and exits 1 when there is any:
   not in the repository;
 - a reference to material that lives outside the repository: the paper's reading notes
   (`NOTES.md`), the design brief (`DESIGN.md`), the `shared/` directory of the development
-  machine, or an issue number of the project's tracker (`issue 17`).
+  machine, or an issue number of the project's tracker (the word issue and a number).
 
 Only the standard library: it runs wherever the tests run.
 """

@@ -1,4 +1,4 @@
-//! `etlcal study crlb`: statistical efficiency at the paper rig (NOTES.md: 15 views, 2311
+//! `etlcal study crlb`: statistical efficiency at the paper rig (docs/METHOD.md: 15 views, 2311
 //! points, all 25 numbers refined).
 //!
 //! - Pixel noise alone (0.2 px): the Cramer-Rao bound of every parameter and of fx(E) from
@@ -189,7 +189,7 @@ impl Crlb {
     }
 
     /// The markdown summary: every parameter's bound, Monte Carlo spread and efficiency,
-    /// the smallest efficiency `min` against issue 8's 0.9, and the same for fx(E).
+    /// the smallest efficiency `min` against the target 0.9, and the same for fx(E).
     fn markdown(&self, min: f64) -> String {
         let rows: Vec<Vec<String>> = self
             .parameters
