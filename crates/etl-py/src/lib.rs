@@ -20,6 +20,7 @@ pub mod observations;
 pub mod physics;
 pub mod pipeline;
 pub mod pose;
+pub mod results;
 pub mod simulate;
 pub mod studies;
 pub mod thermal;
