@@ -61,10 +61,13 @@ class _Result(Mapping[str, Any]):
         return key in self._names()
 
     def __eq__(self, other: object) -> bool:
-        # Field by field (arrays compared elementwise, NaN equal to NaN).
-        if type(other) is not type(self):
+        # Key by key, as the dicts these once were (so `result == {...}` still holds);
+        # arrays compared elementwise, NaN equal to NaN.
+        if not isinstance(other, Mapping):
             return NotImplemented
-        return all(_same(getattr(self, k), getattr(other, k)) for k in self._names())
+        if set(self) != set(other.keys()):
+            return False
+        return all(_same(self[k], other[k]) for k in self)
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -232,32 +235,35 @@ class ThermalCalibrationResult(_Result):
 @dataclass(frozen=True, eq=False, repr=False)
 class StudyResult(_Result):
     """`study(name)`: `name` (the study) and `table` (the command line's --json object).
-    The table's keys are also keys of the result (``result["parameters"]``) and
-    attributes (``result.parameters``); which keys depends on the study."""
+    As a mapping it is the table itself (``result["parameters"]``, ``dict(result)``, as
+    when `study` returned the dict); the table's keys are also attributes
+    (``result.parameters``); which keys depends on the study."""
 
     name: str
     table: Dict[str, Any]
 
     def __getitem__(self, key: str) -> Any:
-        if key in self.table and key not in ("name", "table"):
-            return self.table[key]
-        return super().__getitem__(key)
+        return self.table[key]
 
     def __getattr__(self, key: str) -> Any:
         # Only called for names that are not fields: the table's keys.
         table = self.__dict__.get("table", {})
         if key in table:
             return table[key]
-        raise AttributeError(f"{type(self).__name__} of {self.__dict__.get('name')!r} has no {key!r}")
-
-    def _keys(self) -> Tuple[str, ...]:
-        return tuple(k for k in self.table if k not in ("name", "table"))
+        raise AttributeError(f"the {self.__dict__.get('name')!r} study has no {key!r}")
 
     def __iter__(self) -> Iterator[str]:
-        return iter(("name", "table") + self._keys())
+        return iter(self.table)
 
     def __len__(self) -> int:
-        return 2 + len(self._keys())
+        return len(self.table)
 
     def __contains__(self, key: object) -> bool:
-        return key in ("name", "table") or key in self.table
+        return key in self.table
+
+    def __repr__(self) -> str:
+        return f"StudyResult(name={self.name!r}, keys={list(self.table)})"
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The table as a plain dict (the command line's --json object)."""
+        return dict(self.table)
