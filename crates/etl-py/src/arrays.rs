@@ -194,7 +194,12 @@ pub fn currents(x: &Bound<'_, PyAny>, what: &str) -> PyResult<Currents> {
 }
 
 /// A float64 array of shape `shape` followed by `inner`, from row-major `values`.
-pub fn stacked<'py>(py: Python<'py>, shape: &[usize], inner: &[usize], values: Vec<f64>) -> PyResult<Bound<'py, PyAny>> {
+pub fn stacked<'py>(
+    py: Python<'py>,
+    shape: &[usize],
+    inner: &[usize],
+    values: Vec<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
     let full: Vec<usize> = shape.iter().chain(inner).copied().collect();
     let a = ArrayD::from_shape_vec(IxDyn(&full), values).map_err(|e| input_error(e.to_string()))?;
     Ok(a.into_pyarray(py).into_any())

@@ -403,8 +403,8 @@ impl Calibration {
     ///
     /// Args:
     ///     distance_mm: depth of the plane to focus on (along the optical axis from the
-    ///         camera's centre), mm.
-    ///     temperature_c: lens temperature, degC.
+    ///         camera's centre), mm (a float or an array).
+    ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
     ///     allow_extrapolation: outside the calibrated temperature and current ranges too
     ///         (keyword only; the law's distance range is always enforced).
     ///
@@ -412,26 +412,40 @@ impl Calibration {
     /// focus law") or no thermal part, for a distance outside the law's calibrated
     /// distances (+- 2 % of their span), or a setting outside the calibrated ranges.
     #[pyo3(signature = (distance_mm, temperature_c, *, allow_extrapolation=false))]
-    fn focus_e_in(&self, distance_mm: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
-        self.file.focus_e_in(distance_mm, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)
+    fn focus_e_in<'py>(
+        &self,
+        distance_mm: &Bound<'py, PyAny>,
+        temperature_c: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let policy = trust(allow_extrapolation);
+        crate::arrays::map2(distance_mm, temperature_c, ("distance_mm", "temperature_c"), |d, c| {
+            self.file.focus_e_in(d, c, policy).map_err(crate::errors::calib_err)
+        })
     }
 
     /// The distance in focus (mm, as in `focus_e_in`) at driver current `e_in_ma` and lens
     /// temperature `temperature_c`.
     ///
     /// Args:
-    ///     e_in_ma: driver current, mA.
-    ///     temperature_c: lens temperature, degC.
+    ///     e_in_ma: driver current, mA (a float or an array).
+    ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
     ///     allow_extrapolation: as in `focus_e_in`.
     ///
     /// Raises: InputError when the calibration has no focus law or no thermal part, for
     /// an E_com outside the law's calibrated currents (+- 2 % of their span), or a
     /// setting outside the calibrated ranges.
     #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
-    fn focus_distance_mm(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
-        self.file
-            .focus_distance_mm(e_in_ma, temperature_c, trust(allow_extrapolation))
-            .map_err(crate::errors::calib_err)
+    fn focus_distance_mm<'py>(
+        &self,
+        e_in_ma: &Bound<'py, PyAny>,
+        temperature_c: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let policy = trust(allow_extrapolation);
+        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, c| {
+            self.file.focus_distance_mm(e, c, policy).map_err(crate::errors::calib_err)
+        })
     }
 
     /// (fx, fy) at the compensated current, px (Eq. 16: fx(E) = sum kf_x[k] E^k).
@@ -443,7 +457,11 @@ impl Calibration {
     ///
     /// Raises: InputError for a current outside the calibrated range (+- 5 mA).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
-    fn focal_lengths<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
+    fn focal_lengths<'py>(
+        &self,
+        e_com_ma: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let [fx, fy] = self.per_current(e_com_ma, allow_extrapolation, [&[], &[]], |at, _| {
             let k = at.intrinsics();
             Ok([vec![k.fx], vec![k.fy]])

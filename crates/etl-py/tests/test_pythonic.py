@@ -4,16 +4,18 @@ views, option checking, and the stubs under mypy --strict (this file is fully ty
 is the file mypy checks)."""
 from __future__ import annotations
 
+import json
 import pathlib
 import subprocess
 import sys
-from typing import Any, List
+from typing import Any, List, get_args
 
 import numpy as np
 import numpy.typing as npt
 import pytest
 
 import etlcal
+from etlcal.options import ExportFormat, NoisePreset, SharpnessMetric, StudyName
 from etlcal.results import (
     AutofocusResult,
     Compensation,
@@ -98,6 +100,23 @@ def test_an_array_with_one_current_out_of_range_is_refused(cal: etlcal.Calibrati
     np.testing.assert_allclose(fx, poly(KF_X, np.array([150.0, 300.0])), rtol=1e-13)
     with pytest.raises(etlcal.InputError, match="e_com_ma"):
         cal.intrinsics(np.array(["a", "b"]))
+
+
+def test_focus_functions_over_arrays_are_the_scalar_ones(cal: etlcal.Calibration) -> None:
+    # The golden calibration's focus law with the paper's thermal part.
+    doc = json.loads((ROOT / "fixtures" / "golden" / "calibrate-eiv.json").read_text())
+    doc["thermal"] = json.loads(cal.to_json())["thermal"]
+    focused = etlcal.Calibration.from_json(json.dumps(doc))
+    distance_mm = np.array([60.0, 85.0, 115.0])
+    temperature_c = np.array([27.0, 31.5, 36.0])
+    e_in = focused.focus_e_in(distance_mm, temperature_c)
+    assert isinstance(e_in, np.ndarray) and e_in.shape == (3,)
+    for k in range(3):
+        assert e_in[k] == focused.focus_e_in(float(distance_mm[k]), float(temperature_c[k]))
+    np.testing.assert_allclose(focused.focus_distance_mm(e_in, temperature_c), distance_mm, atol=1e-8)
+    # Broadcast: one temperature for every distance.
+    np.testing.assert_array_equal(focused.focus_e_in(distance_mm, 30.0),
+                                  [focused.focus_e_in(float(d), 30.0) for d in distance_mm])
 
 
 def test_principal_point_is_an_array_and_fx_poly_is_a_polynomial(cal: etlcal.Calibration) -> None:
@@ -216,6 +235,19 @@ def test_options_are_checked_with_a_one_line_error(sim: etlcal.Simulation, call:
     with pytest.raises(etlcal.InputError, match=message) as e:
         call(sim.observations)
     assert "\n" not in str(e.value)
+
+
+def test_every_word_of_the_literal_options_is_accepted_at_run_time(tmp_path: pathlib.Path) -> None:
+    image = (np.arange(64 * 64).reshape(64, 64) % 251).astype(np.uint8)
+    for metric in get_args(SharpnessMetric):
+        assert etlcal.sharpness(image, metric) >= 0.0
+    for fmt in get_args(ExportFormat):
+        etlcal.Calibration.paper_rig().export(tmp_path / f"cam.{fmt}", 150.0, 30.0, fmt)
+    for noise in get_args(NoisePreset):
+        assert len(etlcal.simulate.paper_rig(seed=1, noise=noise).observations) == 15
+    with pytest.raises(etlcal.InputError) as e:
+        etlcal.study("fig7")  # type: ignore[arg-type]
+    assert f"one of {', '.join(get_args(StudyName))})" in str(e.value)
 
 
 def test_nothing_private_is_exported() -> None:

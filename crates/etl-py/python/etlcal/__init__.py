@@ -25,7 +25,8 @@ Main nouns:
 Results are typed objects (`etlcal.results`: `ZhangResult`, `AutofocusResult`,
 `Compensation`, `ModelStd`, `View`, `StudyResult`, ...): attributes with a short repr,
 and read-only mappings too (`r["key"]`, `"key" in r`, `r.keys()`), as the dicts they
-replace. `Observations` is a sequence of `View`s (`obs[i]`, `obs[-1]`, `for v in obs`).
+replace. `etlcal.options` names the words each option accepts (`typing.Literal`).
+`Observations` is a sequence of `View`s (`obs[i]`, `obs[-1]`, `for v in obs`).
 The per-current model functions (`focal_lengths`, `intrinsics`, `distortion`,
 `to_opencv`) take a number or an array of currents (results stacked on leading axes).
 
@@ -78,7 +79,7 @@ from .results import (
     ViewSummary,
     ZhangResult,
 )
-from . import physics, results, simulate, studies
+from . import options, physics, results, simulate, studies
 
 __all__ = [
     "__version__",
@@ -122,6 +123,7 @@ __all__ = [
     "View",
     "ViewSummary",
     "ZhangResult",
+    "options",
     "physics",
     "results",
     "simulate",

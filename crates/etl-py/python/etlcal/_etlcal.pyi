@@ -6,6 +6,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.polynomial import Polynomial
 
+from etlcal.options import Estimator, ExportFormat, Method, NoisePreset, RobustLoss, SharpnessMetric, StudyName
 from etlcal.results import (
     AutofocusResult,
     Compensation,
@@ -30,13 +31,6 @@ _FloatOrArray = Union[float, _F64]
 # An array of currents (any shape S): the vectorised per-current functions stack their
 # results on leading axes S.
 _Currents = Union[_F64, Sequence[float]]
-Estimator = Literal["paper", "eiv"]
-RobustLoss = Literal["huber", "cauchy"]
-Method = Literal["proposed", "per-setting"]
-SharpnessMetric = Literal["cpbd", "tenengrad", "laplacian", "brenner", "normvar"]
-StudyName = Literal["fig5", "fig6", "subsets", "baseline", "crlb"]
-NoisePreset = Literal["paper", "none"]
-ExportFormat = Literal["opencv", "ros", "mrcal"]
 
 __all__ = [
     "A0",
@@ -300,8 +294,20 @@ class Calibration:
     ) -> _FloatOrArray: ...
     @property
     def focus_law(self) -> Optional[FocusLaw]: ...
+    @overload
     def focus_e_in(self, distance_mm: float, temperature_c: float, *, allow_extrapolation: bool = False) -> float: ...
-    def focus_distance_mm(self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False) -> float: ...
+    @overload
+    def focus_e_in(
+        self, distance_mm: _ArrayLike, temperature_c: _ArrayLike, *, allow_extrapolation: bool = False
+    ) -> _FloatOrArray: ...
+    @overload
+    def focus_distance_mm(
+        self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False
+    ) -> float: ...
+    @overload
+    def focus_distance_mm(
+        self, e_in_ma: _ArrayLike, temperature_c: _ArrayLike, *, allow_extrapolation: bool = False
+    ) -> _FloatOrArray: ...
     @overload
     def focal_lengths(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> Tuple[float, float]: ...
     @overload
@@ -433,7 +439,7 @@ class Observations:
     def setting_count(self) -> int: ...
     def setting_view(self, index: int) -> View: ...
     def __len__(self) -> int: ...
-    def __getitem__(self, index: int) -> View: ...
+    def __getitem__(self, index: int, /) -> View: ...
     def __iter__(self) -> Iterator[View]: ...
     @property
     def offstate_count(self) -> int: ...
