@@ -844,8 +844,10 @@ impl Calibration {
             Currents::Array { shape, values } => (shape, values, false),
         };
         let mut blocks: [Vec<f64>; P] = core::array::from_fn(|_| Vec::new());
+        // The camera once, not per current (`at_e_com` rebuilds it on every call).
+        let camera = self.file.camera().map_err(crate::errors::calib_err)?;
         for e in values {
-            let at = self.at_e_com(e, allow_extrapolation)?;
+            let at = camera.at_e_com(e, trust(allow_extrapolation)).py()?;
             for (block, part) in blocks.iter_mut().zip(f(&at, self.file.image_size)?) {
                 block.extend(part);
             }
