@@ -1,6 +1,6 @@
 //! numpy in and out: (N, k) point arrays, 3 x 3 matrices, scalars-or-arrays.
 
-use numpy::ndarray::{Array1, Array2};
+use numpy::ndarray::{Array1, Array2, ArrayD, IxDyn};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyFloat;
@@ -159,4 +159,48 @@ pub fn map2<'py>(
         return Ok(PyFloat::new(py, v).into_any());
     }
     Ok(out.into_pyarray(py).into_any())
+}
+
+/// Currents given to a per-current model function: a number (the function's scalar
+/// result) or an array of any shape S (every part of the result stacked on leading axes S).
+pub enum Currents {
+    /// A float, an integer or a 0-d array.
+    Scalar(f64),
+    /// An array-like of at least one dimension: its shape and its values, row-major.
+    Array {
+        /// The array's shape S.
+        shape: Vec<usize>,
+        /// Its values in row-major order.
+        values: Vec<f64>,
+    },
+}
+
+/// Reads a current argument (`what` names it in the error) as a scalar or an array.
+pub fn currents(x: &Bound<'_, PyAny>, what: &str) -> PyResult<Currents> {
+    if let Ok(v) = x.cast::<PyFloat>() {
+        return Ok(Currents::Scalar(v.value()));
+    }
+    if !x.hasattr("__len__")? && !x.hasattr("__array__")? {
+        let v: f64 = x.extract().map_err(|e| input_error(format!("{what} must be a number or an array: {e}")))?;
+        return Ok(Currents::Scalar(v));
+    }
+    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
+        x.extract().map_err(|e| input_error(format!("{what} must be a number or an array of numbers: {e}")))?;
+    let values: Vec<f64> = arr.as_array().iter().copied().collect();
+    if arr.ndim() == 0 {
+        return Ok(Currents::Scalar(values.first().copied().unwrap_or(f64::NAN)));
+    }
+    Ok(Currents::Array { shape: arr.shape().to_vec(), values })
+}
+
+/// A float64 array of shape `shape` followed by `inner`, from row-major `values`.
+pub fn stacked<'py>(
+    py: Python<'py>,
+    shape: &[usize],
+    inner: &[usize],
+    values: Vec<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let full: Vec<usize> = shape.iter().chain(inner).copied().collect();
+    let a = ArrayD::from_shape_vec(IxDyn(&full), values).map_err(|e| input_error(e.to_string()))?;
+    Ok(a.into_pyarray(py).into_any())
 }

@@ -188,11 +188,25 @@ impl Calibration {
         vec_out(py, &self.model.kf_y)
     }
 
-    /// (u0, v0), px.
+    /// (u0, v0), px: a float64 array of shape (2,).
     #[getter]
-    fn principal_point(&self) -> (f64, f64) {
-        let [u, v] = self.model.principal_point;
-        (u, v)
+    fn principal_point<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        vec_out(py, &self.model.principal_point)
+    }
+
+    /// fx(E) as a `numpy.polynomial.Polynomial` in E (mA), px: its coefficients are
+    /// `kf_x` in ascending powers, so `cal.fx_poly(e_com_ma)` is fx at E_com (no range
+    /// check: `focal_lengths` checks the calibrated range).
+    #[getter]
+    fn fx_poly<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        polynomial(py, &self.model.kf_x)
+    }
+
+    /// fy(E) as a `numpy.polynomial.Polynomial` in E (mA), px (coefficients `kf_y`; as
+    /// `fx_poly`).
+    #[getter]
+    fn fy_poly<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        polynomial(py, &self.model.kf_y)
     }
 
     /// a1..a9 of Eq. 18.
@@ -277,12 +291,13 @@ impl Calibration {
         self.file.iterations
     }
 
-    /// Per-view summaries of the calibration: a list of dicts with every key of the
+    /// Per-view summaries of the calibration: a list of ViewSummary (attributes, also dict
+    /// keys) with every key of the
     /// file's `views` entries: e_com_ma (mA), points, rms_px (px), dz_mm (mm) and de_ma
     /// (mA) (the errors-in-variables corrections; 0 for the paper's estimator), fx_px and
     /// fy_px (px; the focal lengths refitted to that view alone).
     #[getter]
-    fn views<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    fn views<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
         self.file
             .views
             .iter()
@@ -301,16 +316,16 @@ impl Calibration {
                         None => d.set_item(key, value.as_f64())?,
                     }
                 }
-                Ok(d)
+                crate::results::make(py, "ViewSummary", &d)
             })
             .collect()
     }
 
-    /// One standard deviation of each model number: a dict with the keys
+    /// One standard deviation of each model number: a ModelStd (attributes, also dict keys)
     /// rotation_rodrigues, translation_mm, kf_x, kf_y, principal_point, distortion_a
     /// (float64 arrays, units as the numbers'; zeros for a model given, not estimated).
     #[getter]
-    fn std<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn std<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         std_dict(py, &self.file.std)
     }
 
@@ -362,14 +377,15 @@ impl Calibration {
         })
     }
 
-    /// The focus law of the calibration, or None when it has none: a dict with
+    /// The focus law of the calibration, or None when it has none: a FocusLaw (attributes,
+    /// also dict keys):
     /// coefficients_ma (c0 mA, c1 mA/dpt, c2 mA/dpt^2 of E_com = c0 + c1 V + c2 V^2 with
     /// V = 1000 / distance_mm), distance_range_mm and e_com_range_ma (the fitted views'
     /// (min, max)), rms_ma (the views' current residual) and views (how many were fitted).
     /// The distance is the depth of the plane in focus: along the optical axis from the
     /// camera's centre, mm.
     #[getter]
-    fn focus_law<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+    fn focus_law<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         let Some(law) = &self.file.focus_law else { return Ok(None) };
         let d = PyDict::new(py);
         let c = law.coefficients_ma;
@@ -378,7 +394,7 @@ impl Calibration {
         d.set_item("e_com_range_ma", (law.e_com_range_ma[0], law.e_com_range_ma[1]))?;
         d.set_item("rms_ma", law.rms_ma)?;
         d.set_item("views", law.views)?;
-        Ok(Some(d))
+        crate::results::make(py, "FocusLaw", &d).map(Some)
     }
 
     /// The driver current E_in (mA) that focuses the camera at `distance_mm` at lens
@@ -387,8 +403,8 @@ impl Calibration {
     ///
     /// Args:
     ///     distance_mm: depth of the plane to focus on (along the optical axis from the
-    ///         camera's centre), mm.
-    ///     temperature_c: lens temperature, degC.
+    ///         camera's centre), mm (a float or an array).
+    ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
     ///     allow_extrapolation: outside the calibrated temperature and current ranges too
     ///         (keyword only; the law's distance range is always enforced).
     ///
@@ -396,53 +412,77 @@ impl Calibration {
     /// focus law") or no thermal part, for a distance outside the law's calibrated
     /// distances (+- 2 % of their span), or a setting outside the calibrated ranges.
     #[pyo3(signature = (distance_mm, temperature_c, *, allow_extrapolation=false))]
-    fn focus_e_in(&self, distance_mm: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
-        self.file.focus_e_in(distance_mm, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)
+    fn focus_e_in<'py>(
+        &self,
+        distance_mm: &Bound<'py, PyAny>,
+        temperature_c: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let policy = trust(allow_extrapolation);
+        crate::arrays::map2(distance_mm, temperature_c, ("distance_mm", "temperature_c"), |d, c| {
+            self.file.focus_e_in(d, c, policy).map_err(crate::errors::calib_err)
+        })
     }
 
     /// The distance in focus (mm, as in `focus_e_in`) at driver current `e_in_ma` and lens
     /// temperature `temperature_c`.
     ///
     /// Args:
-    ///     e_in_ma: driver current, mA.
-    ///     temperature_c: lens temperature, degC.
+    ///     e_in_ma: driver current, mA (a float or an array).
+    ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
     ///     allow_extrapolation: as in `focus_e_in`.
     ///
     /// Raises: InputError when the calibration has no focus law or no thermal part, for
     /// an E_com outside the law's calibrated currents (+- 2 % of their span), or a
     /// setting outside the calibrated ranges.
     #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
-    fn focus_distance_mm(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
-        self.file
-            .focus_distance_mm(e_in_ma, temperature_c, trust(allow_extrapolation))
-            .map_err(crate::errors::calib_err)
+    fn focus_distance_mm<'py>(
+        &self,
+        e_in_ma: &Bound<'py, PyAny>,
+        temperature_c: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let policy = trust(allow_extrapolation);
+        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, c| {
+            self.file.focus_distance_mm(e, c, policy).map_err(crate::errors::calib_err)
+        })
     }
 
-    /// (fx, fy) at the compensated current, px (Eq. 16).
+    /// (fx, fy) at the compensated current, px (Eq. 16: fx(E) = sum kf_x[k] E^k).
     ///
     /// Args:
-    ///     e_com_ma: compensated current, mA.
+    ///     e_com_ma: compensated current, mA: a number, or an array of any shape S
+    ///         (vectorised: then fx and fy are float64 arrays of shape S).
+    ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
+    ///
+    /// Raises: InputError for a current outside the calibrated range (+- 5 mA).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
-    fn focal_lengths(&self, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<(f64, f64)> {
-        let k = *self.at_e_com(e_com_ma, allow_extrapolation)?.intrinsics();
-        Ok((k.fx, k.fy))
+    fn focal_lengths<'py>(
+        &self,
+        e_com_ma: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let [fx, fy] = self.per_current(e_com_ma, allow_extrapolation, [&[], &[]], |at, _| {
+            let k = at.intrinsics();
+            Ok([vec![k.fx], vec![k.fy]])
+        })?;
+        Ok(PyTuple::new(e_com_ma.py(), [fx, fy])?.into_any())
     }
 
     /// The intrinsic matrix A(E) = [[fx, 0, u0], [0, fy, v0], [0, 0, 1]] (Eq. 15), px.
     ///
     /// Args:
-    ///     e_com_ma: compensated current, mA.
+    ///     e_com_ma: compensated current, mA: a number, or an array of shape S
+    ///         (vectorised).
+    ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
     ///
-    /// Returns: a 3 x 3 float64 array.
+    /// Returns: a 3 x 3 float64 array (S + (3, 3) for an array of currents).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
-    fn intrinsics<'py>(
-        &self,
-        py: Python<'py>,
-        e_com_ma: f64,
-        allow_extrapolation: bool,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let k = *self.at_e_com(e_com_ma, allow_extrapolation)?.intrinsics();
-        Ok(mat3_out(py, k.matrix()))
+    fn intrinsics<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
+        let [k] = self.per_current(e_com_ma, allow_extrapolation, [&[3, 3]], |at, _| {
+            Ok([at.intrinsics().matrix().into_iter().flatten().collect()])
+        })?;
+        Ok(k)
     }
 
     /// The distortion coefficients (k1 in 1/px^2, p1 and p2 in 1/px) at the compensated
@@ -450,11 +490,16 @@ impl Calibration {
     /// (Eq. 17, with Weng's decentering term).
     ///
     /// Args:
-    ///     e_com_ma: compensated current, mA.
+    ///     e_com_ma: compensated current, mA: a number, or an array of shape S
+    ///         (vectorised: then k1, p1, p2 are float64 arrays of shape S).
+    ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
-    fn distortion(&self, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<(f64, f64, f64)> {
-        let d = *self.at_e_com(e_com_ma, allow_extrapolation)?.distortion();
-        Ok((d.k1, d.p1, d.p2))
+    fn distortion<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
+        let parts = self.per_current(e_com_ma, allow_extrapolation, [&[], &[], &[]], |at, _| {
+            let d = at.distortion();
+            Ok([vec![d.k1], vec![d.p1], vec![d.p2]])
+        })?;
+        Ok(PyTuple::new(e_com_ma.py(), parts)?.into_any())
     }
 
     /// Projects world points to observed pixels (Eq. 13-18).
@@ -641,21 +686,20 @@ impl Calibration {
     /// returns and writes.
     ///
     /// Args:
-    ///     e_com_ma: compensated current, mA.
+    ///     e_com_ma: compensated current, mA: a number, or an array of shape S
+    ///         (vectorised).
     ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
     ///
     /// Returns: (K, dist): the 3 x 3 camera matrix (px) and the 5 coefficients
-    /// (k1, k2, p1, p2, k3).
+    /// (k1, k2, p1, p2, k3); for an array of currents, K of shape S + (3, 3) and dist of
+    /// shape S + (5,).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
-    fn to_opencv<'py>(
-        &self,
-        py: Python<'py>,
-        e_com_ma: f64,
-        allow_extrapolation: bool,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let at = self.at_e_com(e_com_ma, allow_extrapolation)?;
-        let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), self.file.image_size).py()?;
-        Ok((mat3_out(py, at.intrinsics().matrix()), vec_out(py, &fit.dist_coeffs)))
+    fn to_opencv<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
+        let parts = self.per_current(e_com_ma, allow_extrapolation, [&[3, 3], &[5]], |at, image_size| {
+            let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), image_size).py()?;
+            Ok([at.intrinsics().matrix().into_iter().flatten().collect(), fit.dist_coeffs.to_vec()])
+        })?;
+        Ok(PyTuple::new(e_com_ma.py(), parts)?.into_any())
     }
 
     /// Writes the camera at one setting for another tool (atomically; nothing on error).
@@ -669,7 +713,7 @@ impl Calibration {
     ///         (.cameramodel, LENSMODEL_OPENCV5).
     ///     allow_extrapolation: export outside the calibrated ranges too (keyword only).
     ///
-    /// Returns: a dict with "e_com_ma", "camera_matrix" (3 x 3), "dist_coeffs" (k1, k2,
+    /// Returns: an ExportResult (attributes, also dict keys): "e_com_ma", "camera_matrix" (3 x 3), "dist_coeffs" (k1, k2,
     /// p1, p2, k3: the least-squares fit of etlcal's distortion over the image) and the
     /// fit's error "fit_rms_px", "fit_max_px" (also written into the file).
     #[pyo3(signature = (path, e_in_ma, temperature_c, format, *, allow_extrapolation=false))]
@@ -681,7 +725,7 @@ impl Calibration {
         temperature_c: f64,
         format: &str,
         allow_extrapolation: bool,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         use etl_formats::export::{export, ExportFormat};
         let format: ExportFormat = format.parse().map_err(crate::errors::calib_err)?;
         let at = self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
@@ -693,7 +737,7 @@ impl Calibration {
         d.set_item("dist_coeffs", vec_out(py, &e.fit.dist_coeffs))?;
         d.set_item("fit_rms_px", e.fit.rms_px)?;
         d.set_item("fit_max_px", e.fit.max_px)?;
-        Ok(d)
+        crate::results::make(py, "ExportResult", &d)
     }
 
     /// The undistortion maps at the compensated current, in cv2.remap's convention: for
@@ -781,6 +825,43 @@ impl Calibration {
 }
 
 impl Calibration {
+    /// A per-current model function at one current or elementwise over an array of them:
+    /// `f(camera at E_com, image size)` gives the result's `P` parts, part p a row-major
+    /// block of shape `part_shapes[p]`. For a scalar current, a part of shape () is a
+    /// float and any other an array of its shape; for an array of shape S, part p is an
+    /// array of shape S + `part_shapes[p]` (every current range-checked as for a scalar).
+    fn per_current<'py, const P: usize>(
+        &self,
+        e_com_ma: &Bound<'py, PyAny>,
+        allow_extrapolation: bool,
+        part_shapes: [&[usize]; P],
+        f: impl Fn(&etl_core::camera::CameraAt, [u32; 2]) -> PyResult<[Vec<f64>; P]>,
+    ) -> PyResult<[Bound<'py, PyAny>; P]> {
+        use crate::arrays::{currents, stacked, Currents};
+        let py = e_com_ma.py();
+        let (shape, values, scalar) = match currents(e_com_ma, "e_com_ma")? {
+            Currents::Scalar(e) => (Vec::new(), vec![e], true),
+            Currents::Array { shape, values } => (shape, values, false),
+        };
+        let mut blocks: [Vec<f64>; P] = core::array::from_fn(|_| Vec::new());
+        // The camera once, not per current (`at_e_com` rebuilds it on every call).
+        let camera = self.file.camera().map_err(crate::errors::calib_err)?;
+        for e in values {
+            let at = camera.at_e_com(e, trust(allow_extrapolation)).py()?;
+            for (block, part) in blocks.iter_mut().zip(f(&at, self.file.image_size)?) {
+                block.extend(part);
+            }
+        }
+        let mut out = Vec::with_capacity(P);
+        for (block, inner) in blocks.into_iter().zip(part_shapes) {
+            out.push(match (scalar, inner.is_empty()) {
+                (true, true) => pyo3::types::PyFloat::new(py, block.first().copied().unwrap_or(f64::NAN)).into_any(),
+                _ => stacked(py, &shape, inner, block)?,
+            });
+        }
+        out.try_into().map_err(|_| input_error("per_current: part count mismatch"))
+    }
+
     /// The camera at a known E_com, refused outside the calibrated E_com range (margin
     /// 5 mA) unless `allow_extrapolation`: the one range check of every method taking
     /// `e_com_ma`.
@@ -788,6 +869,11 @@ impl Calibration {
         let camera = self.file.camera().map_err(crate::errors::calib_err)?;
         camera.at_e_com(e_com_ma, trust(allow_extrapolation)).py()
     }
+}
+
+/// `numpy.polynomial.Polynomial(coefficients)` (ascending powers).
+fn polynomial<'py>(py: Python<'py>, coefficients: &[f64]) -> PyResult<Bound<'py, PyAny>> {
+    py.import("numpy.polynomial")?.getattr("Polynomial")?.call1((vec_out(py, coefficients),))
 }
 
 /// A `thermal=` argument: a ThermalCalibration (kept with its ranges), the string
@@ -816,8 +902,8 @@ pub(crate) fn thermal_ref(t: &Bound<'_, PyAny>) -> PyResult<ThermalRef> {
     })
 }
 
-/// A `ModelStd` as a dict of float64 arrays under the model's keys.
-pub(crate) fn std_dict<'py>(py: Python<'py>, s: &ModelStd) -> PyResult<Bound<'py, PyDict>> {
+/// A `ModelStd` as an `etlcal.results.ModelStd` of float64 arrays under the model's keys.
+pub(crate) fn std_dict<'py>(py: Python<'py>, s: &ModelStd) -> PyResult<Bound<'py, PyAny>> {
     let d = PyDict::new(py);
     d.set_item("rotation_rodrigues", vec_out(py, &s.rotation_rodrigues))?;
     d.set_item("translation_mm", vec_out(py, &s.translation_mm))?;
@@ -825,5 +911,5 @@ pub(crate) fn std_dict<'py>(py: Python<'py>, s: &ModelStd) -> PyResult<Bound<'py
     d.set_item("kf_y", vec_out(py, &s.kf_y))?;
     d.set_item("principal_point", vec_out(py, &s.principal_point))?;
     d.set_item("distortion_a", vec_out(py, &s.distortion_a))?;
-    Ok(d)
+    crate::results::make(py, "ModelStd", &d)
 }

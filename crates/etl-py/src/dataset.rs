@@ -256,12 +256,12 @@ impl Dataset {
     }
 
     /// Detects the board in every image (in parallel, without the GIL) and returns the
-    /// observations and a summary dict ("images", "detected", "views_detected", "skipped":
+    /// observations and a DetectionSummary (attributes, also dict keys: "images", "detected", "views_detected", "skipped":
     /// list of (image, kind, reason)). Views whose board is not found are skipped.
     ///
     /// Raises: FileError for a missing or unreadable image (before any detection);
     /// BoardNotFoundError when the views left span fewer than 3 currents.
-    fn detect<'py>(&self, py: Python<'py>) -> PyResult<(Observations, Bound<'py, PyDict>)> {
+    fn detect<'py>(&self, py: Python<'py>) -> PyResult<(Observations, Bound<'py, PyAny>)> {
         let base = self.path.clone().unwrap_or_else(|| PathBuf::from("dataset.json"));
         let file = self.file.clone();
         let (obs, summary) = py
@@ -274,7 +274,7 @@ impl Dataset {
         let skipped: Vec<(String, &str, String)> =
             summary.skipped.iter().map(|s| (s.image.display().to_string(), s.kind, s.reason.clone())).collect();
         d.set_item("skipped", skipped)?;
-        Ok((Observations { file: obs }, d))
+        Ok((Observations { file: obs }, crate::results::make(py, "DetectionSummary", &d)?))
     }
 
     fn __repr__(&self) -> String {

@@ -18,7 +18,7 @@ use crate::errors::CoreResultExt;
 ///     max_evaluations: total calls allowed (>= coarse_points).
 ///     tolerance_ma: stop when the bracket is narrower than twice this, mA.
 ///
-/// Returns: dict with "best_ma", "best_sharpness", "evaluations", "bracket_ma",
+/// Returns: an AutofocusResult (attributes, also dict keys): "best_ma", "best_sharpness", "evaluations", "bracket_ma",
 /// "converged".
 ///
 /// Raises: InputError for bad options or a non-finite sharpness; TypeError when the
@@ -33,7 +33,7 @@ pub fn autofocus<'py>(
     coarse_points: usize,
     max_evaluations: usize,
     tolerance_ma: f64,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<Bound<'py, PyAny>> {
     let options = AutofocusOptions { range_ma: [range_ma.0, range_ma.1], coarse_points, max_evaluations, tolerance_ma };
     let mut raised: Option<PyErr> = None;
     let r = search(
@@ -56,5 +56,5 @@ pub fn autofocus<'py>(
     d.set_item("evaluations", r.evaluations)?;
     d.set_item("bracket_ma", (r.bracket_ma[0], r.bracket_ma[1]))?;
     d.set_item("converged", r.converged)?;
-    Ok(d)
+    crate::results::make(py, "AutofocusResult", &d)
 }

@@ -20,6 +20,7 @@ pub mod observations;
 pub mod physics;
 pub mod pipeline;
 pub mod pose;
+pub mod results;
 pub mod simulate;
 pub mod studies;
 pub mod thermal;
@@ -31,7 +32,8 @@ pub mod zhang;
 fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
-    m.add_function(wrap_pyfunction!(errors::_raise_rust_error, m)?)?;
+    // A test hook, private: set as an attribute so that it stays out of `__all__`.
+    m.setattr("_raise_rust_error", wrap_pyfunction!(errors::_raise_rust_error, m)?)?;
     m.add_class::<calibration::Calibration>()?;
     m.add_class::<camera::CameraAt>()?;
     m.add_class::<thermal::ThermalSurface>()?;

@@ -217,6 +217,18 @@ impl Observations {
         self.file.views.len()
     }
 
+    /// ETL view `index` as a View (negative counts from the end; IndexError outside).
+    fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
+        view_dict(py, pick(&self.file.views, index)?)
+    }
+
+    /// The ETL views in order, as View objects (a snapshot: views added while iterating
+    /// are not seen).
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let views = self.file.views.iter().map(|v| view_dict(py, v)).collect::<PyResult<Vec<_>>>()?;
+        Ok(pyo3::types::PyList::new(py, views)?.try_iter()?.into_any())
+    }
+
     /// Number of lens-off views.
     #[getter]
     fn offstate_count(&self) -> usize {
@@ -235,28 +247,29 @@ impl Observations {
         self.file.views.iter().map(|v| v.points.len()).sum()
     }
 
-    /// ETL view `index`: a dict with world_mm ((N, 3), mm), pixels ((N, 2), px), e_in_ma,
+    /// ETL view `index` (also `obs[index]`): a View (attributes, also dict keys): world_mm ((N, 3), mm), pixels ((N, 2), px), e_in_ma,
     /// temperature_c and e_com_ma (None when not recorded).
     ///
     /// Args:
     ///     index: view number (negative counts from the end).
-    fn view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
+    fn view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
         view_dict(py, pick(&self.file.views, index)?)
     }
 
-    /// Lens-off view `index`: a dict with world_mm ((N, 3), mm) and pixels ((N, 2), px).
+    /// Lens-off view `index`: an OffstateView (attributes, also dict keys): world_mm ((N, 3), mm) and pixels ((N, 2), px).
     ///
     /// Args:
     ///     index: view number (negative counts from the end).
-    fn offstate_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
-        points_dict(py, &pick(&self.file.offstate_views, index)?.points)
+    fn offstate_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
+        let d = points_dict(py, &pick(&self.file.offstate_views, index)?.points)?;
+        crate::results::make(py, "OffstateView", &d)
     }
 
-    /// Per-setting baseline view `index`: a dict like `view(index)`.
+    /// Per-setting baseline view `index`: a View, as `view(index)`.
     ///
     /// Args:
     ///     index: view number (negative counts from the end).
-    fn setting_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyDict>> {
+    fn setting_view<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
         view_dict(py, pick(&self.file.setting_views, index)?)
     }
 
@@ -293,13 +306,13 @@ impl Observations {
     }
 }
 
-/// A view as the dict `Observations.view` returns.
-fn view_dict<'py>(py: Python<'py>, v: &ViewObs) -> PyResult<Bound<'py, PyDict>> {
+/// A view as `Observations.view` returns it (an `etlcal.results.View`).
+fn view_dict<'py>(py: Python<'py>, v: &ViewObs) -> PyResult<Bound<'py, PyAny>> {
     let d = points_dict(py, &v.points)?;
     d.set_item("e_in_ma", v.e_in_ma)?;
     d.set_item("temperature_c", v.temperature_c)?;
     d.set_item("e_com_ma", v.e_com_ma)?;
-    Ok(d)
+    crate::results::make(py, "View", &d)
 }
 
 fn pick<T>(xs: &[T], index: isize) -> PyResult<&T> {

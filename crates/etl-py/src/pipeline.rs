@@ -132,7 +132,7 @@ pub fn calibrate(
 ///     thermal: temperature compensation for views without a recorded E_com (a
 ///         `ThermalCalibration` or "paper"; required when a view has none).
 ///
-/// Returns: a dict like `Calibration.std` (one standard deviation per number; NaN for
+/// Returns: a ModelStd like `Calibration.std` (one standard deviation per number; NaN for
 /// directions the data do not identify).
 #[pyfunction]
 #[pyo3(signature = (observations, truth, sigma_px, sigma_z_mm=None, sigma_e_ma=None, thermal=None))]
@@ -144,7 +144,7 @@ pub fn cramer_rao_std<'py>(
     sigma_z_mm: Option<f64>,
     sigma_e_ma: Option<f64>,
     thermal: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+) -> PyResult<Bound<'py, PyAny>> {
     let priors = match (sigma_z_mm, sigma_e_ma) {
         (None, None) => None,
         (Some(z), Some(e)) => Some((z, e)),

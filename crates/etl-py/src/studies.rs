@@ -19,8 +19,9 @@ use crate::errors::{input_error, CoreResultExt};
 ///     seed: base random seed.
 ///     out: a directory for name.json, name.md and the SVG/PNG plots (None: not written).
 ///
-/// Returns: the study's table, e.g. {"fit_rmse_mm": [...]} for fig5 or {"parameters":
-/// [{"name", "truth", "crlb_std", "mc_std", "efficiency"}, ...], ...} for crlb.
+/// Returns: a StudyResult: `name` and `table` (the --json object), whose keys are also the
+/// result's keys and attributes, e.g. `r["fit_rmse_mm"]` or `r.fit_rmse_mm` for fig5, or
+/// `r.parameters` ([{"name", "truth", "crlb_std", "mc_std", "efficiency"}, ...]) for crlb.
 ///
 /// Runs without the GIL (the trials run in parallel).
 #[pyfunction]
@@ -44,5 +45,8 @@ pub fn study<'py>(
         result.write(dir).py()?;
     }
     let text = result.json.to_string();
-    py.import("json")?.call_method1("loads", (text,))
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item("name", name)?;
+    d.set_item("table", py.import("json")?.call_method1("loads", (text,))?)?;
+    crate::results::make(py, "StudyResult", &d)
 }

@@ -280,7 +280,7 @@ impl ThermalCalibration {
     ///     e_in_ma: driver current, mA.
     ///     temperature_c: lens temperature, degC.
     ///
-    /// Returns: a dict with `e_in_ma`, `e_t_ma`, `e_com_ma` (mA) and `extrapolated` (True
+    /// Returns: a Compensation (attributes, also dict keys): `e_in_ma`, `e_t_ma`, `e_com_ma` (mA) and `extrapolated` (True
     /// when outside the calibrated ranges).
     fn compensate<'py>(&self, py: Python<'py>, e_in_ma: f64, temperature_c: f64) -> PyResult<Bound<'py, PyAny>> {
         let c = self.inner.compensate(e_in_ma, temperature_c).py()?;
@@ -294,7 +294,7 @@ impl ThermalCalibration {
     ///     e_com_ma: wanted compensated current, mA.
     ///     temperature_c: lens temperature, degC.
     ///
-    /// Returns: a dict as `compensate`'s.
+    /// Returns: a Compensation, as `compensate`.
     fn e_in_for_e_com<'py>(&self, py: Python<'py>, e_com_ma: f64, temperature_c: f64) -> PyResult<Bound<'py, PyAny>> {
         let c = self.inner.e_in_for_e_com(e_com_ma, temperature_c).py()?;
         compensation_dict(py, &c)
@@ -330,5 +330,5 @@ fn compensation_dict<'py>(py: Python<'py>, c: &etl_core::thermal::Compensation) 
     d.set_item("e_t_ma", c.e_t_ma)?;
     d.set_item("e_com_ma", c.e_com_ma)?;
     d.set_item("extrapolated", c.extrapolated)?;
-    Ok(d.into_any())
+    crate::results::make(py, "Compensation", &d)
 }

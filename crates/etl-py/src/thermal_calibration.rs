@@ -94,7 +94,7 @@ pub fn thermal_calibration<'py>(
     temperatures_c: Option<Vec<f64>>,
     search_ma: f64,
     metric: &str,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<Bound<'py, PyAny>> {
     use crate::errors::CoreResultExt;
     use etl_calib::thermal_calibration::{run_procedure, ProcedureOptions};
     let mut options = ProcedureOptions {
@@ -126,5 +126,5 @@ pub fn thermal_calibration<'py>(
     d.set_item("rms_ma", r.rms_ma)?;
     d.set_item("samples", crate::arrays::points_out(py, samples, false)?)?;
     d.set_item("frames", r.frames)?;
-    Ok(d)
+    crate::results::make(py, "ThermalCalibrationResult", &d)
 }

@@ -15,7 +15,7 @@ use crate::errors::{input_error, CoreResultExt};
 ///         with Z = 0), and the (N, 2) detected pixels, px (e.g. `detect_corners`).
 ///     image_size: (width, height), px.
 ///
-/// Returns: dict with "fx", "fy", "u0", "v0" (px), "k1" (1/px^2), "p1", "p2" (1/px),
+/// Returns: a ZhangResult (attributes, also dict keys): "fx", "fy", "u0", "v0" (px), "k1" (1/px^2), "p1", "p2" (1/px),
 /// "std" (one standard deviation of those seven, same order), "rms_px", "iterations",
 /// "views_used", "poses" (list of (rodrigues, translation_mm)).
 ///
@@ -26,7 +26,7 @@ pub fn zhang<'py>(
     py: Python<'py>,
     views: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)>,
     image_size: (u32, u32),
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<Bound<'py, PyAny>> {
     let mut planar = Vec::with_capacity(views.len());
     for (k, (board, pixels)) in views.iter().enumerate() {
         let board_mm: Vec<[f64; 2]> = match crate::arrays::points::<2>(board, "board_mm") {
@@ -58,5 +58,5 @@ pub fn zhang<'py>(
     d.set_item("iterations", r.iterations)?;
     d.set_item("views_used", r.views_used)?;
     d.set_item("poses", r.poses.iter().map(|(om, t)| (om.to_vec(), t.to_vec())).collect::<Vec<_>>())?;
-    Ok(d)
+    crate::results::make(py, "ZhangResult", &d)
 }

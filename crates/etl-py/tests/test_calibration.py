@@ -20,7 +20,7 @@ def cal():
 def test_paper_rig_numbers(cal):
     assert cal.kf_x.tolist() == [5380.0, -7.0, 0.02, -3e-5]
     assert cal.kf_y.tolist() == [5430.0, -7.0, 0.02, -3e-5]
-    assert cal.principal_point == (900.0, 550.0)
+    assert cal.principal_point.tolist() == [900.0, 550.0]
     assert cal.distortion_a.tolist() == PAPER_A
     assert cal.rotation_rodrigues.tolist() == [0.2, 0.2, 0.2]
     assert cal.translation_mm.tolist() == [-11.0, -4.0, 48.0]

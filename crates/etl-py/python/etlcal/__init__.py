@@ -22,6 +22,14 @@ Main nouns:
 - `etlcal.studies.fig5()`, `.fig6(trials)`, `.subsets()`, `.baseline()`, `.crlb(trials)`
   (also `study(name)`): the paper's simulation studies.
 
+Results are typed objects (`etlcal.results`: `ZhangResult`, `AutofocusResult`,
+`Compensation`, `ModelStd`, `View`, `StudyResult`, ...): attributes with a short repr,
+and read-only mappings too (`r["key"]`, `"key" in r`, `r.keys()`), as the dicts they
+replace. `etlcal.options` names the words each option accepts (`typing.Literal`).
+`Observations` is a sequence of `View`s (`obs[i]`, `obs[-1]`, `for v in obs`).
+The per-current model functions (`focal_lengths`, `intrinsics`, `distortion`,
+`to_opencv`) take a number or an array of currents (results stacked on leading axes).
+
 Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 `NotConvergedError`, `BoardNotFoundError`, `FileError` (also an OSError), `DeviceError`,
 `DeviceTimeoutError` (also a TimeoutError).
@@ -57,7 +65,21 @@ from ._etlcal import (
     thermal_calibration,
     zhang,
 )
-from . import physics, simulate, studies
+from .results import (
+    AutofocusResult,
+    Compensation,
+    DetectionSummary,
+    ExportResult,
+    FocusLaw,
+    ModelStd,
+    OffstateView,
+    StudyResult,
+    ThermalCalibrationResult,
+    View,
+    ViewSummary,
+    ZhangResult,
+)
+from . import options, physics, results, simulate, studies
 
 __all__ = [
     "__version__",
@@ -89,7 +111,21 @@ __all__ = [
     "study",
     "thermal_calibration",
     "zhang",
+    "AutofocusResult",
+    "Compensation",
+    "DetectionSummary",
+    "ExportResult",
+    "FocusLaw",
+    "ModelStd",
+    "OffstateView",
+    "StudyResult",
+    "ThermalCalibrationResult",
+    "View",
+    "ViewSummary",
+    "ZhangResult",
+    "options",
     "physics",
+    "results",
     "simulate",
     "studies",
 ]

@@ -1,9 +1,26 @@
 """Type stubs of the native module etlcal._etlcal (units: mm, mA, degC, px)."""
 import os
-from typing import Any, Callable, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, final, overload
+from typing import Any, Callable, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
+from numpy.polynomial import Polynomial
+
+from etlcal.options import Estimator, ExportFormat, Method, NoisePreset, RobustLoss, SharpnessMetric, StudyName
+from etlcal.results import (
+    AutofocusResult,
+    Compensation,
+    DetectionSummary,
+    ExportResult,
+    FocusLaw,
+    ModelStd,
+    OffstateView,
+    StudyResult,
+    ThermalCalibrationResult,
+    View,
+    ViewSummary,
+    ZhangResult,
+)
 
 _Path = Union[str, "os.PathLike[str]"]
 _F64 = npt.NDArray[np.float64]
@@ -11,6 +28,9 @@ _F32 = npt.NDArray[np.float32]
 _Image = Union[npt.NDArray[np.uint8], npt.NDArray[np.uint16], npt.NDArray[np.float32]]
 _ArrayLike = npt.ArrayLike
 _FloatOrArray = Union[float, _F64]
+# An array of currents (any shape S): the vectorised per-current functions stack their
+# results on leading axes S.
+_Currents = Union[_F64, Sequence[float]]
 
 __all__ = [
     "A0",
@@ -33,7 +53,6 @@ __all__ = [
     "ThermalSurface",
     "VirtualLens",
     "__version__",
-    "_raise_rust_error",
     "autofocus",
     "calibrate",
     "cramer_rao_std",
@@ -107,8 +126,8 @@ class ThermalCalibration:
     def e_in_range_ma(self) -> Tuple[float, float]: ...
     @property
     def rms_ma(self) -> float: ...
-    def compensate(self, e_in_ma: float, temperature_c: float) -> Dict[str, Any]: ...
-    def e_in_for_e_com(self, e_com_ma: float, temperature_c: float) -> Dict[str, Any]: ...
+    def compensate(self, e_in_ma: float, temperature_c: float) -> Compensation: ...
+    def e_in_for_e_com(self, e_com_ma: float, temperature_c: float) -> Compensation: ...
     def contains(self, e_in_ma: float, temperature_c: float) -> bool: ...
 
 @final
@@ -231,7 +250,11 @@ class Calibration:
     @property
     def kf_y(self) -> _F64: ...
     @property
-    def principal_point(self) -> Tuple[float, float]: ...
+    def principal_point(self) -> _F64: ...
+    @property
+    def fx_poly(self) -> Polynomial: ...
+    @property
+    def fy_poly(self) -> Polynomial: ...
     @property
     def distortion_a(self) -> _F64: ...
     @property
@@ -254,9 +277,9 @@ class Calibration:
     @property
     def iterations(self) -> int: ...
     @property
-    def views(self) -> List[Dict[str, float]]: ...
+    def views(self) -> List[ViewSummary]: ...
     @property
-    def std(self) -> Dict[str, _F64]: ...
+    def std(self) -> ModelStd: ...
     @overload
     def e_com(self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False) -> float: ...
     @overload
@@ -270,12 +293,32 @@ class Calibration:
         self, e_com_ma: _ArrayLike, temperature_c: _ArrayLike, *, allow_extrapolation: bool = False
     ) -> _FloatOrArray: ...
     @property
-    def focus_law(self) -> Optional[Dict[str, Any]]: ...
+    def focus_law(self) -> Optional[FocusLaw]: ...
+    @overload
     def focus_e_in(self, distance_mm: float, temperature_c: float, *, allow_extrapolation: bool = False) -> float: ...
-    def focus_distance_mm(self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False) -> float: ...
+    @overload
+    def focus_e_in(
+        self, distance_mm: _ArrayLike, temperature_c: _ArrayLike, *, allow_extrapolation: bool = False
+    ) -> _FloatOrArray: ...
+    @overload
+    def focus_distance_mm(
+        self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False
+    ) -> float: ...
+    @overload
+    def focus_distance_mm(
+        self, e_in_ma: _ArrayLike, temperature_c: _ArrayLike, *, allow_extrapolation: bool = False
+    ) -> _FloatOrArray: ...
+    @overload
     def focal_lengths(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> Tuple[float, float]: ...
-    def intrinsics(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
+    @overload
+    def focal_lengths(self, e_com_ma: _Currents, *, allow_extrapolation: bool = False) -> Tuple[_F64, _F64]: ...
+    def intrinsics(self, e_com_ma: Union[float, _Currents], *, allow_extrapolation: bool = False) -> _F64: ...
+    @overload
     def distortion(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> Tuple[float, float, float]: ...
+    @overload
+    def distortion(
+        self, e_com_ma: _Currents, *, allow_extrapolation: bool = False
+    ) -> Tuple[_F64, _F64, _F64]: ...
     def project(self, world_mm: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
     def undistort(self, pixels: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
     def ray(
@@ -293,7 +336,9 @@ class Calibration:
     @property
     def covariance(self) -> Optional[_F64]: ...
     def projection_std(self, world_mm: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
-    def to_opencv(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> Tuple[_F64, _F64]: ...
+    def to_opencv(
+        self, e_com_ma: Union[float, _Currents], *, allow_extrapolation: bool = False
+    ) -> Tuple[_F64, _F64]: ...
     def undistort_maps(
         self,
         e_com_ma: float,
@@ -308,10 +353,10 @@ class Calibration:
         path: _Path,
         e_in_ma: float,
         temperature_c: float,
-        format: Literal["opencv", "ros", "mrcal"],
+        format: ExportFormat,
         *,
         allow_extrapolation: bool = False,
-    ) -> Dict[str, Any]: ...
+    ) -> ExportResult: ...
 
 @final
 class CameraAt:
@@ -392,14 +437,16 @@ class Observations:
     ) -> None: ...
     @property
     def setting_count(self) -> int: ...
-    def setting_view(self, index: int) -> Dict[str, Any]: ...
+    def setting_view(self, index: int) -> View: ...
     def __len__(self) -> int: ...
+    def __getitem__(self, index: int, /) -> View: ...
+    def __iter__(self) -> Iterator[View]: ...
     @property
     def offstate_count(self) -> int: ...
     @property
     def point_count(self) -> int: ...
-    def view(self, index: int) -> Dict[str, Any]: ...
-    def offstate_view(self, index: int) -> Dict[str, Any]: ...
+    def view(self, index: int) -> View: ...
+    def offstate_view(self, index: int) -> OffstateView: ...
     def e_com_ma(self, thermal: Union[ThermalCalibration, Literal["paper"], None] = None) -> List[float]: ...
 
 @final
@@ -420,20 +467,20 @@ class Simulation:
     def noise(self) -> Dict[str, float]: ...
 
 def simulate_paper_rig(
-    seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None, setting_views: bool = False
+    seed: int = 0, noise: Optional[Union[NoisePreset, Mapping[str, float]]] = None, setting_views: bool = False
 ) -> Simulation: ...
 def calibrate(
     observations: Observations,
     a0: Optional[A0] = None,
     thermal: Union[ThermalCalibration, Literal["paper"], None] = None,
-    estimator: Optional[str] = None,
+    estimator: Optional[Estimator] = None,
     hold_a0: bool = False,
-    robust: Optional[str] = None,
+    robust: Optional[RobustLoss] = None,
     robust_k_px: float = 1.0,
     sigma_z_mm: float = 0.010,
     sigma_e_ma: float = 0.4,
     sigma_px: Optional[float] = None,
-    method: str = "proposed",
+    method: Method = "proposed",
 ) -> Calibration: ...
 def cramer_rao_std(
     observations: Observations,
@@ -442,7 +489,7 @@ def cramer_rao_std(
     sigma_z_mm: Optional[float] = None,
     sigma_e_ma: Optional[float] = None,
     thermal: Union[ThermalCalibration, Literal["paper"], None] = None,
-) -> Dict[str, _F64]: ...
+) -> ModelStd: ...
 
 
 def detect_corners(image: np.ndarray, pattern: Union[str, Tuple[int, int]]) -> np.ndarray:
@@ -450,7 +497,7 @@ def detect_corners(image: np.ndarray, pattern: Union[str, Tuple[int, int]]) -> n
     `image`: 2-D uint8/uint16. Raises BoardNotFoundError (absent, partial, other size)."""
     ...
 
-def sharpness(image: np.ndarray, metric: str = "cpbd") -> float:
+def sharpness(image: np.ndarray, metric: SharpnessMetric = "cpbd") -> float:
     """Sharpness (larger is sharper): "cpbd" (bit-exact with the cpbd package), "tenengrad",
     "laplacian", "brenner", "normvar"."""
     ...
@@ -475,7 +522,7 @@ def autofocus(
     coarse_points: int = 7,
     max_evaluations: int = 15,
     tolerance_ma: float = 0.1,
-) -> Dict[str, Any]:
+) -> AutofocusResult:
     """Current of best focus: coarse scan then Brent; returns best_ma, best_sharpness,
     evaluations, bracket_ma, converged."""
     ...
@@ -542,7 +589,7 @@ class VirtualLens:
     def disconnect(self) -> None: ...
     def reconnect(self) -> None: ...
 
-def zhang(views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]], image_size: Tuple[int, int]) -> Dict[str, Any]:
+def zhang(views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]], image_size: Tuple[int, int]) -> ZhangResult:
     """Zhang's monofocal calibration from (board_mm (N,2), pixels (N,2)) views: fx, fy, u0, v0
     (px), k1, p1, p2, std, rms_px, iterations, views_used, poses."""
     ...
@@ -555,8 +602,8 @@ def thermal_calibration(
     e_in_grid_ma: Optional[Sequence[float]] = None,
     temperatures_c: Optional[Sequence[float]] = None,
     search_ma: float = 20.0,
-    metric: str = "tenengrad",
-) -> Dict[str, Any]:
+    metric: SharpnessMetric = "tenengrad",
+) -> ThermalCalibrationResult:
     """The section 4.1 temperature procedure with your camera and climate as callables:
     returns calibration (ThermalCalibration), rms_ma, samples ((N, 3): T, E_in, E_T), frames."""
     ...
@@ -570,12 +617,12 @@ class Dataset:
         image_size: Tuple[int, int],
         inner_corners: Tuple[int, int],
         square_mm: float,
-        base_dir: Union[str, os.PathLike, None] = None,
+        base_dir: Union[str, os.PathLike[str], None] = None,
         offstate_board: Optional[Dict[str, Any]] = None,
     ) -> Dataset: ...
     def add_view(
         self,
-        image: Union[str, os.PathLike],
+        image: Union[str, os.PathLike[str]],
         e_in_ma: float,
         temperature_c: float,
         z_w_mm: float,
@@ -585,13 +632,13 @@ class Dataset:
     ) -> None: ...
     def add_offstate_view(
         self,
-        image: Union[str, os.PathLike],
+        image: Union[str, os.PathLike[str]],
         board: Optional[Dict[str, Any]] = None,
         first_corner: Optional[Tuple[int, int]] = None,
     ) -> None: ...
     def add_setting_view(
         self,
-        image: Union[str, os.PathLike],
+        image: Union[str, os.PathLike[str]],
         e_in_ma: float,
         temperature_c: float,
         e_com_ma: Optional[float] = None,
@@ -603,20 +650,22 @@ class Dataset:
     @property
     def setting_count(self) -> int: ...
     @classmethod
-    def load(cls, path: Union[str, os.PathLike]) -> Dataset: ...
-    def save(self, path: Union[str, os.PathLike]) -> None: ...
+    def load(cls, path: Union[str, os.PathLike[str]]) -> Dataset: ...
+    def save(self, path: Union[str, os.PathLike[str]]) -> None: ...
     def to_json(self) -> str: ...
     @staticmethod
-    def from_json(text: str, base_dir: Union[str, os.PathLike, None] = None) -> Dataset: ...
+    def from_json(text: str, base_dir: Union[str, os.PathLike[str], None] = None) -> Dataset: ...
     def __len__(self) -> int: ...
     @property
     def image_size(self) -> Tuple[int, int]: ...
     @property
     def board(self) -> Dict[str, Any]: ...
     def images(self) -> List[str]: ...
-    def detect(self) -> Tuple[Observations, Dict[str, Any]]: ...
+    def detect(self) -> Tuple[Observations, DetectionSummary]: ...
 
-def study(name: str, trials: int = 0, seed: int = 1, out: Union[str, os.PathLike, None] = None) -> Dict[str, Any]:
+def study(
+    name: StudyName, trials: int = 0, seed: int = 1, out: Union[str, os.PathLike[str], None] = None
+) -> StudyResult:
     """One of the paper's studies ("fig5", "fig6", "subsets", "baseline", "crlb") as the
     command line's --json table; `out` also writes its JSON, summary and plots."""
     ...

@@ -2,12 +2,13 @@
 from typing import Mapping, Optional, Union
 
 from ._etlcal import Simulation, simulate_paper_rig
+from .options import NoisePreset
 
 __all__ = ["Simulation", "paper_rig"]
 
 
 def paper_rig(
-    seed: int = 0, noise: Optional[Union[str, Mapping[str, float]]] = None, setting_views: bool = False
+    seed: int = 0, noise: Optional[Union[NoisePreset, Mapping[str, float]]] = None, setting_views: bool = False
 ) -> Simulation:
     """The paper rig's 15 views (2311 corners of a 14 x 12 board, 1.5 mm squares, at stage
     positions 75..2 mm and E_com 80..225 mA), seeded.

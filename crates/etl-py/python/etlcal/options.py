@@ -1,0 +1,20 @@
+"""The words etlcal's options accept, as `typing.Literal` types (for annotations; each
+function also checks its option at run time and names the allowed words in the error)."""
+from typing import Literal
+
+__all__ = ["Estimator", "ExportFormat", "Method", "NoisePreset", "RobustLoss", "SharpnessMetric", "StudyName"]
+
+Estimator = Literal["paper", "eiv"]
+"""`calibrate(estimator=...)`: the paper's bundle adjustment or errors-in-variables."""
+RobustLoss = Literal["huber", "cauchy"]
+"""`calibrate(robust=...)`: the robust loss on each point's error."""
+Method = Literal["proposed", "per-setting"]
+"""`calibrate(method=...)`: the paper's method or the per-setting baseline."""
+SharpnessMetric = Literal["cpbd", "tenengrad", "laplacian", "brenner", "normvar"]
+"""`sharpness(metric=...)`, `thermal_calibration(metric=...)`."""
+StudyName = Literal["fig5", "fig6", "subsets", "baseline", "crlb"]
+"""`study(name)`: the paper's studies."""
+NoisePreset = Literal["paper", "none"]
+"""`simulate.paper_rig(noise=...)`: the paper's noise model or none."""
+ExportFormat = Literal["opencv", "ros", "mrcal"]
+"""`Calibration.export(format=...)`."""

@@ -1,0 +1,269 @@
+"""Typed result objects of etlcal's functions (units: mm, mA, degC, px).
+
+Each is a frozen dataclass with one attribute per result and a short ``repr``; each is
+also a read-only mapping (``result["key"]``, ``"key" in result``, ``keys()``,
+``items()``, ``dict(result)``) so code written when these were dicts still runs.
+``to_dict()`` gives a plain dict (e.g. for ``json.dumps`` after converting arrays).
+"""
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, Dict, List, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+_F64 = npt.NDArray[np.float64]
+
+__all__ = [
+    "AutofocusResult",
+    "Compensation",
+    "DetectionSummary",
+    "ExportResult",
+    "FocusLaw",
+    "ModelStd",
+    "OffstateView",
+    "StudyResult",
+    "ThermalCalibrationResult",
+    "View",
+    "ViewSummary",
+    "ZhangResult",
+]
+
+
+def _short(value: Any) -> str:
+    # Arrays of points would flood a repr: their shape says what they are.
+    if isinstance(value, np.ndarray) and value.size > 9:
+        return f"<array {value.shape}>"
+    if isinstance(value, list) and len(value) > 9:
+        return f"<list of {len(value)}>"
+    return repr(value)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class _Result(Mapping[str, Any]):
+    """Attributes and read-only dict access to the same fields."""
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self._names():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names())
+
+    def __len__(self) -> int:
+        return len(self._names())
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._names()
+
+    def __eq__(self, other: object) -> bool:
+        # Key by key, as the dicts these once were (so `result == {...}` still holds);
+        # arrays compared elementwise, NaN equal to NaN.
+        if not isinstance(other, Mapping):
+            return NotImplemented
+        if set(self) != set(other.keys()):
+            return False
+        return all(_same(self[k], other[k]) for k in self)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        inner = ", ".join(f"{k}={_short(getattr(self, k))}" for k in self._names())
+        return f"{type(self).__name__}({inner})"
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The fields as a plain dict (values as they are: arrays stay arrays)."""
+        return {k: getattr(self, k) for k in self._names()}
+
+    @classmethod
+    def _names(cls) -> Tuple[str, ...]:
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))
+    return bool(a == b)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ZhangResult(_Result):
+    """`zhang(...)`: intrinsics fx, fy, u0, v0 (px), distortion k1 (1/px^2), p1, p2 (1/px),
+    `std` (one standard deviation of those seven, same order), `rms_px`, `iterations`,
+    `views_used`, `poses` (per view: (rodrigues (rad), translation_mm))."""
+
+    fx: float
+    fy: float
+    u0: float
+    v0: float
+    k1: float
+    p1: float
+    p2: float
+    std: List[float]
+    rms_px: float
+    iterations: int
+    views_used: int
+    poses: List[Tuple[List[float], List[float]]]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class AutofocusResult(_Result):
+    """`autofocus(...)`: `best_ma` (mA), `best_sharpness`, `evaluations` (calls made),
+    `bracket_ma` (the final bracket, mA), `converged` (bracket below the tolerance)."""
+
+    best_ma: float
+    best_sharpness: float
+    evaluations: int
+    bracket_ma: Tuple[float, float]
+    converged: bool
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Compensation(_Result):
+    """`ThermalCalibration.compensate` / `.e_in_for_e_com`: `e_in_ma`, `e_t_ma`,
+    `e_com_ma` (mA; E_com = E_in - E_T) and `extrapolated` (outside the calibrated ranges)."""
+
+    e_in_ma: float
+    e_t_ma: float
+    e_com_ma: float
+    extrapolated: bool
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ViewSummary(_Result):
+    """One entry of `Calibration.views`: `e_com_ma` (mA), `points`, `rms_px` (px), `dz_mm`
+    (mm) and `de_ma` (mA) (errors-in-variables corrections; 0 for the paper's estimator),
+    `fx_px`, `fy_px` (px: the focal lengths refitted to that view alone; 0 if not computed)."""
+
+    e_com_ma: float
+    points: int
+    rms_px: float
+    dz_mm: float
+    de_ma: float
+    fx_px: float
+    fy_px: float
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ModelStd(_Result):
+    """One standard deviation of each model number (`Calibration.std`, `cramer_rao_std`):
+    float64 arrays in the numbers' units: `rotation_rodrigues` (3, rad), `translation_mm`
+    (3, mm), `kf_x`, `kf_y` (4 each, px / mA^k), `principal_point` (2, px), `distortion_a` (9)."""
+
+    rotation_rodrigues: _F64
+    translation_mm: _F64
+    kf_x: _F64
+    kf_y: _F64
+    principal_point: _F64
+    distortion_a: _F64
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class FocusLaw(_Result):
+    """`Calibration.focus_law`: E_com = c0 + c1 V + c2 V^2 with V = 1000 / distance_mm
+    (`coefficients_ma`: c0 mA, c1 mA/dpt, c2 mA/dpt^2), the fitted views'
+    `distance_range_mm` and `e_com_range_ma` (min, max), `rms_ma` (mA), `views` (count)."""
+
+    coefficients_ma: Tuple[float, float, float]
+    distance_range_mm: Tuple[float, float]
+    e_com_range_ma: Tuple[float, float]
+    rms_ma: float
+    views: int
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ExportResult(_Result):
+    """`Calibration.export`: `e_com_ma` (mA), `extrapolated`, `camera_matrix` (3 x 3, px),
+    `dist_coeffs` (k1, k2, p1, p2, k3) and the fit's error `fit_rms_px`, `fit_max_px` (px)."""
+
+    e_com_ma: float
+    extrapolated: bool
+    camera_matrix: _F64
+    dist_coeffs: _F64
+    fit_rms_px: float
+    fit_max_px: float
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class View(_Result):
+    """An ETL view of `Observations` (`obs[i]`, `obs.view(i)`, `obs.setting_view(i)`):
+    `world_mm` ((N, 3), mm), `pixels` ((N, 2), px), `e_in_ma` (mA), `temperature_c`
+    (degC), `e_com_ma` (mA, None when not recorded)."""
+
+    world_mm: _F64
+    pixels: _F64
+    e_in_ma: float
+    temperature_c: float
+    e_com_ma: Optional[float]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class OffstateView(_Result):
+    """A lens-off view of `Observations` (`obs.offstate_view(i)`): `world_mm` ((N, 3), mm)
+    and `pixels` ((N, 2), px)."""
+
+    world_mm: _F64
+    pixels: _F64
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class DetectionSummary(_Result):
+    """`Dataset.detect()`'s summary: `images` (count), `detected` (boards found),
+    `views_detected`, `skipped` (list of (image, kind, reason))."""
+
+    images: int
+    detected: int
+    views_detected: int
+    skipped: List[Tuple[str, str, str]]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ThermalCalibrationResult(_Result):
+    """`thermal_calibration(...)`: `calibration` (a ThermalCalibration), `rms_ma` (mA),
+    `samples` ((N, 3): T degC, E_in mA, E_T mA), `frames` (images captured)."""
+
+    calibration: Any
+    rms_ma: float
+    samples: _F64
+    frames: int
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class StudyResult(_Result):
+    """`study(name)`: `name` (the study) and `table` (the command line's --json object).
+    As a mapping it is the table itself (``result["parameters"]``, ``dict(result)``, as
+    when `study` returned the dict); the table's keys are also attributes
+    (``result.parameters``); which keys depends on the study."""
+
+    name: str
+    table: Dict[str, Any]
+
+    def __getitem__(self, key: str) -> Any:
+        return self.table[key]
+
+    def __getattr__(self, key: str) -> Any:
+        # Only called for names that are not fields: the table's keys.
+        table = self.__dict__.get("table", {})
+        if key in table:
+            return table[key]
+        raise AttributeError(f"the {self.__dict__.get('name')!r} study has no {key!r}")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.table)
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.table
+
+    def __repr__(self) -> str:
+        return f"StudyResult(name={self.name!r}, keys={list(self.table)})"
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The table as a plain dict (the command line's --json object)."""
+        return dict(self.table)
