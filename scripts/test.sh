@@ -26,9 +26,6 @@ python3 -m venv "$venv"
       opencv-python-headless mypy pyyaml types-PyYAML
 ) >"$root/target/test-venv.log" 2>&1 &
 venv_job=$!
-# pyo3's build script configures for the interpreter it is given: the same one for the
-# Rust tests (which build etl-py's examples) and for maturin, so pyo3 is compiled once.
-export PYO3_PYTHON="$venv/bin/python"
 
 # The no-alloc, no-panic gate (etl-core linked into a #![no_std] cdylib: no allocator,
 # panics unresolvable) is a workspace of its own with its own target directory: it builds
