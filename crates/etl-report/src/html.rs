@@ -73,7 +73,7 @@ fn parameter_table(d: &Data) -> String {
     );
     for i in 0..PARAMS {
         let flagged = std[i] > 0.0 && x[i].abs() < 2.0 * std[i];
-        let rel = if x[i] != 0.0 { format!("{:.1e}", std[i] / x[i].abs()) } else { "-".into() };
+        let rel = if x[i] != 0.0 && std[i] > 0.0 { sd(std[i] / x[i].abs()) } else { "-".into() };
         let _ = writeln!(
             t,
             "<tr{}><td><b>{}</b></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{rel}</td><td>{}</td></tr>",
@@ -161,9 +161,11 @@ fn figures_html(d: &Data, files: &[PathBuf]) -> (String, String) {
             continue;
         }
         let _ = writeln!(toc, "<li><a href=\"#{stem}\">{title}</a></li>");
+        // Heat maps are shown as PNG: browsers draw seams between adjacent SVG cells.
+        let shown = if matches!(stem, "projection_std" | "correlation") { "png" } else { "svg" };
         let _ = writeln!(
             body,
-            "<h2 id=\"{stem}\">{title}</h2>\n<figure><a href=\"{stem}.svg\"><img src=\"{stem}.svg\" alt=\"{title}\"></a>\
+            "<h2 id=\"{stem}\">{title}</h2>\n<figure><a href=\"{stem}.{shown}\"><img src=\"{stem}.{shown}\" alt=\"{title}\"></a>\
              <figcaption>{} <span class=\"files\">Files: <a href=\"{stem}.svg\">SVG</a>, <a href=\"{stem}.png\">PNG</a>.\
              </span></figcaption></figure>",
             caption(stem, d)
@@ -183,23 +185,17 @@ fn correlated_pairs(d: &Data) -> String {
     }
     let rows: String = pairs
         .iter()
-        .map(|(i, j, r)| format!("<tr><td>{}</td><td>{}</td><td>{r:+.4}</td></tr>", PARAM_NAMES[*i], PARAM_NAMES[*j]))
+        .map(|(i, j, r)| format!("<li><b>{}</b> &amp; <b>{}</b>: {r:+.4}</li>", PARAM_NAMES[*i], PARAM_NAMES[*j]))
         .collect();
     format!(
         "<p>{} pairs with |r| &gt; {STRONG_CORRELATION}: their numbers are not separately determined by these views \
          (only a combination is); the curves and the projection are, as the bands and the map show.</p>\n\
-         <table class=\"num\"><tr><th>number</th><th>number</th><th>r</th></tr>\n{rows}</table>\n",
+         <ul class=\"pairs\">{rows}</ul>\n",
         pairs.len()
     )
 }
 
 fn views_table(d: &Data) -> String {
-    let rms = |k: usize| {
-        d.views.get(k).filter(|v| !v.residuals.is_empty()).map_or(String::from("-"), |v| {
-            let s: f64 = v.residuals.iter().map(|r| r.d[0] * r.d[0] + r.d[1] * r.d[1]).sum();
-            format!("{:.3}", (s / v.residuals.len() as f64).sqrt())
-        })
-    };
     let rows: String = d
         .cal
         .views
@@ -207,14 +203,16 @@ fn views_table(d: &Data) -> String {
         .enumerate()
         .map(|(k, v)| {
             format!(
-                "<tr><td>{k}</td><td>{:.2}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}</td><td>{:.2}</td><td>{:.4}</td><td>{:.3}</td></tr>\n",
-                v.e_com_ma, v.points, v.rms_px, rms(k), v.fx_px, v.fy_px, v.dz_mm, v.de_ma
+                "<tr><td>{k}</td><td>{:.2}</td><td>{}</td><td>{:.3}</td><td>{:.2}</td><td>{:.2}</td><td>{:.4}</td><td>{:.3}</td></tr>\n",
+                v.e_com_ma, v.points, v.rms_px, v.fx_px, v.fy_px, v.dz_mm, v.de_ma
             )
         })
         .collect();
     format!(
-        "<table class=\"num\"><tr><th>view</th><th>E_com (mA)</th><th>points</th><th>RMS (px), calibration</th>\
-         <th>RMS (px), recomputed</th><th>own fx (px)</th><th>own fy (px)</th><th>dZ (mm)</th><th>dE (mA)</th></tr>\n{rows}</table>\n"
+        "<p>dZ, dE: the errors-in-variables corrections of the view's stage position and current (0 for the paper's \
+         estimator, which takes both as exact).</p>\n<table class=\"num\"><tr><th>view</th><th>E_com (mA)</th>\
+         <th>points</th><th>RMS (px)</th><th>own fx (px)</th><th>own fy (px)</th><th>dZ (mm)</th><th>dE (mA)</th></tr>\n\
+         {rows}</table>\n"
     )
 }
 
@@ -252,7 +250,8 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1300px;margin:auto;pa
     td,th{padding:2px 10px;border-bottom:1px solid #ddd;text-align:left;vertical-align:top}\
     table.num td{font-variant-numeric:tabular-nums}tr.flag{background:#fff1c2}\
     figure{margin:0 0 1.5em 0}figure img{max-width:100%;border:1px solid #eee}\
-    figcaption{color:#333;max-width:1000px}.files{color:#777}.note{background:#f3f3f3;padding:.5em 1em}";
+    figcaption{color:#333;max-width:1000px}.files{color:#777}.note{background:#f3f3f3;padding:.5em 1em}\
+    ul.pairs{columns:4;max-width:1000px}";
 
 /// The whole index.html.
 pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> String {

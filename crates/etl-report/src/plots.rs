@@ -40,6 +40,11 @@ pub(crate) fn diverging(r: f64) -> RGBColor {
     RGBColor(mix(c.0), mix(c.1), mix(c.2))
 }
 
+/// A pixel coordinate as a tick label: whole pixels.
+fn px(v: &f64) -> String {
+    format!("{v:.0}")
+}
+
 fn range_of(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in vals.filter(|v| v.is_finite()) {
@@ -77,7 +82,15 @@ where
     }
     let mut chart = b.build_cartesian_2d(e0 - 5.0..e1 + 5.0, lo..hi)?;
     if text {
-        chart.configure_mesh().x_desc("E_com (mA)").y_desc(p.y_label.as_str()).x_labels(6).y_labels(6).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("E_com (mA)")
+            .y_desc(p.y_label.as_str())
+            .x_labels(6)
+            .y_labels(6)
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()?;
     }
     for (k, alpha) in [(3.0, 0.15), (1.0, 0.35)] {
         let mut poly: Vec<(f64, f64)> = p.curve.iter().map(|c| (c.0, c.1 + k * c.2)).collect();
@@ -179,7 +192,16 @@ where
     }
     let mut chart = b.build_cartesian_2d(0.0..1.0, lo..hi)?;
     if text {
-        chart.configure_mesh().disable_x_mesh().disable_y_mesh().disable_x_axis().y_desc(label).y_labels(8).draw()?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .disable_y_mesh()
+            .disable_x_axis()
+            .y_desc(label)
+            .y_labels(8)
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 14))
+            .draw()?;
     }
     let n = 100;
     chart.draw_series((0..n).map(|k| {
@@ -201,7 +223,7 @@ where
     let [w, h] = d.cal.image_size;
     for (m, panel) in d.std_maps.iter().zip(maps.split_evenly((1, 3)).iter()) {
         let mut b = ChartBuilder::on(panel);
-        b.margin(10);
+        b.margin(10).margin_top(16);
         if text {
             let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
             b.caption(format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max), ("sans-serif", 16))
@@ -218,7 +240,7 @@ where
             })
         }))?;
         if text {
-            chart.configure_mesh().disable_mesh().x_desc("u (px)").y_desc("v (px)").x_labels(5).y_labels(5).draw()?;
+            chart.configure_mesh().disable_mesh().x_desc("u (px)").y_desc("v (px)").x_labels(5).y_labels(5).x_label_formatter(&px).y_label_formatter(&px).draw()?;
         }
     }
     colour_bar(&bar, (0.0, top), "worst-direction std (px)", sequential, text)?;
@@ -278,7 +300,7 @@ where
         }
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
-            chart.configure_mesh().disable_mesh().x_labels(5).y_labels(5).draw()?;
+            chart.configure_mesh().disable_mesh().x_labels(5).y_labels(5).x_label_formatter(&px).y_label_formatter(&px).draw()?;
         }
         chart.draw_series(std::iter::once(Rectangle::new([(0.0, 0.0), (w as f64, h as f64)], BLACK.stroke_width(1))))?;
         for &k in &g.1 {
@@ -313,7 +335,7 @@ where
     // Image rows grow downwards.
     let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
     if text {
-        chart.configure_mesh().x_desc("u (px)").y_desc("v (px)").draw()?;
+        chart.configure_mesh().x_desc("u (px)").y_desc("v (px)").x_label_formatter(&px).y_label_formatter(&px).draw()?;
     }
     let n = d.views.len();
     for (k, v) in d.views.iter().enumerate() {
@@ -327,7 +349,7 @@ where
     let (x0, y0) = (0.03 * w as f64, 0.96 * h as f64);
     chart.draw_series(std::iter::once(PathElement::new(vec![(x0, y0), (x0 + gain * rms, y0)], BLACK.stroke_width(3))))?;
     if text {
-        chart.draw_series(std::iter::once(Text::new(format!("{rms:.3} px (the RMS)"), (x0, y0 - 0.02 * h as f64), ("sans-serif", 14))))?;
+        chart.draw_series(std::iter::once(Text::new(format!("= {rms:.3} px (the RMS)"), (x0 + gain * rms + 0.01 * w as f64, y0 - 0.012 * h as f64), ("sans-serif", 14))))?;
     }
     root.present()?;
     Ok(())
@@ -433,8 +455,8 @@ where
     let norm = |v: &[f64; 2]| v[0].hypot(v[1]);
     let max = fields.iter().flatten().map(|f| norm(&f.1)).fold(0.0, f64::max).max(1e-9);
     let [w, h] = d.cal.image_size;
-    // The longest arrow becomes 6 % of the image width.
-    let gain = 0.06 * w as f64 / max;
+    // The longest arrow becomes 8 % of the image width.
+    let gain = 0.08 * w as f64 / max;
     for ((f, e), panel) in fields.iter().zip(d.map_currents).zip(root.split_evenly((1, 3)).iter()) {
         let m = f.iter().map(|q| norm(&q.1)).fold(0.0, f64::max);
         let mut b = ChartBuilder::on(panel);
@@ -446,7 +468,7 @@ where
         }
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
-            chart.configure_mesh().disable_mesh().x_desc("u (px)").y_desc("v (px)").x_labels(5).y_labels(5).draw()?;
+            chart.configure_mesh().disable_mesh().x_desc("u (px)").y_desc("v (px)").x_labels(5).y_labels(5).x_label_formatter(&px).y_label_formatter(&px).draw()?;
         }
         let col = RGBColor(140, 40, 160);
         chart.draw_series(f.iter().map(|(p, v)| PathElement::new(vec![(p[0], p[1]), (p[0] + gain * v[0], p[1] + gain * v[1])], col.stroke_width(2))))?;

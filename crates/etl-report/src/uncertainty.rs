@@ -75,7 +75,7 @@ pub(crate) fn strong_pairs(r: &[[f64; PARAMS]; PARAMS], threshold: f64) -> Vec<(
 /// p2 = a7 w^2 + a8 w + a9 (1/px), w = 2 / (fx + fy) in 1/px.
 pub(crate) const PARAM_UNITS: [&str; PARAMS] = [
     "rad", "rad", "rad", "mm", "mm", "mm", "px", "px/mA", "px/mA²", "px/mA³", "px", "px/mA", "px/mA²", "px/mA³", "px",
-    "px", "1", "1/px", "1/px²", "px", "1", "1/px", "px", "1", "1/px",
+    "px", "none", "1/px", "1/px²", "px", "none", "1/px", "px", "none", "1/px",
 ];
 
 /// What each number is, for the parameter table.
