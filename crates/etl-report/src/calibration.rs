@@ -154,7 +154,12 @@ impl Data {
 
 /// The view summaries' own estimates, or (when the file has none) each view's fx, fy
 /// refitted to that view alone ([`etl_calib::pipeline::view_focal`]).
-fn gather_views(cal: &Calibration, model: &CameraModel, obs: &Observations, thermal: Option<&ThermalRef>) -> Result<Data> {
+fn gather_views(
+    cal: &Calibration,
+    model: &CameraModel,
+    obs: &Observations,
+    thermal: Option<&ThermalRef>,
+) -> Result<Data> {
     obs.validate()?;
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
@@ -171,10 +176,18 @@ fn gather_views(cal: &Calibration, model: &CameraModel, obs: &Observations, ther
         let (dz, de) = cal.views.get(k).map_or((0.0, 0.0), |v| (v.dz_mm, v.de_ma));
         let shifted: Vec<etl_core::calib::Point> = p
             .iter()
-            .map(|q| etl_core::calib::Point { world_mm: [q.world_mm[0], q.world_mm[1], q.world_mm[2] + dz], pixel: q.pixel })
+            .map(|q| etl_core::calib::Point {
+                world_mm: [q.world_mm[0], q.world_mm[1], q.world_mm[2] + dz],
+                pixel: q.pixel,
+            })
             .collect();
         let e = e + de;
-        let mut v = ViewData { e_com_ma: e, pixels: p.iter().map(|q| q.pixel).collect(), residuals: vec![], depth_mm: f64::NAN };
+        let mut v = ViewData {
+            e_com_ma: e,
+            pixels: p.iter().map(|q| q.pixel).collect(),
+            residuals: vec![],
+            depth_mm: f64::NAN,
+        };
         if frame {
             if recompute {
                 let (fx, fy) = etl_calib::pipeline::view_focal(model, &View { e_com_ma: e - de, points: p }, dz)
@@ -241,7 +254,10 @@ fn std_map(d: &Data, c: &[[f64; PARAMS]; PARAMS], e_com_ma: f64) -> StdMap {
         .map(|r| {
             (0..MAP_CELLS.0)
                 .map(|k| {
-                    let px = [(k as f64 + 0.5) * w as f64 / MAP_CELLS.0 as f64, (r as f64 + 0.5) * h as f64 / MAP_CELLS.1 as f64];
+                    let px = [
+                        (k as f64 + 0.5) * w as f64 / MAP_CELLS.0 as f64,
+                        (r as f64 + 0.5) * h as f64 / MAP_CELLS.1 as f64,
+                    ];
                     // The world point on the pixel's ray at the chosen depth (camera z).
                     let Ok(ray) = d.model.ray(px, e_com_ma) else { return f64::NAN };
                     let z1 = d.model.world_to_camera(ray.at(1.0))[2] - d.model.world_to_camera(ray.origin_mm)[2];
@@ -303,7 +319,14 @@ macro_rules! plot {
     }};
 }
 
-fn finish_plot(dir: &Path, name: &str, size: (u32, u32), buf: Vec<u8>, svg: &str, files: &mut Vec<PathBuf>) -> Result<()> {
+fn finish_plot(
+    dir: &Path,
+    name: &str,
+    size: (u32, u32),
+    buf: Vec<u8>,
+    svg: &str,
+    files: &mut Vec<PathBuf>,
+) -> Result<()> {
     let img = image::RgbImage::from_raw(size.0, size.1, buf)
         .ok_or_else(|| Error::InvalidInput(format!("plot {name}: bitmap size mismatch")))?;
     let mut bytes = std::io::Cursor::new(vec![]);
@@ -341,7 +364,7 @@ pub fn write_report(
     let text = font_available();
     let mut files = vec![];
     plot!(dir, "focal", (1100, 760), &d, text, plots::draw_focal, &mut files);
-    plot!(dir, "distortion", (1300, 460), &d, text, plots::draw_distortion, &mut files);
+    plot!(dir, "distortion", (1300, 800), &d, text, plots::draw_distortion, &mut files);
     if !d.std_maps.is_empty() {
         plot!(dir, "projection_std", (1400, 440), &d, text, plots::draw_projection_std, &mut files);
     }

@@ -116,7 +116,8 @@ fn plotted(c: &Chart, s: &Series) -> Vec<(f64, f64, f64, f64)> {
         .iter()
         .enumerate()
         .filter_map(|(k, &(x, y))| {
-            let se = s.y_se.as_ref().and_then(|v| v.get(k)).copied().filter(|v| v.is_finite() && *v > 0.0).unwrap_or(0.0);
+            let se =
+                s.y_se.as_ref().and_then(|v| v.get(k)).copied().filter(|v| v.is_finite() && *v > 0.0).unwrap_or(0.0);
             let (lo, hi) = (y_of(c, y - se), y_of(c, y + se));
             let yy = y_of(c, y);
             // On a log axis a bar reaching zero or below ends at the point.

@@ -4,8 +4,8 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 
 use crate::calibration::{Data, Provenance, REPORT_FIGURES};
 use crate::uncertainty::{correlation, curve_std, curve_values, param_meaning, strong_pairs, CURVES, PARAM_UNITS};
@@ -117,9 +117,10 @@ fn caption(stem: &str, d: &Data) -> String {
              as bands of one (dark) and three (light) standard deviations. The bands are the uncertainty of the \
              curve, not of a single view: single views scatter more."
             .into(),
-        "distortion" => "k1, p1, p2 (Eq. 18) against the current, with bands of one and three standard deviations \
-             and each view's own estimate (dots). A band that holds zero everywhere means that coefficient is not \
-             determined by these views."
+        "distortion" => "Top: k1, p1, p2 (Eq. 18) against the current (lines) and each view's own estimate (dots). \
+             Bottom: the dots minus the curve, with the curve's uncertainty as bands of one (dark) and three (light) \
+             standard deviations. A band as wide as the curve's values means that coefficient is not determined \
+             by these views."
             .into(),
         "projection_std" => format!(
             "The standard deviation (longest axis of the 1σ ellipse) of where the calibrated model puts a point, due \
@@ -242,7 +243,11 @@ fn provenance_html(d: &Data, p: &Provenance) -> String {
         d.cal.iterations,
         d.cal.rms_reprojection_px,
         d.cal.initial_rms_px,
-        if d.covariance.is_some() { "recorded (25 x 25)" } else { "absent: no bands, no uncertainty map, no correlations" }
+        if d.covariance.is_some() {
+            "recorded (25 x 25)"
+        } else {
+            "absent: no bands, no uncertainty map, no correlations"
+        }
     )
 }
 

@@ -148,27 +148,38 @@ where
 }
 
 /// k1, p1, p2 against the current with the 1- and 3-sigma bands and each view's own
-/// estimate (Eq. 23).
+/// estimate (Eq. 23) (top), and the same minus the curve (bottom: bands too narrow to see
+/// on the top row show there).
 pub(crate) fn draw_distortion<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
     let c = curves(d);
-    let panels = root.split_evenly((1, 3));
-    let names = ["k1 (1e-9 / px²)", "p1 (1e-6 / px)", "p2 (1e-6 / px)"];
+    let panels = root.split_evenly((2, 3));
+    let names = ["k1", "p1", "p2"];
+    let units = ["1e-9 / px²", "1e-6 / px", "1e-6 / px"];
     let colours = [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44)];
-    for (k, panel) in panels.iter().enumerate() {
+    for k in 0..3 {
         // Scaled units keep the tick labels short.
         let scale = if k == 0 { 1e9 } else { 1e6 };
-        let p = BandPanel {
-            title: format!("{}: ±1σ, ±3σ bands, views' own (dots)", ["k1", "p1", "p2"][k]),
-            y_label: names[k].into(),
+        let points: Vec<(f64, f64)> = d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect();
+        let top = BandPanel {
+            title: format!("{}(E) (line) and each view's own (dots)", names[k]),
+            y_label: format!("{} ({})", names[k], units[k]),
             curve: c.iter().map(|q| (q.0, q.1[2 + k] * scale, q.2[2 + k] * scale)).collect(),
-            points: d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect(),
+            points: points.clone(),
             colour: colours[k],
         };
-        draw_band(panel, &p, text)?;
+        draw_band(&panels[k], &top, text)?;
+        let dev = BandPanel {
+            title: format!("{0} − {0}(E): bands ±1σ (dark), ±3σ (light)", names[k]),
+            y_label: format!("{0} − {0}(E) ({1})", names[k], units[k]),
+            curve: c.iter().map(|q| (q.0, 0.0, q.2[2 + k] * scale)).collect(),
+            points: points.iter().map(|p| (p.0, p.1 - curve_values(&d.model, p.0)[2 + k] * scale)).collect(),
+            colour: colours[k],
+        };
+        draw_band(&panels[3 + k], &dev, text)?;
     }
     root.present()?;
     Ok(())
@@ -188,7 +199,7 @@ where
     let mut b = ChartBuilder::on(area);
     b.margin_top(40).margin_bottom(50).margin_right(10);
     if text {
-        b.y_label_area_size(60);
+        b.y_label_area_size(80);
     }
     let mut chart = b.build_cartesian_2d(0.0..1.0, lo..hi)?;
     if text {
@@ -217,8 +228,9 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
-    let (maps, bar) = root.split_horizontally(root.dim_in_pixel().0 - 110);
-    let top = d.std_maps.iter().flat_map(|m| m.cells.iter().flatten()).copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let (maps, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
+    let top =
+        d.std_maps.iter().flat_map(|m| m.cells.iter().flatten()).copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
     let top = if top > 0.0 { top } else { 1.0 };
     let [w, h] = d.cal.image_size;
     for (m, panel) in d.std_maps.iter().zip(maps.split_evenly((1, 3)).iter()) {
@@ -226,9 +238,12 @@ where
         b.margin(10).margin_top(16);
         if text {
             let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
-            b.caption(format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max), ("sans-serif", 16))
-                .x_label_area_size(35)
-                .y_label_area_size(50);
+            b.caption(
+                format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max),
+                ("sans-serif", 16),
+            )
+            .x_label_area_size(35)
+            .y_label_area_size(50);
         }
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         let (rows, cols) = (m.cells.len(), m.cells.first().map_or(0, |r| r.len()));
@@ -236,11 +251,23 @@ where
         chart.draw_series(m.cells.iter().enumerate().flat_map(|(r, row)| {
             row.iter().enumerate().map(move |(k, v)| {
                 let col = if v.is_finite() { sequential(v / top) } else { RGBColor(200, 200, 200) };
-                Rectangle::new([(k as f64 * cw, r as f64 * ch), ((k + 1) as f64 * cw, (r + 1) as f64 * ch)], col.filled())
+                Rectangle::new(
+                    [(k as f64 * cw, r as f64 * ch), ((k + 1) as f64 * cw, (r + 1) as f64 * ch)],
+                    col.filled(),
+                )
             })
         }))?;
         if text {
-            chart.configure_mesh().disable_mesh().x_desc("u (px)").y_desc("v (px)").x_labels(5).y_labels(5).x_label_formatter(&px).y_label_formatter(&px).draw()?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc("u (px)")
+                .y_desc("v (px)")
+                .x_labels(5)
+                .y_labels(5)
+                .x_label_formatter(&px)
+                .y_label_formatter(&px)
+                .draw()?;
         }
     }
     colour_bar(&bar, (0.0, top), "worst-direction std (px)", sequential, text)?;
@@ -269,7 +296,8 @@ pub(crate) fn coverage_groups(d: &Data) -> Vec<([f64; 2], Vec<usize>)> {
     }
     let (lo, hi) = (groups[0].0[0], groups[groups.len() - 1].0[1]);
     let width = (hi - lo) / 6.0;
-    let mut merged: Vec<([f64; 2], Vec<usize>)> = (0..6).map(|b| ([lo + b as f64 * width, lo + (b + 1) as f64 * width], vec![])).collect();
+    let mut merged: Vec<([f64; 2], Vec<usize>)> =
+        (0..6).map(|b| ([lo + b as f64 * width, lo + (b + 1) as f64 * width], vec![])).collect();
     for (k, v) in d.views.iter().enumerate() {
         let b = (((v.e_com_ma - lo) / width.max(1e-12)) as usize).min(5);
         merged[b].1.push(k);
@@ -293,23 +321,39 @@ where
         let mut b = ChartBuilder::on(panel);
         b.margin(10);
         if text {
-            let range = if g.0[1] - g.0[0] < 0.05 { format!("{:.1} mA", g.0[0]) } else { format!("{:.1}–{:.1} mA", g.0[0], g.0[1]) };
+            let range = if g.0[1] - g.0[0] < 0.05 {
+                format!("{:.1} mA", g.0[0])
+            } else {
+                format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
+            };
             b.caption(format!("E_com {range}: {} views, {corners} corners", g.1.len()), ("sans-serif", 16))
                 .x_label_area_size(32)
                 .y_label_area_size(50);
         }
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
-            chart.configure_mesh().disable_mesh().x_labels(5).y_labels(5).x_label_formatter(&px).y_label_formatter(&px).draw()?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_labels(5)
+                .y_labels(5)
+                .x_label_formatter(&px)
+                .y_label_formatter(&px)
+                .draw()?;
         }
-        chart.draw_series(std::iter::once(Rectangle::new([(0.0, 0.0), (w as f64, h as f64)], BLACK.stroke_width(1))))?;
+        chart
+            .draw_series(std::iter::once(Rectangle::new([(0.0, 0.0), (w as f64, h as f64)], BLACK.stroke_width(1))))?;
         for &k in &g.1 {
             let col = view_colour(k, n);
             chart.draw_series(d.views[k].pixels.iter().map(|p| Circle::new((p[0], p[1]), 2, col.filled())))?;
         }
     }
     if text {
-        root.draw(&Text::new("u, v in px; the frame is the whole image; colours: views (as in the residual figures)", (12, 8), ("sans-serif", 16)))?;
+        root.draw(&Text::new(
+            "u, v in px; the frame is the whole image; colours: views (as in the residual figures)",
+            (12, 8),
+            ("sans-serif", 16),
+        ))?;
     }
     root.present()?;
     Ok(())
@@ -335,21 +379,35 @@ where
     // Image rows grow downwards.
     let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
     if text {
-        chart.configure_mesh().x_desc("u (px)").y_desc("v (px)").x_label_formatter(&px).y_label_formatter(&px).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("u (px)")
+            .y_desc("v (px)")
+            .x_label_formatter(&px)
+            .y_label_formatter(&px)
+            .draw()?;
     }
     let n = d.views.len();
     for (k, v) in d.views.iter().enumerate() {
         let col = view_colour(k, n);
         chart.draw_series(v.residuals.iter().map(|r| {
-            PathElement::new(vec![(r.at[0], r.at[1]), (r.at[0] + gain * r.d[0], r.at[1] + gain * r.d[1])], col.stroke_width(1))
+            PathElement::new(
+                vec![(r.at[0], r.at[1]), (r.at[0] + gain * r.d[0], r.at[1] + gain * r.d[1])],
+                col.stroke_width(1),
+            )
         }))?;
         chart.draw_series(v.residuals.iter().map(|r| Circle::new((r.at[0], r.at[1]), 1, col.filled())))?;
     }
     // A scale arrow of 1 RMS at the bottom left, inside the image.
     let (x0, y0) = (0.03 * w as f64, 0.96 * h as f64);
-    chart.draw_series(std::iter::once(PathElement::new(vec![(x0, y0), (x0 + gain * rms, y0)], BLACK.stroke_width(3))))?;
+    chart
+        .draw_series(std::iter::once(PathElement::new(vec![(x0, y0), (x0 + gain * rms, y0)], BLACK.stroke_width(3))))?;
     if text {
-        chart.draw_series(std::iter::once(Text::new(format!("= {rms:.3} px (the RMS)"), (x0 + gain * rms + 0.01 * w as f64, y0 - 0.012 * h as f64), ("sans-serif", 14))))?;
+        chart.draw_series(std::iter::once(Text::new(
+            format!("= {rms:.3} px (the RMS)"),
+            (x0 + gain * rms + 0.01 * w as f64, y0 - 0.012 * h as f64),
+            ("sans-serif", 14),
+        )))?;
     }
     root.present()?;
     Ok(())
@@ -365,7 +423,11 @@ where
     let rms: Vec<f64> = d
         .views
         .iter()
-        .map(|v| (v.residuals.iter().map(|r| r.d[0] * r.d[0] + r.d[1] * r.d[1]).sum::<f64>() / v.residuals.len().max(1) as f64).sqrt())
+        .map(|v| {
+            (v.residuals.iter().map(|r| r.d[0] * r.d[0] + r.d[1] * r.d[1]).sum::<f64>()
+                / v.residuals.len().max(1) as f64)
+                .sqrt()
+        })
         .collect();
     let top = rms.iter().copied().fold(d.cal.rms_reprojection_px, f64::max).max(1e-9) * 1.15;
     let mut b = ChartBuilder::on(root);
@@ -381,12 +443,22 @@ where
             .configure_mesh()
             .disable_x_mesh()
             .x_labels(n.min(30))
-            .x_label_formatter(&|x| if (x - x.round()).abs() < 1e-6 { format!("{}", x.round() as i64) } else { String::new() })
+            .x_label_formatter(&|x| {
+                if (x - x.round()).abs() < 1e-6 {
+                    format!("{}", x.round() as i64)
+                } else {
+                    String::new()
+                }
+            })
             .x_desc("view (index in the observations; its current in the views table)")
             .y_desc("RMS (px)")
             .draw()?;
     }
-    chart.draw_series(rms.iter().enumerate().map(|(k, r)| Rectangle::new([(k as f64 - 0.4, 0.0), (k as f64 + 0.4, *r)], view_colour(k, n).filled())))?;
+    chart.draw_series(
+        rms.iter()
+            .enumerate()
+            .map(|(k, r)| Rectangle::new([(k as f64 - 0.4, 0.0), (k as f64 + 0.4, *r)], view_colour(k, n).filled())),
+    )?;
     let all = d.cal.rms_reprojection_px;
     chart.draw_series(DashedLineSeries::new([(-0.6, all), (n as f64 - 0.4, all)], 8, 5, BLACK.stroke_width(2)))?;
     root.present()?;
@@ -412,7 +484,9 @@ where
     let mut b = ChartBuilder::on(root);
     b.margin(15);
     if text {
-        b.caption("residual components u and v together (px)", ("sans-serif", 20)).x_label_area_size(40).y_label_area_size(60);
+        b.caption("residual components u and v together (px)", ("sans-serif", 20))
+            .x_label_area_size(40)
+            .y_label_area_size(60);
     }
     let mut chart = b.build_cartesian_2d(-m..m, 0u32..top + top / 10 + 1)?;
     if text {
@@ -436,7 +510,11 @@ fn field(d: &Data, e_com_ma: f64) -> Vec<([f64; 2], [f64; 2])> {
     let [w, h] = d.cal.image_size;
     let [u0, v0] = d.model.principal_point;
     (0..FIELD.1)
-        .flat_map(|r| (0..FIELD.0).map(move |k| ((k as f64 + 0.5) * w as f64 / FIELD.0 as f64, (r as f64 + 0.5) * h as f64 / FIELD.1 as f64)))
+        .flat_map(|r| {
+            (0..FIELD.0).map(move |k| {
+                ((k as f64 + 0.5) * w as f64 / FIELD.0 as f64, (r as f64 + 0.5) * h as f64 / FIELD.1 as f64)
+            })
+        })
         .map(|(x, y)| {
             let [xd, yd] = dist.distort(x - u0, y - v0);
             ([x, y], [xd + u0 - x, yd + v0 - y])
@@ -446,7 +524,11 @@ fn field(d: &Data, e_com_ma: f64) -> Vec<([f64; 2], [f64; 2])> {
 
 /// The distortion field (distorted − ideal pixel, Eq. 17) at the three currents, one
 /// magnification for the three.
-pub(crate) fn draw_distortion_field<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
+pub(crate) fn draw_distortion_field<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    d: &Data,
+    text: bool,
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -468,10 +550,21 @@ where
         }
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
-            chart.configure_mesh().disable_mesh().x_desc("u (px)").y_desc("v (px)").x_labels(5).y_labels(5).x_label_formatter(&px).y_label_formatter(&px).draw()?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc("u (px)")
+                .y_desc("v (px)")
+                .x_labels(5)
+                .y_labels(5)
+                .x_label_formatter(&px)
+                .y_label_formatter(&px)
+                .draw()?;
         }
         let col = RGBColor(140, 40, 160);
-        chart.draw_series(f.iter().map(|(p, v)| PathElement::new(vec![(p[0], p[1]), (p[0] + gain * v[0], p[1] + gain * v[1])], col.stroke_width(2))))?;
+        chart.draw_series(f.iter().map(|(p, v)| {
+            PathElement::new(vec![(p[0], p[1]), (p[0] + gain * v[0], p[1] + gain * v[1])], col.stroke_width(2))
+        }))?;
         chart.draw_series(f.iter().map(|(p, _)| Circle::new((p[0], p[1]), 2, BLACK.filled())))?;
         let pp = d.model.principal_point;
         chart.draw_series(std::iter::once(Cross::new((pp[0], pp[1]), 6, RED.stroke_width(2))))?;
@@ -488,7 +581,7 @@ where
     root.fill(&WHITE)?;
     let Some(c) = d.covariance else { return Ok(()) };
     let r = correlation(&c);
-    let (mat, bar) = root.split_horizontally(root.dim_in_pixel().0 - 110);
+    let (mat, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
     let (w, h) = mat.dim_in_pixel();
     let (left, topm) = (60i32, 40i32);
     let cell = ((w as i32 - left - 10).min(h as i32 - topm - 60) / PARAMS as i32).max(1);
@@ -510,7 +603,11 @@ where
         for (k, name) in PARAM_NAMES.iter().enumerate() {
             let at = k as i32 * cell + cell / 2;
             mat.draw(&Text::new(*name, (6, topm + at - 6), font.clone()))?;
-            mat.draw(&Text::new(*name, (left + at - 5, topm + PARAMS as i32 * cell + 6), font.clone().transform(FontTransform::Rotate90)))?;
+            mat.draw(&Text::new(
+                *name,
+                (left + at - 5, topm + PARAMS as i32 * cell + 6),
+                font.clone().transform(FontTransform::Rotate90),
+            ))?;
         }
         mat.draw(&Text::new("correlation r_ij = C_ij / sqrt(C_ii C_jj)", (left, 10), ("sans-serif", 18)))?;
     }

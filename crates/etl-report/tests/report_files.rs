@@ -78,7 +78,10 @@ fn both_estimators_show_every_figure_and_each_file_exists() {
         }
         // The distortion triples are nearly collinear in w: strongly correlated (the
         // paper's own a-values are poorly determined), so pairs are listed.
-        assert!(html.contains("<b>a1</b> &amp; <b>a2</b>") || html.contains("<b>a2</b> &amp; <b>a3</b>"), "{estimator:?}");
+        assert!(
+            html.contains("<b>a1</b> &amp; <b>a2</b>") || html.contains("<b>a2</b> &amp; <b>a3</b>"),
+            "{estimator:?}"
+        );
     }
 }
 

@@ -20,12 +20,12 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
+use etl_core::calib::Estimator;
 use etl_formats::write_atomic;
 use etl_formats::{Error, Result};
+use etl_report::Provenance;
 use etl_sim::simulate::write_simulation;
 use etl_studies::demo::{run_demo, DemoOptions};
-use etl_core::calib::Estimator;
-use etl_report::Provenance;
 
 /// Arguments of `etlcal demo`.
 #[derive(clap::Args, Debug)]
@@ -74,7 +74,13 @@ pub fn run(args: Args) -> Result<()> {
         let dir = args.out.join(name);
         crate::output::create_dir(&dir)?;
         let provenance = Provenance { inputs: inputs(file), priors: Some(Provenance::priors_of(&estimator)) };
-        etl_report::write_report(&r.calibration, Some(&demo.observations), r.calibration.thermal.as_ref(), &provenance, &dir)?;
+        etl_report::write_report(
+            &r.calibration,
+            Some(&demo.observations),
+            r.calibration.thermal.as_ref(),
+            &provenance,
+            &dir,
+        )?;
     }
     if args.json {
         let to_json = |v| serde_json::to_value(v).map_err(|e| Error::InvalidInput(e.to_string()));
