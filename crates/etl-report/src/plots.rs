@@ -444,13 +444,15 @@ where
             .disable_x_mesh()
             .x_labels(n.min(30))
             .x_label_formatter(&|x| {
-                if (x - x.round()).abs() < 1e-6 {
-                    format!("{}", x.round() as i64)
-                } else {
-                    String::new()
+                let k = x.round();
+                match d.views.get(k as usize).filter(|_| (x - k).abs() < 1e-6 && k >= 0.0) {
+                    // Up to 20 views the label carries the current too.
+                    Some(v) if n <= 20 => format!("{k:.0}: {:.0}", v.e_com_ma),
+                    Some(_) => format!("{k:.0}"),
+                    None => String::new(),
                 }
             })
-            .x_desc("view (index in the observations; its current in the views table)")
+            .x_desc(if n <= 20 { "view: E_com (mA)" } else { "view (its current in the views table)" })
             .y_desc("RMS (px)")
             .draw()?;
     }
