@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Bundle adjustment of the paper rig: etlcal against scipy.optimize.least_squares from the
-same linear start, in one run (issue 3). Prints both times, the ratio and both final costs.
+same linear start, in one run. Prints both times, the ratio and both final costs.
 
     python3 -m venv /tmp/venv-ba && /tmp/venv-ba/bin/pip install scipy
     /tmp/venv-ba/bin/python benches/ba_scipy.py

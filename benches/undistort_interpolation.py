@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Why etl-image's FocusMaps computes the maps at each new current instead of interpolating
-cached ones (issue 17): the error of maps cached at n equally spaced currents over the paper
+cached ones: the error of maps cached at n equally spaced currents over the paper
 rig's calibrated range 80..225 mA and interpolated linearly in E, against the exact maps, on
 every 5th pixel of the 1936 x 1458 image (and its last row and column), at 581 currents.
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Whole-image undistortion, 1936 x 1458 u8, in one run (issue 17): OpenCV's
+"""Whole-image undistortion, 1936 x 1458 u8, in one run: OpenCV's
 cv2.initUndistortRectifyMap (CV_32FC1) + cv2.remap (INTER_LINEAR, BORDER_CONSTANT) against
 etlcal's Calibration.undistort_maps + undistort_image (the same maps and bilinear remap,
 exact for the paper's model), interleaved, median of N runs each.

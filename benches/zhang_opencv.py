@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Zhang's monofocal calibration: `etlcal zhang` against OpenCV's calibrateCamera on a real
-image set, in the same run (issue 5).
+image set, in the same run.
 
 The set: fixtures/zhang (25 photographs of a 9x6 board by one 640 x 512 camera; source in
 fixtures/zhang/SOURCE.md). OpenCV's model is made to match etlcal's (the paper's section 4.2

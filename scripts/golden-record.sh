@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Records the golden JSON outputs of the etlcal binary that crates/etlcal/tests/golden.rs
-# compares against (issue 14: behaviour unchanged across the architecture move). Run it
+# compares against (behaviour unchanged across the architecture move). Run it
 # only when a change of output is intended, and say so in the commit.
 #   usage: scripts/golden-record.sh PATH/TO/etlcal
 set -euo pipefail

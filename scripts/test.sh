@@ -1,25 +1,66 @@
 #!/usr/bin/env bash
 # The whole test suite: Rust (every crate, doctests included), the no-alloc gate, and the
 # Python package (wheel built by maturin, installed into a fresh virtualenv, pytest).
+# Prints the time of each stage and the total.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 export CARGO_TERM_COLOR=never
+start=$SECONDS
+stage_start=$SECONDS
+# Prints how long the stage that just ended took, and the time so far.
+stage_done() {
+  echo "-- $1: $((SECONDS - stage_start)) s (total $((SECONDS - start)) s)"
+  stage_start=$SECONDS
+}
+
+# The Python test environment: the virtualenv now, its packages downloaded and installed in
+# the background while Rust compiles (network and disk, not the CPU the build needs).
+venv="$root/target/test-venv"
+rm -rf "$venv" "$root/target/wheels-test"
+mkdir -p "$root/target"
+python3 -m venv "$venv"
+(
+  "$venv/bin/python" -m pip install --quiet --upgrade pip &&
+    "$venv/bin/python" -m pip install --quiet "maturin>=1.5,<2" "pytest>=7" "numpy>=1.21" \
+      opencv-python-headless mypy pyyaml types-PyYAML
+) >"$root/target/test-venv.log" 2>&1 &
+venv_job=$!
+# pyo3's build script configures for the interpreter it is given: the same one for the
+# Rust tests (which build etl-py's examples) and for maturin, so pyo3 is compiled once.
+export PYO3_PYTHON="$venv/bin/python"
+
+# The no-alloc, no-panic gate (etl-core linked into a #![no_std] cdylib: no allocator,
+# panics unresolvable) is a workspace of its own with its own target directory: it builds
+# beside the Rust tests and fills the gaps of their build.
+cargo build --release --locked --manifest-path tests/no-alloc-gate/Cargo.toml >"$root/target/no-alloc-gate.log" 2>&1 &
+gate_job=$!
 
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked
+stage_done "Rust tests"
 
-echo "== no-alloc, no-panic gate (etl-core linked into a #![no_std] cdylib: no allocator, panics unresolvable)"
-cargo build --release --locked --manifest-path tests/no-alloc-gate/Cargo.toml
+echo "== no-alloc, no-panic gate"
+if ! wait "$gate_job"; then
+  cat "$root/target/no-alloc-gate.log" >&2
+  echo "test.sh: the no-alloc, no-panic gate failed to build (log above)" >&2
+  exit 1
+fi
+tail -1 "$root/target/no-alloc-gate.log"
+stage_done "no-alloc gate (built during the Rust tests)"
 
 echo "== Python package"
-venv="$root/target/test-venv"
-rm -rf "$venv" "$root/target/wheels-test"
-python3 -m venv "$venv"
-"$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet "maturin>=1.5,<2" "pytest>=7" "numpy>=1.21" opencv-python-headless mypy pyyaml types-PyYAML
+if ! wait "$venv_job"; then
+  cat "$root/target/test-venv.log" >&2
+  echo "test.sh: the Python test environment could not be installed (log above)" >&2
+  exit 1
+fi
+stage_done "Python test environment (installed during the Rust tests)"
 "$venv/bin/maturin" build --quiet --profile dev --manifest-path crates/etl-py/Cargo.toml \
   --out "$root/target/wheels-test" --interpreter "$venv/bin/python"
 "$venv/bin/python" -m pip install --quiet "$root"/target/wheels-test/*.whl
+stage_done "Python package built and installed"
 cd crates/etl-py/tests
-"$venv/bin/python" -m pytest -q
+"$venv/bin/python" -m pytest -q --durations=10
+stage_done "pytest"
+echo "== all tests passed in $((SECONDS - start)) s"

@@ -1,4 +1,4 @@
-//! From observations to calibration file for the paper rig (issue 5: under 10 ms, process
+//! From observations to calibration file for the paper rig (target: under 10 ms, process
 //! start excluded): read `observations.json`, compensate E, initialise, bundle-adjust,
 //! write `calibration.json` atomically; with errors-in-variables (the default estimator)
 //! and with the paper's Eq. 24.

@@ -32,7 +32,7 @@ fn baseline_error_grows_with_current_and_the_proposed_method_beats_it_there() {
     // 0.11 % at 80 mA to 0.89 % at 225 mA (paper Fig. 12(a): up to 0.81 %), its cubic from
     // 0.11 % to 0.53 %; the proposed method with errors-in-variables 0.07 % .. 0.16 %; with
     // the paper's plain estimator 0.36 % .. 0.85 % (it absorbs the 10 um stage and 0.4 mA
-    // current errors, NOTES.md).
+    // current errors, docs/METHOD.md).
     let rig = SettingRig::default();
     let thermal = ThermalRef::paper();
     let t = CameraModel::paper_rig();

@@ -1,5 +1,5 @@
 //! The calibration's covariance and the measurement's standard deviation are honest: over
-//! seeded calibrations of the simulated paper rig (NOTES.md's noise model: 0.2 px, 1 um
+//! seeded calibrations of the simulated paper rig (docs/METHOD.md's noise model: 0.2 px, 1 um
 //! corners, 10 um stage and 0.4 mA current per view) with the default errors-in-variables
 //! estimator, the one-sigma intervals cover the truth 68 % +- 5 % of the time, for the 25
 //! numbers, for what users feel (fx(E), fy(E) at five currents, u0, v0) and for a 2 mm

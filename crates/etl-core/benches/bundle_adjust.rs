@@ -1,5 +1,5 @@
 //! Bundle adjustment of the paper rig (15 views, 2311 points) from the linear
-//! initialisation, and the initialisation itself (issue 3: target < 2 ms on one core).
+//! initialisation, and the initialisation itself (target < 2 ms on one core).
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, Estimator, Point, View, ViewScratch, A0,

@@ -1,6 +1,6 @@
 //! Projection and undistortion of a paper-rig view, and the temperature compensation
-//! (issue 2's targets: < 2 us for 168 projections, < 20 ns per E_com, on one core), and
-//! the run-time camera at a setting (issue 17: `Camera::at` under 100 ns).
+//! (the targets: < 2 us for 168 projections, < 20 ns per E_com, on one core), and
+//! the run-time camera at a setting (target: `Camera::at` under 100 ns).
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::camera::{Camera, ThermalTrust};
 use etl_core::model::CameraModel;

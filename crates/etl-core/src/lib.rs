@@ -6,7 +6,8 @@
 //! hand-written Levenberg-Marquardt solver, bundle adjustment, plane-based PnP, and
 //! whole-image undistortion maps and remapping over caller buffers.
 //!
-//! Equation numbers refer to the paper in `shared/paper/` as read by its NOTES.md:
+//! Equation numbers refer to the paper (*Calibration method for the electrically tunable lens
+//! based on shape-changing polymer*, Optics Express 2020) as docs/METHOD.md reads it:
 //! lengths in mm, currents in mA, temperatures in degC, pixels with (0, 0) at the centre
 //! of the top-left pixel.
 //!

@@ -2,7 +2,7 @@
 //!
 //! Jacobians are exact: every model is written once over forward-mode dual numbers.
 //! Scored by the log relative error (LRE) of the parameters against the certified values,
-//! capped at 11. Required (issue 3): LRE >= 6 on at least 25 of 27 from each start, and
+//! capped at 11. Required: LRE >= 6 on at least 25 of 27 from each start, and
 //! LRE >= 4 on all 27 from start 2. Print the table with `-- --nocapture`.
 
 use etl_core::lm::{solve, Options, Problem, RowSink};

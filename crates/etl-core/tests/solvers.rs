@@ -1,4 +1,4 @@
-//! The calibration solvers on the paper rig (NOTES.md): noise-free recovery, the
+//! The calibration solvers on the paper rig (docs/METHOD.md): noise-free recovery, the
 //! paper's noise model with the plain and the errors-in-variables bundle adjustment, and
 //! bad inputs.
 
@@ -96,7 +96,7 @@ fn calibrate(pts: &[Vec<Point>], e: &[f64], a0: &A0, estimator: Estimator) -> et
 #[test]
 fn noise_free_paper_rig_is_recovered_exactly() {
     let (pts, e, a0) = paper_rig(&NO_NOISE, 1);
-    assert_eq!(pts.iter().map(Vec::len).sum::<usize>(), 2311, "NOTES.md: 2311 of 2520 corners remain");
+    assert_eq!(pts.iter().map(Vec::len).sum::<usize>(), 2311, "docs/METHOD.md: 2311 of 2520 corners remain");
     let r = calibrate(&pts, &e, &a0, Estimator::Paper);
     let truth = etl_core::calib::jacobian::to_params(&CameraModel::paper_rig());
     let got = etl_core::calib::jacobian::to_params(&r.model);
@@ -242,7 +242,7 @@ fn pnp_bad_inputs() {
     assert!(matches!(e(etl_core::pnp::solve_pnp(&cam, f64::NAN, &line, &lp)), Error::NotFinite { .. }));
 }
 
-/// Statistical efficiency (issue 3): with pixel noise of 0.2 px only, the Monte Carlo spread
+/// Statistical efficiency: with pixel noise of 0.2 px only, the Monte Carlo spread
 /// of each of the 25 estimates matches its Cramer-Rao bound. With T trials the spread is
 /// itself uncertain by about 1/sqrt(2T) (4 % at T = 300), so the 10 % tolerance is 2.5 of
 /// those standard errors.

@@ -1,4 +1,4 @@
-//! The serial link through the virtual lens's pseudo-terminal (issue 6): round trip of a
+//! The serial link through the virtual lens's pseudo-terminal: round trip of a
 //! temperature query, rate of current commands, and the compensation loop's rate against
 //! what 115200 baud allows for its commands (10 bits per byte on the wire).
 //!

@@ -2,7 +2,7 @@
 //! lens device for tests and demos.
 //!
 //! - [`codec`]: CRC-16/ARC, every command and reply of the facts sheet
-//!   (`shared/protocol/optotune-lens-driver-4.md`) a user needs, units;
+//!   (`docs/PROTOCOL.md`) a user needs, units;
 //! - [`client::LensClient`]: the driver over a serial port (`serialport`) or any other
 //!   [`transport::Transport`];
 //! - [`virtual_lens::VirtualDevice`]: a device model speaking the same protocol, with the

@@ -3,7 +3,7 @@
 //! (`FocusMaps::maps_at`, buffers reused: the per-frame cost of a focus change), remap of
 //! an 8-bit image through stored maps, and maps + remap fused (`undistort_image`).
 //! `cargo bench -p etl-image --bench undistort -- --measurement-time 3`; OpenCV's side is
-//! benches/undistort_opencv.py (docs/BENCHMARKS.md, "Undistortion (issue 17)").
+//! benches/undistort_opencv.py (docs/BENCHMARKS.md, "Undistortion").
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::model::CameraModel;

@@ -49,7 +49,7 @@ RUST_ERRORS = [
     ("calib:BoardNotFound", "BoardNotFoundError", "board not found: img.png"),
     ("calib:InvalidInput", "InputError", "invalid input: negative"),
     ("calib:Core", "NotConvergedError", "ba did not converge in 3 iterations"),
-    # A lens timeout inside a library procedure keeps its class (issue 14).
+    # A lens timeout inside a library procedure keeps its class.
     ("calib:LensTimeout", "DeviceTimeoutError", "lens: no reply to GetTemperature within 500ms"),
 ]
 

@@ -1,4 +1,4 @@
-"""Exports of the camera at a setting (issue 17), read back by each tool's own reader:
+"""Exports of the camera at a setting, read back by each tool's own reader:
 cv2.FileStorage (OpenCV), a YAML parser with ROS camera_info's keys, and mrcal itself
 (Debian's python3-mrcal, for /usr/bin/python3: mrcal's PyPI release does not install
 here; .ci/run installs it with apt-get)."""

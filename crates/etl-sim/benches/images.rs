@@ -1,4 +1,4 @@
-//! Rendering a 1936 x 1458 board with defocus (issue 4: < 100 ms) and the sharpness
+//! Rendering a 1936 x 1458 board with defocus (target: < 100 ms) and the sharpness
 //! measures on it (CPBD: < 20 ms; the reference package takes seconds).
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::model::CameraModel;

@@ -1,4 +1,4 @@
-//! The paper rig's facts (NOTES.md): its 15 views' stage positions and currents, its board
+//! The paper rig's facts (docs/METHOD.md): its 15 views' stage positions and currents, its board
 //! and temperature, and the focus law they imply: piecewise linear through the stage
 //! positions ([`focused_z_mm`], where the stage stands at a current) and the smooth physical
 //! law of the simulated lens ([`PAPER_FOCUS_LAW_MA`], what is sharp at a current). Shared by the synthetic camera

@@ -1,4 +1,4 @@
-//! Autofocus on the synthetic camera (issue 4): the paper rig's camera looking straight at
+//! Autofocus on the synthetic camera: the paper rig's camera looking straight at
 //! the paper's board at three working distances; the current of best focus found from
 //! rendered images within 0.5 mA of the truth with at most 15 renders.
 //!

@@ -1,4 +1,4 @@
-//! The focus law (issue 17) on the simulated paper rig: the rig's lens is the smooth law
+//! The focus law on the simulated paper rig: the rig's lens is the smooth law
 //! fitted once to the paper's views ([`etl_sim::rig::PAPER_FOCUS_LAW_MA`]); a calibration of
 //! the rig's noisy observations fits its own law from the views; at distances inside the
 //! calibrated range the current it predicts is within 0.3 mA of the sharpest current a

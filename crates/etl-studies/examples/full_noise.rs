@@ -1,4 +1,4 @@
-//! The paper rig under the paper's full noise model (NOTES.md), N seeded trials (default
+//! The paper rig under the paper's full noise model (docs/METHOD.md), N seeded trials (default
 //! 100): the errors of the plain (paper) and the errors-in-variables bundle adjustment.
 //! Prints a markdown table: mean and 95th percentile of the max relative error of fx(E),
 //! fy(E) over 80..225 mA, the principal-point error, and the mean relative errors of

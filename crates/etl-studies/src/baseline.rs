@@ -200,7 +200,7 @@ impl Baseline {
              tilted as far as the depth of field allows.\n\n## (a) Focal length\n\n{}\n{}\n## (b) PnP error of a 2 mm move \
              (um, mean ± std over trials)\n\n{}\nAt 250 mA the baseline's error is {:.1} ± {:.1} times the proposed \
              method's with the paper's BA and {:.1} ± {:.1} times with errors-in-variables, etlcal's default estimator \
-             (± one standard error over the trials; issue 8 asks at least 3, the paper found 5).\n",
+             (± one standard error over the trials; the acceptance asks at least 3, the paper found 5).\n",
             self.trials.len(),
             self.failures.len(),
             md_table(

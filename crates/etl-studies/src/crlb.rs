@@ -1,4 +1,4 @@
-//! `etlcal study crlb`: statistical efficiency at the paper rig (NOTES.md: 15 views, 2311
+//! `etlcal study crlb`: statistical efficiency at the paper rig (docs/METHOD.md: 15 views, 2311
 //! points, all 25 numbers refined).
 //!
 //! - Pixel noise alone (0.2 px): the Cramer-Rao bound of every parameter and of fx(E) from
@@ -189,7 +189,7 @@ impl Crlb {
     }
 
     /// The markdown summary: every parameter's bound, Monte Carlo spread and efficiency,
-    /// the smallest efficiency `min` against issue 8's 0.9, and the same for fx(E).
+    /// the smallest efficiency `min` against the target 0.9, and the same for fx(E).
     fn markdown(&self, min: f64) -> String {
         let rows: Vec<Vec<String>> = self
             .parameters
@@ -227,7 +227,7 @@ impl Crlb {
              {} + {} trials ({} failed). Pixel only: 0.2 px, the paper's BA. Per-view errors: 10 um on Z_W and 0.4 mA \
              on E per view with 0.2 px, the errors-in-variables BA and the bound with dZ_j, dE_j unknown under their \
              priors. Efficiency = bound / observed std (the observed std is uncertain by about {:.0} %).\n\n{}\n\
-             Smallest efficiency (pixel only): {:.3} (issue 8 asks at least 0.9: {}).\n\n## fx(E) (px)\n\n{}",
+             Smallest efficiency (pixel only): {:.3} (the acceptance asks at least 0.9: {}).\n\n## fx(E) (px)\n\n{}",
             self.points,
             self.trials[0],
             self.trials[1],

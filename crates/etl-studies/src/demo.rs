@@ -141,7 +141,7 @@ pub fn summary_markdown(demo: &Demo, options: &DemoOptions) -> String {
     let figures = figures_table(&demo.paper_validation, &demo.eiv_validation);
     let table = parameter_table(&demo.sim.truth, &demo.paper, &demo.eiv);
     format!(
-        "# etlcal demo (seed {}, stage noise {} um)\n\nThe paper rig (NOTES.md), {} views, {} points{}, the paper's noise model; \
+        "# etlcal demo (seed {}, stage noise {} um)\n\nThe paper rig (docs/METHOD.md, \"The paper rig\"), {} views, {} points{}, the paper's noise model; \
          A0 by Zhang's method from {} lens-off views.\n\n## Errors users feel (validated on fresh views)\n\n{figures}\n## Every parameter\n\n{table}\n({:.2} s)\n",
         options.seed,
         options.stage_noise_um,

@@ -353,7 +353,7 @@ impl Fig6 {
             "eiv_lowers_current_noise_curves_above_0_4ma": self.eiv_lowers_current_noise_curves() });
         let mut md = format!(
             "# Fig. 6: estimation errors against pixel noise, current noise and number of images\n\n\
-             {} trials per level, the paper's noise model otherwise (NOTES.md); each trial a full calibration from the \
+             {} trials per level, the paper's noise model otherwise (docs/METHOD.md); each trial a full calibration from the \
              linear initialisation. Coefficient columns: mean relative error (the paper's measure); CRLB rows: the mean \
              absolute relative error the Cramer-Rao bound implies (Gaussian), with pixel noise only (Z_W, E exact) and \
              with the full model (per-view dZ, dE unknown). Curve errors: max over 80..225 mA; PnP: a 2 mm move at 225 mA. \

@@ -216,7 +216,7 @@ impl Subsets {
              last two: mean and std over its 84 six-view subsets.\n\n{}\n\
              Over all {} calibrations: the paper's BA stops (ftol 1e-10) after at most {} iterations; after 5 iterations \
              it is within {:.2e} formal std of its minimum in every parameter and {:.1e} of its RMS (converged within 5 \
-             iterations by the criterion above, as issue 8 asks: {}). Per-coordinate RMS after BA: paper's BA {:.4} .. {:.4} \
+             iterations by the criterion above, as the acceptance asks: {}). Per-coordinate RMS after BA: paper's BA {:.4} .. {:.4} \
              px (the per-view Z_W and E errors stay in its residuals), errors-in-variables {:.4} .. {:.4} px, against \
              the pixel noise {} px (within 10 %: {}). The paper: 2-3 iterations (its Table 1 shows 5), 0.4 px -> 0.23 px.\n",
             NINE_VIEWS.iter().map(|i| (i + 1).to_string()).collect::<Vec<_>>().join(", "),

@@ -1,4 +1,4 @@
-//! The studies of issue 8 (`etlcal study ...`) on few trials, asserting the acceptance
+//! The studies (`etlcal study ...`) on few trials, asserting the acceptance
 //! shapes where a few trials can show them: Fig. 5's cubic against the paper, Fig. 6's
 //! trends and the errors-in-variables gain, the subsets' reprojection error, the baseline's
 //! error at high current, the statistical efficiency; and the command line's bad input.

@@ -52,6 +52,10 @@ pub struct Cli {
     /// Print one JSON object on stdout (accepted before or after the verb).
     #[arg(long, global = true)]
     json: bool,
+    /// No progress on stderr: neither the terminal's bar nor, without a terminal, the log
+    /// line written every few seconds of long work (accepted before or after the verb).
+    #[arg(long, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -117,6 +121,7 @@ pub fn trust(allow_extrapolation: bool) -> etl_formats::Trust {
 
 fn run(cli: Cli) -> Result<ExitCode> {
     let json = cli.json;
+    progress::set_quiet(cli.quiet);
     let done = |r: Result<()>| r.map(|()| ExitCode::SUCCESS);
     match cli.command {
         Command::Model(a) => done(model::run(model::Args { json, ..a })),

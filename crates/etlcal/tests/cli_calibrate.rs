@@ -149,11 +149,35 @@ fn demo_meets_the_acceptance_figures() {
     for f in ["observations.json", "a0.json", "truth.json", "calibration.json", "calibration-eiv.json", "summary.md"] {
         assert!(d.join(f).is_file(), "{f} not written");
     }
+    readme_demo_table_is(&j);
     // With a better stage the paper estimator's curve error falls accordingly.
     let (code, stdout, _) = etlcal(&["demo", "--out", d.to_str().unwrap(), "--json", "--stage-noise-um", "1"]);
     assert_eq!(code, 0);
     let j1: Value = serde_json::from_str(&stdout).unwrap();
     assert!(j1["fx_curve_max_rel_err"].as_f64().unwrap() < 0.5 * j["fx_curve_max_rel_err"].as_f64().unwrap());
+}
+
+/// The README's demo table states what `etlcal demo --json` (seed 1, images) prints, rounded
+/// as printed there, so it cannot go stale.
+fn readme_demo_table_is(j: &Value) {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
+    let row = |start: &str| -> Vec<String> {
+        let line =
+            readme.lines().find(|l| l.starts_with(start)).unwrap_or_else(|| panic!("README has no row {start:?}"));
+        line.split('|').map(|c| c.trim().to_owned()).filter(|c| !c.is_empty()).skip(1).collect()
+    };
+    let pnp_225 = |j: &Value| {
+        let last = j["pnp_displacement_err_um"].as_array().unwrap().last().unwrap().clone();
+        assert_eq!(last["e_com_ma"].as_f64().unwrap(), 225.0);
+        last["err_um"].as_f64().unwrap()
+    };
+    let (paper, eiv) = (j, &j["eiv"]);
+    let fx = |j: &Value| format!("{:.2} %", 100.0 * j["fx_curve_max_rel_err"].as_f64().unwrap());
+    let pp = |j: &Value| format!("{:.1} px", j["principal_point_err_px"].as_f64().unwrap());
+    let um = |j: &Value| format!("{:.1} um", pnp_225(j));
+    assert_eq!(row("| max rel. error of fx(E)"), [fx(paper), fx(eiv)], "README demo table, fx(E) row");
+    assert_eq!(row("| principal point error"), [pp(paper), pp(eiv)], "README demo table, principal point row");
+    assert_eq!(row("| 2 mm stage move"), [um(paper), um(eiv)], "README demo table, PnP row");
 }
 
 /// Runs a failing calibrate and checks: exit 1, one line naming `needle`, and the earlier

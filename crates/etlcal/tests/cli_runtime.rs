@@ -1,4 +1,4 @@
-//! The run-time side through the binary (issue 17): no thermal surface assumed by
+//! The run-time side through the binary: no thermal surface assumed by
 //! `calibrate`, the calibrated ranges enforced by every verb, `export` for OpenCV, ROS and
 //! mrcal. Bad input: one-line error, exit 1, nothing written.
 

@@ -1,4 +1,4 @@
-//! Behaviour kept across the architecture move (issue 14): the JSON of every case in
+//! Behaviour kept across the architecture move: the JSON of every case in
 //! `fixtures/golden/cases.txt`, recorded by `scripts/golden-record.sh` with the binary of
 //! before the move, is reproduced by this build, numbers to 1e-12 relative. Keys that
 //! name a time or a temporary path (`seconds`, `out`) are not compared.

@@ -7,7 +7,7 @@
 //! harmless: the step is computed in scaled variables).
 //!
 //! **Errors-in-variables** (beyond the paper): maximum likelihood under the full noise
-//! model of NOTES.md. Each view j gets a correction dZ_j of its stage position and dE_j of
+//! model of docs/METHOD.md. Each view j gets a correction dZ_j of its stage position and dE_j of
 //! its current, with Gaussian priors (10 um and 0.4 mA by default). Residuals are
 //! normalised by their standard deviations:
 //!

@@ -1,4 +1,4 @@
-//! The Cramer-Rao bound of the 25 numbers at the truth (the yardstick of NOTES.md).
+//! The Cramer-Rao bound of the 25 numbers at the truth (the yardstick of docs/METHOD.md).
 //!
 //! With pixel noise of standard deviation sigma on each coordinate, the Fisher information
 //! of the parameters is J^T J / sigma^2 (J: the Jacobian of all projections at the true

@@ -6,7 +6,7 @@
 //!
 //! ```text
 //! u_d - u = k1 u r^2 + p1 (3u^2 + v^2) + 2 p2 u v
-//! v_d - v = k1 v r^2 + 2 p1 u v + p2 (u^2 + 3v^2)       (Weng's form; NOTES.md)
+//! v_d - v = k1 v r^2 + 2 p1 u v + p2 (u^2 + 3v^2)       (Weng's form; docs/METHOD.md)
 //! ```
 //!
 //! Then each of k1, p1, p2 is fitted across views as a quadratic in w = 1 / f_mean(E_j)

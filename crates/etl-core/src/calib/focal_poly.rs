@@ -1,7 +1,7 @@
 //! The focal polynomial and tz (Eq. 21-22), given R, tx, ty from RAC and A0.
 //!
 //! With Z_C = w + tz, w = r7 X + r8 Y + r9 Z, and centred u = fx(E) X_C / Z_C, the row of
-//! the x equation for [kf1x, kf2x, kf3x, tz] is (NOTES.md: the paper prints +u, a sign typo)
+//! the x equation for [kf1x, kf2x, kf3x, tz] is (docs/METHOD.md: the paper prints +u, a sign typo)
 //!
 //! ```text
 //! [X_C E, X_C E^2, X_C E^3, -u] . [kf1x, kf2x, kf3x, tz] = u w - kf0x X_C

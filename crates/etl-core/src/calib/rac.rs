@@ -4,7 +4,7 @@
 //! All ETL views share one R and T (the world frame is the displacement stage), so the
 //! points of all views form one non-coplanar 3D target and Tsai's non-coplanar method
 //! applies. With centred pixels u, v (from the principal point of A0) and s = fx / fy,
-//! u / v = s X_C / Y_C gives, per point, the linear equation (Eq. 20 with NOTES.md's
+//! u / v = s X_C / Y_C gives, per point, the linear equation (Eq. 20 with docs/METHOD.md's
 //! erratum: the third entry is v Z_W)
 //!
 //! ```text

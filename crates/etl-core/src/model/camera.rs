@@ -56,7 +56,7 @@ pub fn cubic(c: &[f64; 4], x: f64) -> f64 {
 }
 
 impl CameraModel {
-    /// The simulated rig of the paper's section 5.1.2 (NOTES.md, "the paper rig").
+    /// The simulated rig of the paper's section 5.1.2 (docs/METHOD.md, "The paper rig").
     pub const fn paper_rig() -> Self {
         CameraModel {
             rotation_rodrigues: [0.2, 0.2, 0.2],

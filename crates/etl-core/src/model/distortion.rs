@@ -1,6 +1,6 @@
 //! Lens distortion in centred pixel coordinates (Eq. 17, 18).
 //!
-//! Eq. 17 as this project reads it (NOTES.md): with u, v the ideal pixel offsets from the
+//! Eq. 17 as this project reads it (docs/METHOD.md): with u, v the ideal pixel offsets from the
 //! principal point and r^2 = u^2 + v^2,
 //!
 //! ```text

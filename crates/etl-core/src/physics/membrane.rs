@@ -91,7 +91,7 @@ impl LensPhysics {
 mod tests {
     use super::*;
 
-    /// Section 5.1.1 / NOTES.md: f_liq from 120.5 mm (0 mA) to 50.5 mm (250 mA).
+    /// Section 5.1.1 / docs/METHOD.md: f_liq from 120.5 mm (0 mA) to 50.5 mm (250 mA).
     #[test]
     fn paper_values_at_0_and_250_ma() {
         let lens = LensPhysics::paper();

@@ -1,5 +1,5 @@
 //! The Optotune Lens Driver 4 serial protocol (facts sheet
-//! `shared/protocol/optotune-lens-driver-4.md`): CRC-16/ARC, commands, replies, units.
+//! `docs/PROTOCOL.md`): CRC-16/ARC, commands, replies, units.
 //!
 //! ```
 //! use etl_hw::codec::{Command, Reply};

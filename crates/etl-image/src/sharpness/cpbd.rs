@@ -1,6 +1,6 @@
 //! CPBD, the cumulative probability of blur detection (Narvekar and Karam, IEEE TIP
 //! 20(9):2678-2683, 2011), exactly as the reference package `cpbd` 1.0.7 computes it
-//! (shared/data/cpbd/SPEC.md, sections A.2 to A.5).
+//! (docs/CPBD.md, sections A.2 to A.5).
 //!
 //! 64 x 64 blocks (the remainder of the image is ignored) with at least 9 Canny edge
 //! pixels are edge blocks; in them, every width of a "vertical" Sobel edge measured along

@@ -46,7 +46,7 @@ impl OutputChoice {
 /// 0.018 with 8, 0.0075 with 12, 0.0040 with 16). Here the error bound is f32 rounding
 /// alone: 1.2e-4 px over the whole image (etl-core's test against the model's projection),
 /// and the time is that of [`super::undistort_maps_into`] (buffers reused): 4.8 ms median
-/// for 1936 x 1458 on 2 shared cores (docs/BENCHMARKS.md, "Undistortion (issue 17)").
+/// for 1936 x 1458 on 2 shared cores (docs/BENCHMARKS.md, "Undistortion").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FocusMaps {
     model: CameraModel,

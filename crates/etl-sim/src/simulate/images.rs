@@ -6,7 +6,7 @@
 //! Choices of this simulation (the paper gives no images):
 //! - each ETL view is rendered at its *true* stage position and current (recorded value
 //!   plus the simulated error) and recorded with the noisy values, as a user records them;
-//! - the paper rig's board does not fit the image at the nearest stage positions (NOTES.md
+//! - the paper rig's board does not fit the image at the nearest stage positions (docs/METHOD.md
 //!   keeps the visible corners). A detector must not guess which part of a board it sees,
 //!   so each image shows the largest block of the board's squares that lies fully inside the
 //!   image with a margin (the part a user would cut, or mask, for that view), and the

@@ -1,4 +1,4 @@
-//! The paper rig (shared/paper/NOTES.md, section 5.1.2) as synthetic observations with
+//! The paper rig (docs/METHOD.md, "The paper rig"; section 5.1.2) as synthetic observations with
 //! the paper's noise model.
 //!
 //! Per view j the stage really stands at Z_W,j + dZ_j and the lens runs at E_j + dE_j while
@@ -25,7 +25,7 @@ mod config;
 pub use crate::rig::{focus_depth_mm, focused_z_mm, PAPER_BOARD, PAPER_E_COM_MA, PAPER_TEMPERATURE_C, PAPER_Z_W_MM};
 pub use config::{SimConfig, CONFIG_FORMAT};
 
-/// Standard deviations of the noise model (NOTES.md).
+/// Standard deviations of the noise model (docs/METHOD.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseModel {
@@ -124,7 +124,7 @@ const LENS_OFF_TILTS_DEG: [(f64, f64); 10] = [
     (25.0, 5.0),
 ];
 
-/// The lens-off views of NOTES.md (this project's choice; the paper gives none): 10 views
+/// The lens-off views of docs/METHOD.md (this project's choice; the paper gives none): 10 views
 /// at E = 0 of a planar board of 11 x 8 inner corners with 4 mm squares, about 125 mm from the
 /// camera, tilted up to about 25 degrees, with corner and pixel noise. Points are in the
 /// board frame (Z = 0).
@@ -149,7 +149,7 @@ pub fn lens_off_views(truth: &CameraModel, noise: &NoiseModel, rng: &mut ChaCha8
     views
 }
 
-/// The lens-off board: inner corners (columns, rows) and square size, mm (NOTES.md).
+/// The lens-off board: inner corners (columns, rows) and square size, mm (docs/METHOD.md).
 pub const LENS_OFF_BOARD: ([usize; 2], f64) = ([11, 8], 4.0);
 
 /// The camera of each lens-off view with the board frame as its world frame (board at
