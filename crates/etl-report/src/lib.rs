@@ -1,8 +1,12 @@
-//! etl-report: everything etlcal draws. The calibration report (plots and an index.html,
-//! [`write_report`]) and the figures of the studies ([`figure`]).
+//! etl-report: everything etlcal draws. The calibration report (figures with the
+//! calibration's uncertainty, and an index.html, [`write_report`]) and the figures of the
+//! studies ([`figure`]).
 
 mod calibration;
 pub mod figure;
+mod html;
+mod plots;
+mod uncertainty;
 
 pub use calibration::*;
 pub use etl_formats::{Error, Result};

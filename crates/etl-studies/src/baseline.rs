@@ -268,7 +268,7 @@ impl Baseline {
                         .collect(),
                 },
                 Chart {
-                    title: "(b) PnP error of a 2 mm move, mean".into(),
+                    title: "(b) PnP error of a 2 mm move, mean ± 1 s.e.".into(),
                     x_label: "E_com (mA)".into(),
                     y_label: "error (um)".into(),
                     log_y: false,
@@ -278,6 +278,12 @@ impl Baseline {
                                 METHODS[m],
                                 m,
                                 PNP_E_MA.iter().enumerate().map(|(k, e)| (*e, self.pnp(m, k).0)).collect(),
+                            )
+                            // One standard error of the mean: the trials' std / sqrt(trials).
+                            .with_se(
+                                (0..PNP_E_MA.len())
+                                    .map(|k| self.pnp(m, k).1 / (self.trials.len().max(1) as f64).sqrt())
+                                    .collect(),
                             )
                         })
                         .collect(),

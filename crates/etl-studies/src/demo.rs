@@ -73,6 +73,8 @@ pub struct Demo {
     pub paper: CalibrationResult,
     /// Errors-in-variables.
     pub eiv: CalibrationResult,
+    /// The estimator (with its priors) `eiv` was calibrated with.
+    pub eiv_estimator: Estimator,
     /// Validation of `paper` on fresh views.
     pub paper_validation: Validation,
     /// Validation of `eiv` on the same fresh views.
@@ -122,6 +124,7 @@ pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress
         views_detected,
         paper,
         eiv,
+        eiv_estimator: eiv_est,
         paper_validation,
         eiv_validation,
         seconds: 0.0,

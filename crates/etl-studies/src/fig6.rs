@@ -451,13 +451,21 @@ impl Fig6 {
             let mut series: Vec<Series> = (0..6)
                 .map(|k| {
                     Series::line(KF_NAMES[k], k, levels.iter().map(|l| (l.level, pick(l).mean.kf_rel[k])).collect())
+                        .with_se(levels.iter().map(|l| pick(l).se.kf_rel[k]).collect())
                 })
                 .collect();
-            series.push(Series::line("om", 6, levels.iter().map(|l| (l.level, pick(l).mean.om_rel)).collect()));
-            series.push(Series::line("T", 7, levels.iter().map(|l| (l.level, pick(l).mean.t_rel)).collect()));
+            series.push(
+                Series::line("om", 6, levels.iter().map(|l| (l.level, pick(l).mean.om_rel)).collect())
+                    .with_se(levels.iter().map(|l| pick(l).se.om_rel).collect()),
+            );
+            series.push(
+                Series::line("T", 7, levels.iter().map(|l| (l.level, pick(l).mean.t_rel)).collect())
+                    .with_se(levels.iter().map(|l| pick(l).se.t_rel).collect()),
+            );
+            // Its own colour (dashed): kf3x's would make it look like a tenth curve of kf3x.
             series.push(Series::reference(
                 "CRLB kf3x (full model)",
-                2,
+                8,
                 levels.iter().map(|l| (l.level, l.bound.kf_rel_full[2])).collect(),
             ));
             Chart {
@@ -469,13 +477,15 @@ impl Fig6 {
             }
         };
         let curve = Chart {
-            title: "max relative error of fx(E), mean".into(),
+            title: "max relative error of fx(E), mean ± 1 s.e.".into(),
             x_label: x_label.clone(),
             y_label: "relative error".into(),
             log_y: true,
             series: vec![
-                Series::line("paper BA", 0, levels.iter().map(|l| (l.level, l.paper.mean.fx_curve_max_rel)).collect()),
-                Series::line("eiv BA", 1, levels.iter().map(|l| (l.level, l.eiv.mean.fx_curve_max_rel)).collect()),
+                Series::line("paper BA", 0, levels.iter().map(|l| (l.level, l.paper.mean.fx_curve_max_rel)).collect())
+                    .with_se(levels.iter().map(|l| l.paper.se.fx_curve_max_rel).collect()),
+                Series::line("eiv BA", 1, levels.iter().map(|l| (l.level, l.eiv.mean.fx_curve_max_rel)).collect())
+                    .with_se(levels.iter().map(|l| l.eiv.se.fx_curve_max_rel).collect()),
                 Series::reference(
                     "CRLB full (1 std)",
                     2,
@@ -489,13 +499,15 @@ impl Fig6 {
             ],
         };
         let pnp = Chart {
-            title: "PnP error of a 2 mm move at 225 mA, mean".into(),
+            title: "PnP error of a 2 mm move at 225 mA, mean ± 1 s.e.".into(),
             x_label: x_label.clone(),
             y_label: "error (um)".into(),
             log_y: false,
             series: vec![
-                Series::line("paper BA", 0, levels.iter().map(|l| (l.level, l.paper.pnp_um)).collect()),
-                Series::line("eiv BA", 1, levels.iter().map(|l| (l.level, l.eiv.pnp_um)).collect()),
+                Series::line("paper BA", 0, levels.iter().map(|l| (l.level, l.paper.pnp_um)).collect())
+                    .with_se(levels.iter().map(|l| l.paper.pnp_um_se).collect()),
+                Series::line("eiv BA", 1, levels.iter().map(|l| (l.level, l.eiv.pnp_um)).collect())
+                    .with_se(levels.iter().map(|l| l.eiv.pnp_um_se).collect()),
             ],
         };
         Figure {

@@ -20,8 +20,10 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
+use etl_core::calib::Estimator;
 use etl_formats::write_atomic;
 use etl_formats::{Error, Result};
+use etl_report::Provenance;
 use etl_sim::simulate::write_simulation;
 use etl_studies::demo::{run_demo, DemoOptions};
 
@@ -58,10 +60,27 @@ pub fn run(args: Args) -> Result<()> {
     demo.paper.calibration.save(&args.out.join("calibration.json"))?;
     demo.eiv.calibration.save(&args.out.join("calibration-eiv.json"))?;
     write_atomic(&args.out.join("summary.md"), demo.summary_md.as_bytes())?;
-    for (name, r) in [("report", &demo.paper), ("report-eiv", &demo.eiv)] {
+    let inputs = |file: &str| {
+        let obs = if options.images { "detected in the rendered views/*.png" } else { "simulated corners" };
+        vec![
+            ("calibration".to_string(), file.to_string()),
+            ("observations".to_string(), format!("observations.json ({obs}; seed {})", args.seed)),
+        ]
+    };
+    for (name, file, r, estimator) in [
+        ("report", "calibration.json", &demo.paper, Estimator::Paper),
+        ("report-eiv", "calibration-eiv.json", &demo.eiv, demo.eiv_estimator),
+    ] {
         let dir = args.out.join(name);
         crate::output::create_dir(&dir)?;
-        etl_report::write_report(&r.calibration, Some(&demo.observations), r.calibration.thermal.as_ref(), &dir)?;
+        let provenance = Provenance { inputs: inputs(file), priors: Some(Provenance::priors_of(&estimator)) };
+        etl_report::write_report(
+            &r.calibration,
+            Some(&demo.observations),
+            r.calibration.thermal.as_ref(),
+            &provenance,
+            &dir,
+        )?;
     }
     if args.json {
         let to_json = |v| serde_json::to_value(v).map_err(|e| Error::InvalidInput(e.to_string()));

@@ -1,7 +1,9 @@
 //! `etlcal report --calibration FILE [--observations FILE] [--thermal FILE|paper] --out DIR
-//! [--json]`: PNG and SVG plots of a calibration (fx, fy against current with every
-//! view's own estimate; k1, p1, p2 against current; with observations, a residual vector
-//! map and a residual histogram) and an index.html that shows them with the numbers.
+//! [--json]`: PNG and SVG figures of a calibration with its uncertainty (fx, fy, k1, p1, p2
+//! against current with 1- and 3-sigma bands; the projection-uncertainty map; the
+//! distortion field; the correlation matrix; with observations, the coverage per current,
+//! residual vectors by view, per-view RMS and a residual histogram) and an index.html that
+//! shows them with the parameter table and the provenance (`etl_report::REPORT_FIGURES`).
 //!
 //! DIR is created if missing (with its missing parents).
 
@@ -13,7 +15,7 @@ use super::print_json;
 use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::observations::Observations;
 use etl_formats::Result;
-use etl_report::write_report;
+use etl_report::{write_report, Provenance};
 
 /// Arguments of `etlcal report`.
 #[derive(clap::Args, Debug)]
@@ -45,7 +47,16 @@ pub fn run(args: Args) -> Result<()> {
     let chosen = args.thermal.as_deref().map(ThermalRef::choose).transpose()?;
     let thermal = chosen.as_ref().or(cal.thermal.as_ref());
     crate::output::create_dir(&args.out)?;
-    let r = write_report(&cal, obs.as_ref(), thermal, &args.out)?;
+    let mut inputs = vec![("calibration".to_string(), args.calibration.display().to_string())];
+    if let Some(o) = &args.observations {
+        inputs.push(("observations".to_string(), o.display().to_string()));
+    }
+    if let Some(t) = &args.thermal {
+        inputs.push(("thermal".to_string(), t.display().to_string()));
+    }
+    // The calibration file does not record the estimator's priors: the report says so.
+    let provenance = Provenance { inputs, priors: None };
+    let r = write_report(&cal, obs.as_ref(), thermal, &provenance, &args.out)?;
     if args.json {
         print_json(&json!({"files": r.files, "text": r.text}));
     } else {

@@ -1,0 +1,303 @@
+//! The report's index.html: the figures written, each under its heading with what to look
+//! for, the parameter table, the strongly correlated pairs, the views and the provenance.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use etl_core::calib::jacobian::to_params;
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
+
+use crate::calibration::{Data, Provenance, REPORT_FIGURES};
+use crate::uncertainty::{correlation, curve_std, curve_values, param_meaning, strong_pairs, CURVES, PARAM_UNITS};
+
+/// |r| above which a pair of numbers is listed as strongly correlated.
+pub(crate) const STRONG_CORRELATION: f64 = 0.9;
+
+/// A number with 6 significant digits, fixed or scientific as its size asks.
+fn num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || (1e-3..1e5).contains(&a) {
+        let digits = (5 - a.log10().floor().max(-3.0) as i32).clamp(0, 8) as usize;
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.5e}")
+    }
+}
+
+/// A standard deviation with 2 significant digits.
+fn sd(v: f64) -> String {
+    if v == 0.0 {
+        "0 (held)".into()
+    } else if (1e-3..1e5).contains(&v.abs()) {
+        let digits = (1 - v.abs().log10().floor() as i32).clamp(0, 8) as usize;
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+/// Today's date (UTC) from the system clock, yyyy-mm-dd hh:mm (civil from days, H. Hinnant).
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{day:02} {:02}:{:02} UTC", rem / 3600, rem % 3600 / 60)
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// The parameter table: name, meaning, unit, value, std, relative std, flag.
+fn parameter_table(d: &Data) -> String {
+    let x = to_params(&d.model);
+    let std: [f64; PARAMS] = to_params(&etl_core::model::CameraModel {
+        rotation_rodrigues: d.cal.std.rotation_rodrigues,
+        translation_mm: d.cal.std.translation_mm,
+        kf_x: d.cal.std.kf_x,
+        kf_y: d.cal.std.kf_y,
+        principal_point: d.cal.std.principal_point,
+        distortion_a: d.cal.std.distortion_a,
+    });
+    let mut t = String::from(
+        "<table class=\"num\"><tr><th>name</th><th>meaning</th><th>unit</th><th>value</th><th>std</th>\
+         <th>std / |value|</th><th>flag</th></tr>\n",
+    );
+    for i in 0..PARAMS {
+        let flagged = std[i] > 0.0 && x[i].abs() < 2.0 * std[i];
+        let rel = if x[i] != 0.0 && std[i] > 0.0 { sd(std[i] / x[i].abs()) } else { "-".into() };
+        let _ = writeln!(
+            t,
+            "<tr{}><td><b>{}</b></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{rel}</td><td>{}</td></tr>",
+            if flagged { " class=\"flag\"" } else { "" },
+            PARAM_NAMES[i],
+            param_meaning(i),
+            PARAM_UNITS[i],
+            num(x[i]),
+            sd(std[i]),
+            if flagged { "⚠ |value| &lt; 2 std: not determined" } else { "" }
+        );
+    }
+    t + "</table>\n"
+}
+
+/// fx, fy, k1, p1, p2 with their std at the three map currents.
+fn curve_table(d: &Data) -> String {
+    let units = ["px", "px", "1/px²", "1/px", "1/px"];
+    let mut t = String::from("<table class=\"num\"><tr><th>quantity</th><th>unit</th>");
+    for e in d.map_currents {
+        let _ = write!(t, "<th>at {e:.1} mA</th>");
+    }
+    t += "</tr>\n";
+    let at: Vec<([f64; 5], [f64; 5])> = d
+        .map_currents
+        .iter()
+        .map(|&e| (curve_values(&d.model, e), d.covariance.map_or([f64::NAN; 5], |c| curve_std(&d.model, &c, e))))
+        .collect();
+    for k in 0..5 {
+        let cells: String = at.iter().map(|(v, s)| format!("<td>{} &plusmn; {}</td>", num(v[k]), sd(s[k]))).collect();
+        let _ = writeln!(t, "<tr><td><b>{}</b></td><td>{}</td>{cells}</tr>", CURVES[k], units[k]);
+    }
+    t + "</table>\n"
+}
+
+/// What each figure shows and what to look for.
+fn caption(stem: &str, d: &Data) -> String {
+    match stem {
+        "focal" => "Top: the calibrated fx(E) and fy(E) (lines) and each view's own estimate (dots: the focal lengths \
+             refitted to that view alone). Bottom: the same dots minus the curve, with the curve's own uncertainty \
+             as bands of one (dark) and three (light) standard deviations. The bands are the uncertainty of the \
+             curve, not of a single view: single views scatter more."
+            .into(),
+        "distortion" => "Top: k1, p1, p2 (Eq. 18) against the current (lines) and each view's own estimate (dots). \
+             Bottom: the dots minus the curve, with the curve's uncertainty as bands of one (dark) and three (light) \
+             standard deviations. A band as wide as the curve's values means that coefficient is not determined \
+             by these views."
+            .into(),
+        "projection_std" => format!(
+            "The standard deviation (longest axis of the 1σ ellipse) of where the calibrated model puts a point, due \
+             to the uncertainty of the 25 numbers (J C Jᵀ), over the image at the ends and the middle of the \
+             calibrated range; one colour scale for the three. The points are at {}. Large values at the edges \
+             call for corners there (see the coverage map).",
+            d.depth_source
+        ),
+        "coverage" => "Every detected corner at its place in the image, one panel per current (views within 0.5 mA \
+             together), coloured by view. Empty regions are where the model is extrapolated."
+            .into(),
+        "residual_map" => "Each corner's residual (model − observed) as a vector, magnified (the black bar is the \
+             overall RMS), coloured by view. Systematic patterns (all arrows alike in a region) mean a model error; \
+             random directions mean noise."
+            .into(),
+        "view_rms" => "The RMS residual of each view (same colours as the residual map); the dashed line is the \
+             RMS of all views. A view far above the line is worth checking (blur, wrong current, moved board)."
+            .into(),
+        "residual_hist" => "Histogram of the u and v components of the residuals together: near-Gaussian around \
+             zero when the model fits."
+            .into(),
+        "distortion_field" => "Where distortion moves an ideal pixel (Eq. 17): arrows from the ideal position \
+             (dots) to the distorted one, magnified by the same factor in the three panels; the red cross is the \
+             principal point."
+            .into(),
+        "correlation" => "Correlation r_ij = C_ij / sqrt(C_ii C_jj) of the 25 numbers (blue −1, white 0, red +1); \
+             the lines separate rotation, translation, kf_x, kf_y, principal point and a1..a9. Strongly \
+             correlated pairs are listed below."
+            .into(),
+        _ => String::new(),
+    }
+}
+
+fn figures_html(d: &Data, files: &[PathBuf]) -> (String, String) {
+    let written = |name: String| files.iter().any(|f| f.file_name().is_some_and(|n| n.to_string_lossy() == name));
+    let (mut toc, mut body) = (String::new(), String::new());
+    for (stem, title) in REPORT_FIGURES {
+        if !written(format!("{stem}.svg")) {
+            continue;
+        }
+        let _ = writeln!(toc, "<li><a href=\"#{stem}\">{title}</a></li>");
+        // Heat maps are shown as PNG: browsers draw seams between adjacent SVG cells.
+        let shown = if matches!(stem, "projection_std" | "correlation") { "png" } else { "svg" };
+        let _ = writeln!(
+            body,
+            "<h2 id=\"{stem}\">{title}</h2>\n<figure><a href=\"{stem}.{shown}\"><img src=\"{stem}.{shown}\" alt=\"{title}\"></a>\
+             <figcaption>{} <span class=\"files\">Files: <a href=\"{stem}.svg\">SVG</a>, <a href=\"{stem}.png\">PNG</a>.\
+             </span></figcaption></figure>",
+            caption(stem, d)
+        );
+        if stem == "correlation" {
+            body += &correlated_pairs(d);
+        }
+    }
+    (toc, body)
+}
+
+fn correlated_pairs(d: &Data) -> String {
+    let Some(c) = d.covariance else { return String::new() };
+    let pairs = strong_pairs(&correlation(&c), STRONG_CORRELATION);
+    if pairs.is_empty() {
+        return format!("<p>No pair of numbers has |r| &gt; {STRONG_CORRELATION}.</p>\n");
+    }
+    let rows: String = pairs
+        .iter()
+        .map(|(i, j, r)| format!("<li><b>{}</b> &amp; <b>{}</b>: {r:+.4}</li>", PARAM_NAMES[*i], PARAM_NAMES[*j]))
+        .collect();
+    format!(
+        "<p>{} pairs with |r| &gt; {STRONG_CORRELATION}: their numbers are not separately determined by these views \
+         (only a combination is); the curves and the projection are, as the bands and the map show.</p>\n\
+         <ul class=\"pairs\">{rows}</ul>\n",
+        pairs.len()
+    )
+}
+
+fn views_table(d: &Data) -> String {
+    let rows: String = d
+        .cal
+        .views
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            format!(
+                "<tr><td>{k}</td><td>{:.2}</td><td>{}</td><td>{:.3}</td><td>{:.2}</td><td>{:.2}</td><td>{:.4}</td><td>{:.3}</td></tr>\n",
+                v.e_com_ma, v.points, v.rms_px, v.fx_px, v.fy_px, v.dz_mm, v.de_ma
+            )
+        })
+        .collect();
+    format!(
+        "<p>dZ, dE: the errors-in-variables corrections of the view's stage position and current (0 for the paper's \
+         estimator, which takes both as exact).</p>\n<table class=\"num\"><tr><th>view</th><th>E_com (mA)</th>\
+         <th>points</th><th>RMS (px)</th><th>own fx (px)</th><th>own fy (px)</th><th>dZ (mm)</th><th>dE (mA)</th></tr>\n\
+         {rows}</table>\n"
+    )
+}
+
+fn provenance_html(d: &Data, p: &Provenance) -> String {
+    let inputs: String = if p.inputs.is_empty() {
+        "<li>not given by the caller</li>".into()
+    } else {
+        p.inputs.iter().map(|(role, at)| format!("<li>{}: <code>{}</code></li>", esc(role), esc(at))).collect()
+    };
+    let thermal = d.cal.thermal.as_ref().map_or("none recorded".to_string(), |t| {
+        t.source.clone().unwrap_or_else(|| "recorded, source not named".into())
+    });
+    let priors = p.priors.clone().unwrap_or_else(|| {
+        "not recorded in the calibration file (see the options the calibration was run with)".into()
+    });
+    format!(
+        "<table><tr><td>etlcal version</td><td>{}</td></tr><tr><td>report written</td><td>{}</td></tr>\
+         <tr><td>inputs</td><td><ul>{inputs}</ul></td></tr><tr><td>estimator</td><td>{}</td></tr>\
+         <tr><td>priors</td><td>{}</td></tr><tr><td>thermal compensation</td><td>{}</td></tr>\
+         <tr><td>bundle adjustment</td><td>{} iterations, RMS {:.4} px (before: {:.4} px)</td></tr>\
+         <tr><td>covariance</td><td>{}</td></tr></table>\n",
+        env!("CARGO_PKG_VERSION"),
+        utc_now(),
+        esc(&d.cal.estimator),
+        esc(&priors),
+        esc(&thermal),
+        d.cal.iterations,
+        d.cal.rms_reprojection_px,
+        d.cal.initial_rms_px,
+        if d.covariance.is_some() {
+            "recorded (25 x 25)"
+        } else {
+            "absent: no bands, no uncertainty map, no correlations"
+        }
+    )
+}
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1300px;margin:auto;padding:0 1em;line-height:1.4}\
+    td,th{padding:2px 10px;border-bottom:1px solid #ddd;text-align:left;vertical-align:top}\
+    table.num td{font-variant-numeric:tabular-nums}tr.flag{background:#fff1c2}\
+    figure{margin:0 0 1.5em 0}figure img{max-width:100%;border:1px solid #eee}\
+    figcaption{color:#333;max-width:1000px}.files{color:#777}.note{background:#f3f3f3;padding:.5em 1em}\
+    ul.pairs{columns:4;max-width:1000px}";
+
+/// The whole index.html.
+pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> String {
+    let c = &d.cal;
+    let (toc, figures) = figures_html(d, files);
+    let mut notes = String::new();
+    if !text {
+        notes += "<p class=\"note\">No TrueType font was found: the plots carry no text (set ETLCAL_FONT).</p>";
+    }
+    if d.covariance.is_none() {
+        notes += "<p class=\"note\">This calibration has no covariance (written before it was recorded): no \
+                  uncertainty bands, projection-uncertainty map or correlations. Calibrate again to get them.</p>";
+    }
+    if d.views.is_empty() {
+        notes += "<p class=\"note\">No observations were given (<code>--observations</code>): no coverage, \
+                  residual or per-view figures.</p>";
+    }
+    let flagged = parameter_table(d).matches("class=\"flag\"").count();
+    format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>etlcal calibration report</title>\
+         <style>{STYLE}</style></head><body>\n<h1>etlcal calibration report</h1>\n{notes}\n\
+         <p>Estimator <b>{}</b>, {} views, E_com {:.1} .. {:.1} mA, RMS reprojection error <b>{:.4} px</b>; \
+         {flagged} of the 25 numbers flagged as not determined (|value| &lt; 2 std).</p>\n\
+         <ul><li><a href=\"#parameters\">Parameters</a></li>{toc}<li><a href=\"#views\">Views</a></li>\
+         <li><a href=\"#provenance\">Provenance</a></li></ul>\n\
+         <h2 id=\"parameters\">Parameters (value and one standard deviation)</h2>\n\
+         <p>Std from the covariance of the bundle adjustment (first order). Rows flagged ⚠ have |value| &lt; 2 std: \
+         the views do not determine that number (it is consistent with zero). That alone is no fault when the \
+         curves below are well determined (a flagged number is usually strongly correlated with another); if a \
+         curve's band or the projection-uncertainty map is too wide, add views: more currents, the board nearer \
+         the image corners.</p>\n{}\n\
+         <h3>The curves at the ends and the middle of the range</h3>\n{}\n{figures}\n\
+         <h2 id=\"views\">Views</h2>\n{}\n<h2 id=\"provenance\">Provenance</h2>\n{}</body></html>\n",
+        esc(&c.estimator),
+        c.views.len().max(d.views.len()),
+        c.e_com_range_ma[0],
+        c.e_com_range_ma[1],
+        c.rms_reprojection_px,
+        parameter_table(d),
+        curve_table(d),
+        views_table(d),
+        provenance_html(d, p),
+    )
+}

@@ -1,0 +1,160 @@
+//! The numbers the report derives from the calibration's covariance C (25 x 25, order of
+//! [`PARAM_NAMES`]): the standard deviation of a curve value q(E) (fx, fy, k1, p1, p2) as
+//! sqrt(J_q C J_q^T), the correlation matrix, and the parameter table's names and units.
+
+use etl_core::calib::jacobian::{from_params, to_params};
+use etl_core::calib::params::{PARAMS, PARAM_NAMES};
+use etl_core::calib::uncertainty::sandwich;
+use etl_core::model::CameraModel;
+
+/// The curves the report draws against the current: fx, fy (px), k1 (1/px^2), p1, p2 (1/px).
+pub(crate) const CURVES: [&str; 5] = ["fx", "fy", "k1", "p1", "p2"];
+
+/// The values of [`CURVES`] at `e_com_ma` (NaN where the model cannot be evaluated, e.g.
+/// a non-positive focal length).
+pub(crate) fn curve_values(model: &CameraModel, e_com_ma: f64) -> [f64; 5] {
+    let (fx, fy) = model.focal_lengths(e_com_ma);
+    match model.distortion(e_com_ma) {
+        Ok(d) => [fx, fy, d.k1, d.p1, d.p2],
+        Err(_) => [fx, fy, f64::NAN, f64::NAN, f64::NAN],
+    }
+}
+
+/// One standard deviation of each of [`CURVES`] at `e_com_ma`: sqrt(J C J^T) with J = dq/dx
+/// by central differences, the step of parameter i being 1e-4 of its own std (q is
+/// polynomial in kf and a, so the difference is exact to rounding for the linear numbers
+/// and to O(h^2) for w = 2 / (fx + fy)). Parameters with zero std (held) do not enter.
+pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; PARAMS]; PARAMS], e_com_ma: f64) -> [f64; 5] {
+    let x = to_params(model);
+    let mut j = [[0.0; PARAMS]; 5];
+    for i in 0..PARAMS {
+        let h = 1e-4 * covariance[i][i].max(0.0).sqrt();
+        if h == 0.0 {
+            continue;
+        }
+        let (mut up, mut down) = (x, x);
+        up[i] += h;
+        down[i] -= h;
+        let (qu, qd) = (curve_values(&from_params(&up), e_com_ma), curve_values(&from_params(&down), e_com_ma));
+        for (k, row) in j.iter_mut().enumerate() {
+            row[i] = (qu[k] - qd[k]) / (2.0 * h);
+        }
+    }
+    let s = sandwich(&j, covariance);
+    core::array::from_fn(|k| s[k][k].max(0.0).sqrt())
+}
+
+/// The correlation matrix r_ij = C_ij / sqrt(C_ii C_jj); 0 off the diagonal (and 1 on it)
+/// for a held number (C_ii = 0), whose correlation is undefined.
+pub(crate) fn correlation(covariance: &[[f64; PARAMS]; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
+    core::array::from_fn(|i| {
+        core::array::from_fn(|j| {
+            let s = (covariance[i][i] * covariance[j][j]).sqrt();
+            if i == j {
+                1.0
+            } else if s > 0.0 {
+                covariance[i][j] / s
+            } else {
+                0.0
+            }
+        })
+    })
+}
+
+/// The pairs (i, j, r_ij), i < j, with |r_ij| > `threshold`, strongest first.
+pub(crate) fn strong_pairs(r: &[[f64; PARAMS]; PARAMS], threshold: f64) -> Vec<(usize, usize, f64)> {
+    let mut pairs: Vec<(usize, usize, f64)> =
+        (0..PARAMS).flat_map(|i| (i + 1..PARAMS).map(move |j| (i, j))).map(|(i, j)| (i, j, r[i][j])).collect();
+    pairs.retain(|p| p.2.abs() > threshold);
+    pairs.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    pairs
+}
+
+/// The unit of each of the 25 numbers, in [`PARAM_NAMES`] order. fx(E) = sum kf_i E^i
+/// (px, E in mA); k1 = a1 w^2 + a2 w + a3 (1/px^2), p1 = a4 w^2 + a5 w + a6 and
+/// p2 = a7 w^2 + a8 w + a9 (1/px), w = 2 / (fx + fy) in 1/px.
+pub(crate) const PARAM_UNITS: [&str; PARAMS] = [
+    "rad", "rad", "rad", "mm", "mm", "mm", "px", "px/mA", "px/mA²", "px/mA³", "px", "px/mA", "px/mA²", "px/mA³", "px",
+    "px", "none", "1/px", "1/px²", "px", "none", "1/px", "px", "none", "1/px",
+];
+
+/// What each number is, for the parameter table.
+pub(crate) fn param_meaning(i: usize) -> &'static str {
+    match PARAM_NAMES[i] {
+        "om1" | "om2" | "om3" => "rotation (Rodrigues) world → camera",
+        "tx" | "ty" | "tz" => "translation world → camera",
+        n if n.starts_with("kf") && n.ends_with('x') => "fx(E) polynomial coefficient",
+        n if n.starts_with("kf") => "fy(E) polynomial coefficient",
+        "u0" | "v0" => "principal point",
+        "a1" | "a2" | "a3" => "k1 = a1 w² + a2 w + a3",
+        "a4" | "a5" | "a6" => "p1 = a4 w² + a5 w + a6",
+        _ => "p2 = a7 w² + a8 w + a9",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use etl_core::calib::params::{DISTORTION_A, KF_X};
+
+    /// A covariance with known entries on kf_x and a1..a3 (and a correlation between them).
+    fn covariance() -> [[f64; PARAMS]; PARAMS] {
+        let mut c = [[0.0; PARAMS]; PARAMS];
+        let s = [2.0, 0.03, 2e-4, 5e-7];
+        for i in 0..4 {
+            for j in 0..4 {
+                // r = 0.5 between different kf coefficients.
+                c[KF_X.at(i)][KF_X.at(j)] = s[i] * s[j] * if i == j { 1.0 } else { 0.5 };
+            }
+        }
+        for (k, s) in [1e-3, 1e-6, 1e-9].iter().enumerate() {
+            c[DISTORTION_A.at(k)][DISTORTION_A.at(k)] = s * s;
+        }
+        c
+    }
+
+    #[test]
+    fn fx_std_is_the_quadratic_form_of_the_powers_of_e() {
+        let (m, c) = (CameraModel::paper_rig(), covariance());
+        for e in [80.0, 150.0, 250.0] {
+            let p = [1.0, e, e * e, e * e * e];
+            let mut v = 0.0;
+            for i in 0..4 {
+                for j in 0..4 {
+                    v += p[i] * p[j] * c[KF_X.at(i)][KF_X.at(j)];
+                }
+            }
+            let s = curve_std(&m, &c, e);
+            assert!((s[0] / v.sqrt() - 1.0).abs() < 1e-6, "fx std at {e}: {} vs {}", s[0], v.sqrt());
+            // fy's numbers have no variance.
+            assert_eq!(s[1], 0.0);
+        }
+    }
+
+    #[test]
+    fn k1_std_adds_the_a_terms_and_the_focal_term() {
+        // Only a1..a3 uncertain: std k1 = sqrt(w^4 s1^2 + w^2 s2^2 + s3^2), w = 2 / (fx + fy).
+        let m = CameraModel::paper_rig();
+        let mut c = [[0.0; PARAMS]; PARAMS];
+        for (k, s) in [1e-3, 1e-6, 1e-9].iter().enumerate() {
+            c[DISTORTION_A.at(k)][DISTORTION_A.at(k)] = s * s;
+        }
+        let e = 120.0;
+        let (fx, fy) = m.focal_lengths(e);
+        let w = 2.0 / (fx + fy);
+        let want = (w.powi(4) * 1e-6 + w * w * 1e-12 + 1e-18).sqrt();
+        let s = curve_std(&m, &c, e);
+        assert!((s[2] / want - 1.0).abs() < 1e-6, "{} vs {want}", s[2]);
+        assert_eq!((s[0], s[3], s[4]), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn correlation_and_strong_pairs() {
+        let r = correlation(&covariance());
+        assert!((r[KF_X.at(0)][KF_X.at(1)] - 0.5).abs() < 1e-12);
+        assert_eq!(r[0][0], 1.0);
+        assert_eq!(r[0][1], 0.0);
+        assert!(strong_pairs(&r, 0.9).is_empty());
+        assert_eq!(strong_pairs(&r, 0.4).len(), 6);
+    }
+}
