@@ -175,6 +175,9 @@ pub fn thermal_inverse(data: &[u8]) {
     if let Ok(e_in_ma) = surface.e_in_for_e_com(e_com_ma, t_c) {
         let e_t_ma = surface.e_t_ma(e_in_ma, t_c).expect("the inverse's E_in is in the surface's domain");
         let back = e_in_ma - e_t_ma;
-        assert!((back - e_com_ma).abs() <= 1e-6 * e_com_ma.abs().max(1.0), "E_com {e_com_ma} -> E_in {e_in_ma} -> {back}");
+        assert!(
+            (back - e_com_ma).abs() <= 1e-6 * e_com_ma.abs().max(1.0),
+            "E_com {e_com_ma} -> E_in {e_in_ma} -> {back}"
+        );
     }
 }

@@ -156,7 +156,10 @@ fn bench_zhang(c: &mut Criterion) {
         let rows = zhang_rows(n);
         let bh = hand::zhang_b(&rows);
         // Noise-free undistorted views of the paper rig at E = 0: the truth is fx = 5380 px.
-        eprintln!("zhang closed form, {n} views: fx error (V^T V, Jacobi) {:.3e} (relative)", fx_px(&bh) / 5380.0 - 1.0);
+        eprintln!(
+            "zhang closed form, {n} views: fx error (V^T V, Jacobi) {:.3e} (relative)",
+            fx_px(&bh) / 5380.0 - 1.0
+        );
         c.bench_function(&format!("zhang_closed_form_{n}_views/hand"), |b| b.iter(|| hand::zhang_b(black_box(&rows))));
     }
 }
