@@ -64,6 +64,27 @@ pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use observations::Observations;
 pub use thermal::ThermalFile;
 
+/// A number as messages print it: compact, so that 1e308 is `1e308`, not 309 digits
+/// (scientific notation outside [1e-4, 1e5), Rust's shortest round-trip digits inside).
+pub fn compact(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e5).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// `value` if it is in `range` (inclusive; NaN never is), else an error naming `what`
+/// (a flag or a key), the value (compact) and the range: `--aperture-mm NaN mm is outside
+/// [0, 50] mm`.
+pub fn check_range(what: &str, value: f64, range: [f64; 2], unit: &str) -> Result<f64> {
+    if (range[0]..=range[1]).contains(&value) {
+        return Ok(value);
+    }
+    let [lo, hi] = range.map(compact);
+    Err(Error::InvalidInput(format!("{what} {} {unit} is outside [{lo}, {hi}] {unit}", compact(value))))
+}
+
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
 ///
 /// The `"format"` field is checked before the rest is parsed, so a file of another

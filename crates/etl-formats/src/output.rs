@@ -53,7 +53,7 @@ pub fn check_paths(inputs: &[&Path], outputs: &[Output<'_>]) -> Result<()> {
             Output::Dir(p) => (p, true),
         };
         let Some(m) = existing(path)? else {
-            let lexical = path.components().collect::<PathBuf>();
+            let lexical = absolute(path);
             if seen.iter().any(|(_, _, s)| *s == lexical) {
                 return Err(refused(path, "is given as two outputs"));
             }
@@ -83,6 +83,54 @@ pub fn check_paths(inputs: &[&Path], outputs: &[Output<'_>]) -> Result<()> {
         seen.push((m.dev(), m.ino(), canonical));
     }
     Ok(())
+}
+
+/// `path` with its existing directory made canonical, for comparing outputs that do not
+/// exist yet (`t.json` and `./t.json` are one file).
+fn absolute(path: &Path) -> PathBuf {
+    let lexical: PathBuf = path.components().collect();
+    let dir = match lexical.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match (dir.canonicalize(), lexical.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => lexical,
+    }
+}
+
+/// Writes several files as one set, wherever they are: `write` gets one temporary sibling
+/// path per output (`.NAME.tmpPID`, in order) and writes each (with the formats' own
+/// savers, which validate); then every temporary is renamed onto its output, last step.
+/// On an error before the renames nothing is replaced and every temporary is removed.
+/// The outputs are checked as [`check_paths`] does (policy of the module doc) first.
+/// Not atomic as a set under a kill between the renames (a window of a few system
+/// calls); sets in one directory use [`write_dir_set`], which is.
+pub fn write_file_set<T>(outputs: &[&Path], write: impl FnOnce(&[PathBuf]) -> Result<T>) -> Result<T> {
+    let files: Vec<Output<'_>> = outputs.iter().map(|p| Output::File(p)).collect();
+    check_paths(&[], &files)?;
+    let mut targets = Vec::with_capacity(outputs.len());
+    let mut temps = Vec::with_capacity(outputs.len());
+    for p in outputs {
+        let (target, dir, name) = resolve_output(p)?;
+        remove_stale_temps(&dir, &name);
+        temps.push(temp_sibling(&dir, &name));
+        targets.push(target);
+    }
+    let result = write(&temps).and_then(|value| {
+        for ((tmp, target), out) in temps.iter().zip(&targets).zip(outputs) {
+            let io = |source| Error::Output { path: out.to_path_buf(), source };
+            if let Some(mode) = kept_mode(target) {
+                std::fs::set_permissions(tmp, mode).map_err(io)?;
+            }
+            std::fs::rename(tmp, target).map_err(io)?;
+        }
+        Ok(value)
+    });
+    for tmp in &temps {
+        let _ = std::fs::remove_file(tmp);
+    }
+    result
 }
 
 /// The metadata of the input `path` (symlinks followed), refusing anything but a regular
@@ -264,7 +312,9 @@ fn refuse_foreign_entries(dir: &Path, target: &Path, set_names: &[&str]) -> Resu
     match names.iter().find(|n| !known(n)) {
         Some(n) => Err(refused(
             dir,
-            &format!("holds {n}, which is not an etlcal output: the set is replaced whole; pass a new or empty directory"),
+            &format!(
+                "holds {n}, which is not an etlcal output: the set is replaced whole; pass a new or empty directory"
+            ),
         )),
         None => Ok(()),
     }

@@ -12,7 +12,21 @@ use serde_json::json;
 use super::print_json;
 use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::observations::Observations;
+use etl_formats::output::{write_dir_set, Output};
 use etl_formats::Result;
+
+/// The names a report writes (with observations, the residual plots too).
+const REPORT_FILES: &[&str] = &[
+    "index.html",
+    "focal.png",
+    "focal.svg",
+    "distortion.png",
+    "distortion.svg",
+    "residual_map.png",
+    "residual_map.svg",
+    "residual_hist.png",
+    "residual_hist.svg",
+];
 use etl_report::write_report;
 
 /// Arguments of `etlcal report`.
@@ -38,14 +52,23 @@ pub struct Args {
 
 /// Runs `etlcal report`.
 pub fn run(args: Args) -> Result<()> {
+    let thermal_file = crate::output::thermal_file(args.thermal.as_deref());
+    crate::output::check(
+        [Some(args.calibration.as_path()), args.observations.as_deref(), thermal_file],
+        &[Output::Dir(&args.out)],
+    )?;
     let cal = Calibration::load(&args.calibration)?;
     let obs = args.observations.as_deref().map(Observations::load).transpose()?;
     // Views without E_com are compensated by the thermal calibration chosen here, else
     // the one the calibration keeps; none is assumed.
     let chosen = args.thermal.as_deref().map(ThermalRef::choose).transpose()?;
     let thermal = chosen.as_ref().or(cal.thermal.as_ref());
-    crate::output::create_dir(&args.out)?;
-    let r = write_report(&cal, obs.as_ref(), thermal, &args.out)?;
+    // The plots and index.html of one run, swapped in whole (a kill leaves the earlier set).
+    let r = write_dir_set(&args.out, REPORT_FILES, |staging| {
+        let mut r = write_report(&cal, obs.as_ref(), thermal, staging)?;
+        r.files = crate::output::moved(r.files, staging, &args.out);
+        Ok(r)
+    })?;
     if args.json {
         print_json(&json!({"files": r.files, "text": r.text}));
     } else {

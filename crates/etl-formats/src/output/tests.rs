@@ -129,3 +129,26 @@ fn a_set_replaces_the_earlier_set_whole_or_not_at_all() {
     write_dir_set(&slash, &["a"], |s| write_atomic(&s.join("a"), b"four")).unwrap();
     assert_eq!(names(&set), [SET_MANIFEST, "a"]);
 }
+
+#[test]
+fn a_file_set_is_renamed_last_and_left_out_whole_on_error() {
+    let d = tempfile::tempdir().unwrap();
+    let (a, b) = (d.path().join("o.json"), d.path().join("sub").join("c.json"));
+    std::fs::create_dir(d.path().join("sub")).unwrap();
+    for p in [&a, &b] {
+        std::fs::write(p, "old").unwrap();
+    }
+    let e = write_file_set(&[&a, &b], |tmp| {
+        write_atomic(&tmp[0], b"new")?;
+        Err::<(), _>(Error::Output { path: b.clone(), source: std::io::Error::other("No space left on device") })
+    });
+    assert!(e.is_err());
+    assert_eq!([std::fs::read_to_string(&a).unwrap(), std::fs::read_to_string(&b).unwrap()], ["old", "old"]);
+    assert_eq!(names(d.path()), ["o.json", "sub"]);
+    write_file_set(&[&a, &b], |tmp| tmp.iter().try_for_each(|t| write_atomic(t, b"new"))).unwrap();
+    assert_eq!([std::fs::read_to_string(&a).unwrap(), std::fs::read_to_string(&b).unwrap()], ["new", "new"]);
+    assert_eq!(names(&d.path().join("sub")), ["c.json"]);
+    let dotted = d.path().join(".").join("o.json");
+    let e = write_file_set(&[&a, &dotted], |_| Ok(())).unwrap_err().to_string();
+    assert!(e.contains("two outputs"), "{e}");
+}
