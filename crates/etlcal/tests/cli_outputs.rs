@@ -218,6 +218,9 @@ fn killed_simulate_and_report_leave_one_whole_set() {
     assert!(killed > 0, "no report run was killed before finishing");
 }
 
+/// An edit of an observations file's JSON.
+type Change = fn(&mut serde_json::Value);
+
 /// The golden observations with `change` applied, written to `dir/name`.
 fn observations_with(dir: &Path, name: &str, change: impl FnOnce(&mut serde_json::Value)) -> PathBuf {
     let text = std::fs::read_to_string(format!("{ROOT}/fixtures/golden/observations.json")).unwrap();
@@ -251,7 +254,7 @@ fn numbers_out_of_their_documented_ranges_are_refused_naming_the_quantity() {
     assert!(err.contains("--stage-noise-um -1 um is outside"), "{err}");
     assert!(!out.exists(), "nothing written");
     // Observations: each bad number named with its view and point.
-    let cases: [(&str, fn(&mut serde_json::Value), &str); 4] = [
+    let cases: [(&str, Change, &str); 4] = [
         (
             "e_com.json",
             |v| v["views"][2]["e_com_ma"] = (-1e6).into(),
