@@ -93,6 +93,9 @@ fn check_points(points: &[PointObs], name: &str, i: usize, image_size: [u32; 2],
     if points.is_empty() {
         return Err(Error::InvalidInput(format!("{name} {i} has no points")));
     }
+    if points.iter().any(|p| p.world_mm.iter().chain(&p.pixel).any(|x| !x.is_finite())) {
+        return Err(Error::InvalidInput(format!("{name} {i}: a point is not finite")));
+    }
     let [wr0, wr1] = WORLD_RANGE_MM;
     for (j, p) in points.iter().enumerate() {
         let bad = |what: String| Error::InvalidInput(format!("{name} {i} point {j}: {what}"));
@@ -210,6 +213,9 @@ impl Observations {
 
 /// Checks a view's currents and temperature against the lens driver's domain.
 fn check_view_setting(v: &ViewObs, name: &str, i: usize) -> Result<()> {
+    if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
+        return Err(Error::InvalidInput(format!("{name} {i}: current or temperature is not finite")));
+    }
     let [e0, e1] = E_IN_DOMAIN_MA;
     let [t0, t1] = T_DOMAIN_C;
     for (value, key) in [(Some(v.e_in_ma), "e_in_ma"), (v.e_com_ma, "e_com_ma")] {
