@@ -417,7 +417,8 @@ impl Calibration {
     }
 
     /// The one check of a calibration, made by every reader and writer (CLI and Python):
-    /// a valid camera model, a positive image size, a finite ordered current range, a
+    /// a valid camera model, an image size within `check_image_size`, an ordered current
+    /// range within the driver's `E_IN_DOMAIN_MA`, a
     /// valid thermal surface when there is one, and a finite RMS >= 0. `path` names the
     /// file in the message.
     pub fn validate(&self, path: &Path) -> Result<()> {
@@ -425,12 +426,18 @@ impl Calibration {
         if let Err(e) = self.model().validate() {
             return bad(e.to_string());
         }
-        if self.image_size[0] == 0 || self.image_size[1] == 0 {
-            return bad(format!("image_size {:?} must be positive", self.image_size));
+        if let Err(e) = crate::observations::check_image_size(self.image_size, "image_size") {
+            return bad(e.to_string());
         }
         let [lo, hi] = self.e_com_range_ma;
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return bad(format!("e_com_range_ma {:?} must be a finite [min, max]", self.e_com_range_ma));
+        let [e0, e1] = etl_core::thermal::E_IN_DOMAIN_MA;
+        // Within the driver's range: a range of 1e308 would also hang a plot's axis.
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi && e0 <= lo && hi <= e1) {
+            return bad(format!(
+                "e_com_range_ma [{}, {}] must be a [min, max] within the lens driver's [{e0}, {e1}] mA",
+                crate::compact(lo),
+                crate::compact(hi)
+            ));
         }
         if let Some(t) = &self.thermal {
             if let Err(e) = t.trust().validate() {

@@ -39,7 +39,7 @@
 //! then a rename, so a failed run leaves earlier output whole.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -50,6 +50,7 @@ pub mod dataset;
 mod error;
 pub mod export;
 pub mod observations;
+pub mod output;
 pub mod thermal;
 
 pub use error::{Error, ErrorKind, Result};
@@ -63,11 +64,35 @@ pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use observations::Observations;
 pub use thermal::ThermalFile;
 
+/// A number as messages print it: compact, so that 1e308 is `1e308`, not 309 digits
+/// (scientific notation outside [1e-4, 1e5), Rust's shortest round-trip digits inside).
+pub fn compact(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e5).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// `value` if it is in `range` (inclusive; NaN never is), else an error naming `what`
+/// (a flag or a key), the value (compact) and the range: `--aperture-mm NaN mm is outside
+/// [0, 50] mm`.
+pub fn check_range(what: &str, value: f64, range: [f64; 2], unit: &str) -> Result<f64> {
+    if (range[0]..=range[1]).contains(&value) {
+        return Ok(value);
+    }
+    let [lo, hi] = range.map(compact);
+    Err(Error::InvalidInput(format!("{what} {} {unit} is outside [{lo}, {hi}] {unit}", compact(value))))
+}
+
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
 ///
 /// The `"format"` field is checked before the rest is parsed, so a file of another
 /// format or version gets a message naming both, not a confusing field error.
+/// A path that is not a regular file (a FIFO, a device, a directory) is refused before it
+/// is opened ([`output::check_input`]).
 pub fn read_json<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
+    output::check_input(path)?;
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
     parse_json(&text, path, expected)
 }
@@ -196,25 +221,34 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
 /// flushed to disk and renamed over `path`. On any error `path` is untouched and the
 /// temporary file removed. The parent directory must exist (it is not created: a
 /// misspelt output directory is an error, not a surprise tree).
+///
+/// The policy of [`output`]: a symlink is written through (its target is replaced, the
+/// link kept), an existing output must be a regular file and writable, and a replaced
+/// file keeps its permission bits; temporaries of killed runs (`.NAME.tmpPID`) are removed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let io = |source| Error::Output { path: path.to_owned(), source };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-        _ => PathBuf::from("."),
-    };
+    let (target, dir, name) = output::resolve_output(path)?;
     if !dir.is_dir() {
         return Err(Error::Output {
             path: path.to_owned(),
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "the output directory does not exist"),
         });
     }
-    let name = path.file_name().ok_or_else(|| Error::InvalidInput(format!("{}: not a file path", path.display())))?;
-    let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    output::check_paths(&[], &[output::Output::File(&target)]).map_err(|e| match e {
+        Error::Output { source, .. } => Error::Output { path: path.to_owned(), source },
+        other => other,
+    })?;
+    output::remove_stale_temps(&dir, &name);
+    let tmp = output::temp_sibling(&dir, &name);
+    let mode = output::kept_mode(&target);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
+        if let Some(mode) = mode {
+            f.set_permissions(mode)?;
+        }
         f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)
     })();
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);

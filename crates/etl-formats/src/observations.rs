@@ -15,6 +15,7 @@ use std::path::Path;
 
 use crate::calibration::ThermalRef;
 use etl_core::calib::Point;
+use etl_core::thermal::{E_IN_DOMAIN_MA, T_DOMAIN_C};
 use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
@@ -56,12 +57,68 @@ pub struct OffstateView {
     pub points: Vec<PointObs>,
 }
 
-fn check_points(points: &[PointObs], name: &str, i: usize) -> Result<()> {
+/// The largest image side, px, and the most pixels an image may have: 65536 px and
+/// 2^28 px (268 Mpx, a 16384 x 16384 sensor), beyond any camera etlcal calibrates; larger
+/// is refused before anything is allocated for it.
+pub const MAX_IMAGE_SIDE_PX: u32 = 65_536;
+/// See [`MAX_IMAGE_SIDE_PX`].
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
+/// World coordinates of a board point, mm: within +-10 m of the rig's origin.
+pub const WORLD_RANGE_MM: [f64; 2] = [-10_000.0, 10_000.0];
+/// How far outside the image an observed pixel may be, in image sizes: a corner is seen
+/// in the image, and one image size around it covers any distortion model's overshoot.
+pub const PIXEL_MARGIN_IMAGES: f64 = 1.0;
+
+/// Checks `image_size` against [`MAX_IMAGE_SIDE_PX`] and [`MAX_IMAGE_PIXELS`] (`what`
+/// names it in the message).
+pub fn check_image_size(image_size: [u32; 2], what: &str) -> Result<()> {
+    let [w, h] = image_size;
+    if !(1..=MAX_IMAGE_SIDE_PX).contains(&w) || !(1..=MAX_IMAGE_SIDE_PX).contains(&h) {
+        return Err(Error::InvalidInput(format!(
+            "{what} [{w}, {h}] px: each side must be in [1, {MAX_IMAGE_SIDE_PX}] px"
+        )));
+    }
+    if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
+        return Err(Error::InvalidInput(format!(
+            "{what} [{w}, {h}] px: more than {MAX_IMAGE_PIXELS} pixels (the documented limit)"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks the points of view `i` (`name`: "view", "lens-off view", ...): at least one,
+/// world coordinates in [`WORLD_RANGE_MM`], pixels within [`PIXEL_MARGIN_IMAGES`] of the
+/// image, and with `planar` every Z = 0. The message names the view and the point.
+fn check_points(points: &[PointObs], name: &str, i: usize, image_size: [u32; 2], planar: bool) -> Result<()> {
     if points.is_empty() {
         return Err(Error::InvalidInput(format!("{name} {i} has no points")));
     }
     if points.iter().any(|p| p.world_mm.iter().chain(&p.pixel).any(|x| !x.is_finite())) {
         return Err(Error::InvalidInput(format!("{name} {i}: a point is not finite")));
+    }
+    let [wr0, wr1] = WORLD_RANGE_MM;
+    for (j, p) in points.iter().enumerate() {
+        let bad = |what: String| Error::InvalidInput(format!("{name} {i} point {j}: {what}"));
+        if let Some(x) = p.world_mm.iter().find(|x| !(wr0..=wr1).contains(*x)) {
+            return Err(bad(format!("world coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(*x))));
+        }
+        for (x, side) in p.pixel.iter().zip(image_size) {
+            let margin = PIXEL_MARGIN_IMAGES * f64::from(side);
+            if !(-margin..=f64::from(side) + margin).contains(x) {
+                return Err(bad(format!(
+                    "pixel coordinate {} px is outside [{}, {}] px (the image and one image size around it)",
+                    crate::compact(*x),
+                    -margin,
+                    f64::from(side) + margin
+                )));
+            }
+        }
+        if planar && p.world_mm[2] != 0.0 {
+            return Err(bad(format!(
+                "Z = {} mm, but this board is planar: its points must have Z = 0",
+                crate::compact(p.world_mm[2])
+            )));
+        }
     }
     Ok(())
 }
@@ -108,21 +165,23 @@ impl Observations {
         write_json(path, self)
     }
 
-    /// Checks finiteness and non-empty views: at least one ETL view or one setting view.
+    /// Checks the documented ranges (docs/RELIABILITY.md): at least one ETL view or one
+    /// setting view; `image_size` within [`check_image_size`]; currents (`e_in_ma`,
+    /// `e_com_ma`) within the driver's [`E_IN_DOMAIN_MA`] and temperatures within
+    /// [`T_DOMAIN_C`]; points as `check_points` (lens-off and setting boards planar).
     pub fn validate(&self) -> Result<()> {
         if self.views.is_empty() && self.setting_views.is_empty() {
             return Err(Error::InvalidInput("observations hold no views".into()));
         }
-        for (list, name) in [(&self.views, "view"), (&self.setting_views, "setting view")] {
+        check_image_size(self.image_size, "image_size")?;
+        for (list, name, planar) in [(&self.views, "view", false), (&self.setting_views, "setting view", true)] {
             for (i, v) in list.iter().enumerate() {
-                if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
-                    return Err(Error::InvalidInput(format!("{name} {i}: current or temperature is not finite")));
-                }
-                check_points(&v.points, name, i)?;
+                check_view_setting(v, name, i)?;
+                check_points(&v.points, name, i, self.image_size, planar)?;
             }
         }
         for (i, v) in self.offstate_views.iter().enumerate() {
-            check_points(&v.points, "lens-off view", i)?;
+            check_points(&v.points, "lens-off view", i, self.image_size, true)?;
         }
         Ok(())
     }
@@ -150,6 +209,33 @@ impl Observations {
             .map(|v| v.points.iter().map(|p| Point { world_mm: p.world_mm, pixel: p.pixel }).collect())
             .collect()
     }
+}
+
+/// Checks a view's currents and temperature against the lens driver's domain.
+fn check_view_setting(v: &ViewObs, name: &str, i: usize) -> Result<()> {
+    if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
+        return Err(Error::InvalidInput(format!("{name} {i}: current or temperature is not finite")));
+    }
+    let [e0, e1] = E_IN_DOMAIN_MA;
+    let [t0, t1] = T_DOMAIN_C;
+    for (value, key) in [(Some(v.e_in_ma), "e_in_ma"), (v.e_com_ma, "e_com_ma")] {
+        match value {
+            Some(e) if !(e0..=e1).contains(&e) => {
+                return Err(Error::InvalidInput(format!(
+                    "{name} {i}: {key} {} mA is outside the lens driver's [{e0}, {e1}] mA",
+                    crate::compact(e)
+                )));
+            }
+            _ => {}
+        }
+    }
+    if !(t0..=t1).contains(&v.temperature_c) {
+        return Err(Error::InvalidInput(format!(
+            "{name} {i}: temperature_c {} degC is outside [{t0}, {t1}] degC",
+            crate::compact(v.temperature_c)
+        )));
+    }
+    Ok(())
 }
 
 /// E_com of one view: its recorded `e_com_ma`, or E_in - E_T(T, E_in) through `thermal`,

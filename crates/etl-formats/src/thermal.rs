@@ -110,7 +110,7 @@ pub fn parse_thermal_table(text: &str, path: &Path) -> Result<Vec<ThermalSample>
         Some((n, h)) => {
             let fields: Vec<&str> = h.split(',').map(str::trim).collect();
             if fields.join(",") != THERMAL_TABLE_HEADER {
-                return Err(err(n, format!("header must be \"{THERMAL_TABLE_HEADER}\", found \"{h}\"")));
+                return Err(err(n, format!("header must be \"{THERMAL_TABLE_HEADER}\", found \"{}\"", excerpt(h))));
             }
         }
         None => return Err(err(1, format!("empty table (expected the header \"{THERMAL_TABLE_HEADER}\")"))),
@@ -127,9 +127,10 @@ pub fn parse_thermal_table(text: &str, path: &Path) -> Result<Vec<ThermalSample>
         }
         let mut v = [0.0; 3];
         for (k, (field, name)) in fields.iter().zip(names).enumerate() {
-            let x: f64 = field.parse().map_err(|_| err(n, format!("{name} = \"{field}\" is not a number")))?;
+            let x: f64 =
+                field.parse().map_err(|_| err(n, format!("{name} = \"{}\" is not a number", excerpt(field))))?;
             if !x.is_finite() {
-                return Err(err(n, format!("{name} = {field} is not a finite number")));
+                return Err(err(n, format!("{name} = {} is not a finite number", excerpt(field))));
             }
             v[k] = x;
         }
@@ -141,8 +142,19 @@ pub fn parse_thermal_table(text: &str, path: &Path) -> Result<Vec<ThermalSample>
     Ok(rows)
 }
 
-/// Reads the thermal table from `path` (see [`parse_thermal_table`]).
+/// At most the first 40 characters of a field quoted in a message (a 10 MB field must not
+/// become a 10 MB error line), with `...` when cut.
+fn excerpt(field: &str) -> String {
+    match field.char_indices().nth(40) {
+        Some((at, _)) => format!("{}...", &field[..at]),
+        None => field.to_owned(),
+    }
+}
+
+/// Reads the thermal table from `path` (see [`parse_thermal_table`]); a path that is not
+/// a regular file is refused before it is opened.
 pub fn read_thermal_table(path: &Path) -> Result<Vec<ThermalSample>> {
+    crate::output::check_input(path)?;
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
     parse_thermal_table(&text, path)
 }
@@ -163,6 +175,13 @@ pub fn write_thermal_table(path: &Path, rows: &[ThermalSample]) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_huge_field_is_cut_in_the_message() {
+        let text = format!("{THERMAL_TABLE_HEADER}\n30,{},1\n", "9".repeat(1_000_000) + "x");
+        let e = parse_thermal_table(&text, Path::new("t.csv")).unwrap_err().to_string();
+        assert!(e.len() < 150 && e.contains("e_in_ma = \"9999") && e.contains("...\" is not a number"), "{e}");
+    }
+
     use super::*;
 
     #[test]

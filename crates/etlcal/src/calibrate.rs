@@ -16,7 +16,7 @@
 //! at each current, a cubic through fx(E), fy(E); needs `setting_views`); it refuses the
 //! flags of the bundle adjustment (`--a0`, `--estimator`, `--hold-a0`, `--huber-px`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use etl_core::calib::{Estimator, RobustLoss};
 
@@ -28,6 +28,7 @@ use etl_formats::a0::A0File;
 use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::dataset::Dataset;
 use etl_formats::observations::Observations;
+use etl_formats::output::{write_file_set, Output};
 use etl_formats::{Error, Result};
 
 /// The bundle adjustment's estimator.
@@ -125,7 +126,15 @@ pub fn load_input(
 
 /// Runs `etlcal calibrate`.
 pub fn run(args: Args) -> Result<()> {
-    // Cheap checks first: a bad flag or output path must not cost a detection run.
+    // Cheap checks first: a bad flag or output path must not cost a detection run, and an
+    // output that is an input must be refused before the input is read.
+    let mut outputs = vec![Output::File(&args.out)];
+    outputs.extend(args.observations_out.as_deref().map(Output::File));
+    let thermal_file = crate::output::thermal_file(args.thermal.as_deref());
+    crate::output::check(
+        [args.observations.as_deref(), args.dataset.as_deref(), args.a0.as_deref(), thermal_file],
+        &outputs,
+    )?;
     if !(args.sigma_z_um > 0.0 && args.sigma_e_ma > 0.0) {
         return Err(Error::InvalidInput("--sigma-z-um and --sigma-e-ma must be positive".into()));
     }
@@ -146,13 +155,15 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::PerSetting => etl_calib::baseline::per_setting(&obs, thermal.as_ref())?.calibration,
         MethodArg::Proposed => calibrate_proposed(&args, &obs, thermal.as_ref())?,
     };
-    for out in std::iter::once(&args.out).chain(&args.observations_out) {
+    let files: Vec<&Path> = std::iter::once(&args.out).chain(&args.observations_out).map(PathBuf::as_path).collect();
+    for out in &files {
         crate::output::create_parent(out)?;
     }
-    if let Some(p) = &args.observations_out {
-        obs.save(p)?;
-    }
-    calibration.save(&args.out)?;
+    // Both files or neither: a calibration beside observations of another run is wrong.
+    write_file_set(&files, |tmp| {
+        calibration.save(&tmp[0])?;
+        tmp.get(1).map_or(Ok(()), |p| obs.save(p))
+    })?;
     if args.json {
         print_json(&serde_json::to_value(&calibration).map_err(|e| Error::InvalidInput(e.to_string()))?);
     } else {

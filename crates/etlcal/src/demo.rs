@@ -21,7 +21,23 @@ use serde_json::json;
 
 use super::print_json;
 use etl_core::calib::Estimator;
+use etl_formats::output::{write_dir_set, Output};
 use etl_formats::write_atomic;
+
+/// The names `demo` writes into its directory.
+const DEMO_FILES: &[&str] = &[
+    "views",
+    "offstate",
+    "dataset.json",
+    "observations.json",
+    "a0.json",
+    "truth.json",
+    "calibration.json",
+    "calibration-eiv.json",
+    "summary.md",
+    "report",
+    "report-eiv",
+];
 use etl_formats::{Error, Result};
 use etl_report::Provenance;
 use etl_sim::simulate::write_simulation;
@@ -49,17 +65,8 @@ pub struct Args {
 
 /// Runs `etlcal demo`: [`run_demo`], then writes its files and prints its summary.
 pub fn run(args: Args) -> Result<()> {
-    crate::output::create_dir(&args.out)?;
+    crate::output::check([], &[Output::Dir(&args.out)])?;
     let options = DemoOptions { seed: args.seed, stage_noise_um: args.stage_noise_um, images: !args.no_images };
-    let demo = run_demo(&options, &args.out, &crate::progress::Bar::new(!args.json))?;
-    write_simulation(&demo.sim, &args.out)?;
-    if let Some(dataset) = &demo.dataset {
-        dataset.save(&args.out.join("dataset.json"))?;
-        demo.observations.save(&args.out.join("observations.json"))?;
-    }
-    demo.paper.calibration.save(&args.out.join("calibration.json"))?;
-    demo.eiv.calibration.save(&args.out.join("calibration-eiv.json"))?;
-    write_atomic(&args.out.join("summary.md"), demo.summary_md.as_bytes())?;
     let inputs = |file: &str| {
         let obs = if options.images { "detected in the rendered views/*.png" } else { "simulated corners" };
         vec![
@@ -67,21 +74,29 @@ pub fn run(args: Args) -> Result<()> {
             ("observations".to_string(), format!("observations.json ({obs}; seed {})", args.seed)),
         ]
     };
-    for (name, file, r, estimator) in [
-        ("report", "calibration.json", &demo.paper, Estimator::Paper),
-        ("report-eiv", "calibration-eiv.json", &demo.eiv, demo.eiv_estimator),
-    ] {
-        let dir = args.out.join(name);
-        crate::output::create_dir(&dir)?;
-        let provenance = Provenance { inputs: inputs(file), priors: Some(Provenance::priors_of(&estimator)) };
-        etl_report::write_report(
-            &r.calibration,
-            Some(&demo.observations),
-            r.calibration.thermal.as_ref(),
-            &provenance,
-            &dir,
-        )?;
-    }
+    // Everything of one run in a temporary sibling directory, swapped in whole.
+    let demo = write_dir_set(&args.out, DEMO_FILES, |out| {
+        let demo = run_demo(&options, out, &crate::progress::Bar::new(!args.json))?;
+        write_simulation(&demo.sim, out)?;
+        if let Some(dataset) = &demo.dataset {
+            dataset.save(&out.join("dataset.json"))?;
+            demo.observations.save(&out.join("observations.json"))?;
+        }
+        demo.paper.calibration.save(&out.join("calibration.json"))?;
+        demo.eiv.calibration.save(&out.join("calibration-eiv.json"))?;
+        write_atomic(&out.join("summary.md"), demo.summary_md.as_bytes())?;
+        for (name, file, r, estimator) in [
+            ("report", "calibration.json", &demo.paper, Estimator::Paper),
+            ("report-eiv", "calibration-eiv.json", &demo.eiv, demo.eiv_estimator),
+        ] {
+            let dir = out.join(name);
+            crate::output::create_dir(&dir)?;
+            let provenance = Provenance { inputs: inputs(file), priors: Some(Provenance::priors_of(&estimator)) };
+            let thermal = r.calibration.thermal.as_ref();
+            etl_report::write_report(&r.calibration, Some(&demo.observations), thermal, &provenance, &dir)?;
+        }
+        Ok(demo)
+    })?;
     if args.json {
         let to_json = |v| serde_json::to_value(v).map_err(|e| Error::InvalidInput(e.to_string()));
         let mut j = to_json(&demo.paper_validation)?;

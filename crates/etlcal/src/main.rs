@@ -170,9 +170,20 @@ fn verb_of(argv: &[String]) -> String {
     words.join(" ")
 }
 
+/// The command line parsed, with negative numbers taken as values by every verb and
+/// subcommand (`render --e-com -292`, `thermal eval --t -10`): set here once rather than
+/// on each `Args`, so that a new verb cannot forget it.
+fn parse(argv: &[String]) -> std::result::Result<Cli, clap::Error> {
+    fn negatives(c: clap::Command) -> clap::Command {
+        c.allow_negative_numbers(true).mut_subcommands(negatives)
+    }
+    let matches = negatives(<Cli as clap::CommandFactory>::command()).try_get_matches_from(argv)?;
+    <Cli as clap::FromArgMatches>::from_arg_matches(&matches)
+}
+
 fn main() -> ExitCode {
     let argv: Vec<String> = std::env::args().collect();
-    let cli = match Cli::try_parse_from(&argv) {
+    let cli = match parse(&argv) {
         Ok(cli) => cli,
         Err(e) if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) => {
             let _ = e.print();

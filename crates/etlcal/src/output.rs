@@ -1,9 +1,13 @@
 //! Output paths, one rule for every verb: a missing output directory is created (with any
 //! missing parents, as `mkdir -p`), and so is the missing parent directory of an output
-//! file. A path that exists but is not a directory is refused by the operating system.
+//! file. Before reading anything a verb checks its inputs and outputs with [`check`]
+//! (etl_formats::output's policy: an output that is an input, or exists and is not a
+//! regular file, is refused); several outputs are written as one set
+//! ([`etl_formats::output::write_dir_set`], [`etl_formats::output::write_file_set`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use etl_formats::output::{check_paths, Output};
 use etl_formats::{Error, Result};
 
 /// Creates the directory `dir` and its missing parents; nothing to do when it exists.
@@ -18,4 +22,21 @@ pub fn create_parent(file: &Path) -> Result<()> {
         Some(dir) => create_dir(dir),
         None => Ok(()),
     }
+}
+
+/// The file of a `--thermal FILE|paper` flag: `None` for `paper` (no file).
+pub fn thermal_file(choice: Option<&Path>) -> Option<&Path> {
+    choice.filter(|p| *p != Path::new(etl_formats::calibration::PAPER_THERMAL))
+}
+
+/// [`check_paths`] over the inputs that were given (`None`s skipped) and the outputs.
+pub fn check<'a>(inputs: impl IntoIterator<Item = Option<&'a Path>>, outputs: &[Output<'_>]) -> Result<()> {
+    let inputs: Vec<&Path> = inputs.into_iter().flatten().collect();
+    check_paths(&inputs, outputs)
+}
+
+/// The paths `files` reports under the temporary directory `staging` of a set, as they
+/// are once the set is in place at `dir`.
+pub fn moved(files: Vec<PathBuf>, staging: &Path, dir: &Path) -> Vec<PathBuf> {
+    files.into_iter().map(|f| f.strip_prefix(staging).map(|rel| dir.join(rel)).unwrap_or(f)).collect()
 }

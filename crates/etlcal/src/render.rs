@@ -19,8 +19,9 @@ use serde_json::json;
 
 use super::print_json;
 use etl_formats::dataset::Board;
+use etl_formats::output::{write_file_set, Output};
+use etl_formats::{check_range, Error, Result};
 use etl_formats::{write_atomic, write_json};
-use etl_formats::{Error, Result};
 use etl_image::detect::Pattern;
 use etl_sim::render::{render, BitDepth, Optics, Photometry, RenderOptions, Scene};
 use etl_sim::simulate::focused_z_mm;
@@ -72,9 +73,20 @@ pub fn run(args: Args) -> Result<()> {
         b => return Err(Error::InvalidInput(format!("--bit-depth must be 8 or 16, got {b}"))),
     };
     let format = image_format(&args.out, bit_depth)?;
+    let mut corners_path = args.out.clone().into_os_string();
+    corners_path.push(".corners.json");
+    let corners_path = PathBuf::from(corners_path);
+    crate::output::check([], &[Output::File(&args.out), Output::File(&corners_path)])?;
     let truth = CameraModel::paper_rig();
-    let e = args.e_com;
-    let z = args.z_mm.unwrap_or_else(|| focused_z_mm(e));
+    // Documented ranges (docs/RELIABILITY.md), checked before rendering: NaN is in none.
+    let e = check_range("--e-com", args.e_com, etl_core::thermal::E_IN_DOMAIN_MA, "mA")?;
+    check_range("--aperture-mm", args.aperture_mm, [0.0, 50.0], "mm")?;
+    check_range("--blur-px", args.blur_px, [0.0, 100.0], "px")?;
+    check_range("--noise", args.noise, [0.0, 255.0], "grey levels")?;
+    let z = match args.z_mm {
+        Some(z) => check_range("--z-mm", z, [-10_000.0, 10_000.0], "mm")?,
+        None => focused_z_mm(e),
+    };
     let board = Board { inner_corners: [args.pattern.cols, args.pattern.rows], square_mm: args.square };
     board.validate()?;
     let scene = Scene::new(truth, e, board, z, CameraModel::PAPER_IMAGE_SIZE);
@@ -96,16 +108,17 @@ pub fn run(args: Args) -> Result<()> {
         "in_image": r.corners_in_image,
         "blur_sigma_px": r.blur_sigma_px,
     });
-    let mut corners_path = args.out.clone().into_os_string();
-    corners_path.push(".corners.json");
     let mut bytes = std::io::Cursor::new(Vec::new());
-    r.image
-        .to_dynamic()
-        .write_to(&mut bytes, format)
-        .map_err(|e| Error::Image { path: args.out.clone(), message: format!("cannot encode: {e}") })?;
+    r.image.to_dynamic().write_to(&mut bytes, format).map_err(|e| Error::Output {
+        path: args.out.clone(),
+        source: std::io::Error::other(format!("cannot encode: {e}")),
+    })?;
     crate::output::create_parent(&args.out)?;
-    write_atomic(&args.out, bytes.get_ref())?;
-    write_json(&PathBuf::from(corners_path), &corners)?;
+    // The image and its corners, both or neither.
+    write_file_set(&[&args.out, &corners_path], |tmp| {
+        write_atomic(&tmp[0], bytes.get_ref())?;
+        write_json(&tmp[1], &corners)
+    })?;
     if args.json {
         print_json(&corners);
     } else {

@@ -14,8 +14,15 @@ use serde_json::json;
 use super::print_json;
 use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::observations::Observations;
+use etl_formats::output::{write_dir_set, Output};
 use etl_formats::Result;
-use etl_report::{write_report, Provenance};
+use etl_report::{write_report, Provenance, REPORT_FIGURES};
+
+/// The names a report writes: index.html and each figure as SVG and PNG.
+fn report_files() -> Vec<String> {
+    let figures = REPORT_FIGURES.iter().flat_map(|(name, _)| [format!("{name}.svg"), format!("{name}.png")]);
+    std::iter::once("index.html".to_string()).chain(figures).collect()
+}
 
 /// Arguments of `etlcal report`.
 #[derive(clap::Args, Debug)]
@@ -40,13 +47,17 @@ pub struct Args {
 
 /// Runs `etlcal report`.
 pub fn run(args: Args) -> Result<()> {
+    let thermal_file = crate::output::thermal_file(args.thermal.as_deref());
+    crate::output::check(
+        [Some(args.calibration.as_path()), args.observations.as_deref(), thermal_file],
+        &[Output::Dir(&args.out)],
+    )?;
     let cal = Calibration::load(&args.calibration)?;
     let obs = args.observations.as_deref().map(Observations::load).transpose()?;
     // Views without E_com are compensated by the thermal calibration chosen here, else
     // the one the calibration keeps; none is assumed.
     let chosen = args.thermal.as_deref().map(ThermalRef::choose).transpose()?;
     let thermal = chosen.as_ref().or(cal.thermal.as_ref());
-    crate::output::create_dir(&args.out)?;
     let mut inputs = vec![("calibration".to_string(), args.calibration.display().to_string())];
     if let Some(o) = &args.observations {
         inputs.push(("observations".to_string(), o.display().to_string()));
@@ -56,7 +67,14 @@ pub fn run(args: Args) -> Result<()> {
     }
     // The calibration file does not record the estimator's priors: the report says so.
     let provenance = Provenance { inputs, priors: None };
-    let r = write_report(&cal, obs.as_ref(), thermal, &provenance, &args.out)?;
+    let files = report_files();
+    let names: Vec<&str> = files.iter().map(String::as_str).collect();
+    // The plots and index.html of one run, swapped in whole (a kill leaves the earlier set).
+    let r = write_dir_set(&args.out, &names, |staging| {
+        let mut r = write_report(&cal, obs.as_ref(), thermal, &provenance, staging)?;
+        r.files = crate::output::moved(r.files, staging, &args.out);
+        Ok(r)
+    })?;
     if args.json {
         print_json(&json!({"files": r.files, "text": r.text}));
     } else {

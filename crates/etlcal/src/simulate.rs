@@ -8,14 +8,19 @@
 //! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
 //! given on the command line override it.
 //!
-//! DIR is created if missing (with its missing parents).
+//! DIR is created if missing (with its missing parents) and replaced as one set: a kill
+//! or an error leaves the earlier set whole (docs/RELIABILITY.md).
 
 use std::path::PathBuf;
 
 use serde_json::json;
 
 use super::print_json;
+use etl_formats::output::{write_dir_set, Output};
 use etl_formats::{Error, Result};
+
+/// The names `simulate` writes into its directory.
+const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
 use etl_sim::simulate::{simulate, write_simulation, SettingRig, SimConfig};
 
 /// Arguments of `etlcal simulate`.
@@ -61,6 +66,16 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
     if let Some(s) = args.seed {
         c.seed = s;
     }
+    // The flags by their names first; the configuration's own keys in `validate`.
+    for (flag, value, hi, unit) in [
+        ("--stage-noise-um", args.stage_noise_um, 10_000.0, "um"),
+        ("--current-noise-ma", args.current_noise_ma, 50.0, "mA"),
+        ("--pixel-noise-px", args.pixel_noise_px, 100.0, "px"),
+    ] {
+        if let Some(v) = value {
+            etl_formats::check_range(flag, v, [0.0, hi], unit)?;
+        }
+    }
     let n = &mut c.noise;
     let flags = [args.stage_noise_um.map(|v| v / 1000.0), args.current_noise_ma, args.pixel_noise_px];
     for (slot, v) in [&mut n.z_mm, &mut n.e_ma, &mut n.px].into_iter().zip(flags) {
@@ -77,6 +92,7 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 
 /// Runs `etlcal simulate`.
 pub fn run(args: Args) -> Result<()> {
+    crate::output::check([args.config.as_deref()], &[Output::Dir(&args.out)])?;
     let config = config_from(&args)?;
     if !args.observations_only && config.setting_rig.is_some() {
         return Err(Error::InvalidInput(
@@ -84,21 +100,24 @@ pub fn run(args: Args) -> Result<()> {
                 .into(),
         ));
     }
-    crate::output::create_dir(&args.out)?;
     let sim = simulate(&config);
-    write_simulation(&sim, &args.out)?;
-    let mut images = 0;
-    if !args.observations_only {
+    // Images, dataset, observations and truth of one run, swapped in whole: a dataset
+    // beside another seed's observations would calibrate to a wrong answer silently.
+    let images = write_dir_set(&args.out, SIMULATION_FILES, |staging| {
+        write_simulation(&sim, staging)?;
+        if args.observations_only {
+            return Ok(0);
+        }
         let dataset = etl_sim::simulate::images::render_rig(
             &sim,
-            &args.out,
+            staging,
             &etl_sim::simulate::images::ImageOptions::default(),
             config.seed,
             &crate::progress::Bar::new(!args.json),
         )?;
-        images = dataset.views.len() + dataset.offstate_views.len();
-        dataset.save(&args.out.join("dataset.json"))?;
-    }
+        dataset.save(&staging.join("dataset.json"))?;
+        Ok(dataset.views.len() + dataset.offstate_views.len())
+    })?;
     let points: usize = sim.observations.views.iter().map(|v| v.points.len()).sum();
     if args.json {
         print_json(&json!({"views": sim.observations.views.len(), "points": points,

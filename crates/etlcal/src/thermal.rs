@@ -22,6 +22,7 @@ use serde_json::json;
 
 use super::print_json;
 use etl_formats::calibration::ThermalRef;
+use etl_formats::output::Output;
 use etl_formats::thermal::{read_thermal_table, ThermalFile};
 use etl_formats::{Error, Result};
 
@@ -122,6 +123,7 @@ pub fn run(args: Args, json: bool) -> Result<()> {
 pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     use etl_calib::thermal_calibration::ProcedureOptions;
     let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
+    crate::output::check([], &[Output::File(&args.out), Output::File(&table)])?;
     for p in [&args.out, &table] {
         crate::output::create_parent(p)?;
     }
@@ -133,9 +135,12 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &crate::progress::Bar::new(!args.json))?;
     let (r, t0) = (&v.result, v.t_ref_c);
     let (referenced, absolute) = (v.surface_error_ma, v.surface_error_absolute_ma);
-    etl_formats::thermal::write_thermal_table(&table, &r.samples)?;
     let file = ThermalFile::new(&r.calibration, r.rms_ma);
-    file.save(&args.out)?;
+    // The surface and the table it was fitted to, both or neither.
+    etl_formats::output::write_file_set(&[&args.out, &table], |tmp| {
+        file.save(&tmp[0])?;
+        etl_formats::thermal::write_thermal_table(&tmp[1], &r.samples)
+    })?;
     if args.json {
         print_json(&file_json(
             &file,
@@ -197,6 +202,7 @@ pub fn run_eval(args: EvalArgs) -> Result<()> {
 
 /// Runs `etlcal thermal fit`.
 pub fn run_fit(args: FitArgs) -> Result<()> {
+    crate::output::check([Some(args.table.as_path())], &[Output::File(&args.out)])?;
     let rows = read_thermal_table(&args.table)?;
     let (cal, rms_ma) = etl_calib::thermal_calibration::fit_samples(&rows)
         .map_err(|err| Error::InvalidInput(format!("{}: {err}", args.table.display())))?;

@@ -50,6 +50,7 @@ struct Job {
 fn check_input(input: &Path, out_dir: &Path, size: [u32; 2]) -> Result<Job> {
     let bad = |message: String| Error::Image { path: input.to_owned(), message };
     let io = |source| Error::Io { path: input.to_owned(), source };
+    etl_formats::output::check_input(input)?; // a FIFO would block the open below
     let reader = image::ImageReader::open(input).map_err(io)?.with_guessed_format().map_err(io)?;
     let format = reader.format().ok_or_else(|| bad("not an image (PNG, JPEG or TIFF)".into()))?;
     let decoder = reader.into_decoder().map_err(|e| bad(e.to_string()))?;
@@ -105,8 +106,10 @@ fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64) -> Result<()> {
         }
     };
     let mut bytes = std::io::Cursor::new(Vec::new());
-    out.write_to(&mut bytes, job.format)
-        .map_err(|e| Error::Image { path: job.output.clone(), message: format!("cannot encode: {e}") })?;
+    out.write_to(&mut bytes, job.format).map_err(|e| Error::Output {
+        path: job.output.clone(),
+        source: std::io::Error::other(format!("cannot encode: {e}")),
+    })?;
     write_atomic(&job.output, bytes.get_ref())
 }
 

@@ -259,5 +259,5 @@ fn bad_inputs_fail_with_one_line_and_write_nothing() {
     // Negative noise in simulate.
     let (code, _, err) = etlcal(&["simulate", "--out", &p(""), "--observations-only", "--pixel-noise-px", "-1"]);
     assert_eq!(code, 1);
-    assert!(err.contains("negative"), "{err}");
+    assert!(err.contains("--pixel-noise-px -1 px is outside [0, 100] px"), "{err}");
 }

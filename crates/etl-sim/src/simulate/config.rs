@@ -21,6 +21,11 @@ use etl_formats::{Error, Result};
 /// The format tag.
 pub const CONFIG_FORMAT: &str = "etlcal.simconfig/1";
 
+/// The most views per setting a configuration may ask for (the paper's rig has 15).
+pub const MAX_VIEWS_PER_SETTING: usize = 1000;
+/// The most currents of a setting rig (the paper's has 7).
+pub const MAX_SETTINGS: usize = 1000;
+
 /// A simulation's configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -64,12 +69,32 @@ impl SimConfig {
     /// See [`Self::load`].
     pub fn validate(&self) -> Result<()> {
         let n = &self.noise;
-        if ![n.xy_mm, n.z_mm, n.e_ma, n.px, n.kf0_rel, n.pp_px].iter().all(|x| x.is_finite() && *x >= 0.0) {
-            return Err(Error::InvalidInput("noise levels must be finite and not negative".into()));
+        // Practical ranges (docs/RELIABILITY.md): far above any real rig's noise, far
+        // below what makes the synthetic corners leave the image or overflow.
+        for (key, value, hi, unit) in [
+            ("noise.xy_mm", n.xy_mm, 10.0, "mm"),
+            ("noise.z_mm", n.z_mm, 10.0, "mm"),
+            ("noise.e_ma", n.e_ma, 50.0, "mA"),
+            ("noise.px", n.px, 100.0, "px"),
+            ("noise.kf0_rel", n.kf0_rel, 1.0, ""),
+            ("noise.pp_px", n.pp_px, 1000.0, "px"),
+        ] {
+            etl_formats::check_range(key, value, [0.0, hi], unit)?;
         }
         if let Some(r) = &self.setting_rig {
             if r.e_com_ma.is_empty() || r.views_per_setting == 0 {
                 return Err(Error::InvalidInput("setting_rig needs at least one current and one view".into()));
+            }
+            if r.views_per_setting > MAX_VIEWS_PER_SETTING || r.e_com_ma.len() > MAX_SETTINGS {
+                return Err(Error::InvalidInput(format!(
+                    "setting_rig: {} currents x {} views_per_setting: at most {MAX_SETTINGS} currents and \
+                     {MAX_VIEWS_PER_SETTING} views per setting",
+                    r.e_com_ma.len(),
+                    r.views_per_setting
+                )));
+            }
+            for e in &r.e_com_ma {
+                etl_formats::check_range("setting_rig.e_com_ma", *e, etl_core::thermal::E_IN_DOMAIN_MA, "mA")?;
             }
             if !(r.blur_px > 0.0 && r.aperture_mm > 0.0 && r.max_tilt_deg >= 0.0)
                 || r.e_com_ma.iter().any(|e| !e.is_finite())

@@ -1,0 +1,292 @@
+//! Outputs and inputs (issue 19, docs/RELIABILITY.md "Outputs"): an output that is an
+//! input, or exists and is not a regular file, is refused before anything is read, in one
+//! line with exit status 1, inputs and earlier outputs intact and no temporary left; sets
+//! of files are replaced whole, also when the writer is killed at a random moment.
+use std::collections::BTreeMap;
+use std::os::unix::fs::PermissionsExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use rand::{Rng, SeedableRng};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+fn etlcal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).current_dir(ROOT).output().expect("run etlcal")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = etlcal(args);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    out
+}
+
+/// The one stderr line of a run that failed with status 1.
+fn refused(args: &[&str]) -> String {
+    let out = etlcal(args);
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: one line: {err}");
+    assert!(err.starts_with("etlcal: error: "), "{args:?}: {err}");
+    err
+}
+
+/// Every file under `dir` (relative path -> bytes); also the proof that no temporary is left.
+fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                out.insert(p.strip_prefix(root).unwrap().to_owned(), std::fs::read(&p).unwrap_or_default());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn thermal_table(path: &Path) {
+    let mut text = String::from("temperature_c,e_in_ma,e_t_ma\n");
+    for t in [27.0, 29.0, 31.0, 33.0, 35.0, 37.0] {
+        for e in [40.0, 80.0, 120.0, 160.0, 200.0, 240.0] {
+            let e_t = etl_core::thermal::ThermalSurface::PAPER.e_t_ma(e, t).unwrap();
+            text.push_str(&format!("{t},{e},{e_t}\n"));
+        }
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn an_output_that_is_an_input_is_refused_before_reading() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    std::fs::copy(format!("{ROOT}/fixtures/golden/observations.json"), p("o.json")).unwrap();
+    std::fs::write(p("d.json"), r#"{"format": "etlcal.dataset/1"}"#).unwrap();
+    thermal_table(&p("t.csv"));
+    std::fs::create_dir(p("D")).unwrap();
+    std::fs::write(p("D/index.html"), "a calibration named index.html").unwrap();
+    std::os::unix::fs::symlink(p("o.json"), p("link.json")).unwrap();
+    std::fs::hard_link(p("t.csv"), p("hard.csv")).unwrap();
+    let before = tree(d.path());
+    let q = |n: &str| -> &'static str { Box::leak(p(n).to_str().unwrap().to_owned().into_boxed_str()) };
+    let (o, d_json, t_csv) = (q("o.json"), q("d.json"), q("t.csv"));
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["calibrate", "--observations", o, "--out", o], "is the input"),
+        (vec!["calibrate", "--observations", o, "--out", q("link.json")], "is the input"),
+        (vec!["calibrate", "--dataset", d_json, "--observations-out", d_json, "--out", q("c.json")], "is the input"),
+        (vec!["thermal", "fit", t_csv, "--out", t_csv], "is the input"),
+        (vec!["thermal", "fit", t_csv, "--out", q("hard.csv")], "is the input"),
+        (vec!["report", "--calibration", q("D/index.html"), "--out", q("D")], "holds the input"),
+        (
+            vec!["thermal", "calibrate", "--virtual", "--quick", "--out", q("t.json"), "--table", q("t.json")],
+            "two outputs",
+        ),
+    ];
+    for (args, why) in cases {
+        let err = refused(&args);
+        assert!(err.contains(why), "{args:?}: {err}");
+        assert_eq!(tree(d.path()), before, "{args:?} changed the directory");
+    }
+}
+
+#[test]
+fn outputs_that_are_not_regular_files_are_refused_modes_kept_symlinks_written_through() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    thermal_table(&p("t.csv"));
+    assert!(Command::new("mkfifo").arg(p("fifo")).status().unwrap().success());
+    std::fs::create_dir(p("dir")).unwrap();
+    for out in [s(&p("fifo")), "/dev/null", s(&p("dir"))] {
+        let err = refused(&["thermal", "fit", s(&p("t.csv")), "--out", out]);
+        assert!(err.contains("not a regular file"), "{out}: {err}");
+    }
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    assert!(std::fs::metadata(p("fifo")).unwrap().file_type().is_fifo());
+    // A FIFO as an input is refused before it is opened (opening it would block).
+    let err = refused(&["calibrate", "--observations", s(&p("fifo")), "--out", s(&p("c.json"))]);
+    assert!(err.contains("not a regular file: refused as an input"), "{err}");
+    // A replaced file keeps its mode; a symlink is written through and kept.
+    std::fs::write(p("th.json"), "old").unwrap();
+    std::fs::set_permissions(p("th.json"), std::fs::Permissions::from_mode(0o600)).unwrap();
+    std::os::unix::fs::symlink(p("th.json"), p("link.json")).unwrap();
+    ok(&["thermal", "fit", s(&p("t.csv")), "--out", s(&p("link.json"))]);
+    assert!(std::fs::symlink_metadata(p("link.json")).unwrap().file_type().is_symlink());
+    assert!(std::fs::read_to_string(p("th.json")).unwrap().contains("etlcal.thermal/1"));
+    assert_eq!(std::fs::metadata(p("th.json")).unwrap().permissions().mode() & 0o777, 0o600);
+    let names: Vec<_> = std::fs::read_dir(d.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names.len(), 5, "no temporary left: {names:?}");
+}
+
+#[test]
+fn an_existing_output_directory_with_a_trailing_slash_works_and_foreign_files_are_kept() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("sim");
+    std::fs::create_dir(&out).unwrap();
+    let slash = format!("{}/", out.display());
+    ok(&["simulate", "--out", &slash, "--observations-only", "--seed", "3"]);
+    ok(&["simulate", "--out", &slash, "--observations-only", "--seed", "4"]);
+    assert!(out.join("observations.json").is_file());
+    std::fs::write(out.join("calibration.json"), "the user's").unwrap();
+    let before = tree(&out);
+    let err = refused(&["simulate", "--out", &slash, "--observations-only"]);
+    assert!(err.contains("holds calibration.json"), "{err}");
+    assert_eq!(tree(&out), before);
+    assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1, "no temporary left");
+}
+
+/// Runs `args` and kills it (SIGKILL) after `delay_ms`; true if it had finished before.
+fn kill_after(args: &[&str], delay_ms: u64) -> bool {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_etlcal"))
+        .args(args)
+        .current_dir(ROOT)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+    let finished = child.try_wait().unwrap().is_some();
+    let _ = child.kill();
+    let _ = child.wait();
+    finished
+}
+
+/// `kills` runs of `args_of(k)` (k alternates between 0 and 1 once a run completed) over a
+/// directory holding a whole set, each killed at a random moment of a run's duration;
+/// after every kill the directory holds exactly one of the two complete sets. Returns how
+/// many runs were killed before they finished.
+fn kill_test(name: &str, kills: usize, args_of: impl Fn(usize, &Path) -> Vec<String>) -> usize {
+    let d = tempfile::tempdir().unwrap();
+    let mut sets = vec![];
+    let mut millis = 0u64;
+    for k in 0..2 {
+        let out = d.path().join(format!("ref{k}"));
+        let args = args_of(k, &out);
+        let start = std::time::Instant::now();
+        ok(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        millis = millis.max(start.elapsed().as_millis() as u64);
+        sets.push(tree(&out));
+    }
+    assert_ne!(sets[0], sets[1]);
+    let out = d.path().join("out");
+    ok(&args_of(0, &out).iter().map(String::as_str).collect::<Vec<_>>());
+    let (mut current, mut killed) = (0, 0);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(19);
+    for i in 0..kills {
+        let next = 1 - current;
+        let args = args_of(next, &out);
+        let finished = kill_after(&args.iter().map(String::as_str).collect::<Vec<_>>(), rng.random_range(0..=millis));
+        let now = tree(&out);
+        // Temporaries of the killed run may remain beside `out`; never inside it.
+        let whole = sets.iter().position(|s| *s == now);
+        assert!(whole.is_some(), "{name}: kill {i} left a mixed set: {:?}", now.keys().collect::<Vec<_>>());
+        killed += usize::from(!finished && whole == Some(current));
+        current = whole.unwrap();
+    }
+    // The next run writing there removes the killed runs' temporaries.
+    ok(&args_of(0, &out).iter().map(String::as_str).collect::<Vec<_>>());
+    let left: Vec<_> = std::fs::read_dir(d.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left.len(), 3, "{name}: temporaries left: {left:?}");
+    killed
+}
+
+#[test]
+fn killed_simulate_and_report_leave_one_whole_set() {
+    let simulate = |k: usize, out: &Path| -> Vec<String> {
+        let seed = (k + 1).to_string();
+        ["simulate", "--out", s(out), "--seed", &seed].map(String::from).to_vec()
+    };
+    let killed = kill_test("simulate", 20, simulate);
+    assert!(killed > 0, "no simulate run was killed before finishing");
+    let report = |k: usize, out: &Path| -> Vec<String> {
+        let mut a = ["report", "--calibration", "fixtures/service/calibration.json", "--out", s(out)]
+            .map(String::from)
+            .to_vec();
+        if k == 1 {
+            a.extend(["--observations".into(), "fixtures/golden/observations.json".into()]);
+        }
+        a
+    };
+    let killed = kill_test("report", 20, report);
+    assert!(killed > 0, "no report run was killed before finishing");
+}
+
+/// An edit of an observations file's JSON.
+type Change = fn(&mut serde_json::Value);
+
+/// The golden observations with `change` applied, written to `dir/name`.
+fn observations_with(dir: &Path, name: &str, change: impl FnOnce(&mut serde_json::Value)) -> PathBuf {
+    let text = std::fs::read_to_string(format!("{ROOT}/fixtures/golden/observations.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    change(&mut v);
+    let p = dir.join(name);
+    std::fs::write(&p, serde_json::to_string(&v).unwrap()).unwrap();
+    p
+}
+
+#[test]
+fn numbers_out_of_their_documented_ranges_are_refused_naming_the_quantity() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let sim = |extra: &[&str]| {
+        let mut a = vec!["simulate", "--observations-only", "--out", s(&out)];
+        a.extend_from_slice(extra);
+        refused(&a)
+    };
+    let err = sim(&["--pixel-noise-px", "1e308"]);
+    assert!(err.contains("--pixel-noise-px 1e308 px is outside [0, 100] px") && err.len() < 200, "{err}");
+    std::fs::write(
+        d.path().join("sim.json"),
+        r#"{"format": "etlcal.simconfig/1", "setting_rig": {"e_com_ma": [80, 150], "views_per_setting": 1000000000000,
+            "blur_px": 2.0, "aperture_mm": 2.5, "max_tilt_deg": 25.0}}"#,
+    )
+    .unwrap();
+    let err = sim(&["--setting-views", "--config", s(&d.path().join("sim.json"))]);
+    assert!(err.contains("views_per_setting") && err.contains("at most 1000"), "{err}");
+    let err = sim(&["--stage-noise-um", "-1"]);
+    assert!(err.contains("--stage-noise-um -1 um is outside"), "{err}");
+    assert!(!out.exists(), "nothing written");
+    // Observations: each bad number named with its view and point.
+    let cases: [(&str, Change, &str); 4] = [
+        (
+            "e_com.json",
+            |v| v["views"][2]["e_com_ma"] = (-1e6).into(),
+            "view 2: e_com_ma -1e6 mA is outside the lens driver's",
+        ),
+        (
+            "size.json",
+            |v| v["image_size"] = serde_json::json!([0, 0]),
+            "image_size [0, 0] px: each side must be in [1, 65536]",
+        ),
+        (
+            "z.json",
+            |v| v["offstate_views"][1]["points"][3]["world_mm"][2] = 2.0.into(),
+            "lens-off view 1 point 3: Z = 2 mm",
+        ),
+        (
+            "px.json",
+            |v| v["views"][0]["points"][5]["pixel"][0] = 1e300.into(),
+            "view 0 point 5: pixel coordinate 1e300 px",
+        ),
+    ];
+    for (name, change, needle) in cases {
+        let obs = observations_with(d.path(), name, change);
+        let err = refused(&["calibrate", "--observations", s(&obs), "--out", s(&d.path().join("c.json"))]);
+        assert!(err.contains(needle), "{name}: {err}");
+    }
+    assert!(!d.path().join("c.json").exists());
+    // Negative numbers are values (not flags) for every verb; NaN is in no range.
+    let img = d.path().join("r.png");
+    let err = refused(&["render", "--e-com", "-292", "--aperture-mm", "NaN", "--out", s(&img)]);
+    assert!(err.contains("--aperture-mm NaN mm is outside [0, 50] mm"), "{err}");
+    let err = refused(&["render", "--e-com", "-1e6", "--out", s(&img)]);
+    assert!(err.contains("--e-com -1e6 mA is outside [-292.84, 292.84] mA"), "{err}");
+    assert!(!img.exists());
+}
