@@ -474,6 +474,9 @@ impl Calibration {
         if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| !(o.residual_px >= 0.0)) {
             return bad(format!("outliers[{i}].residual_px = {} must be a number >= 0", o.residual_px));
         }
+        if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| o.view >= self.views.len()) {
+            return bad(format!("outliers[{i}].view = {} must name one of the {} views", o.view, self.views.len()));
+        }
         self.validate_covariance().or_else(bad)
     }
 

@@ -16,8 +16,9 @@
 //!    points the initialisation and the first solve see; it does not decide what is an
 //!    outlier.
 //! 2. After the bundle adjustment, a corner whose reprojection distance exceeds
-//!    [`OUTLIER_SIGMAS`] robust sigmas of all distances ([`robust_sigma_px`]) is an
-//!    outlier; the solve is repeated without the outliers until the set no longer changes.
+//!    [`outlier_limit_px`] (the larger of [`OUTLIER_SIGMAS`] robust sigmas of all
+//!    distances and [`OUTLIER_FLOOR_PX`]) is an outlier; the solve is repeated without the
+//!    outliers until the set no longer changes.
 
 use etl_core::pnp::homography;
 
@@ -34,6 +35,20 @@ pub const INIT_FLOOR_PX: f64 = 3.0;
 /// P(d > 5 sigma) = exp(-12.5) = 3.7e-6, i.e. 0.009 false outliers expected among the
 /// paper rig's 2311 corners.
 pub const OUTLIER_SIGMAS: f64 = 5.0;
+
+/// The least distance, px, that makes an outlier. Without it, model misfit would be taken
+/// for outliers whenever the corner noise is far below the misfit: the paper's estimator
+/// leaves residuals up to 1 px (10 um stage errors it cannot absorb) on the demo's
+/// rendered images, whose corners are good to 0.01 px (robust sigma 0.09 px), and a pure
+/// sigma rule set 8 % of those corners aside. Gross outliers (a neighbouring corner, a
+/// stray detection, a random pixel) are off by a square: tens of px.
+pub const OUTLIER_FLOOR_PX: f64 = 2.0;
+
+/// The distance, px, beyond which a point is an outlier given all points' distances
+/// `d_px`: max([`OUTLIER_SIGMAS`] [`robust_sigma_px`](d_px), [`OUTLIER_FLOOR_PX`]).
+pub fn outlier_limit_px(d_px: &[f64]) -> f64 {
+    (OUTLIER_SIGMAS * robust_sigma_px(d_px)).max(OUTLIER_FLOOR_PX)
+}
 
 /// The least robust sigma, px, [`robust_sigma_px`] returns: noise-free data (simulations)
 /// would otherwise make round-off an outlier. Far below any real corner detector's noise

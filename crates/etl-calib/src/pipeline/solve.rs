@@ -10,7 +10,7 @@ use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, Outlier};
 use etl_formats::Result;
 
-use super::robust::{homography_inliers, robust_sigma_px, OUTLIER_SIGMAS};
+use super::robust::{homography_inliers, outlier_limit_px, OUTLIER_FLOOR_PX, OUTLIER_SIGMAS};
 use super::CalibrateOptions;
 
 /// Solves after the first at most: the outlier set is re-tested after each solve; when it
@@ -109,7 +109,7 @@ fn solve_once(
 }
 
 /// The linear initialisation on the screened points, the bundle adjustment, then while
-/// the outliers (distance > [`OUTLIER_SIGMAS`] robust sigmas of all distances) are not
+/// the outliers (distance > [`outlier_limit_px`] of all distances) are not
 /// the points left out, a new solve from the linear initialisation without them.
 ///
 /// Errors: those of [`initialise`] and [`bundle_adjust`] on the points used.
@@ -123,7 +123,7 @@ pub(super) fn solve_without_outliers(views: &[View<'_>], a0: &A0, ba: &BundleAdj
     let mut d = distances(&report.model, views, &corrections);
     for _ in 0..MAX_RESOLVES {
         let all: Vec<f64> = d.iter().flatten().copied().collect();
-        let limit = OUTLIER_SIGMAS * robust_sigma_px(&all);
+        let limit = outlier_limit_px(&all);
         let inliers: Vec<Vec<bool>> = d.iter().map(|v| v.iter().map(|&x| x <= limit).collect()).collect();
         if inliers == used {
             converged = true;
@@ -155,7 +155,7 @@ pub(super) fn plausibility_warnings(cal: &Calibration, rounds: &Rounds, options:
     if !cal.outliers.is_empty() {
         let pct = 100.0 * cal.outliers.len() as f64 / rounds.points.max(1) as f64;
         w.push(format!(
-            "{} of {} corners ({pct:.2} %) are outliers (reprojection error > {OUTLIER_SIGMAS} robust sigmas) and were left out",
+            "{} of {} corners ({pct:.2} %) are outliers (reprojection error > {OUTLIER_SIGMAS} robust sigmas and > {OUTLIER_FLOOR_PX} px) and were left out",
             cal.outliers.len(),
             rounds.points
         ));
