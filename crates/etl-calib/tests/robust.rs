@@ -86,3 +86,23 @@ fn permuted_current_labels_warn() {
     assert!(r.calibration.warnings.iter().any(|w| w.contains("current correction")), "{:?}", r.calibration.warnings);
 }
 
+
+/// The homography screen on a view with a quarter of its corners replaced: exactly those
+/// are set aside; too few points or mismatched counts set nothing aside.
+#[test]
+fn the_homography_screen_finds_a_quarter_of_a_view_wrong() {
+    use etl_calib::pipeline::robust::homography_inliers;
+    let sim = paper_rig(&NoiseModel::PAPER, 3);
+    let v = &sim.observations.views[7];
+    let board: Vec<[f64; 2]> = v.points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect();
+    let mut pixels: Vec<[f64; 2]> = v.points.iter().map(|p| p.pixel).collect();
+    let bad: Vec<usize> = (0..pixels.len()).step_by(4).collect();
+    for &i in &bad {
+        pixels[i] = [pixels[i][0] + 40.0 + i as f64, pixels[i][1] - 25.0];
+    }
+    let inliers = homography_inliers(&board, &pixels);
+    let out: Vec<usize> = (0..inliers.len()).filter(|&i| !inliers[i]).collect();
+    assert_eq!(out, bad);
+    assert!(homography_inliers(&board[..11], &pixels[..11]).iter().all(|&k| k));
+    assert!(homography_inliers(&board, &pixels[1..]).iter().all(|&k| k));
+}

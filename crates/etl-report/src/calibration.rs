@@ -293,9 +293,14 @@ fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Option<&Therma
                 let (fx, fy) = etl_calib::pipeline::view_focal(&model, &view, dz).unwrap_or((0.0, 0.0));
                 view_focal.push((e, fx, fy));
             }
+            // The points of the final solve: the calibration's outliers (listed in their own
+            // table) would swamp the residual plots and the view's distortion estimate.
+            let outlier = |i: usize| cal.outliers.iter().any(|o| o.view == k && o.point == i);
             let shifted: Vec<etl_core::calib::Point> = p
                 .iter()
-                .map(|q| etl_core::calib::Point {
+                .enumerate()
+                .filter(|(i, _)| !outlier(*i))
+                .map(|(_, q)| etl_core::calib::Point {
                     world_mm: [q.world_mm[0], q.world_mm[1], q.world_mm[2] + dz],
                     pixel: q.pixel,
                 })
@@ -346,6 +351,27 @@ fn html(d: &Data, text: bool) -> String {
             d.residuals.len()
         )
     };
+    let esc = |t: &str| t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;");
+    let warnings: String = if c.warnings.is_empty() {
+        String::new()
+    } else {
+        let items: String = c.warnings.iter().map(|w| format!("<li>{}</li>", esc(w))).collect();
+        format!("<h2>Warnings</h2><ul>{items}</ul>\n")
+    };
+    let outliers: String = if c.outliers.is_empty() {
+        String::new()
+    } else {
+        let rows: String = c
+            .outliers
+            .iter()
+            .map(|o| format!("<tr><td>{}</td><td>{}</td><td>{:.2}</td></tr>\n", o.view, o.point, o.residual_px))
+            .collect();
+        format!(
+            "<h2>Outliers</h2><p>{} corners left out of the final solve (not in the residual plots).</p>\
+             <table><tr><th>view</th><th>point</th><th>residual (px)</th></tr>\n{rows}</table>\n",
+            c.outliers.len()
+        )
+    };
     let text_note =
         if text { "" } else { "<p>(No TrueType font was found: the plots carry no text; set ETLCAL_FONT.)</p>" };
     format!(
@@ -353,14 +379,14 @@ fn html(d: &Data, text: bool) -> String {
          <style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}td{{padding:2px 10px;border-bottom:1px solid #ddd}}</style>\
          </head><body>\n<h1>etlcal calibration report</h1>{text_note}\n\
          <p>Estimator <b>{}</b>, {} views, E_com {:.1} .. {:.1} mA, RMS reprojection error <b>{:.4} px</b> \
-         (before bundle adjustment {:.4} px), {} iterations.</p>\n\
+         (before bundle adjustment {:.4} px), {} iterations.</p>\n{warnings}\
          <h2>Focal lengths</h2><p>fx(E) (blue) and fy(E) (red) with every view's own estimate (dots: fx, crosses: fy).</p>\
          <img src=\"focal.svg\" width=\"80%\">\n\
          <h2>Distortion</h2><p>k1, p1, p2 against the current (Eq. 18; the paper's Fig. 11), with each view's own Eq. 23 estimate.</p>\
          <img src=\"distortion.svg\" width=\"100%\">\n{residual_note}\n\
          <h2>Parameters (value &plusmn; one standard deviation)</h2><table>\n{t}</table>\n\
          <h2>Views</h2><table><tr><th>E_com (mA)</th><th>points</th><th>RMS (px)</th><th>own fx</th><th>own fy</th>\
-         <th>dZ (mm)</th><th>dE (mA)</th></tr>\n{views}</table>\n</body></html>\n",
+         <th>dZ (mm)</th><th>dE (mA)</th></tr>\n{views}</table>\n{outliers}</body></html>\n",
         c.estimator,
         c.views.len(),
         c.e_com_range_ma[0],

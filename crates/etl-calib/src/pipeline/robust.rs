@@ -109,12 +109,13 @@ const SAMPLE_POINTS: usize = 6;
 /// [`INIT_FLOOR_PX`]), sigma from [`robust_sigma_px`] of the current fit's distances.
 ///
 /// Deterministic (the samples come from a fixed-seed generator). Views with fewer than
-/// 2 [`SAMPLE_POINTS`] points, or where no homography can be fitted (collinear points),
-/// are returned all `true`: the solvers after it then report their own precondition.
+/// 2 [`SAMPLE_POINTS`] points, with board and pixel counts that differ, or where no
+/// homography can be fitted (collinear points) are returned all `true`: the solvers
+/// after it then report their own precondition.
 pub fn homography_inliers(board: &[[f64; 2]], pixels: &[[f64; 2]]) -> Vec<bool> {
-    let n = board.len().min(pixels.len());
-    let all = vec![true; board.len()];
-    if n < 2 * SAMPLE_POINTS {
+    let n = board.len();
+    let all = vec![true; n];
+    if n < 2 * SAMPLE_POINTS || pixels.len() != n {
         return all;
     }
     // xorshift64*: a fixed, dependency-free sequence, so a calibration is reproducible.

@@ -121,12 +121,15 @@ pub(super) fn solve_without_outliers(views: &[View<'_>], a0: &A0, ba: &BundleAdj
     let mut converged = false;
     let (mut report, mut corrections) = solve_once(views, &used, &initial, ba)?;
     let mut d = distances(&report.model, views, &corrections);
-    for _ in 0..MAX_RESOLVES {
+    for round in 0..=MAX_RESOLVES {
         let all: Vec<f64> = d.iter().flatten().copied().collect();
         let limit = outlier_limit_px(&all);
         let inliers: Vec<Vec<bool>> = d.iter().map(|v| v.iter().map(|&x| x <= limit).collect()).collect();
         if inliers == used {
             converged = true;
+            break;
+        }
+        if round == MAX_RESOLVES {
             break;
         }
         used = inliers;
