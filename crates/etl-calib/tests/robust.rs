@@ -86,7 +86,6 @@ fn permuted_current_labels_warn() {
     assert!(r.calibration.warnings.iter().any(|w| w.contains("current correction")), "{:?}", r.calibration.warnings);
 }
 
-
 /// The homography screen on a view with a quarter of its corners replaced: exactly those
 /// are set aside; too few points or mismatched counts set nothing aside.
 #[test]

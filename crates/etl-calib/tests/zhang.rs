@@ -134,7 +134,9 @@ fn lens_off_outliers_are_reported_and_leave_a0_unmoved() {
     assert_eq!(found, bad);
     assert!(z.outliers.iter().all(|o| o.residual_px > 100.0), "{:?}", z.outliers);
     let want = a0_from_offstate(&without).unwrap();
-    for (got, want, name) in [(z.fx, want.fx, "fx"), (z.fy, want.fy, "fy"), (z.u0, want.u0, "u0"), (z.v0, want.v0, "v0")] {
+    for (got, want, name) in
+        [(z.fx, want.fx, "fx"), (z.fy, want.fy, "fy"), (z.u0, want.u0, "u0"), (z.v0, want.v0, "v0")]
+    {
         assert!((got / want - 1.0).abs() < 1e-6, "{name}: {got} vs {want} without the outliers");
     }
     assert!((z.rms_px / want.rms_px - 1.0).abs() < 1e-6, "rms {} vs {}", z.rms_px, want.rms_px);

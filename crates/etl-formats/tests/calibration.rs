@@ -208,8 +208,16 @@ fn outliers_and_warnings_are_optional_round_trip_and_are_checked() {
     assert_eq!(Calibration::load(&with).unwrap(), c);
     let n = good.views.len();
     let bads: [(&str, String, Outlier); 2] = [
-        ("residual", "outliers[0].residual_px = -1 must be a number >= 0".into(), Outlier { view: 0, point: 0, residual_px: -1.0 }),
-        ("view", format!("outliers[0].view = {n} must name one of the {n} views"), Outlier { view: n, point: 0, residual_px: 9.0 }),
+        (
+            "residual",
+            "outliers[0].residual_px = -1 must be a number >= 0".into(),
+            Outlier { view: 0, point: 0, residual_px: -1.0 },
+        ),
+        (
+            "view",
+            format!("outliers[0].view = {n} must name one of the {n} views"),
+            Outlier { view: n, point: 0, residual_px: 9.0 },
+        ),
     ];
     for (name, message, o) in bads {
         let mut c = good.clone();

@@ -18,9 +18,7 @@ mod view_focal;
 pub use planar_views::{detect_views, PlanarViews};
 pub use view_focal::view_focal;
 
-use etl_core::calib::{
-    BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss, View, A0,
-};
+use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss, View, A0};
 use etl_core::model::CameraModel;
 
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};

@@ -27,9 +27,10 @@ pub const RMS_NOISE_FACTOR: f64 = 3.0;
 
 /// A view correction (errors-in-variables) above this many prior standard deviations is
 /// reported as implausible: the recorded currents or stage positions do not fit the
-/// data (e.g. permuted current labels). With 15 views, the chance that a correct record
-/// exceeds it is 15 x 2.7e-3 = 4 %, and less after the prior's shrinkage.
-pub const PRIOR_FACTOR: f64 = 3.0;
+/// data (e.g. permuted current labels: 11.5 times). Not 3: the estimated corrections
+/// carry their own estimation noise, and on clean paper-rig data (seeds 100..139) the
+/// stage corrections reached 3.7 times their prior, 3 times in 3 of 40 runs.
+pub const PRIOR_FACTOR: f64 = 4.0;
 
 /// What the solve found; `used[j][i]` says whether point i of view j was in the final
 /// solve, `distances_px[j][i]` is its reprojection distance under the final model.

@@ -183,7 +183,7 @@ fn closed_form(views: &[PlanarView], image_size: [u32; 2]) -> Result<([f64; 4], 
     }
     let (alpha, beta) = (alpha2.sqrt(), beta2.sqrt());
     let u0n = -b13 * alpha2 / lambda; // skew dropped
-    // Poses from K^-1 H (H in the normalised frame, K likewise).
+                                      // Poses from K^-1 H (H in the normalised frame, K likewise).
     let kinv = |p: [f64; 3]| [(p[0] - u0n * p[2]) / alpha, (p[1] - v0n * p[2]) / beta, p[2]];
     let mut poses: Vec<[f64; 6]> = vec![];
     for h in &hs {
