@@ -111,3 +111,33 @@ fn real_image_set_agrees_with_opencv() {
     }
     assert!(z.rms_px < 0.16, "rms {} (OpenCV's own corners: 0.160 px)", z.rms_px);
 }
+
+/// Issue 19: gross outliers in the lens-off views (corners replaced by pixels far off)
+/// are set aside by the robust homographies and reported, and A0 is what the clean views
+/// without those corners give (to 1e-6 relative).
+#[test]
+fn lens_off_outliers_are_reported_and_leave_a0_unmoved() {
+    let sim = paper_rig(&NoiseModel::PAPER, 5);
+    let clean = a0_from_offstate(&sim.observations).unwrap();
+    assert!(clean.outliers.is_empty(), "{:?}", clean.outliers);
+    let bad = [(0usize, 3usize), (0, 50), (4, 17), (9, 70)];
+    let (mut obs, mut without) = (sim.observations.clone(), sim.observations.clone());
+    for (k, &(v, p)) in bad.iter().enumerate() {
+        let px = &mut obs.offstate_views[v].points[p].pixel;
+        *px = [px[0] + 150.0 + 40.0 * k as f64, px[1] - 90.0];
+    }
+    for &(v, p) in bad.iter().rev() {
+        without.offstate_views[v].points.remove(p);
+    }
+    let z = a0_from_offstate(&obs).unwrap();
+    let found: Vec<(usize, usize)> = z.outliers.iter().map(|o| (o.view, o.point)).collect();
+    assert_eq!(found, bad);
+    assert!(z.outliers.iter().all(|o| o.residual_px > 100.0), "{:?}", z.outliers);
+    let want = a0_from_offstate(&without).unwrap();
+    for (got, want, name) in
+        [(z.fx, want.fx, "fx"), (z.fy, want.fy, "fy"), (z.u0, want.u0, "u0"), (z.v0, want.v0, "v0")]
+    {
+        assert!((got / want - 1.0).abs() < 1e-6, "{name}: {got} vs {want} without the outliers");
+    }
+    assert!((z.rms_px / want.rms_px - 1.0).abs() < 1e-6, "rms {} vs {}", z.rms_px, want.rms_px);
+}

@@ -242,6 +242,27 @@ pub struct Calibration {
     /// allow one, and in files written before it existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focus_law: Option<FocusLaw>,
+    /// The corners found to be gross outliers after the bundle adjustment and left out of
+    /// the final solve (optional: absent when there are none, and in older files).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outliers: Vec<Outlier>,
+    /// Why the result may be implausible (e.g. current corrections far beyond their prior,
+    /// an RMS far above the detector's noise), one sentence each (optional: absent when
+    /// there are none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
+}
+
+/// A corner left out of a calibration as a gross outlier.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Outlier {
+    /// Index of the view in the observations' `views`.
+    pub view: usize,
+    /// Index of the point in that view's `points`.
+    pub point: usize,
+    /// Its reprojection error under the final model, px (the distance).
+    pub residual_px: f64,
 }
 
 /// Relative tolerance of the covariance checks of [`Calibration::validate`]: symmetry
@@ -268,6 +289,8 @@ impl Calibration {
             rms_reprojection_px: 0.0,
             std: ModelStd::from_params(&[0.0; 25]),
             estimator: String::new(),
+            outliers: Vec::new(),
+            warnings: Vec::new(),
             iterations: 0,
             initial_rms_px: 0.0,
             views: vec![],
@@ -454,6 +477,12 @@ impl Calibration {
             if let Err(e) = law.validate() {
                 return bad(e.to_string());
             }
+        }
+        if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| !(o.residual_px >= 0.0)) {
+            return bad(format!("outliers[{i}].residual_px = {} must be a number >= 0", o.residual_px));
+        }
+        if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| o.view >= self.views.len()) {
+            return bad(format!("outliers[{i}].view = {} must name one of the {} views", o.view, self.views.len()));
         }
         self.validate_covariance().or_else(bad)
     }

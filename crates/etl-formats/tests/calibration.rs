@@ -186,3 +186,47 @@ fn a_bad_thermal_part_is_refused_by_the_reader() {
         assert_eq!(e.kind(), ErrorKind::Parse, "{what}: {e}");
     }
 }
+
+/// Issue 19: the outliers and warnings of a calibration are optional fields, absent when
+/// empty (older readers keep reading files without outliers), kept when present, and a
+/// bad outlier entry is refused naming it, with nothing written.
+#[test]
+fn outliers_and_warnings_are_optional_round_trip_and_are_checked() {
+    use etl_formats::calibration::Outlier;
+    let good = Calibration::load(&fixture()).unwrap();
+    assert!(good.outliers.is_empty() && good.warnings.is_empty());
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain.json");
+    good.save(&plain).unwrap();
+    let text = std::fs::read_to_string(&plain).unwrap();
+    assert!(!text.contains("outliers") && !text.contains("warnings"), "empty lists are written");
+    let mut c = good.clone();
+    c.outliers = vec![Outlier { view: 1, point: 7, residual_px: 412.5 }];
+    c.warnings = vec!["1 of 2311 corners (0.04 %) are outliers".into()];
+    let with = dir.path().join("with.json");
+    c.save(&with).unwrap();
+    assert_eq!(Calibration::load(&with).unwrap(), c);
+    let n = good.views.len();
+    let bads: [(&str, String, Outlier); 2] = [
+        (
+            "residual",
+            "outliers[0].residual_px = -1 must be a number >= 0".into(),
+            Outlier { view: 0, point: 0, residual_px: -1.0 },
+        ),
+        (
+            "view",
+            format!("outliers[0].view = {n} must name one of the {n} views"),
+            Outlier { view: n, point: 0, residual_px: 9.0 },
+        ),
+    ];
+    for (name, message, o) in bads {
+        let mut c = good.clone();
+        c.outliers = vec![o];
+        let out = dir.path().join(format!("{name}.json"));
+        let e = c.save(&out).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Parse, "{name}: {e}");
+        assert!(e.to_string().contains(&message), "{name}: {e}");
+        assert_eq!(e.to_string().lines().count(), 1);
+        assert!(!out.exists(), "{name}: a refused calibration was written");
+    }
+}

@@ -241,6 +241,22 @@ impl Calibration {
         Some(ThermalCalibration { inner: t.calibration().ok()?, rms_ma: t.rms_ma.unwrap_or(0.0) })
     }
 
+    /// The corners left out of the final solve as gross outliers, as (view, point,
+    /// residual_px): indices into the observations' views and that view's points, and the
+    /// corner's reprojection error under the calibration, px. Empty when there are none.
+    #[getter]
+    fn outliers(&self) -> Vec<(usize, usize, f64)> {
+        self.file.outliers.iter().map(|o| (o.view, o.point, o.residual_px)).collect()
+    }
+
+    /// Why the calibration may be implausible (outliers left out, an RMS far above the
+    /// corner noise, view corrections far beyond their priors), one sentence each; empty
+    /// when none. `calibrate` also issues each as a UserWarning.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.file.warnings.clone()
+    }
+
     /// Where the thermal part came from: "paper" (chosen explicitly), a thermal file's
     /// path, or None (no thermal part, or an older file that does not say).
     #[getter]

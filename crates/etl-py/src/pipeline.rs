@@ -40,7 +40,10 @@ use crate::observations::{Observations, A0};
 ///         and robust do not apply and must be left at their defaults, None / False).
 ///
 /// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
-/// error (`rms_px`) and per-view summaries (`views`).
+/// error (`rms_px`), per-view summaries (`views`), the corners left out as gross outliers
+/// (`outliers`) and why the result may be implausible (`warnings`).
+///
+/// Warns: UserWarning for each of `warnings` (and when there is no focus law).
 ///
 /// Raises: InputError naming the unmet precondition (e.g. fewer than 3 distinct
 /// currents, no lens-off views when a0 is None); NotConvergedError when the bundle
@@ -108,8 +111,9 @@ pub fn calibrate(
             run_pipeline(&obs, &a0, thermal.as_ref(), &options)
         })
         .py()?;
-    if let Some(why) = &result.focus_law_warning {
-        // Said, not silent: the calibration is returned without a focus law.
+    // Said, not silent: a calibration without a focus law, and implausible data (also in
+    // Calibration.warnings).
+    for why in result.focus_law_warning.iter().chain(&result.calibration.warnings) {
         let message = std::ffi::CString::new(why.as_str()).map_err(|e| input_error(e.to_string()))?;
         PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
     }

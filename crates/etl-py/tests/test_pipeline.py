@@ -414,3 +414,23 @@ def test_calibrate_records_the_covariance_and_measures_with_it(sim):
     assert np.all(s >= s_px) and np.all(s > 0)
     truth = sim.truth.rotation_matrix @ [0, 0, -2.0]
     assert np.all(np.abs(a.displacement_mm(b) - truth) < 4 * s), (a.displacement_mm(b) - truth, s)
+
+
+def test_calibrate_reports_outliers_and_warns(sim):
+    # Issue 19: two corners moved far off are left out, listed as (view, point,
+    # residual_px), and said as a UserWarning; a clean calibration has neither.
+    clean = etlcal.calibrate(sim.observations, sim.a0)
+    assert clean.outliers == [] and clean.warnings == []
+    doc = json.loads(sim.observations.to_json())
+    for v, p in [(1, 4), (8, 30)]:
+        px = doc["views"][v]["points"][p]["pixel"]
+        doc["views"][v]["points"][p]["pixel"] = [px[0] - 250.0, px[1] + 120.0]
+    obs = etlcal.Observations.from_json(json.dumps(doc))
+    with pytest.warns(UserWarning, match="2 of 2311 corners"):
+        cal = etlcal.calibrate(obs, sim.a0)
+    assert [(v, p) for v, p, _ in cal.outliers] == [(1, 4), (8, 30)]
+    assert all(r > 200.0 for _, _, r in cal.outliers)
+    assert cal.warnings[0].startswith("2 of 2311 corners")
+    assert abs(cal.principal_point[0] - clean.principal_point[0]) < 0.5
+    again = etlcal.Calibration.from_json(cal.to_json())
+    assert again.outliers == cal.outliers and again.warnings == cal.warnings

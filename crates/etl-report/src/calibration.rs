@@ -174,9 +174,14 @@ fn gather_views(
     for (k, (p, &e)) in pts.iter().zip(&e_com).enumerate() {
         // The errors-in-variables corrections of the calibration, when it has them.
         let (dz, de) = cal.views.get(k).map_or((0.0, 0.0), |v| (v.dz_mm, v.de_ma));
+        // The points of the final solve: the calibration's outliers (listed in their own
+        // table) would swamp the residual plots and the view's distortion estimate.
+        let outlier = |i: usize| cal.outliers.iter().any(|o| o.view == k && o.point == i);
         let shifted: Vec<etl_core::calib::Point> = p
             .iter()
-            .map(|q| etl_core::calib::Point {
+            .enumerate()
+            .filter(|(i, _)| !outlier(*i))
+            .map(|(_, q)| etl_core::calib::Point {
                 world_mm: [q.world_mm[0], q.world_mm[1], q.world_mm[2] + dz],
                 pixel: q.pixel,
             })

@@ -258,6 +258,24 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1300px;margin:auto;pa
     figcaption{color:#333;max-width:1000px}.files{color:#777}.note{background:#f3f3f3;padding:.5em 1em}\
     ul.pairs{columns:4;max-width:1000px}";
 
+/// The corners the calibration left out of its final solve (empty when none).
+fn outliers_table(d: &Data) -> String {
+    let c = &d.cal;
+    if c.outliers.is_empty() {
+        return String::new();
+    }
+    let rows: String = c
+        .outliers
+        .iter()
+        .map(|o| format!("<tr><td>{}</td><td>{}</td><td>{}</td></tr>\n", o.view, o.point, num(o.residual_px)))
+        .collect();
+    format!(
+        "<h2 id=\"outliers\">Outliers</h2>\n<p>{} corners left out of the final solve (not in the residual plots).</p>\n\
+         <table class=\"num\"><tr><th>view</th><th>point</th><th>residual (px)</th></tr>\n{rows}</table>\n",
+        c.outliers.len()
+    )
+}
+
 /// The whole index.html.
 pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> String {
     let c = &d.cal;
@@ -274,6 +292,10 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
         notes += "<p class=\"note\">No observations were given (<code>--observations</code>): no coverage, \
                   residual or per-view figures.</p>";
     }
+    if !c.warnings.is_empty() {
+        let items: String = c.warnings.iter().map(|w| format!("<li>{}</li>", esc(w))).collect();
+        notes += &format!("<h2 id=\"warnings\">Warnings</h2><ul>{items}</ul>\n");
+    }
     let flagged = parameter_table(d).matches("class=\"flag\"").count();
     format!(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>etlcal calibration report</title>\
@@ -289,7 +311,7 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
          curve's band or the projection-uncertainty map is too wide, add views: more currents, the board nearer \
          the image corners.</p>\n{}\n\
          <h3>The curves at the ends and the middle of the range</h3>\n{}\n{figures}\n\
-         <h2 id=\"views\">Views</h2>\n{}\n<h2 id=\"provenance\">Provenance</h2>\n{}</body></html>\n",
+         <h2 id=\"views\">Views</h2>\n{}\n{}<h2 id=\"provenance\">Provenance</h2>\n{}</body></html>\n",
         esc(&c.estimator),
         c.views.len().max(d.views.len()),
         c.e_com_range_ma[0],
@@ -298,6 +320,7 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
         parameter_table(d),
         curve_table(d),
         views_table(d),
+        outliers_table(d),
         provenance_html(d, p),
     )
 }

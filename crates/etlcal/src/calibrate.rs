@@ -176,6 +176,9 @@ pub fn run(args: Args) -> Result<()> {
             c.iterations,
             c.estimator
         );
+        if !c.outliers.is_empty() {
+            outln!("left out {} outlier corners (listed in the file's \"outliers\")", c.outliers.len());
+        }
         outln!("wrote {}", args.out.display());
     }
     Ok(())
@@ -200,6 +203,11 @@ fn calibrate_proposed(args: &Args, obs: &Observations, thermal: Option<&ThermalR
     let opts = CalibrateOptions { estimator, hold_a0: args.hold_a0, robust };
     let result = calibrate(obs, &a0, thermal, &opts)?;
     if let Some(why) = &result.focus_law_warning {
+        eprintln!("etlcal: warning: {why}");
+    }
+    // Implausible data (outliers left out, an RMS far above the noise, corrections far
+    // beyond their priors) are said on stderr as well as kept in the file's "warnings".
+    for why in &result.calibration.warnings {
         eprintln!("etlcal: warning: {why}");
     }
     Ok(result.calibration)

@@ -261,3 +261,43 @@ fn bad_inputs_fail_with_one_line_and_write_nothing() {
     assert_eq!(code, 1);
     assert!(err.contains("--pixel-noise-px -1 px is outside [0, 100] px"), "{err}");
 }
+
+#[test]
+fn outliers_are_reported_in_the_json_and_warned_on_stderr() {
+    // Issue 19: three corners replaced by far-off pixels; the calibration succeeds, lists
+    // them in "outliers" (view, point) and says so in "warnings" and on stderr.
+    let dir = tempfile::tempdir().unwrap();
+    simulate(dir.path());
+    let obs_path = dir.path().join("observations.json");
+    let mut obs: Value = serde_json::from_str(&std::fs::read_to_string(&obs_path).unwrap()).unwrap();
+    let bad = [(2usize, 5usize), (7, 40), (11, 0)];
+    for &(v, p) in &bad {
+        let px = &mut obs["views"][v]["points"][p]["pixel"];
+        *px = serde_json::json!([px[0].as_f64().unwrap() + 300.0, px[1].as_f64().unwrap() - 200.0]);
+    }
+    std::fs::write(&obs_path, serde_json::to_string(&obs).unwrap()).unwrap();
+    let (a0, out) = (dir.path().join("a0.json"), dir.path().join("cal.json"));
+    let (code, stdout, err) = etlcal(&[
+        "calibrate",
+        "--observations",
+        obs_path.to_str().unwrap(),
+        "--a0",
+        a0.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    let found: Vec<(u64, u64)> = j["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| (o["view"].as_u64().unwrap(), o["point"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(found, bad.map(|(v, p)| (v as u64, p as u64)));
+    assert!(j["outliers"][0]["residual_px"].as_f64().unwrap() > 300.0, "{}", j["outliers"]);
+    assert!(j["warnings"][0].as_str().unwrap().starts_with("3 of 2311 corners"), "{}", j["warnings"]);
+    assert!(err.contains("etlcal: warning: 3 of 2311 corners"), "{err}");
+    assert!((j["principal_point"][0].as_f64().unwrap() - 900.0).abs() < 2.0, "{}", j["principal_point"]);
+}

@@ -259,6 +259,10 @@ fn calibration_of(
             distortion_a: sa,
         },
         estimator: "per-setting".into(),
+        // Zhang's per-setting solves set their own outliers aside (crate::zhang); the
+        // per-setting views are not indexed like the observations' ETL views.
+        outliers: vec![],
+        warnings: vec![],
         // No joint covariance: kf_x, kf_y, (u0, v0) and each a-triple come from separate
         // fits whose cross-covariances are not computed; a block-diagonal matrix would
         // claim independence it does not have. Downstream uncertainty is refused instead.

@@ -11,15 +11,14 @@ pub mod dataset;
 pub mod focus_law;
 pub mod measure;
 mod planar_views;
+pub mod robust;
+mod solve;
 mod view_focal;
 
 pub use planar_views::{detect_views, PlanarViews};
 pub use view_focal::view_focal;
 
-use etl_core::calib::{
-    bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
-    View, ViewCorrection, ViewScratch, A0,
-};
+use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss, View, A0};
 use etl_core::model::CameraModel;
 
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
@@ -134,33 +133,35 @@ pub fn calibrate(
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
-    let initial = initialise(&views, a0)?;
     let ba = BundleAdjustOptions {
         estimator: options.estimator,
         hold_a0: options.hold_a0,
         robust: options.robust,
         ..BundleAdjustOptions::default()
     };
-    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
-    let report = bundle_adjust(&views, &initial, &ba, &mut scratch)?;
-    let corrections: Vec<ViewCorrection> = scratch.iter().map(ViewCorrection::from).collect();
+    let solved = solve::solve_without_outliers(&views, a0, &ba)?;
+    let (report, initial) = (solved.report, solved.initial);
     let m = report.model;
     let summaries = views
         .iter()
-        .zip(&corrections)
-        .map(|(v, c)| {
-            let (mut s, mut n) = (0.0, 0usize);
-            for p in v.points {
-                let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + c.dz_mm];
-                if let Ok(q) = m.project(w, v.e_com_ma + c.de_ma) {
-                    s += (q[0] - p.pixel[0]).powi(2) + (q[1] - p.pixel[1]).powi(2);
-                    n += 1;
+        .zip(&solved.corrections)
+        .zip(&solved.distances_px)
+        .zip(&solved.used)
+        .map(|(((v, c), d), used)| {
+            let (s, n) = d.iter().zip(used).filter(|(_, &u)| u).fold((0.0, 0usize), |(s, n), (d, _)| {
+                if d.is_finite() {
+                    (s + d * d, n + 1)
+                } else {
+                    (s, n)
                 }
-            }
-            let (fx_px, fy_px) = view_focal(&m, v, c.dz_mm).unwrap_or((0.0, 0.0));
+            });
+            // The view's own focal lengths from its points in the solve, not its outliers.
+            let kept: Vec<_> = v.points.iter().zip(used).filter(|(_, &u)| u).map(|(p, _)| *p).collect();
+            let kept_view = View { e_com_ma: v.e_com_ma, points: &kept };
+            let (fx_px, fy_px) = view_focal(&m, &kept_view, c.dz_mm).unwrap_or((0.0, 0.0));
             ViewSummary {
                 e_com_ma: v.e_com_ma,
-                points: v.points.len(),
+                points: used.iter().filter(|&&u| u).count(),
                 rms_px: if n > 0 { (s / n as f64).sqrt() } else { 0.0 },
                 dz_mm: c.dz_mm,
                 de_ma: c.de_ma,
@@ -189,6 +190,8 @@ pub fn calibrate(
         focus_law,
         ..Calibration::from_model(&m, obs.image_size, [lo, hi])
     };
+    calibration.outliers = solved.outliers;
+    calibration.warnings = solve::plausibility_warnings(&calibration, &solved.rounds, options);
     // The covariance of the 25 shared numbers (for errors-in-variables, with the view
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.
     calibration.set_covariance(&report.covariance);

@@ -19,12 +19,15 @@
 use etl_core::calib::jacobian::{to_params, Projector};
 use etl_core::calib::A0;
 use etl_core::linalg::svd::Svd;
-use etl_core::lm::{solve_blocks, BlockProblem, BlockRowSink, BlockScratch, Options, StopReason};
+use etl_core::lm::{solve_blocks, BlockProblem, BlockReport, BlockRowSink, BlockScratch, Options, StopReason};
 use etl_core::model::rotation::{matrix_to_rodrigues, rotation_from_two_columns};
 use etl_core::model::CameraModel;
 use etl_core::pnp::homography;
 
+use etl_formats::calibration::Outlier;
 use etl_formats::{Error, Result};
+
+use crate::pipeline::robust::{homography_inliers, outlier_limit_px};
 
 /// One view: board points (mm, on Z = 0) and their observed pixels.
 #[derive(Debug, Clone, Default)]
@@ -62,6 +65,9 @@ pub struct ZhangResult {
     pub iterations: usize,
     /// Views used.
     pub views_used: usize,
+    /// The points left out as gross outliers (view and point indices into the input),
+    /// with their distances under the result; empty when there are none.
+    pub outliers: Vec<Outlier>,
 }
 
 impl ZhangResult {
@@ -131,26 +137,14 @@ impl BlockProblem<7, 6> for Refine<'_> {
     }
 }
 
-/// Calibrates a fixed-focus camera from planar views (see the module docs).
-///
-/// `image_size` sets the conditioning frame. Errors: fewer than 3 views or a view with
-/// fewer than 4 points ([`Error::InvalidInput`]); degenerate geometry (all views parallel)
-/// or a failed solve ([`Error::Core`]).
-pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> {
-    if views.len() < 3 {
-        return Err(Error::InvalidInput(format!(
-            "Zhang's method needs at least 3 views of the board, got {}",
-            views.len()
-        )));
-    }
+/// The closed form (steps 1 and 2): (fx, fy, u0, v0) and each view's pose
+/// (Rodrigues, translation) from the views' homographies.
+fn closed_form(views: &[PlanarView], image_size: [u32; 2]) -> Result<([f64; 4], Vec<[f64; 6]>)> {
     let (cx, cy) = (image_size[0] as f64 / 2.0, image_size[1] as f64 / 2.0);
     let s = cx.max(cy).max(1.0);
     let mut hs = vec![];
     let mut vtv = [[0.0; 6]; 6];
-    for (k, v) in views.iter().enumerate() {
-        if v.board_mm.len() != v.pixels.len() || v.board_mm.len() < 4 {
-            return Err(Error::InvalidInput(format!("view {k}: needs at least 4 points with their pixels")));
-        }
+    for v in views {
         let img: Vec<[f64; 2]> = v.pixels.iter().map(|p| [(p[0] - cx) / s, (p[1] - cy) / s]).collect();
         let h = homography(&v.board_mm, &img)?;
         let v12 = vij(&h, 0, 1);
@@ -189,9 +183,7 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
     }
     let (alpha, beta) = (alpha2.sqrt(), beta2.sqrt());
     let u0n = -b13 * alpha2 / lambda; // skew dropped
-                                      // Back to pixels: the normalised frame is (p - c) / s.
-    let (fx, fy, u0, v0) = (alpha * s, beta * s, u0n * s + cx, v0n * s + cy);
-    // Poses from K^-1 H (H in the normalised frame, K likewise).
+                                      // Poses from K^-1 H (H in the normalised frame, K likewise).
     let kinv = |p: [f64; 3]| [(p[0] - u0n * p[2]) / alpha, (p[1] - v0n * p[2]) / beta, p[2]];
     let mut poses: Vec<[f64; 6]> = vec![];
     for h in &hs {
@@ -208,17 +200,110 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
         let om = matrix_to_rodrigues(&rotation_from_two_columns(r1, r2));
         poses.push([om[0], om[1], om[2], t[0], t[1], t[2]]);
     }
+    // Back to pixels: the normalised frame is (p - c) / s.
+    Ok(([alpha * s, beta * s, u0n * s + cx, v0n * s + cy], poses))
+}
+
+/// Step 3: the LM refinement of the 7 shared numbers and every view's pose from `x0`
+/// and `poses`.
+fn refine(views: &[PlanarView], x0: [f64; 7], poses: &[[f64; 6]]) -> Result<(BlockReport<7>, Vec<[f64; 6]>)> {
     let mut problem = Refine { views };
     let mut scratch: Vec<BlockScratch<7, 6>> = poses.iter().map(|&p| BlockScratch::starting_at(p)).collect();
     let opts = Options { max_iterations: 100, ftol: 1e-12, xtol: 1e-12, gtol: 1e-12, ..Options::default() };
-    let r = solve_blocks(&mut problem, [fx, fy, u0, v0, 0.0, 0.0, 0.0], &opts, &mut scratch)?;
-    let poses: Vec<[f64; 6]> = scratch.iter().map(|b| *b.y()).collect();
+    let r = solve_blocks(&mut problem, x0, &opts, &mut scratch)?;
     if r.stop == StopReason::RankDeficient {
         return Err(Error::Core(etl_core::Error::Degenerate {
             what: "Zhang's refinement is rank deficient (too few or too similar views)",
         }));
     }
-    let n: usize = views.iter().map(|v| v.board_mm.len()).sum();
+    Ok((r, scratch.iter().map(|b| *b.y()).collect()))
+}
+
+/// The points of each view that `used` keeps.
+fn kept(views: &[PlanarView], used: &[Vec<bool>]) -> Vec<PlanarView> {
+    views
+        .iter()
+        .zip(used)
+        .map(|(v, u)| {
+            let (board_mm, pixels) =
+                v.board_mm.iter().zip(&v.pixels).zip(u).filter(|(_, &k)| k).map(|((b, p), _)| (*b, *p)).unzip();
+            PlanarView { board_mm, pixels }
+        })
+        .collect()
+}
+
+/// Every point's reprojection distance, px, under the shared numbers `x` and `poses`
+/// (infinite where it does not project).
+fn distances(views: &[PlanarView], x: &[f64; 7], poses: &[[f64; 6]]) -> Vec<Vec<f64>> {
+    views
+        .iter()
+        .zip(poses)
+        .map(|(v, pose)| {
+            let m = model(x, pose);
+            v.board_mm
+                .iter()
+                .zip(&v.pixels)
+                .map(|(b, px)| match m.project([b[0], b[1], 0.0], 0.0) {
+                    Ok(q) => (q[0] - px[0]).hypot(q[1] - px[1]),
+                    Err(_) => f64::INFINITY,
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Calibrates a fixed-focus camera from planar views (see the module docs), robustly:
+/// each view's points are first screened against a robust homography
+/// ([`crate::pipeline::robust::homography_inliers`]); after the refinement a point whose
+/// distance exceeds [`outlier_limit_px`] is an outlier, and the refinement is
+/// repeated without the outliers until their set no longer changes (at most 4 times).
+///
+/// `image_size` sets the conditioning frame. Errors: fewer than 3 views or a view with
+/// fewer than 4 points ([`Error::InvalidInput`]); degenerate geometry (all views parallel)
+/// or a failed solve ([`Error::Core`]).
+pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> {
+    if views.len() < 3 {
+        return Err(Error::InvalidInput(format!(
+            "Zhang's method needs at least 3 views of the board, got {}",
+            views.len()
+        )));
+    }
+    for (k, v) in views.iter().enumerate() {
+        if v.board_mm.len() != v.pixels.len() || v.board_mm.len() < 4 {
+            return Err(Error::InvalidInput(format!("view {k}: needs at least 4 points with their pixels")));
+        }
+    }
+    let mut used: Vec<Vec<bool>> = views.iter().map(|v| homography_inliers(&v.board_mm, &v.pixels)).collect();
+    let screened = kept(views, &used);
+    let (k, poses) = closed_form(&screened, image_size)?;
+    let x0 = [k[0], k[1], k[2], k[3], 0.0, 0.0, 0.0];
+    let (mut r, mut poses) = refine(&screened, x0, &poses)?;
+    let mut d = distances(views, &r.x, &poses);
+    for _ in 0..4 {
+        let all: Vec<f64> = d.iter().flatten().copied().collect();
+        let limit = outlier_limit_px(&all);
+        let inliers: Vec<Vec<bool>> = d.iter().map(|v| v.iter().map(|&x| x <= limit).collect()).collect();
+        if inliers == used {
+            break;
+        }
+        used = inliers;
+        // From the last solution: it is already near, and the closed form is only needed
+        // to start.
+        (r, poses) = refine(&kept(views, &used), r.x, &poses)?;
+        d = distances(views, &r.x, &poses);
+    }
+    let mut outliers = vec![];
+    let (mut ss, mut n) = (0.0, 0usize);
+    for (j, (u, dv)) in used.iter().zip(&d).enumerate() {
+        for (i, (&k, &x)) in u.iter().zip(dv).enumerate() {
+            if k {
+                ss += x * x;
+                n += 1;
+            } else {
+                outliers.push(Outlier { view: j, point: i, residual_px: if x.is_finite() { x } else { f64::MAX } });
+            }
+        }
+    }
     let std: [f64; 7] = core::array::from_fn(|i| r.covariance[i][i].max(0.0).sqrt());
     Ok(ZhangResult {
         fx: r.x[0],
@@ -229,9 +314,10 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
         p1: r.x[5],
         p2: r.x[6],
         std,
-        rms_px: (r.cost / n as f64).sqrt(),
+        rms_px: (ss / n.max(1) as f64).sqrt(),
         poses: poses.iter().map(|p| ([p[0], p[1], p[2]], [p[3], p[4], p[5]])).collect(),
         iterations: r.iterations,
         views_used: views.len(),
+        outliers,
     })
 }
