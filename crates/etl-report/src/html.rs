@@ -267,7 +267,7 @@ fn outliers_table(d: &Data) -> String {
     let rows: String = c
         .outliers
         .iter()
-        .map(|o| format!("<tr><td>{}</td><td>{}</td><td>{}</td></tr>\n", o.view, o.point, num(o.residual_px)))
+        .map(|o| format!("<tr><td>{}</td><td>{}</td><td>{:.2}</td></tr>\n", o.view, o.point, o.residual_px))
         .collect();
     format!(
         "<h2 id=\"outliers\">Outliers</h2>\n<p>{} corners left out of the final solve (not in the residual plots).</p>\n\

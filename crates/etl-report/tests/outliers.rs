@@ -1,4 +1,4 @@
-//! Issue 19: the report shows a calibration's warnings and its outliers (view, point,
+//! The report shows a calibration's warnings and its outliers (view, point,
 //! residual), and says nothing of either when there are none.
 
 use std::path::Path;
@@ -11,15 +11,16 @@ fn the_report_lists_warnings_and_outliers() {
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/service/calibration.json");
     let mut cal = Calibration::load(&fixture).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    etl_report::write_report(&cal, None, None, dir.path()).unwrap();
+    let provenance = etl_report::Provenance { inputs: vec![], priors: None };
+    etl_report::write_report(&cal, None, None, &provenance, dir.path()).unwrap();
     let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
-    assert!(!html.contains("<h2>Warnings</h2>") && !html.contains("<h2>Outliers</h2>"));
+    assert!(!html.contains("Warnings</h2>") && !html.contains("Outliers</h2>"));
     cal.outliers = vec![Outlier { view: 2, point: 17, residual_px: 412.5 }];
     cal.warnings = vec!["1 of 2311 corners (0.04 %) are outliers (reprojection error > 5 robust sigmas)".into()];
-    etl_report::write_report(&cal, None, None, dir.path()).unwrap();
+    etl_report::write_report(&cal, None, None, &provenance, dir.path()).unwrap();
     let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
     assert!(
-        html.contains("<h2>Warnings</h2><ul><li>1 of 2311 corners (0.04 %) are outliers (reprojection error &gt; 5")
+        html.contains("<h2 id=\"warnings\">Warnings</h2><ul><li>1 of 2311 corners (0.04 %) are outliers (reprojection error &gt; 5")
     );
     assert!(html.contains("<tr><td>2</td><td>17</td><td>412.50</td></tr>"), "{html}");
 }
