@@ -33,7 +33,7 @@ pub struct OpenOptions {
     /// Send the `Start` handshake (expects `Ready`). It flushes the driver's input and
     /// **zeroes the output current**: leave it off to reconnect to a lens in use.
     pub handshake: bool,
-    /// Deadline for each reply.
+    /// Deadline for each reply, within [`TIMEOUT_RANGE`].
     pub timeout: Duration,
     /// Baud rate (115200 for the USB port; the virtual COM port ignores it).
     pub baud_rate: u32,
@@ -50,6 +50,19 @@ impl Default for OpenOptions {
             baud_rate: 115_200,
             legacy_set_current: false,
         }
+    }
+}
+
+/// The reply timeouts a client accepts ([`OpenOptions::timeout`]): 1 ms to 60 s.
+pub const TIMEOUT_RANGE: [Duration; 2] = [Duration::from_millis(1), Duration::from_secs(60)];
+
+/// Refuses a timeout outside [`TIMEOUT_RANGE`] (a zero one times out every read, a huge
+/// one would hang a call and overflow its deadline).
+fn check_timeout(options: &OpenOptions) -> Result<()> {
+    if (TIMEOUT_RANGE[0]..=TIMEOUT_RANGE[1]).contains(&options.timeout) {
+        Ok(())
+    } else {
+        Err(etl_core::Error::InvalidArgument { what: "reply timeout must lie in 1..=60000 ms" }.into())
     }
 }
 
@@ -164,8 +177,10 @@ impl LensClient {
     /// Errors: the port cannot be opened ([`HwError::Open`]); no or bad replies
     /// ([`HwError::Timeout`], [`HwError::Crc`], [`HwError::Device`],
     /// [`HwError::UnexpectedReply`]); a max current <= 0 ([`HwError::BadMaxCurrent`]) or
-    /// limits with lower > upper ([`HwError::InvertedLimits`]).
+    /// limits with lower > upper ([`HwError::InvertedLimits`]); a timeout outside
+    /// [`TIMEOUT_RANGE`] ([`HwError::Core`], nothing opened).
     pub fn open(path: impl AsRef<Path>, options: OpenOptions) -> Result<LensClient> {
+        check_timeout(&options)?;
         let path = path.as_ref().to_owned();
         let port = open_port(&path, &options)?;
         LensClient::start(port, path, options)
@@ -201,6 +216,7 @@ impl<T: Transport> LensClient<T> {
     /// assert_eq!(lens.max_current_ma(), 292.84);
     /// ```
     pub fn from_transport(transport: T, options: OpenOptions) -> Result<LensClient<T>> {
+        check_timeout(&options)?;
         let path = PathBuf::from(transport.name());
         LensClient::start(transport, path, options)
     }

@@ -381,3 +381,13 @@ fn an_unexpected_reply_says_what_was_expected_and_what_came() {
     let none = HwError::UnexpectedReply { command: "Start", expected: "Ready", got: None };
     assert_eq!(none.to_string(), r#"protocol error: Start expects a reply starting "Ready", got no reply"#);
 }
+
+#[test]
+fn timeouts_outside_their_range_are_refused_before_anything_is_sent() {
+    for timeout in [Duration::ZERO, Duration::from_secs(61), Duration::MAX] {
+        let (link, written) = script(&[]);
+        let e = LensClient::from_transport(link, OpenOptions { timeout, ..options() }).err().unwrap();
+        assert_eq!(e.to_string(), "invalid argument: reply timeout must lie in 1..=60000 ms");
+        assert!(written.lock().unwrap().is_empty());
+    }
+}
