@@ -55,7 +55,8 @@ fn period(rate_hz: f64) -> Result<Option<Duration>, etl_core::Error> {
     if rate_hz == 0.0 {
         return Ok(None);
     }
-    let bad = etl_core::Error::InvalidArgument { what: "hold rate must be 0 (as fast as possible) or lie in 1e-3..=1e4 Hz" };
+    let bad =
+        etl_core::Error::InvalidArgument { what: "hold rate must be 0 (as fast as possible) or lie in 1e-3..=1e4 Hz" };
     if !(RATE_RANGE_HZ[0]..=RATE_RANGE_HZ[1]).contains(&rate_hz) {
         return Err(bad);
     }

@@ -118,7 +118,10 @@ fn hold_rates_and_durations_outside_their_ranges_are_refused_without_panicking()
     for rate_hz in [1e-30, 1e-4, 1e5, f64::INFINITY, f64::NAN, -1.0] {
         let cfg = HoldConfig { e_com_ma: 100.0, rate_hz, duration: None };
         let e = hold(&mut lens, &ThermalCalibration::PAPER, &cfg, |_| true).unwrap_err();
-        assert_eq!(e.to_string(), "compensation: invalid argument: hold rate must be 0 (as fast as possible) or lie in 1e-3..=1e4 Hz");
+        assert_eq!(
+            e.to_string(),
+            "compensation: invalid argument: hold rate must be 0 (as fast as possible) or lie in 1e-3..=1e4 Hz"
+        );
     }
     assert!(lens.received().current_codes.is_empty(), "nothing was sent");
     for s in [1e30, 1e8, -1.0, f64::NAN, f64::INFINITY] {

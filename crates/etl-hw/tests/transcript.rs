@@ -184,11 +184,7 @@ fn set_current_writes_aw_then_confirms_it_with_ar() {
 fn a_current_command_the_driver_rejects_is_an_error_naming_aw() {
     // E 02 answers the `Aw`; the read-back's `A` (the old code 0) follows it and is consumed,
     // so the next query gets its own answer.
-    let then = [
-        (hex("41 77 05 76 26 90"), reply(b"E\x02")),
-        (ar(), a_reply(0)),
-        (ar(), a_reply(0)),
-    ];
+    let then = [(hex("41 77 05 76 26 90"), reply(b"E\x02")), (ar(), a_reply(0)), (ar(), a_reply(0))];
     run(&then, |client| {
         let e = client.set_current_ma(100.0).unwrap_err();
         assert!(matches!(e, HwError::Device { command: "Aw", id: 2 }), "{e:?}");

@@ -45,7 +45,10 @@ pub fn run(args: Args) -> Result<()> {
         )));
     }
     if !(SENSOR_RANGE_C[0]..=SENSOR_RANGE_C[1]).contains(&args.ambient) {
-        return Err(Error::InvalidInput(format!("--ambient {} degC must lie in -40..=125 degC", compact(args.ambient))));
+        return Err(Error::InvalidInput(format!(
+            "--ambient {} degC must lie in -40..=125 degC",
+            compact(args.ambient)
+        )));
     }
     if !(args.time_scale > 0.0 && args.time_scale <= MAX_TIME_SCALE) {
         return Err(Error::InvalidInput(format!("--time-scale {} must lie in (0, 1e6]", compact(args.time_scale))));

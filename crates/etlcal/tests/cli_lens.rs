@@ -121,15 +121,37 @@ impl Drop for Sim {
 #[test]
 fn hold_beyond_the_driver_limits_fails_instead_of_reporting_success() {
     let sim = Sim::spawn(&["--upper-limit", "200", "--ambient", "27"]);
-    let (code, out, err) =
-        etlcal(&["lens", "--port", &sim.1, "--json", "hold", "--e-com", "260", "--thermal", "paper", "--duration", "1"]);
+    let (code, out, err) = etlcal(&[
+        "lens",
+        "--port",
+        &sim.1,
+        "--json",
+        "hold",
+        "--e-com",
+        "260",
+        "--thermal",
+        "paper",
+        "--duration",
+        "1",
+    ]);
     assert_eq!(code, 1, "{out} {err}");
     assert!(out.is_empty(), "no success report: {out}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("E_com 260.000 mA needs E_in ") && err.contains("beyond the driver's limits"), "{err}");
     // Within the limits the same driver holds.
-    let (code, out, err) =
-        etlcal(&["lens", "--port", &sim.1, "--json", "hold", "--e-com", "150", "--thermal", "paper", "--duration", "0.2"]);
+    let (code, out, err) = etlcal(&[
+        "lens",
+        "--port",
+        &sim.1,
+        "--json",
+        "hold",
+        "--e-com",
+        "150",
+        "--thermal",
+        "paper",
+        "--duration",
+        "0.2",
+    ]);
     assert_eq!(code, 0, "{err}");
     let h: Value = serde_json::from_str(&out).unwrap();
     assert!(h["worst_e_com_error_ma"].as_f64().unwrap() < 0.04, "{h}");
