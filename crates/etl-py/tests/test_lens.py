@@ -130,6 +130,8 @@ def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
         with pytest.raises(etlcal.DeviceTimeoutError, match=r"^no reply to \w+ within 150ms$") as e:
             lens.current_ma()
         assert isinstance(e.value, TimeoutError) and isinstance(e.value, etlcal.DeviceError)
+        # The next call resynchronises first (a probe takes the next reply, faults included).
+        lens.current_ma()
         device.inject_faults(error_frame_next=3)
         with pytest.raises(etlcal.DeviceError, match=r"answered \w+ with error 3") as e:
             lens.current_ma()
@@ -138,7 +140,7 @@ def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
         with pytest.raises(etlcal.DeviceTimeoutError):
             lens.current_ma()
         device.inject_faults()
-        # The late reply arrives after the timeout and is skipped as stray bytes.
+        # The late reply arrives after the timeout and is discarded by the resynchronisation.
         time.sleep(0.3)
         got = lens.set_current_ma(100.0)
         assert lens.current_ma() == pytest.approx(got)
