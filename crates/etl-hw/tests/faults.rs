@@ -40,7 +40,7 @@ fn a_slow_reply_within_the_timeout_is_fine_and_beyond_it_is_not() {
     device.with_faults(|f| f.reply_delay = Duration::from_millis(400));
     assert!(matches!(client.current_ma(), Err(HwError::Timeout { .. })));
     device.set_faults(Faults::default());
-    // The late reply arrives while the next query is under way, and is skipped as stray bytes.
+    // The late reply arrives before the next query; the resynchronisation discards it.
     std::thread::sleep(Duration::from_millis(300));
     assert!(client.current_ma().is_ok());
 }
