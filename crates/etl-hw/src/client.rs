@@ -6,8 +6,12 @@
 //!   driver with `CrUA`/`CrLA` when the port is opened) and its max current: requests
 //!   beyond them are clamped (the result says so), NaN and infinities are refused;
 //! - one lock around each command and its reply (the protocol has no tags);
-//! - bytes left on the line (e.g. an unsolicited error frame after a fire-and-forget `Aw`)
-//!   are drained before each command and recorded ([`LensClient::take_unsolicited`]);
+//! - bytes left on the line (e.g. an unsolicited error frame after a fire-and-forget
+//!   `PwDA`) are drained before each command and recorded ([`LensClient::take_unsolicited`]);
+//! - a current command is confirmed by reading the current back: a rejected `Aw` is an
+//!   error of `set_current_ma`, never "applied";
+//! - after a timeout, the next command is preceded by a resynchronising probe, so that a
+//!   late reply is never taken for the answer to a later question;
 //! - every read has a deadline ([`OpenOptions::timeout`]): no call hangs;
 //! - [`LensClient::reconnect`] reopens the port without `Start`, so the lens keeps its
 //!   current (and focus); the EEPROM-backed limits are never written.
@@ -29,7 +33,7 @@ pub struct OpenOptions {
     /// Send the `Start` handshake (expects `Ready`). It flushes the driver's input and
     /// **zeroes the output current**: leave it off to reconnect to a lens in use.
     pub handshake: bool,
-    /// Deadline for each reply.
+    /// Deadline for each reply, within [`TIMEOUT_RANGE`].
     pub timeout: Duration,
     /// Baud rate (115200 for the USB port; the virtual COM port ignores it).
     pub baud_rate: u32,
@@ -46,6 +50,19 @@ impl Default for OpenOptions {
             baud_rate: 115_200,
             legacy_set_current: false,
         }
+    }
+}
+
+/// The reply timeouts a client accepts ([`OpenOptions::timeout`]): 1 ms to 60 s.
+pub const TIMEOUT_RANGE: [Duration; 2] = [Duration::from_millis(1), Duration::from_secs(60)];
+
+/// Refuses a timeout outside [`TIMEOUT_RANGE`] (a zero one times out every read, a huge
+/// one would hang a call and overflow its deadline).
+fn check_timeout(options: &OpenOptions) -> Result<()> {
+    if (TIMEOUT_RANGE[0]..=TIMEOUT_RANGE[1]).contains(&options.timeout) {
+        Ok(())
+    } else {
+        Err(etl_core::Error::InvalidArgument { what: "reply timeout must lie in 1..=60000 ms" }.into())
     }
 }
 
@@ -112,6 +129,9 @@ struct Inner<T> {
     firmware: FirmwareType,
     legacy_temperature: bool,
     fp_range_dpt: Option<(f64, f64)>,
+    /// The command that timed out, whose reply may still come (see
+    /// [`LensClient::transact`]).
+    desynchronised: Option<&'static str>,
 }
 
 /// The driver over a [`Transport`], the serial port by default (`LensClient` alone means
@@ -157,8 +177,10 @@ impl LensClient {
     /// Errors: the port cannot be opened ([`HwError::Open`]); no or bad replies
     /// ([`HwError::Timeout`], [`HwError::Crc`], [`HwError::Device`],
     /// [`HwError::UnexpectedReply`]); a max current <= 0 ([`HwError::BadMaxCurrent`]) or
-    /// limits with lower > upper ([`HwError::InvertedLimits`]).
+    /// limits with lower > upper ([`HwError::InvertedLimits`]); a timeout outside
+    /// [`TIMEOUT_RANGE`] ([`HwError::Core`], nothing opened).
     pub fn open(path: impl AsRef<Path>, options: OpenOptions) -> Result<LensClient> {
+        check_timeout(&options)?;
         let path = path.as_ref().to_owned();
         let port = open_port(&path, &options)?;
         LensClient::start(port, path, options)
@@ -171,6 +193,8 @@ impl LensClient {
             let mut i = self.lock();
             i.port = None; // close first: the port is opened exclusively
             i.rx.clear();
+            // A fresh port has no late reply of the old one.
+            i.desynchronised = None;
         }
         let port = open_port(&self.path, &self.options)?;
         self.lock().port = Some(port);
@@ -192,6 +216,7 @@ impl<T: Transport> LensClient<T> {
     /// assert_eq!(lens.max_current_ma(), 292.84);
     /// ```
     pub fn from_transport(transport: T, options: OpenOptions) -> Result<LensClient<T>> {
+        check_timeout(&options)?;
         let path = PathBuf::from(transport.name());
         LensClient::start(transport, path, options)
     }
@@ -210,6 +235,7 @@ impl<T: Transport> LensClient<T> {
                 firmware: FirmwareType::Other(b'?'),
                 legacy_temperature: false,
                 fp_range_dpt: None,
+                desynchronised: None,
             }),
         };
         if options.handshake {
@@ -282,50 +308,123 @@ impl<T: Transport> LensClient<T> {
 
     /// Sends `command` and, if it has a reply, waits for it: the one primitive every other
     /// method uses. Error frames in reply become [`HwError::Device`]/[`HwError::Nack`].
+    ///
+    /// Resynchronisation: the protocol has no tags, so a reply that comes after its
+    /// command timed out would be taken for the answer to the next command of its kind.
+    /// After a timeout the client therefore sends the probe `H` before the next command and
+    /// discards everything up to the probe's reply (the driver answers in order, so every
+    /// late reply comes before it); `H` answers a constant (the firmware type), so a late
+    /// probe reply is never a wrong answer. Until a probe is answered every command fails
+    /// with [`HwError::Desynchronised`], nothing else being sent.
     pub fn transact(&self, command: Command) -> Result<Option<Reply>> {
-        let mut inner = self.lock();
-        let inner = &mut *inner;
-        let io = |source: std::io::Error| HwError::Io { path: self.path.display().to_string(), source };
-        let port = inner
-            .port
-            .as_mut()
-            .ok_or_else(|| io(std::io::Error::new(std::io::ErrorKind::NotConnected, "port closed; reconnect")))?;
-        // Drain what is on the line: stray bytes and error frames of earlier writes.
-        drain(port, &mut inner.rx, self.options.timeout).map_err(io)?;
-        record_unsolicited(&mut inner.rx, &mut inner.unsolicited, inner.last_command);
-        inner.last_command = command.name();
-        port.send(&command.encode()).map_err(io)?;
+        let mut guard = self.lock();
+        self.transact_locked(&mut guard, command)
+    }
+
+    fn transact_locked(&self, inner: &mut Inner<T>, command: Command) -> Result<Option<Reply>> {
+        self.prepare(inner, command.name())?;
+        self.send(inner, command)?;
         let Some(expected) = command.reply_header() else {
             return Ok(None);
         };
-        let deadline = Instant::now() + self.options.timeout;
-        let mut chunk = [0u8; 256];
+        match self.await_frame(inner, command.name(), expected.as_bytes())? {
+            Reply::Error(id) => Err(HwError::Device { command: command.name(), id }),
+            Reply::Nack => Err(HwError::Nack { command: command.name() }),
+            r => Ok(Some(r)),
+        }
+    }
+
+    fn io_error(&self, source: std::io::Error) -> HwError {
+        HwError::Io { path: self.path.display().to_string(), source }
+    }
+
+    fn port<'a>(&self, inner: &'a mut Inner<T>) -> Result<&'a mut T> {
+        let closed = || std::io::Error::new(std::io::ErrorKind::NotConnected, "port closed; reconnect");
+        inner.port.as_mut().ok_or_else(|| self.io_error(closed()))
+    }
+
+    fn send(&self, inner: &mut Inner<T>, command: Command) -> Result<()> {
+        inner.last_command = command.name();
+        self.port(inner)?.send(&command.encode()).map_err(|e| self.io_error(e))
+    }
+
+    /// Before sending `next`: drains what is on the line (stray bytes and error frames of
+    /// earlier writes) and, after a timeout, resynchronises with the probe `H`.
+    fn prepare(&self, inner: &mut Inner<T>, next: &'static str) -> Result<()> {
+        let timeout = self.options.timeout;
+        let mut rx = std::mem::take(&mut inner.rx);
+        let drained = drain(self.port(inner)?, &mut rx, timeout);
+        inner.rx = rx;
+        drained.map_err(|e| self.io_error(e))?;
+        record_unsolicited(&mut inner.rx, &mut inner.unsolicited, inner.last_command);
+        let Some(timed_out) = inner.desynchronised else {
+            return Ok(());
+        };
+        self.send(inner, Command::FirmwareType)?;
+        let deadline = Instant::now() + timeout;
         loop {
-            match scan_reply(&inner.rx, expected.as_bytes()) {
-                Scan::Found { reply, end, .. } => {
+            match scan_reply(&inner.rx, b"H") {
+                Scan::Found { reply: Reply::FirmwareType(_), end, .. } => {
+                    // Everything before the probe's reply answered earlier commands.
                     inner.rx.drain(..end);
-                    return match reply {
-                        Reply::Error(id) => Err(HwError::Device { command: command.name(), id }),
-                        Reply::Nack => Err(HwError::Nack { command: command.name() }),
-                        r => Ok(Some(r)),
-                    };
+                    inner.desynchronised = None;
+                    return Ok(());
                 }
-                Scan::Corrupted { .. } => {
-                    // Drop the frame and whatever follows it: the line is resynchronised by
-                    // the next command's drain.
-                    inner.rx.clear();
-                    let _ = port.discard_input();
-                    return Err(HwError::Crc { command: command.name() });
+                Scan::Found { reply, end, .. } => {
+                    // A late error frame: it answered the command that timed out.
+                    inner.unsolicited.push(Unsolicited { reply, after: timed_out });
+                    inner.rx.drain(..end);
+                    continue;
+                }
+                Scan::Corrupted { end } => {
+                    inner.rx.drain(..end);
+                    continue;
                 }
                 Scan::NeedMore => {}
             }
-            let now = Instant::now();
-            if now >= deadline {
+            if !self.receive_until(inner, deadline)? {
                 inner.rx.clear();
-                return Err(HwError::Timeout { command: command.name(), timeout: self.options.timeout });
+                return Err(HwError::Desynchronised { command: next, timeout });
             }
-            let n = port.receive(&mut chunk, deadline - now).map_err(io)?;
-            inner.rx.extend_from_slice(chunk.get(..n).unwrap_or(&chunk));
+        }
+    }
+
+    /// Reads what arrives before `deadline` into `rx`; false once the deadline passed.
+    fn receive_until(&self, inner: &mut Inner<T>, deadline: Instant) -> Result<bool> {
+        let now = Instant::now();
+        if now >= deadline {
+            return Ok(false);
+        }
+        let mut chunk = [0u8; 256];
+        let n = self.port(inner)?.receive(&mut chunk, deadline - now).map_err(|e| self.io_error(e))?;
+        inner.rx.extend_from_slice(chunk.get(..n).unwrap_or(&chunk));
+        Ok(true)
+    }
+
+    /// Waits for the reply starting `expected` or an error frame (returned as such) to the
+    /// command `name` just sent. A timeout leaves the client desynchronised (see
+    /// [`Self::transact`]).
+    fn await_frame(&self, inner: &mut Inner<T>, name: &'static str, expected: &[u8]) -> Result<Reply> {
+        let deadline = Instant::now() + self.options.timeout;
+        loop {
+            match scan_reply(&inner.rx, expected) {
+                Scan::Found { reply, end, .. } => {
+                    inner.rx.drain(..end);
+                    return Ok(reply);
+                }
+                Scan::Corrupted { .. } => {
+                    // The whole frame came, so the line stays in step; drop it and what follows.
+                    inner.rx.clear();
+                    let _ = self.port(inner)?.discard_input();
+                    return Err(HwError::Crc { command: name });
+                }
+                Scan::NeedMore => {}
+            }
+            if !self.receive_until(inner, deadline)? {
+                inner.rx.clear();
+                inner.desynchronised = Some(name);
+                return Err(HwError::Timeout { command: name, timeout: self.options.timeout });
+            }
         }
     }
 
@@ -373,8 +472,14 @@ impl<T: Transport> LensClient<T> {
         Ok((code, clamped))
     }
 
-    /// Sets the output current (`Aw`, fire-and-forget): clamped to the driver's software
-    /// limits, rounded to the nearest code. NaN/infinite are refused ([`HwError::Core`]).
+    /// Sets the output current (`Aw`): clamped to the driver's software limits, rounded to
+    /// the nearest code. NaN/infinite are refused ([`HwError::Core`]).
+    ///
+    /// `Aw` has no reply on success, only an error frame on failure, so the client confirms
+    /// it by reading the current back (`Ar`, one round trip): an error frame before the
+    /// `A` reply is the driver rejecting `Aw` ([`HwError::Device`] naming `Aw`), and a
+    /// read-back code other than the one sent is [`HwError::CurrentNotApplied`]. Nothing is
+    /// reported as applied that the driver did not apply.
     pub fn set_current_ma(&self, ma: f64) -> Result<SetCurrent> {
         let (code, clamped) = self.clamped_code(ma)?;
         let cmd = if self.options.legacy_set_current {
@@ -382,8 +487,28 @@ impl<T: Transport> LensClient<T> {
         } else {
             Command::SetCurrent { code }
         };
-        self.transact(cmd)?;
-        Ok(SetCurrent { requested_ma: ma, commanded_ma: current_ma(code, self.max_current_ma()), code, clamped })
+        let mut guard = self.lock();
+        let inner = &mut *guard;
+        self.transact_locked(inner, cmd)?;
+        self.send(inner, Command::GetCurrent)?;
+        let read_code = match self.await_frame(inner, Command::GetCurrent.name(), b"A")? {
+            Reply::Current { code } => code,
+            Reply::Error(id) => {
+                // The driver answers in order: this frame answers the write. Consume the
+                // read-back's own reply so that the line stays in step.
+                let _ = self.await_frame(inner, Command::GetCurrent.name(), b"A");
+                return Err(HwError::Device { command: cmd.name(), id });
+            }
+            _ => {
+                let _ = self.await_frame(inner, Command::GetCurrent.name(), b"A");
+                return Err(HwError::Nack { command: cmd.name() });
+            }
+        };
+        if read_code != code {
+            return Err(HwError::CurrentNotApplied { command: cmd.name(), sent_code: code, read_code });
+        }
+        let max = inner.max_current_ma;
+        Ok(SetCurrent { requested_ma: ma, commanded_ma: current_ma(code, max), code, clamped })
     }
 
     /// The output current, mA (`Ar`).

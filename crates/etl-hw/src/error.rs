@@ -51,6 +51,25 @@ pub enum HwError {
         /// Error id (1 CRC, 2 not in this firmware, 3 unknown command, 4 lens incompatible).
         id: u8,
     },
+    /// After a timeout, the resynchronising probe `H` got no reply either, so `command`
+    /// was not sent (a late reply could otherwise be taken for its answer).
+    #[error("no reply to the resynchronising H before {command} within {timeout:?} (the driver has not answered since an earlier timeout)")]
+    Desynchronised {
+        /// The command that was not sent.
+        command: &'static str,
+        /// The timeout.
+        timeout: Duration,
+    },
+    /// A current command was not applied: the current read back (`Ar`) is not the code sent.
+    #[error("lens driver did not apply {command}: sent current code {sent_code}, read back {read_code}")]
+    CurrentNotApplied {
+        /// The command's header (`Aw` or `A`).
+        command: &'static str,
+        /// The code sent.
+        sent_code: i16,
+        /// The code read back.
+        read_code: i16,
+    },
     /// The driver answered with the bare NACK `N` (it saw a bad CRC).
     #[error("lens driver answered {command} with N (it received a corrupted command)")]
     Nack {
@@ -126,13 +145,16 @@ impl etl_core::lens::LensError for HwError {
         use etl_core::lens::LensErrorKind as K;
         match self {
             HwError::Open { .. } | HwError::Io { .. } => K::LinkLost,
-            HwError::Timeout { .. } => K::Timeout,
+            HwError::Timeout { .. } | HwError::Desynchronised { .. } => K::Timeout,
             HwError::Crc { .. }
             | HwError::Nack { .. }
             | HwError::UnexpectedReply { .. }
             | HwError::BadMaxCurrent { .. }
             | HwError::InvertedLimits { .. } => K::Protocol,
-            HwError::Device { .. } | HwError::NoSensor { .. } | HwError::ControlledModeRefused { .. } => K::Refused,
+            HwError::Device { .. }
+            | HwError::CurrentNotApplied { .. }
+            | HwError::NoSensor { .. }
+            | HwError::ControlledModeRefused { .. } => K::Refused,
             HwError::Core(_) => K::InvalidInput,
             HwError::Pty { .. } | HwError::PortPath { .. } => K::Other,
         }

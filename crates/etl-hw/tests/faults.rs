@@ -40,7 +40,7 @@ fn a_slow_reply_within_the_timeout_is_fine_and_beyond_it_is_not() {
     device.with_faults(|f| f.reply_delay = Duration::from_millis(400));
     assert!(matches!(client.current_ma(), Err(HwError::Timeout { .. })));
     device.set_faults(Faults::default());
-    // The late reply arrives while the next query is under way, and is skipped as stray bytes.
+    // The late reply arrives before the next query; the resynchronisation discards it.
     std::thread::sleep(Duration::from_millis(300));
     assert!(client.current_ma().is_ok());
 }
@@ -70,15 +70,23 @@ fn error_frames_in_reply_and_unsolicited() {
     let (device, client) = spawn(VirtualLensConfig::default(), 300);
     device.with_faults(|f| f.error_frame_next = Some(2));
     assert!(matches!(client.current_ma(), Err(HwError::Device { command: "Ar", id: 2 })));
-    // After a fire-and-forget write the error frame is unsolicited: drained before the
-    // next command and reported.
+    // A rejected current command is an error of the call that sent it, naming `Aw`.
     device.with_faults(|f| f.error_frame_next = Some(1));
-    client.set_current_ma(50.0).unwrap();
-    std::thread::sleep(Duration::from_millis(20));
+    let e = client.set_current_ma(50.0).unwrap_err();
+    assert!(matches!(e, HwError::Device { command: "Aw", id: 1 }), "{e:?}");
     assert_eq!(client.current_ma().unwrap(), 0.0); // the write was not executed
+    assert!(client.take_unsolicited().is_empty());
+    // After another fire-and-forget write (`PwDA`) the error frame is unsolicited: drained
+    // before the next command and reported.
+    client.set_temperature_limits_c(60.0, 10.0).unwrap();
+    client.enter_controlled_mode().unwrap();
+    device.with_faults(|f| f.error_frame_next = Some(1));
+    client.set_focal_power_dpt(1.0).unwrap();
+    std::thread::sleep(Duration::from_millis(20));
+    assert!(client.mode().is_ok());
     let u = client.take_unsolicited();
     assert_eq!(u.len(), 1);
-    assert_eq!((u[0].reply, u[0].after), (Reply::Error(1), "Aw"));
+    assert_eq!((u[0].reply, u[0].after), (Reply::Error(1), "PwDA"));
     assert!(client.take_unsolicited().is_empty());
 }
 

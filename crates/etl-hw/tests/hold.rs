@@ -87,3 +87,46 @@ fn hold_runs_at_the_configured_rate_for_the_duration() {
     // 200 ms at 100 Hz: 21 steps at most (first at t = 0); fewer only if the machine stalls.
     assert!((5..=22).contains(&r.commands_sent), "{r:?}");
 }
+
+#[test]
+fn hold_beyond_the_driver_limits_fails_after_one_command() {
+    // A 200 mA driver (upper limit code 2797 = 200.0 mA): E_com 260 mA needs about 262 mA.
+    let upper = etl_hw::codec::scaling::current_code(200.0, 292.84);
+    let mut lens = VirtualDevice::new(VirtualLensConfig { upper_limit_code: upper, ..Default::default() }).unwrap();
+    let cfg = HoldConfig { e_com_ma: 260.0, rate_hz: 0.0, duration: Some(Duration::from_secs(1)) };
+    let mut steps = 0;
+    let e = hold(&mut lens, &ThermalCalibration::PAPER, &cfg, |_| {
+        steps += 1;
+        true
+    })
+    .unwrap_err();
+    let HoldError::Unreachable { wanted_e_in_ma, commanded_e_in_ma, e_com_ma, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(steps, 0, "no step is reported as held");
+    assert_eq!(e_com_ma, 260.0);
+    assert!((commanded_e_in_ma - 200.0).abs() < 0.04, "{commanded_e_in_ma}");
+    assert!(wanted_e_in_ma > 255.0, "{wanted_e_in_ma}");
+    assert_eq!(e.kind(), LensErrorKind::InvalidInput);
+    assert!(e.to_string().starts_with("E_com 260.000 mA needs E_in "), "{e}");
+    assert!(e.to_string().contains("beyond the driver's limits: it commanded 200.0"), "{e}");
+}
+
+#[test]
+fn hold_rates_and_durations_outside_their_ranges_are_refused_without_panicking() {
+    let mut lens = VirtualDevice::new(VirtualLensConfig::default()).unwrap();
+    for rate_hz in [1e-30, 1e-4, 1e5, f64::INFINITY, f64::NAN, -1.0] {
+        let cfg = HoldConfig { e_com_ma: 100.0, rate_hz, duration: None };
+        let e = hold(&mut lens, &ThermalCalibration::PAPER, &cfg, |_| true).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "compensation: invalid argument: hold rate must be 0 (as fast as possible) or lie in 1e-3..=1e4 Hz"
+        );
+    }
+    assert!(lens.received().current_codes.is_empty(), "nothing was sent");
+    for s in [1e30, 1e8, -1.0, f64::NAN, f64::INFINITY] {
+        let e = etl_hw::hold::duration_from_s(s).unwrap_err();
+        assert_eq!(e.to_string(), "invalid argument: hold duration must lie in 0..=1e7 s");
+    }
+    assert_eq!(etl_hw::hold::duration_from_s(1e7).unwrap(), Duration::from_secs(10_000_000));
+}

@@ -147,17 +147,28 @@ fn handshake_then_the_calibration_reads() {
     assert_eq!(client.path(), std::path::Path::new("script"));
 }
 
+/// `Ar 00 00` (facts sheet section 4.1).
+fn ar() -> Vec<u8> {
+    hex("41 72 00 00 B4 27")
+}
+
+/// The `A` reply of current code `code`.
+fn a_reply(code: i16) -> Vec<u8> {
+    reply(&[b"A".as_slice(), &code.to_be_bytes()].concat())
+}
+
 #[test]
-fn set_current_writes_aw_and_waits_for_nothing() {
+fn set_current_writes_aw_then_confirms_it_with_ar() {
     let then = [
         (hex("41 77 05 76 26 90"), vec![]), // 100 mA -> code 1398
+        (ar(), a_reply(1398)),
         (hex("41 77 FD 45 25 45"), vec![]), // -50 mA -> code -699
-        (frame(b"Aw\x0F\xFF"), vec![]),     // 1000 mA: clamped to the upper limit 4095
+        (ar(), a_reply(-699)),
+        (frame(b"Aw\x0F\xFF"), vec![]), // 1000 mA: clamped to the upper limit 4095
+        (ar(), a_reply(4095)),
     ];
     run(&then, |client| {
-        let t0 = Instant::now();
         let r = client.set_current_ma(100.0).unwrap();
-        assert!(t0.elapsed() < TIMEOUT, "a fire-and-forget write does not wait for a reply");
         assert_eq!((r.code, r.clamped), (1398, false));
         assert!((r.commanded_ma - ma(1398)).abs() < 1e-12, "{r:?}");
         let r = client.set_current_ma(-50.0).unwrap();
@@ -166,6 +177,64 @@ fn set_current_writes_aw_and_waits_for_nothing() {
         let r = client.set_current_ma(1000.0).unwrap();
         assert_eq!((r.code, r.clamped), (4095, true));
         assert!((r.commanded_ma - 292.84).abs() < 1e-12, "{r:?}");
+    });
+}
+
+#[test]
+fn a_current_command_the_driver_rejects_is_an_error_naming_aw() {
+    // E 02 answers the `Aw`; the read-back's `A` (the old code 0) follows it and is consumed,
+    // so the next query gets its own answer.
+    let then = [(hex("41 77 05 76 26 90"), reply(b"E\x02")), (ar(), a_reply(0)), (ar(), a_reply(0))];
+    run(&then, |client| {
+        let e = client.set_current_ma(100.0).unwrap_err();
+        assert!(matches!(e, HwError::Device { command: "Aw", id: 2 }), "{e:?}");
+        assert_eq!(e.to_string(), "lens driver answered Aw with error 2: command not available in this firmware type");
+        assert_eq!(e.kind(), LensErrorKind::Refused);
+        assert_eq!(client.current_ma().unwrap(), 0.0);
+        assert!(client.take_unsolicited().is_empty());
+    });
+}
+
+#[test]
+fn a_current_read_back_other_than_the_one_sent_is_not_applied() {
+    let then = [(hex("41 77 05 76 26 90"), vec![]), (ar(), a_reply(7))];
+    run(&then, |client| {
+        let e = client.set_current_ma(100.0).unwrap_err();
+        assert!(matches!(e, HwError::CurrentNotApplied { command: "Aw", sent_code: 1398, read_code: 7 }), "{e:?}");
+        assert_eq!(e.to_string(), "lens driver did not apply Aw: sent current code 1398, read back 7");
+    });
+}
+
+#[test]
+fn after_a_timeout_a_late_reply_is_discarded_before_the_next_answer() {
+    // The first `Ar` gets no answer in time; its late reply (code 999) comes in front of the
+    // probe's `H` reply, so it is dropped, and the next `Ar` gets the lens's real code 1398.
+    let then = [(ar(), vec![]), (hex("48 00 36"), [a_reply(999), reply(b"HC")].concat()), (ar(), a_reply(1398))];
+    run(&then, |client| {
+        assert!(matches!(client.current_ma(), Err(HwError::Timeout { command: "Ar", .. })));
+        let got = client.current_ma().unwrap();
+        assert!((got - ma(1398)).abs() < 1e-12, "{got}: the late reply was taken as the answer");
+    });
+}
+
+#[test]
+fn until_the_probe_is_answered_nothing_else_is_sent() {
+    // No answer to `TCA`, none to the probe `H`: the second query is not sent and fails;
+    // the third is preceded by a probe again, answered this time.
+    let probe = hex("48 00 36");
+    let tca = hex("54 43 41 B0 D0");
+    let then = [
+        (tca.clone(), vec![]),
+        (probe.clone(), vec![]),
+        (probe, reply(b"HC")),
+        (tca, hex("54 43 41 01 B2 F5 B9 0D 0A")),
+    ];
+    run(&then, |client| {
+        assert!(matches!(client.temperature_c(), Err(HwError::Timeout { command: "TCA", .. })));
+        let e = client.temperature_c().unwrap_err();
+        assert!(matches!(e, HwError::Desynchronised { command: "TCA", .. }), "{e:?}");
+        assert_eq!(e.kind(), LensErrorKind::Timeout);
+        assert_eq!(client.temperature_c().unwrap(), 27.125);
     });
 }
 
@@ -252,13 +321,18 @@ fn silence_times_out_after_the_configured_time() {
 }
 
 #[test]
-fn an_error_frame_after_a_write_is_drained_as_unsolicited() {
-    // `Aw` has no reply; the E 01 it provoked waits on the line until the next command.
-    let then = [(hex("41 77 05 76 26 90"), reply(b"E\x01")), (hex("41 72 00 00 B4 27"), reply(b"A\x05\x76"))];
+fn an_error_frame_after_a_focal_power_write_is_drained_as_unsolicited() {
+    // `PwDA` has no reply; the E 01 it provoked waits on the line until the next command.
+    let then = [
+        (hex("4D 77 43 41 56 76"), reply(b"MCA\x00\x0B\xB8\x07\xD0")),
+        (frame(b"PwDA\x09\xC4\x00\x00"), reply(b"E\x01")), // 12.5 dpt -> code 2500
+        (ar(), a_reply(1398)),
+    ];
     run(&then, |client| {
-        client.set_current_ma(100.0).unwrap();
+        client.enter_controlled_mode().unwrap();
+        client.set_focal_power_dpt(12.5).unwrap();
         assert!((client.current_ma().unwrap() - ma(1398)).abs() < 1e-12);
-        assert_eq!(client.take_unsolicited(), vec![Unsolicited { reply: Reply::Error(1), after: "Aw" }]);
+        assert_eq!(client.take_unsolicited(), vec![Unsolicited { reply: Reply::Error(1), after: "PwDA" }]);
     });
 }
 
@@ -302,4 +376,14 @@ fn an_unexpected_reply_says_what_was_expected_and_what_came() {
     assert_eq!(e.kind(), LensErrorKind::Protocol);
     let none = HwError::UnexpectedReply { command: "Start", expected: "Ready", got: None };
     assert_eq!(none.to_string(), r#"protocol error: Start expects a reply starting "Ready", got no reply"#);
+}
+
+#[test]
+fn timeouts_outside_their_range_are_refused_before_anything_is_sent() {
+    for timeout in [Duration::ZERO, Duration::from_secs(61), Duration::MAX] {
+        let (link, written) = script(&[]);
+        let e = LensClient::from_transport(link, OpenOptions { timeout, ..options() }).err().unwrap();
+        assert_eq!(e.to_string(), "invalid argument: reply timeout must lie in 1..=60000 ms");
+        assert!(written.lock().unwrap().is_empty());
+    }
 }

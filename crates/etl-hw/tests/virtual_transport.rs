@@ -49,13 +49,31 @@ fn faults_of_the_model_reach_the_client() {
     let e = client.temperature_c().unwrap_err();
     assert!(matches!(e, HwError::Timeout { command: "TCA", .. }), "{e:?}");
     assert!(t0.elapsed() >= TIMEOUT);
+    // The next call resynchronises first (the probe `H` takes the next reply).
+    assert!(client.temperature_c().is_ok());
     device.with_faults(|f| f.corrupt_next = 1);
     assert!(matches!(client.temperature_c(), Err(HwError::Crc { command: "TCA" })));
     // A reply later than the timeout is a timeout; one within it is fine.
     device.with_faults(|f| f.reply_delay = 2 * TIMEOUT);
     assert_eq!(client.current_ma().unwrap_err().kind(), LensErrorKind::Timeout);
     device.with_faults(|f| f.reply_delay = TIMEOUT / 4);
+    // The late reply comes in front of the probe's, within the probe's wait.
+    std::thread::sleep(TIMEOUT);
     assert_eq!(client.current_ma().unwrap(), 0.0);
     device.with_faults(|f| f.error_frame_next = Some(2));
     assert!(matches!(client.current_ma(), Err(HwError::Device { command: "Ar", id: 2 })));
+}
+
+#[test]
+fn a_late_reply_never_answers_a_later_question() {
+    // The reply to a timed-out `Ar` (50 mA) comes while the next `Ar` waits; meanwhile the
+    // lens was set to 150 mA behind the client's back. The answer must be 150, not 50.
+    let (mut device, client) = open(VirtualLensConfig::default());
+    client.set_current_ma(50.0).unwrap();
+    device.with_faults(|f| f.reply_delay = TIMEOUT + Duration::from_millis(60));
+    assert!(matches!(client.current_ma(), Err(HwError::Timeout { command: "Ar", .. })));
+    device.with_faults(|f| f.reply_delay = Duration::ZERO);
+    let commanded = etl_core::lens::Lens::set_current_ma(&mut device, 150.0).unwrap();
+    let got = client.current_ma().unwrap();
+    assert!((got - commanded).abs() < 1e-9 && (got - 150.0).abs() < 0.04, "{got} mA: a late reply was taken");
 }

@@ -7,7 +7,7 @@
 use std::time::Duration;
 
 use etl_hw::client::{LensClient, OpenOptions};
-use etl_hw::hold::{hold, HoldConfig, HoldError, HoldStep};
+use etl_hw::hold::{duration_from_s, hold, HoldConfig, HoldError, HoldStep};
 use etl_hw::virtual_lens::{Faults, VirtualLens as Device, VirtualLensConfig};
 use etl_hw::HwError;
 use pyo3::prelude::*;
@@ -17,6 +17,16 @@ use etl_core::lens::LensError as _;
 
 use crate::errors::{lens_kind, raise, Kind};
 use crate::thermal::ThermalCalibration;
+
+/// `x` printed compactly for a one-line message (`1e308`, not 309 digits).
+fn compact(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
+}
 
 fn hw_err(e: HwError) -> PyErr {
     raise(lens_kind(e.kind()), e.to_string())
@@ -28,7 +38,11 @@ fn hw_err(e: HwError) -> PyErr {
 ///     port: the serial port path (e.g. "/dev/ttyACM0", or `VirtualLens().port`).
 ///     handshake: send the `Start` handshake (it zeroes the current); leave False to attach
 ///         to a lens in use without losing its focus.
-///     timeout_ms: deadline of each reply, ms.
+///     timeout_ms: deadline of each reply, 1..=60000 ms.
+///
+/// After a DeviceTimeoutError the next call first resynchronises the line (a late reply
+/// is discarded, never taken for a later answer); `set_current_ma` confirms the current by
+/// reading it back, so a current the driver rejects raises DeviceError (naming `Aw`).
 ///
 /// The current never leaves the driver's limits: out-of-range requests are clamped (the
 /// returned value says what was commanded), NaN raises InputError. Use as a context manager
@@ -54,7 +68,8 @@ impl Lens {
 fn hold_err(e: HoldError<HwError>) -> PyErr {
     let kind = match &e {
         HoldError::Lens(l) => lens_kind(l.kind()),
-        HoldError::Core(_) => Kind::Input,
+        // The wanted E_com is beyond what the driver's limits give: the caller's input.
+        HoldError::Core(_) | HoldError::Unreachable { .. } => Kind::Input,
     };
     raise(kind, e.to_string())
 }
@@ -146,8 +161,9 @@ impl Lens {
     ///     calibration: a `ThermalCalibration` (its surface and ranges).
     ///     e_com_ma: the compensated current to hold, mA.
     ///     steps: stop after this many steps (None: by `duration_s` or `on_step`).
-    ///     duration_s: stop after this long, s (None: by `steps` or `on_step`).
-    ///     rate_hz: steps per second, Hz (0: as fast as the link allows).
+    ///     duration_s: stop after this long, 0..=1e7 s (None: by `steps` or `on_step`).
+    ///     rate_hz: steps per second, Hz: 0 for as fast as the link allows, else
+    ///         0.001..=10000.
     ///     on_step: callable(dict) -> bool | None, given "index", "temperature_c",
     ///         "e_in_ma", "e_com_ma" (the surface's E_com at the commanded current), "error_ma"
     ///         (quantisation and clamping), "extrapolated"; returning False stops the loop.
@@ -156,8 +172,9 @@ impl Lens {
     /// "worst_e_com_error_ma", "temperature_range_c" (min, max), "extrapolated_steps",
     /// "last" (the last step's dict or None).
     ///
-    /// Raises: InputError for a non-finite E_com, a negative rate, no stopping rule, or an
-    /// E_com the surface cannot reach at the temperature read; DeviceError /
+    /// Raises: InputError for a non-finite E_com, a rate or duration outside its range, no
+    /// stopping rule, an E_com the surface cannot reach at the temperature read, or one
+    /// whose current lies beyond the driver's limits (after that one clamped command); DeviceError /
     /// DeviceTimeoutError from the link; `on_step`'s own exception as it is (also
     /// KeyboardInterrupt).
     #[pyo3(signature = (calibration, e_com_ma, steps=None, duration_s=None, rate_hz=0.0, on_step=None))]
@@ -178,9 +195,11 @@ impl Lens {
         if steps == Some(0) {
             return Err(raise(Kind::Input, "hold steps must be >= 1"));
         }
-        let duration = match duration_s {
-            Some(d) if d.is_finite() && d >= 0.0 => Some(Duration::from_secs_f64(d)),
-            Some(d) => return Err(raise(Kind::Input, format!("duration_s must be finite and >= 0, got {d}"))),
+        let duration = match duration_s.map(|d| (d, duration_from_s(d))) {
+            Some((_, Ok(d))) => Some(d),
+            Some((d, Err(_))) => {
+                return Err(raise(Kind::Input, format!("duration_s must lie in 0..=1e7 s, got {}", compact(d))))
+            }
             None => None,
         };
         let config = HoldConfig { e_com_ma, rate_hz, duration };
@@ -309,7 +328,7 @@ impl VirtualLens {
     /// flaky cable, a busy driver or a firmware quirk does to the byte stream.
     ///
     /// Args:
-    ///     reply_delay_ms: every reply is sent this long after its command, ms.
+    ///     reply_delay_ms: every reply is sent this long after its command, 0..=60000 ms.
     ///     silence_next: the next N replies are never sent (the command is executed).
     ///     corrupt_next: the next N replies have a CRC byte flipped.
     ///     crc_error_next: the next N commands are treated as failing their CRC.
@@ -332,11 +351,11 @@ impl VirtualLens {
         drop_rx_bytes_next: u32,
         garbage_before_next: Vec<u8>,
     ) -> PyResult<()> {
-        if !(reply_delay_ms.is_finite() && reply_delay_ms >= 0.0) {
-            return Err(raise(Kind::Input, format!("reply_delay_ms must be finite and >= 0, got {reply_delay_ms}")));
-        }
+        let reply_delay = Faults::reply_delay_from_ms(reply_delay_ms).map_err(|_| {
+            raise(Kind::Input, format!("reply_delay_ms must lie in 0..=60000 ms, got {}", compact(reply_delay_ms)))
+        })?;
         self.device.set_faults(Faults {
-            reply_delay: Duration::from_secs_f64(reply_delay_ms / 1e3),
+            reply_delay,
             silence_next,
             corrupt_next,
             garbage_before_next,

@@ -130,6 +130,8 @@ def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
         with pytest.raises(etlcal.DeviceTimeoutError, match=r"^no reply to \w+ within 150ms$") as e:
             lens.current_ma()
         assert isinstance(e.value, TimeoutError) and isinstance(e.value, etlcal.DeviceError)
+        # The next call resynchronises first (a probe takes the next reply, faults included).
+        lens.current_ma()
         device.inject_faults(error_frame_next=3)
         with pytest.raises(etlcal.DeviceError, match=r"answered \w+ with error 3") as e:
             lens.current_ma()
@@ -138,7 +140,7 @@ def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
         with pytest.raises(etlcal.DeviceTimeoutError):
             lens.current_ma()
         device.inject_faults()
-        # The late reply arrives after the timeout and is skipped as stray bytes.
+        # The late reply arrives after the timeout and is discarded by the resynchronisation.
         time.sleep(0.3)
         got = lens.set_current_ma(100.0)
         assert lens.current_ma() == pytest.approx(got)
@@ -236,3 +238,53 @@ def test_thermal_calibration_bad_input():
             etlcal.thermal_calibration(lens, lambda: frame, lambda t: None, metric="sharpest")
     with pytest.raises(etlcal.DeviceError, match="closed"):
         etlcal.thermal_calibration(lens, lambda: frame, lambda t: None)
+
+
+def test_after_a_timeout_a_late_reply_never_answers_a_later_query():
+    """Issue 19: the reply to a timed-out query (the lens at 50 mA) must not be taken for
+    the answer to a later one (the lens at 150 mA)."""
+    device = etlcal.VirtualLens()
+    with etlcal.Lens(device.port, timeout_ms=150) as lens:
+        lens.set_current_ma(50.0)
+        device.inject_faults(reply_delay_ms=200.0)
+        with pytest.raises(etlcal.DeviceTimeoutError):
+            lens.current_ma()
+        device.inject_faults()
+        # The next call resynchronises first; on a stalled machine the late reply may come
+        # after the probe's wait, which is a timeout again, never a wrong answer.
+        for _ in range(5):
+            try:
+                got = lens.set_current_ma(150.0)
+                break
+            except etlcal.DeviceTimeoutError:
+                time.sleep(0.2)
+        assert got == pytest.approx(150.0, abs=0.04)
+        assert lens.current_ma() == pytest.approx(got)
+        assert device.state()["e_in_ma"] == pytest.approx(got)
+
+
+def test_a_current_the_driver_rejects_is_an_error_not_applied():
+    device = etlcal.VirtualLens()
+    with etlcal.Lens(device.port, timeout_ms=1000) as lens:
+        before = lens.set_current_ma(80.0)
+        device.inject_faults(error_frame_next=2)
+        with pytest.raises(etlcal.DeviceError, match=r"^lens driver answered Aw with error 2: ") as e:
+            lens.set_current_ma(120.0)
+        assert not isinstance(e.value, etlcal.DeviceTimeoutError)
+        assert lens.current_ma() == pytest.approx(before)
+        assert device.state()["e_in_ma"] == pytest.approx(before)
+
+
+def test_huge_durations_rates_delays_and_timeouts_are_input_errors_not_panics():
+    device = etlcal.VirtualLens()
+    cal = etlcal.ThermalCalibration.paper()
+    with pytest.raises(etlcal.InputError, match=r"^reply_delay_ms must lie in 0\.\.=60000 ms, got 1e30$"):
+        device.inject_faults(reply_delay_ms=1e30)
+    with pytest.raises(etlcal.InputError, match=r"reply timeout must lie in 1\.\.=60000 ms"):
+        etlcal.Lens(device.port, timeout_ms=0)
+    with etlcal.Lens(device.port) as lens:
+        with pytest.raises(etlcal.InputError, match=r"^duration_s must lie in 0\.\.=1e7 s, got 1e30$"):
+            lens.hold(cal, 100.0, duration_s=1e30)
+        with pytest.raises(etlcal.InputError, match=r"hold rate must be 0 \(as fast as possible\) or lie in 1e-3\.\.=1e4 Hz"):
+            lens.hold(cal, 100.0, steps=1, rate_hz=1e-30)
+    assert device.received_current_codes() == []

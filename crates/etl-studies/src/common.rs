@@ -25,6 +25,12 @@ use etl_formats::{Error, Result};
 pub use etl_report::figure::{write_figure, Chart, Figure, Series};
 use etl_sim::simulate::{focused_z_mm, observe_board, NoiseModel};
 
+/// The most Monte Carlo trials a study runs (per level): each trial keeps its result in
+/// memory (up to a few hundred bytes, a few ms to seconds of CPU), so 100 000 trials stay
+/// within tens of MB while 10^8 would need about 24 GB. Callers (the CLI's `--trials`)
+/// refuse more.
+pub const MAX_TRIALS: usize = 100_000;
+
 /// How a study runs: Monte Carlo trials, the base seed, where its progress goes.
 #[derive(Clone, Copy)]
 pub struct StudyOptions<'p> {

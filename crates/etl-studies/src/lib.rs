@@ -26,6 +26,6 @@ pub mod model;
 mod run;
 pub mod subsets;
 
-pub use common::{StudyOptions, StudyOutput};
+pub use common::{StudyOptions, StudyOutput, MAX_TRIALS};
 pub use etl_formats::{Error, Result};
 pub use run::Study;

@@ -17,8 +17,9 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use etl_hw::client::{LensClient, OpenOptions};
-use etl_hw::hold::{hold, HoldConfig, HoldError};
-use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig};
+use etl_hw::codec::scaling::SENSOR_RANGE_C;
+use etl_hw::hold::{duration_from_s, hold, HoldConfig, HoldError, RATE_RANGE_HZ};
+use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig, MAX_TIME_SCALE};
 use serde_json::json;
 
 use super::print_json;
@@ -34,7 +35,7 @@ pub struct Args {
     /// Send the `Start` handshake on open (zeroes the current).
     #[arg(long)]
     pub handshake: bool,
-    /// Reply timeout, ms.
+    /// Reply timeout, ms (1..=60000).
     #[arg(long, default_value_t = 500, value_name = "MS")]
     pub timeout_ms: u64,
     /// Set from the global `--json` (one JSON object on stdout).
@@ -90,22 +91,29 @@ pub struct HoldArgs {
     /// surface (none is assumed).
     #[arg(long, value_name = "FILE|paper")]
     pub thermal: PathBuf,
-    /// Loop rate, Hz (0: as fast as the link allows).
+    /// Loop rate, Hz: 0 for as fast as the link allows, else 0.001..=10000.
     #[arg(long, default_value_t = 10.0, value_name = "HZ")]
     pub rate: f64,
-    /// Stop after this many seconds (default: run until killed).
+    /// Stop after this many seconds, 0..=1e7 (default: run until killed).
     #[arg(long, value_name = "S")]
     pub duration: Option<f64>,
-    /// Virtual lens only: heat it towards this many degC above its start.
+    /// Virtual lens only: heat it towards this many degC above its start (the target
+    /// must stay in the sensor's -40..=125 degC).
     #[arg(long, value_name = "C")]
     pub warm: Option<f64>,
-    /// Virtual lens only: model seconds per wall second.
+    /// Virtual lens only: model seconds per wall second, (0, 1e6].
     #[arg(long, default_value_t = 1.0, value_name = "X")]
     pub time_scale: f64,
 }
 
 /// Runs `etlcal lens`.
 pub fn run(args: Args) -> Result<()> {
+    if !(1..=60_000).contains(&args.timeout_ms) {
+        return Err(Error::InvalidInput(format!("--timeout-ms {} must lie in 1..=60000 ms", args.timeout_ms)));
+    }
+    if let LensCommand::Hold(h) = &args.command {
+        check_hold_args(h)?;
+    }
     let (device, path) = open_target(&args)?;
     let options = OpenOptions {
         handshake: args.handshake,
@@ -140,12 +148,9 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
         LensCommand::SetCurrent { ma } => {
+            // The client confirms the write by reading it back: a rejected `Aw` is an error here.
             let r = client.set_current_ma(ma).map_err(Error::lens)?;
-            // Fire-and-forget: a query afterwards surfaces an error frame the driver sent.
             let now = client.current_ma().map_err(Error::lens)?;
-            if let Some(u) = client.take_unsolicited().first() {
-                return Err(Error::InvalidInput(format!("the driver rejected the current command: {:?}", u.reply)));
-            }
             if r.clamped {
                 let [lo, hi] = client.limits_ma();
                 eprintln!(
@@ -212,17 +217,18 @@ fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
 
 fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json_out: bool) -> Result<()> {
     let cal = ThermalRef::choose(&h.thermal)?.calibration()?;
-    if !(h.rate.is_finite() && h.rate >= 0.0) {
-        return Err(Error::InvalidInput(format!("--rate {} must be a finite number >= 0", h.rate)));
-    }
-    let duration = match h.duration {
-        Some(s) if s.is_finite() && s >= 0.0 => Some(Duration::from_secs_f64(s)),
-        Some(s) => return Err(Error::InvalidInput(format!("--duration {s} must be a finite number >= 0"))),
-        None => None,
-    };
+    // Checked by `check_hold_args` before anything was opened.
+    let duration = h.duration.map(duration_from_s).transpose().map_err(Error::Core)?;
     if let (Some(d), Some(w)) = (device, h.warm) {
-        let t0 = d.state().temperature_c;
-        d.set_target_temperature_c(t0 + w);
+        let target_c = d.state().temperature_c + w;
+        if !(SENSOR_RANGE_C[0]..=SENSOR_RANGE_C[1]).contains(&target_c) {
+            return Err(Error::InvalidInput(format!(
+                "--warm {} degC takes the lens to {} degC, outside the sensor's -40..=125 degC",
+                compact(w),
+                compact(target_c)
+            )));
+        }
+        d.set_target_temperature_c(target_c);
     } else if h.warm.is_some() {
         return Err(Error::InvalidInput("--warm only applies to --virtual".into()));
     }
@@ -244,6 +250,7 @@ fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json
     .map_err(|e| match e {
         HoldError::Lens(e) => Error::lens(e),
         HoldError::Core(e) => Error::Core(e),
+        e @ HoldError::Unreachable { .. } => Error::InvalidInput(e.to_string()),
     })?;
     let unsolicited = client.take_unsolicited().len();
     if json_out {
@@ -272,6 +279,36 @@ fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json
         );
     }
     Ok(())
+}
+
+/// Refuses `lens hold` flags outside their ranges before the lens is opened: the rate
+/// (0 or [`RATE_RANGE_HZ`]), the duration (0..=[`etl_hw::hold::MAX_DURATION_S`]), the time scale
+/// ((0, [`MAX_TIME_SCALE`]]).
+fn check_hold_args(h: &HoldArgs) -> Result<()> {
+    if h.rate != 0.0 && !(RATE_RANGE_HZ[0]..=RATE_RANGE_HZ[1]).contains(&h.rate) {
+        return Err(Error::InvalidInput(format!(
+            "--rate {} Hz must be 0 (as fast as possible) or lie in 0.001..=10000 Hz",
+            compact(h.rate)
+        )));
+    }
+    if let Some(s) = h.duration.filter(|&s| duration_from_s(s).is_err()) {
+        return Err(Error::InvalidInput(format!("--duration {} s must lie in 0..=1e7 s", compact(s))));
+    }
+    if !(h.time_scale > 0.0 && h.time_scale <= MAX_TIME_SCALE) {
+        return Err(Error::InvalidInput(format!("--time-scale {} must lie in (0, 1e6]", compact(h.time_scale))));
+    }
+    Ok(())
+}
+
+/// `x` printed compactly for a one-line message: plain when that is short (`260`,
+/// `0.25`), in exponent form otherwise (`1e308`, `1e-30`), never 309 digits.
+pub(crate) fn compact(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// `&LensClient` as a [`etl_core::lens::Lens`] (the client locks internally).

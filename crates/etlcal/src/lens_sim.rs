@@ -4,8 +4,10 @@
 
 use std::io::Write;
 
-use etl_hw::codec::scaling::current_code;
-use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig};
+use etl_hw::codec::scaling::{current_code, SENSOR_RANGE_C};
+use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig, MAX_TIME_SCALE};
+
+use crate::lens::compact;
 use serde_json::json;
 
 use super::print_json;
@@ -15,10 +17,10 @@ use etl_formats::{Error, Result};
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Model seconds per wall second (thermal time runs this much faster).
+    /// Model seconds per wall second (thermal time runs this much faster), (0, 1e6].
     #[arg(long, default_value_t = 1.0, value_name = "X")]
     pub time_scale: f64,
-    /// Ambient temperature, degC.
+    /// Ambient temperature, degC, within the lens sensor's -40..=125.
     #[arg(long, default_value_t = 25.0, value_name = "C")]
     pub ambient: f64,
     /// Upper software current limit, mA.
@@ -37,8 +39,19 @@ pub fn run(args: Args) -> Result<()> {
     let [lo, hi] = [args.lower_limit, args.upper_limit];
     if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= -292.84 && hi <= 292.84) {
         return Err(Error::InvalidInput(format!(
-            "limits [{lo}, {hi}] mA must satisfy -292.84 <= lower <= upper <= 292.84"
+            "limits [{}, {}] mA must satisfy -292.84 <= lower <= upper <= 292.84",
+            compact(lo),
+            compact(hi)
         )));
+    }
+    if !(SENSOR_RANGE_C[0]..=SENSOR_RANGE_C[1]).contains(&args.ambient) {
+        return Err(Error::InvalidInput(format!(
+            "--ambient {} degC must lie in -40..=125 degC",
+            compact(args.ambient)
+        )));
+    }
+    if !(args.time_scale > 0.0 && args.time_scale <= MAX_TIME_SCALE) {
+        return Err(Error::InvalidInput(format!("--time-scale {} must lie in (0, 1e6]", compact(args.time_scale))));
     }
     let config = VirtualLensConfig {
         time_scale: args.time_scale,

@@ -12,7 +12,7 @@ use serde_json::json;
 
 use super::print_json;
 use etl_formats::{Error, Result};
-use etl_studies::{Study, StudyOptions};
+use etl_studies::{Study, StudyOptions, MAX_TRIALS};
 
 use crate::progress::Bar;
 
@@ -39,8 +39,8 @@ pub struct Args {
     /// The study.
     #[arg(value_enum)]
     pub name: Name,
-    /// Monte Carlo trials (per level where the study has levels) [default: the study's:
-    /// fig6 100, subsets 5 data sets, baseline 200, crlb 300].
+    /// Monte Carlo trials (per level where the study has levels), 1..=100000 [default: the
+    /// study's: fig6 100, subsets 5 data sets, baseline 200, crlb 300].
     #[arg(long)]
     pub trials: Option<usize>,
     /// Base random seed.
@@ -56,8 +56,8 @@ pub struct Args {
 
 /// Runs `etlcal study`.
 pub fn run(args: Args) -> Result<()> {
-    if args.trials == Some(0) {
-        return Err(Error::InvalidInput("--trials must be at least 1".into()));
+    if let Some(n) = args.trials.filter(|n| !(1..=MAX_TRIALS).contains(n)) {
+        return Err(Error::InvalidInput(format!("--trials {n} must lie in 1..={MAX_TRIALS}")));
     }
     crate::output::create_dir(&args.out)?;
     let bar = Bar::new(true);

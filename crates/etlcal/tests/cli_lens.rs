@@ -67,3 +67,99 @@ fn hold_keeps_e_com_while_the_virtual_lens_warms() {
     let range = h["temperature_range_c"].as_array().unwrap();
     assert!(range[1].as_f64().unwrap() - range[0].as_f64().unwrap() > 5.0, "{h}");
 }
+
+/// Asserts a refusal: exit 1, one line on stderr containing `want`, nothing on stdout.
+fn refused(args: &[&str], want: &str) {
+    let (code, out, err) = etlcal(args);
+    assert_eq!(code, 1, "{args:?}: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.contains(want), "{args:?}: {err}");
+    assert!(out.is_empty(), "{args:?}: {out}");
+}
+
+#[test]
+fn hold_flags_outside_their_ranges_are_refused_in_one_line_without_panicking() {
+    fn hold(extra: &[&'static str]) -> Vec<&'static str> {
+        [&["lens", "--virtual", "--json", "hold", "--e-com", "150", "--thermal", "paper"][..], extra].concat()
+    }
+    refused(&hold(&["--duration", "1e30"]), "--duration 1e30 s must lie in 0..=1e7 s");
+    refused(&hold(&["--duration", "-1"]), "--duration -1 s must lie in 0..=1e7 s");
+    refused(&hold(&["--rate", "1e-30"]), "--rate 1e-30 Hz must be 0 (as fast as possible) or lie in 0.001..=10000 Hz");
+    refused(&hold(&["--rate", "inf"]), "--rate inf Hz must be 0");
+    refused(&hold(&["--time-scale", "1e308", "--duration", "1"]), "--time-scale 1e308 must lie in (0, 1e6]");
+    refused(&hold(&["--warm", "1e308", "--duration", "1"]), "--warm 1e308 degC takes the lens to 1e308 degC");
+    refused(&["lens", "--virtual", "--timeout-ms", "0", "info"], "--timeout-ms 0 must lie in 1..=60000 ms");
+}
+
+/// A `lens-sim` child serving on a pseudo-terminal, killed (by its pid) when dropped.
+struct Sim(std::process::Child, String);
+
+impl Sim {
+    fn spawn(args: &[&str]) -> Sim {
+        use std::io::BufRead;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_etlcal"))
+            .arg("lens-sim")
+            .args(args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        Sim(child, line.trim().to_owned())
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn hold_beyond_the_driver_limits_fails_instead_of_reporting_success() {
+    let sim = Sim::spawn(&["--upper-limit", "200", "--ambient", "27"]);
+    let (code, out, err) = etlcal(&[
+        "lens",
+        "--port",
+        &sim.1,
+        "--json",
+        "hold",
+        "--e-com",
+        "260",
+        "--thermal",
+        "paper",
+        "--duration",
+        "1",
+    ]);
+    assert_eq!(code, 1, "{out} {err}");
+    assert!(out.is_empty(), "no success report: {out}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("E_com 260.000 mA needs E_in ") && err.contains("beyond the driver's limits"), "{err}");
+    // Within the limits the same driver holds.
+    let (code, out, err) = etlcal(&[
+        "lens",
+        "--port",
+        &sim.1,
+        "--json",
+        "hold",
+        "--e-com",
+        "150",
+        "--thermal",
+        "paper",
+        "--duration",
+        "0.2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let h: Value = serde_json::from_str(&out).unwrap();
+    assert!(h["worst_e_com_error_ma"].as_f64().unwrap() < 0.04, "{h}");
+}
+
+#[test]
+fn lens_sim_refuses_an_absurd_ambient_or_time_scale() {
+    refused(&["lens-sim", "--ambient", "1e308"], "--ambient 1e308 degC must lie in -40..=125 degC");
+    refused(&["lens-sim", "--time-scale", "0"], "--time-scale 0 must lie in (0, 1e6]");
+    refused(&["lens-sim", "--upper-limit", "1e308"], "limits [-292.84, 1e308] mA");
+}

@@ -25,3 +25,22 @@ pub struct Faults {
     /// The next N bytes the host sends are lost.
     pub drop_rx_bytes_next: u32,
 }
+
+impl Faults {
+    /// A reply delay of `ms` milliseconds, which must lie in
+    /// 0..=[`MAX_REPLY_DELAY_MS`](super::MAX_REPLY_DELAY_MS) (finite): the checked
+    /// conversion instead of `Duration::from_secs_f64`, which panics on huge values.
+    ///
+    /// ```
+    /// use etl_hw::virtual_lens::Faults;
+    /// assert_eq!(Faults::reply_delay_from_ms(250.0).unwrap().as_millis(), 250);
+    /// assert!(Faults::reply_delay_from_ms(1e30).is_err() && Faults::reply_delay_from_ms(-1.0).is_err());
+    /// ```
+    pub fn reply_delay_from_ms(ms: f64) -> Result<Duration, etl_core::Error> {
+        let bad = etl_core::Error::InvalidArgument { what: "reply delay must lie in 0..=60000 ms" };
+        if !(0.0..=super::MAX_REPLY_DELAY_MS).contains(&ms) {
+            return Err(bad);
+        }
+        Duration::try_from_secs_f64(ms / 1e3).map_err(|_| bad)
+    }
+}

@@ -35,11 +35,18 @@ pub use model::{LensState, ThermalModel};
 #[cfg(unix)]
 pub use pty::VirtualLens;
 
-use crate::codec::scaling::{current_code, current_ma, NO_SENSOR_RAW};
+use crate::codec::scaling::{current_code, current_ma, NO_SENSOR_RAW, SENSOR_RANGE_C};
 use crate::codec::Mode;
 use crate::error::{HwError, Result};
 use crate::transport::Transport;
 use model::Model;
+
+/// The largest [`VirtualLensConfig::time_scale`], model seconds per wall second.
+pub const MAX_TIME_SCALE: f64 = 1e6;
+
+/// The longest reply delay a fault may inject (`Faults::reply_delay`), ms: one minute,
+/// longer than any timeout a client uses.
+pub const MAX_REPLY_DELAY_MS: f64 = 60_000.0;
 
 /// How the virtual lens is built.
 #[derive(Debug, Clone, PartialEq)]
@@ -275,16 +282,22 @@ fn validate(c: &VirtualLensConfig) -> Result<()> {
             Err(E::InvalidArgument { what })
         }
     };
-    positive(c.time_scale, "time_scale must be finite and > 0")?;
+    if !(c.time_scale > 0.0 && c.time_scale <= MAX_TIME_SCALE) {
+        return Err(E::InvalidArgument { what: "time_scale must lie in (0, 1e6] model s per wall s" }.into());
+    }
     positive(c.sensor_period_s, "sensor_period_s must be finite and > 0")?;
     positive(c.thermal.tau_s, "thermal.tau_s must be finite and > 0")?;
     positive(c.thermal.thermal_resistance_k_per_w, "thermal resistance must be finite and > 0")?;
     if !(c.thermal.coil_resistance_ohm.is_finite() && c.thermal.coil_resistance_ohm >= 0.0) {
         return Err(E::InvalidArgument { what: "coil resistance must be finite and >= 0" }.into());
     }
-    etl_core::error::finite(c.thermal.ambient_c, "ambient_c")?;
-    if let Some(t) = c.initial_temperature_c {
-        etl_core::error::finite(t, "initial_temperature_c")?;
+    // The lens sensor's range: a lens model outside it would report "no sensor".
+    let in_sensor_range = |t: f64| (SENSOR_RANGE_C[0]..=SENSOR_RANGE_C[1]).contains(&t);
+    if !in_sensor_range(c.thermal.ambient_c) {
+        return Err(E::InvalidArgument { what: "ambient temperature must lie in -40..=125 degC" }.into());
+    }
+    if c.initial_temperature_c.is_some_and(|t| !in_sensor_range(t)) {
+        return Err(E::InvalidArgument { what: "initial temperature must lie in -40..=125 degC" }.into());
     }
     if c.max_current_centi_ma <= 0 {
         return Err(E::InvalidArgument { what: "max current must be > 0" }.into());

@@ -535,7 +535,10 @@ def autofocus(
 @final
 class Lens:
     """An Optotune Lens Driver 4 on `port` (or a VirtualLens's port); a context manager.
-    The current never leaves the driver's limits (clamped); NaN raises InputError."""
+    The current never leaves the driver's limits (clamped); NaN raises InputError;
+    timeout_ms lies in 1..=60000. After a DeviceTimeoutError the next call resynchronises
+    (a late reply never answers a later query); set_current_ma reads the current back, so
+    a current the driver rejects raises DeviceError."""
     def __new__(cls, port: Union[str, os.PathLike], handshake: bool = False, timeout_ms: int = 500) -> Lens: ...
     def info(self) -> Dict[str, Any]: ...
     def set_current_ma(self, e_in_ma: float) -> float: ...
@@ -587,7 +590,7 @@ class VirtualLens:
         drop_rx_bytes_next: int = 0,
         garbage_before_next: bytes = b"",
     ) -> None:
-        """Faults on the link (replacing any before): reply delay (ms), silenced or corrupted
+        """Faults on the link (replacing any before): reply delay (0..=60000 ms), silenced or corrupted
         replies, commands failing their CRC, an error frame E<id>, lost host bytes, garbage."""
         ...
     def disconnect(self) -> None: ...
