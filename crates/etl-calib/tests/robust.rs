@@ -1,4 +1,4 @@
-//! Robust calibration against gross corner outliers (issue 19).
+//! Robust calibration against gross corner outliers.
 
 use etl_calib::pipeline::robust::OUTLIER_FLOOR_PX;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
@@ -29,7 +29,7 @@ fn corrupt(obs: &mut Observations, k: usize, seed: u64) -> Vec<(usize, usize)> {
     picked
 }
 
-/// The outlier sweep of issue 19: k = 1..23 of the paper rig's 2311 corners replaced by
+/// The outlier sweep of the acceptance: k = 1..23 of the paper rig's 2311 corners replaced by
 /// random pixels (one seed per k); every calibration succeeds, finds each replaced corner
 /// that moved by more than twice the outlier floor (a random pixel can land near the true
 /// one), reports no

@@ -1,4 +1,4 @@
-//! Zhang's method on the simulated lens-off views of the paper rig (NOTES.md: 10 views of an
+//! Zhang's method on the simulated lens-off views of the paper rig (docs/METHOD.md: 10 views of an
 //! 11 x 8 board with 4 mm squares, tilted up to ~25 degrees, at E = 0).
 
 use etl_calib::pipeline::a0_from_offstate;

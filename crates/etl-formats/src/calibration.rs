@@ -1,4 +1,4 @@
-//! `etlcal.calibration/1`: the result of a calibration (DESIGN.md).
+//! `etlcal.calibration/1`: the result of a calibration (README, "File formats").
 //!
 //! The model's 25 numbers under the names of [`etl_core::model::CameraModel`], `std` with
 //! one standard deviation of each, the calibrated current range, the RMS reprojection

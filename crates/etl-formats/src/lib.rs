@@ -28,7 +28,7 @@
 //! # }
 //! ```
 //!
-//! File formats (DESIGN.md): JSON with a `"format"` field naming format and version
+//! File formats (README, "File formats"): JSON with a `"format"` field naming format and version
 //! (`etlcal.<name>/<version>`); lengths in mm, currents in mA, temperatures in degC.
 //!
 //! Readers refuse an unknown format or version with a message naming it. Unknown fields

@@ -130,7 +130,7 @@ fn a_bad_covariance_is_refused_naming_it_and_nothing_is_written() {
     }
 }
 
-/// The temperature trust policy (issue 17): inside the calibrated ranges the camera is
+/// The temperature trust policy: inside the calibrated ranges the camera is
 /// returned; outside, the quantity that left its range is named; extrapolation is explicit
 /// and marked.
 #[test]

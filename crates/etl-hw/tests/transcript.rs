@@ -1,7 +1,7 @@
 //! Byte transcripts of the client, as embedded-hal-mock does for I2C drivers: a scripted
 //! transport records exactly the bytes the client writes and answers each write with
 //! canned bytes. The bytes come from the facts sheet
-//! (`shared/protocol/optotune-lens-driver-4.md`, sections 2-4 and 4.10) and the codec
+//! (`docs/PROTOCOL.md`, sections 2-4 and 4.10) and the codec
 //! vectors; CRCs the sheet does not print are computed with the sheet's own script
 //! (section 3, transcribed below), never with the codec under test.
 

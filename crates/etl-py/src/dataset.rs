@@ -11,7 +11,7 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 use crate::errors::{input_error, CoreResultExt};
 use crate::observations::Observations;
 
-/// The images of a calibration and what was recorded with each (DESIGN.md's
+/// The images of a calibration and what was recorded with each (the README's "File formats":
 /// `etlcal.dataset/1`): the board, per view the image path (relative to the file), E_in,
 /// the lens temperature and the stage position, and optionally lens-off and per-setting
 /// views. `etlcal.simulate`-style rigs write one with `etlcal simulate --out DIR`.

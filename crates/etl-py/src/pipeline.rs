@@ -122,7 +122,7 @@ pub fn calibrate(
 
 /// The Cramer-Rao lower bound of the calibration: the smallest standard deviation any
 /// unbiased estimator can reach for each of the 25 numbers, at the true camera, for the
-/// views' geometry (the benchmark of NOTES.md, "statistical efficiency").
+/// views' geometry (the benchmark of docs/METHOD.md, "statistical efficiency").
 ///
 /// Args:
 ///     observations: the views (their world points and currents are used; the pixels

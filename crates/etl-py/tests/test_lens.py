@@ -103,7 +103,7 @@ def test_thermal_calibration_with_a_python_camera():
 
 def test_a_lens_timeout_inside_the_temperature_procedure_is_a_device_timeout():
     """The procedure is library code between Python and the lens: the failure keeps its
-    kind on the way (issue 14), so it is DeviceTimeoutError, not InputError."""
+    kind on the way, so it is DeviceTimeoutError, not InputError."""
     import numpy as np
 
     device = etlcal.VirtualLens()
@@ -151,8 +151,8 @@ def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
 def test_a_pulled_cable_is_a_device_error_and_reconnect_keeps_the_current():
     device = etlcal.VirtualLens()
     # A generous timeout: with 200 ms a reply delayed by a stalled machine timed out during
-    # the reconnection's own queries and was then taken for a later answer (issue 19's
-    # resynchronisation bug, not what this test is about).
+    # the reconnection's own queries (a late reply is now discarded by the resynchronisation,
+    # docs/RELIABILITY.md, "Device faults"; not what this test is about).
     with etlcal.Lens(device.port, timeout_ms=1000) as lens:
         got = lens.set_current_ma(120.0)
         device.disconnect()

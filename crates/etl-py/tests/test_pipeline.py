@@ -223,7 +223,7 @@ def test_solve_pnp_bad_inputs():
 def test_cramer_rao_bound_of_the_paper_rig():
     sim = etlcal.simulate.paper_rig(0, noise="none")
     plain = etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2)
-    # NOTES.md: with 0.2 px of pixel noise alone the bound of kf3 is about 3 %.
+    # docs/METHOD.md: with 0.2 px of pixel noise alone the bound of kf3 is about 3 %.
     rel = plain["kf_x"][3] / 3e-5
     assert 0.015 < rel < 0.06, rel
     eiv = etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2, sigma_z_mm=0.010, sigma_e_ma=0.4)

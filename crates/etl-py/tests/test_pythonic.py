@@ -1,4 +1,4 @@
-"""The Pythonic surface (issue 18): vectorised per-current functions against the scalar
+"""The Pythonic surface: vectorised per-current functions against the scalar
 ones, typed result objects (attributes and dict access), Observations as a sequence of
 views, option checking, and the stubs under mypy --strict (this file is fully typed and
 is the file mypy checks)."""

@@ -19,8 +19,8 @@ fn the_report_lists_warnings_and_outliers() {
     cal.warnings = vec!["1 of 2311 corners (0.04 %) are outliers (reprojection error > 5 robust sigmas)".into()];
     etl_report::write_report(&cal, None, None, &provenance, dir.path()).unwrap();
     let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
-    assert!(
-        html.contains("<h2 id=\"warnings\">Warnings</h2><ul><li>1 of 2311 corners (0.04 %) are outliers (reprojection error &gt; 5")
-    );
+    assert!(html.contains(
+        "<h2 id=\"warnings\">Warnings</h2><ul><li>1 of 2311 corners (0.04 %) are outliers (reprojection error &gt; 5"
+    ));
     assert!(html.contains("<tr><td>2</td><td>17</td><td>412.50</td></tr>"), "{html}");
 }

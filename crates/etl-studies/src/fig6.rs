@@ -1,5 +1,5 @@
 //! `etlcal study fig6`: the three studies of the paper's section 5.1.2 (Fig. 6) under the
-//! paper's noise model (NOTES.md), each for the plain bundle adjustment (Eq. 24) and the
+//! paper's noise model (docs/METHOD.md), each for the plain bundle adjustment (Eq. 24) and the
 //! errors-in-variables one, side by side:
 //!
 //! - (a) pixel noise 0..1.6 px by 0.2 (the other noises at the paper's levels);
@@ -337,7 +337,7 @@ fn summary_json(s: &LevelSummary) -> Value {
 
 impl Fig6 {
     /// Whether errors-in-variables has a lower mean fx(E) and fy(E) curve error than the plain
-    /// estimator at every level of study (b) above 0.4 mA (issue 8's acceptance); None when
+    /// estimator at every level of study (b) above 0.4 mA (the acceptance); None when
     /// study (b) was not run.
     pub fn eiv_lowers_current_noise_curves(&self) -> Option<bool> {
         let (_, levels) = self.studies.iter().find(|(s, _)| *s == Fig6Study::CurrentNoise)?;

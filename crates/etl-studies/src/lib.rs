@@ -1,4 +1,4 @@
-//! The paper's simulations and comparisons (issue 8), reproduced with etlcal: one file per
+//! The paper's simulations and comparisons, reproduced with etlcal: one file per
 //! study, [`common`] for what they share (trials in parallel, errors against the truth,
 //! statistics, plots, markdown).
 //!

@@ -1,5 +1,5 @@
 //! `etlcal demo [--out DIR] [--seed N] [--stage-noise-um X] [--json]`: the main job on the
-//! built-in simulated rig (the paper rig, NOTES.md).
+//! built-in simulated rig (the paper rig, docs/METHOD.md).
 //!
 //! Simulates the paper rig's 15 views and 10 lens-off views with the paper's noise model,
 //! renders every view with the synthetic camera ([`etl_sim::simulate::images`]), detects the

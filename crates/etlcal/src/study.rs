@@ -1,5 +1,5 @@
 //! `etlcal study NAME [--trials N] [--seed S] [--out DIR] [--json]`: the paper's
-//! simulations and comparisons (issue 8; `etl_studies`).
+//! simulations and comparisons (`etl_studies`).
 //!
 //! NAME is one of `fig5`, `fig6`, `subsets`, `baseline`, `crlb`, or `all`. Each writes
 //! NAME.json, NAME.md and its plots (PNG and SVG) into DIR, prints the markdown summary

@@ -1,5 +1,5 @@
 //! `etlcal simulate`, `calibrate` and `demo` through the real binary: figures against the
-//! truth, and every bad input named in issues 3 and 5 (message, exit code, nothing
+//! truth, and every bad input named in the acceptance criteria (message, exit code, nothing
 //! written or overwritten).
 
 use std::path::Path;
@@ -55,7 +55,7 @@ fn simulate_then_calibrate_recovers_the_paper_rig() {
             + 100.0 * j["kf_x"][1].as_f64().unwrap()
             + 1e4 * j["kf_x"][2].as_f64().unwrap()
             + 1e6 * j["kf_x"][3].as_f64().unwrap();
-        // The paper estimator carries the stage/current noise into fx (NOTES.md): ~1 %.
+        // The paper estimator carries the stage/current noise into fx (docs/METHOD.md): ~1 %.
         let tol = if est == "paper" { 0.02 } else { 0.005 };
         assert!((got - 4850.0).abs() / 4850.0 < tol, "{est}: fx(100) = {got}");
         assert_eq!(j["std"]["kf_x"].as_array().unwrap().len(), 4);

@@ -1,4 +1,4 @@
-//! `etlcal lens --virtual ...` through the real binary: the `--json` keys of issue 6, the
+//! `etlcal lens --virtual ...` through the real binary: the documented `--json` keys, the
 //! clamping policy (beyond the limits: clamped with a warning, exit 0), NaN refused.
 use std::process::Command;
 

@@ -1,4 +1,4 @@
-//! Outputs and inputs (issue 19, docs/RELIABILITY.md "Outputs"): an output that is an
+//! Outputs and inputs (docs/RELIABILITY.md, "Outputs"): an output that is an
 //! input, or exists and is not a regular file, is refused before anything is read, in one
 //! line with exit status 1, inputs and earlier outputs intact and no temporary left; sets
 //! of files are replaced whole, also when the writer is killed at a random moment.
