@@ -58,6 +58,9 @@ stage_done "Python test environment (installed during the Rust tests)"
 "$venv/bin/python" -m pip install --quiet "$root"/target/wheels-test/*.whl
 stage_done "Python package built and installed"
 cd crates/etl-py/tests
+# The Rust programs the Python tests compare with, as `cargo test` built them.
+export ETLCAL_TEST_RUST_REFERENCE="$root/target/debug/examples/rust_reference"
+export ETLCAL_TEST_BINARY="$root/target/debug/etlcal"
 "$venv/bin/python" -m pytest -q --durations=10
 stage_done "pytest"
 echo "== all tests passed in $((SECONDS - start)) s"
