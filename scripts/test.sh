@@ -14,14 +14,23 @@ stage_done() {
   stage_start=$SECONDS
 }
 
-# The Python test environment: the virtualenv now, its packages downloaded and installed in
-# the background while Rust compiles (network and disk, not the CPU the build needs).
+# The Python test environment, created and installed in the background while Rust compiles
+# (network and disk, not the CPU the build needs); first, when .ci/run installs Debian
+# packages in the background too (ETLCAL_APT_STATUS), it waits for them.
 venv="$root/target/test-venv"
 rm -rf "$venv" "$root/target/wheels-test"
 mkdir -p "$root/target"
-python3 -m venv "$venv"
 (
-  "$venv/bin/python" -m pip install --quiet --upgrade pip &&
+  if [ -n "${ETLCAL_APT_STATUS:-}" ]; then
+    while [ ! -s "$ETLCAL_APT_STATUS" ]; do sleep 1; done
+    if [ "$(cat "$ETLCAL_APT_STATUS")" != 0 ]; then
+      cat "${ETLCAL_APT_LOG:-/dev/null}"
+      echo "apt-get failed (log above)"
+      exit 1
+    fi
+  fi
+  python3 -m venv "$venv" &&
+    "$venv/bin/python" -m pip install --quiet --upgrade pip &&
     "$venv/bin/python" -m pip install --quiet "maturin>=1.5,<2" "pytest>=7" "numpy>=1.21" \
       opencv-python-headless mypy pyyaml types-PyYAML
 ) >"$root/target/test-venv.log" 2>&1 &

@@ -290,3 +290,25 @@ fn numbers_out_of_their_documented_ranges_are_refused_naming_the_quantity() {
     assert!(err.contains("--e-com -1e6 mA is outside [-292.84, 292.84] mA"), "{err}");
     assert!(!img.exists());
 }
+
+/// A dataset's image that is not a regular file (a FIFO: opening it would block forever) is
+/// refused by the detection of `calibrate --dataset`, as every other input is.
+#[test]
+fn a_fifo_as_a_dataset_image_is_refused_not_opened() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    assert!(Command::new("mkfifo").arg(p("view.png")).status().unwrap().success());
+    let views: Vec<String> = [(80.0, 75.0), (150.0, 22.0), (225.0, 2.0)]
+        .iter()
+        .map(|(e, z)| format!(r#"{{"image": "view.png", "e_in_ma": {e}, "temperature_c": 30.0, "z_w_mm": {z}}}"#))
+        .collect();
+    let dataset = format!(
+        r#"{{"format": "etlcal.dataset/1", "image_size": [1936, 1458], "board": {{"inner_corners": [14, 12], "square_mm": 1.5}}, "views": [{}]}}"#,
+        views.join(", ")
+    );
+    std::fs::write(p("dataset.json"), dataset).unwrap();
+    let err =
+        refused(&["calibrate", "--dataset", s(&p("dataset.json")), "--thermal", "paper", "--out", s(&p("c.json"))]);
+    assert!(err.contains("not a regular file"), "{err}");
+    assert!(!p("c.json").exists());
+}

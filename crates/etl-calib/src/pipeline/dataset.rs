@@ -224,8 +224,9 @@ pub fn default_detector() -> ImageDetector {
 
 impl CornerDetector for ImageDetector {
     fn detect(&self, path: &Path, inner_corners: [usize; 2]) -> Result<Detection> {
-        let img =
-            image::open(path).map_err(|e| Error::Image { path: path.to_owned(), message: e.to_string() })?.to_luma8();
+        // The one image reader: it refuses what is not a regular file before opening it
+        // and images above its pixel-count limit before decoding them.
+        let img = etl_image::read_image(path)?.to_luma8();
         let image_size = [img.width(), img.height()];
         let corners =
             find_corners(&img, inner_corners).map_err(|e| Error::BoardNotFound(format!("{}: {e}", path.display())))?;
