@@ -14,19 +14,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use etl_core::lens::LensError as _;
+use etl_formats::compact;
 
 use crate::errors::{lens_kind, raise, Kind};
 use crate::thermal::ThermalCalibration;
-
-/// `x` printed compactly for a one-line message (`1e308`, not 309 digits).
-fn compact(x: f64) -> String {
-    let plain = format!("{x}");
-    if plain.len() <= 12 {
-        plain
-    } else {
-        format!("{x:e}")
-    }
-}
 
 fn hw_err(e: HwError) -> PyErr {
     raise(lens_kind(e.kind()), e.to_string())

@@ -24,7 +24,7 @@ use serde_json::json;
 
 use super::print_json;
 use etl_formats::calibration::ThermalRef;
-use etl_formats::{Error, Result};
+use etl_formats::{compact, Error, Result};
 
 /// Arguments of `etlcal lens`.
 #[derive(clap::Args, Debug)]
@@ -298,17 +298,6 @@ fn check_hold_args(h: &HoldArgs) -> Result<()> {
         return Err(Error::InvalidInput(format!("--time-scale {} must lie in (0, 1e6]", compact(h.time_scale))));
     }
     Ok(())
-}
-
-/// `x` printed compactly for a one-line message: plain when that is short (`260`,
-/// `0.25`), in exponent form otherwise (`1e308`, `1e-30`), never 309 digits.
-pub(crate) fn compact(x: f64) -> String {
-    let plain = format!("{x}");
-    if plain.len() <= 12 {
-        plain
-    } else {
-        format!("{x:e}")
-    }
 }
 
 /// `&LensClient` as a [`etl_core::lens::Lens`] (the client locks internally).

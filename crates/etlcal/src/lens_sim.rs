@@ -7,11 +7,10 @@ use std::io::Write;
 use etl_hw::codec::scaling::{current_code, SENSOR_RANGE_C};
 use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig, MAX_TIME_SCALE};
 
-use crate::lens::compact;
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::{Error, Result};
+use etl_formats::{compact, Error, Result};
 
 /// Arguments of `etlcal lens-sim`.
 #[derive(clap::Args, Debug)]
