@@ -19,6 +19,17 @@ use etl_formats::compact;
 use crate::errors::{lens_kind, raise, Kind};
 use crate::thermal::ThermalCalibration;
 
+/// `t_c` if the lens temperature sensor can read it (-40..=125 degC), else InputError
+/// naming `what`: the virtual lens models no temperature its sensor could not report.
+fn sensor_range(what: &str, t_c: f64) -> PyResult<f64> {
+    let [lo, hi] = etl_hw::codec::scaling::SENSOR_RANGE_C;
+    if (lo..=hi).contains(&t_c) {
+        Ok(t_c)
+    } else {
+        Err(raise(Kind::Input, format!("{what} must lie in -40..=125 degC, got {}", compact(t_c))))
+    }
+}
+
 fn hw_err(e: HwError) -> PyErr {
     raise(lens_kind(e.kind()), e.to_string())
 }
@@ -286,9 +297,12 @@ impl VirtualLens {
     }
 
     /// Heats the mount so that the lens settles at `t_c` degC, and jumps to equilibrium.
-    fn set_temperature_c(&self, t_c: f64) {
+    /// `t_c` within the lens sensor's -40..=125 degC (InputError otherwise).
+    fn set_temperature_c(&self, t_c: f64) -> PyResult<()> {
+        sensor_range("t_c", t_c)?;
         self.device.set_target_temperature_c(t_c);
         self.device.settle();
+        Ok(())
     }
 
     /// Every current code the device received, in order (the wire's truth; +-4095 is
@@ -306,13 +320,20 @@ impl VirtualLens {
 
     /// Sets the ambient temperature, degC (the lens drifts towards the new equilibrium
     /// in model time; see `advance_s`).
-    fn set_ambient_c(&self, t_c: f64) {
+    fn set_ambient_c(&self, t_c: f64) -> PyResult<()> {
+        sensor_range("t_c", t_c)?;
         self.device.set_ambient_c(t_c);
+        Ok(())
     }
 
-    /// Advances the thermal model by `dt_s` model seconds at once, s.
-    fn advance_s(&self, dt_s: f64) {
+    /// Advances the thermal model by `dt_s` model seconds at once, s: 0..=1e7 s (the
+    /// longest hold; InputError otherwise).
+    fn advance_s(&self, dt_s: f64) -> PyResult<()> {
+        if !(0.0..=etl_hw::hold::MAX_DURATION_S).contains(&dt_s) {
+            return Err(raise(Kind::Input, format!("dt_s must lie in 0..=1e7 s, got {}", compact(dt_s))));
+        }
         self.device.advance_s(dt_s);
+        Ok(())
     }
 
     /// Injects faults into the link (replacing any before; all off by default): what a

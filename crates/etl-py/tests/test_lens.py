@@ -288,3 +288,19 @@ def test_huge_durations_rates_delays_and_timeouts_are_input_errors_not_panics():
         with pytest.raises(etlcal.InputError, match=r"hold rate must be 0 \(as fast as possible\) or lie in 1e-3\.\.=1e4 Hz"):
             lens.hold(cal, 100.0, steps=1, rate_hz=1e-30)
     assert device.received_current_codes() == []
+
+
+def test_virtual_lens_temperatures_and_time_steps_are_range_checked():
+    device = etlcal.VirtualLens()
+    before = device.state()["temperature_c"]
+    for bad in (1e308, float("nan"), -41.0, 126.0):
+        with pytest.raises(etlcal.InputError, match=r"^t_c must lie in -40\.\.=125 degC, got "):
+            device.set_temperature_c(bad)
+        with pytest.raises(etlcal.InputError, match=r"^t_c must lie in -40\.\.=125 degC, got "):
+            device.set_ambient_c(bad)
+    for bad in (-1.0, 1e30, float("inf"), float("nan")):
+        with pytest.raises(etlcal.InputError, match=r"^dt_s must lie in 0\.\.=1e7 s, got "):
+            device.advance_s(bad)
+    assert device.state()["temperature_c"] == before
+    device.set_temperature_c(40.0)
+    assert device.state()["temperature_c"] == pytest.approx(40.0, abs=0.05)
