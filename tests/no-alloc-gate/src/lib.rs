@@ -257,3 +257,19 @@ pub extern "C" fn etl_gate_undistort_remap(
     s += remap(&src, mx, my, f32::NAN, &mut df).map_or(f64::NAN, |()| df.iter().map(|&v| v as f64).sum());
     s
 }
+
+/// Looks up a dictionary by a name given as bytes, decodes `observed` with it and builds a
+/// ChArUco board from it; returns a checksum of what it found, or NaN on error.
+#[no_mangle]
+pub extern "C" fn etl_gate_board(name: &[u8; 16], len: usize, observed: u64, cols: u32, rows: u32, id: u32) -> f64 {
+    use etl_core::board::{CharucoBoard, Dictionary};
+    let Some(bytes) = name.get(..len) else { return f64::NAN };
+    let Ok(name) = core::str::from_utf8(bytes) else { return f64::NAN };
+    let Some(dict) = Dictionary::by_name(name) else { return f64::NAN };
+    let decoded = dict.identify(observed, dict.max_correction_bits()).map_or(-1.0, |m| m.id as f64);
+    let Ok(board) = CharucoBoard::new([cols, rows], 1.5, 1.1, dict) else { return f64::NAN };
+    let corner = board.corner_mm(id).map_or(0.0, |p| p[0] + p[1]);
+    let marker = board.marker_corners_mm(id).map_or(0.0, |m| m[2][0]);
+    let touching = board.corner_markers(id).map_or(0.0, |m| (m[0] + m[1]) as f64);
+    decoded + corner + marker + touching
+}
