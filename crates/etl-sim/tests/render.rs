@@ -138,33 +138,18 @@ fn corners_px_are_the_model_projections_and_the_image_agrees() {
     }
 }
 
-#[test]
-fn sharp_coverage_matches_supersampling_through_the_ray() {
-    let scene = tilted_scene();
-    let r = render(&scene, &clean(Optics::sharp())).unwrap();
-    let s = scene.board.square_mm();
-    let [cols, rows] = scene.board.corner_grid();
-    let colour = |x: f64, y: f64| -> f64 {
-        let (a, b) = ((x / s).floor(), (y / s).floor());
-        let inside = a >= -1.0 && a <= (cols - 1) as f64 && b >= -1.0 && b <= (rows - 1) as f64;
-        assert!(inside, "test pixels stay on the pattern");
-        if (a + b).rem_euclid(2.0) == 0.0 {
-            40.0
-        } else {
-            210.0
-        }
-    };
+/// The largest and mean difference between the rendered grey level and the mean of a
+/// 48 x 48 point sampling through `CameraModel::ray` of the board's `colour`, over the
+/// 5 x 5 pixels around each of `centres`.
+fn supersampling_errors(
+    scene: &Scene,
+    r: &Rendered,
+    colour: &dyn Fn(f64, f64) -> f64,
+    centres: &[[f64; 2]],
+) -> (f64, f64) {
     let n = 48;
     let (mut worst, mut sum, mut count) = (0.0f64, 0.0, 0);
-    let inner: Vec<usize> = (0..r.corners_px.len())
-        .filter(|&k| {
-            let c = r.corners_px[k];
-            r.corners_in_image[k] && c[0] > 5.0 && c[1] > 5.0 && c[0] < 1930.0 && c[1] < 1452.0
-        })
-        .collect();
-    assert!(inner.len() >= 60, "{}", inner.len());
-    for &k in &[inner[0], inner[inner.len() / 3], inner[inner.len() / 2], inner[inner.len() - 1]] {
-        let c = r.corners_px[k];
+    for c in centres {
         for dy in -2..=2 {
             for dx in -2..=2 {
                 let (px, py) = (c[0].round() as i64 + dx, c[1].round() as i64 + dy);
@@ -190,10 +175,138 @@ fn sharp_coverage_matches_supersampling_through_the_ray() {
             }
         }
     }
+    (worst, sum / count as f64)
+}
+
+#[test]
+fn sharp_coverage_matches_supersampling_through_the_ray() {
+    let scene = tilted_scene();
+    let r = render(&scene, &clean(Optics::sharp())).unwrap();
+    let s = scene.board.square_mm();
+    let [cols, rows] = scene.board.corner_grid();
+    let colour = |x: f64, y: f64| -> f64 {
+        let (a, b) = ((x / s).floor(), (y / s).floor());
+        let inside = a >= -1.0 && a <= (cols - 1) as f64 && b >= -1.0 && b <= (rows - 1) as f64;
+        assert!(inside, "test pixels stay on the pattern");
+        if (a + b).rem_euclid(2.0) == 0.0 {
+            40.0
+        } else {
+            210.0
+        }
+    };
+    let inner: Vec<usize> = (0..r.corners_px.len())
+        .filter(|&k| {
+            let c = r.corners_px[k];
+            r.corners_in_image[k] && c[0] > 5.0 && c[1] > 5.0 && c[0] < 1930.0 && c[1] < 1452.0
+        })
+        .collect();
+    assert!(inner.len() >= 60, "{}", inner.len());
+    let centres: Vec<[f64; 2]> = [inner[0], inner[inner.len() / 3], inner[inner.len() / 2], inner[inner.len() - 1]]
+        .map(|k| r.corners_px[k])
+        .into();
+    let (worst, mean) = supersampling_errors(&scene, &r, &colour, &centres);
     // Point sampling on a 48 x 48 grid is within 170 / 48 grey levels of the true area
     // mean for a straight edge; the mean difference is far smaller.
     assert!(worst < 170.0 / 48.0 + 0.05, "worst {worst}");
-    assert!(sum / (count as f64) < 0.5, "mean {}", sum / count as f64);
+    assert!(mean < 0.5, "mean {mean}");
+}
+
+/// The tilted view with a ChArUco board of 12 x 9 squares of 4 mm, markers 3 mm of
+/// DICT_4X4_100 (cells of 0.5 mm, about 10 px), its centre where the checkerboard's is.
+fn tilted_charuco() -> Scene {
+    let mut scene = tilted_scene();
+    scene.board = Board::charuco([12, 9], 4.0, 3.0, "DICT_4X4_100").unwrap();
+    // The ChArUco frame starts one square before the checkerboard's first inner corner.
+    let r = etl_core::model::rotation::rodrigues_to_matrix(scene.model.rotation_rodrigues);
+    let o = etl_core::model::rotation::mat_vec(&r, [-4.0, -4.0, 0.0]);
+    let t = scene.model.translation_mm;
+    scene.model.translation_mm = [t[0] + o[0], t[1] + o[1], t[2] + o[2]];
+    scene
+}
+
+/// A ChArUco board's grey level at board point (x, y) from etl-core's geometry and codes
+/// alone: black squares, and in the white ones the marker's cells (border black, data
+/// cells white for a 1 bit).
+fn charuco_colour(b: &etl_core::board::CharucoBoard, x: f64, y: f64) -> f64 {
+    let s = b.square_mm();
+    let (a, c) = ((x / s).floor(), (y / s).floor());
+    assert!(a >= 0.0 && c >= 0.0 && a < b.squares()[0] as f64 && c < b.squares()[1] as f64, "on the pattern");
+    if b.is_black(a as u32, c as u32) {
+        return 40.0;
+    }
+    let id = b.marker_at(a as u32, c as u32).unwrap();
+    let [tl, _, br, _] = b.marker_corners_mm(id).unwrap();
+    if x < tl[0] || y < tl[1] || x >= br[0] || y >= br[1] {
+        return 210.0;
+    }
+    let n = b.dictionary().marker_bits();
+    let cell = b.marker_mm() / (n + 2) as f64;
+    let (col, row) = (((x - tl[0]) / cell) as usize, ((y - tl[1]) / cell) as usize);
+    if col == 0 || row == 0 || col > n || row > n {
+        return 40.0;
+    }
+    if b.dictionary().is_white(id, row - 1, col - 1).unwrap() {
+        210.0
+    } else {
+        40.0
+    }
+}
+
+/// The ChArUco board renders with the same exact coverage: every marker cell's centre has
+/// its code's grey level, and the pixels across the markers' cell edges and the squares'
+/// corners are the area means of independent supersampling; its corners are the model's
+/// projections of OpenCV's corner coordinates, the visible ones listed with their ids.
+#[test]
+fn charuco_markers_are_their_codes_and_covered_exactly() {
+    let scene = tilted_charuco();
+    let b = *scene.board.as_charuco().unwrap();
+    let r = render(&scene, &clean(Optics::sharp())).unwrap();
+    assert_eq!(r.corners_px.len(), 11 * 8);
+    for id in 0..88u32 {
+        let [x, y] = b.corner_mm(id).unwrap();
+        assert_eq!(r.corners_px[id as usize], scene.model.project([x, y, 0.0], 0.0).unwrap());
+    }
+    let (ids, px) = r.visible();
+    assert_eq!(ids.len(), px.len());
+    assert!(ids.iter().all(|&id| r.corners_in_image[id as usize]));
+    assert!(ids.len() >= 60, "{}", ids.len());
+    // Cell centres: exactly their level (cells are about 10 px wide).
+    let n = b.dictionary().marker_bits();
+    let cell = b.marker_mm() / (n + 2) as f64;
+    let (mut checked, mut dark) = (0, 0);
+    for id in 0..b.markers() as u32 {
+        let [tl, ..] = b.marker_corners_mm(id).unwrap();
+        for row in 0..n + 2 {
+            for col in 0..n + 2 {
+                let (x, y) = (tl[0] + (col as f64 + 0.5) * cell, tl[1] + (row as f64 + 0.5) * cell);
+                let p = scene.model.project([x, y, 0.0], 0.0).unwrap();
+                let (u, v) = (p[0].round(), p[1].round());
+                if u < 0.0 || v < 0.0 || u > 1935.0 || v > 1457.0 {
+                    continue;
+                }
+                let got = f64::from(r.image.get(u as u32, v as u32).unwrap()) / 257.0;
+                let want = charuco_colour(&b, x, y);
+                assert!((got - want).abs() < 0.01, "marker {id} cell ({row}, {col}): {got} vs {want}");
+                checked += 1;
+                dark += usize::from(want == 40.0);
+            }
+        }
+    }
+    assert!(checked > 1500 && dark > checked / 2 && dark < checked, "{checked} {dark}");
+    // Edges: around marker corners and a cell corner inside each of a few markers.
+    let mut centres = vec![];
+    for id in [0u32, 20, 33, 50] {
+        let [tl, _, br, _] = b.marker_corners_mm(id).unwrap();
+        for q in [tl, br, [tl[0] + 2.0 * cell, tl[1] + 3.0 * cell]] {
+            centres.push(scene.model.project([q[0], q[1], 0.0], 0.0).unwrap());
+        }
+    }
+    centres.push(r.corners_px[40]);
+    centres.retain(|c| c[0] > 3.0 && c[1] > 3.0 && c[0] < 1932.0 && c[1] < 1454.0);
+    assert!(centres.len() >= 8, "{}", centres.len());
+    let (worst, mean) = supersampling_errors(&scene, &r, &|x, y| charuco_colour(&b, x, y), &centres);
+    assert!(worst < 170.0 / 48.0 + 0.05, "worst {worst}");
+    assert!(mean < 0.5, "mean {mean}");
 }
 
 /// A lens focused at the camera depth of the paper board's centre with the stage where the

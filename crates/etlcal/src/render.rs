@@ -1,6 +1,6 @@
-//! `etlcal render --out IMAGE.png [--e-com MA] [--z-mm Z] [--pattern CxR] [--square MM]
-//! [--aperture-mm A] [--blur-px S] [--noise DN] [--bit-depth 8|16] [--seed N] [--json]`:
-//! one synthetic image of a checkerboard on the paper rig's stage seen through the paper
+//! `etlcal render --out IMAGE.png [--e-com MA] [--z-mm Z] [--pattern CxR] [--square MM |
+//! --board FILE] [--aperture-mm A] [--blur-px S] [--noise DN] [--bit-depth 8|16] [--seed N]
+//! [--json]`: one synthetic image of a board on the paper rig's stage seen through the paper
 //! rig's camera at a current, and its true corners.
 //!
 //! Writes IMAGE (8- or 16-bit grayscale, in the format its extension names: `.png`,
@@ -8,7 +8,12 @@
 //! rendering; its directory is created if missing) and, beside it, IMAGE.corners.json:
 //! `{"format": "etlcal.corners/1", "pattern": [c, r], "square_mm", "e_com_ma", "z_w_mm",
 //! "corners_px": [[u, v], ...], "in_image": [bool, ...], "blur_sigma_px"}`, corners row by
-//! row (i fastest) in the order `etlcal detect` reports them. Defocus follows the paper
+//! row (i fastest) in the order `etlcal detect` reports them. With `--board FILE` (an
+//! `etlcal.board/1` file, ChArUco or checkerboard, in place of `--pattern`/`--square`):
+//! `{"format": "etlcal.corners/1", "board": {...}, "e_com_ma", "z_w_mm", "ids": [...],
+//! "corners_px": [[u, v], ...], "blur_sigma_px"}`, the corners inside the image only, with
+//! their ids (as `etlcal detect --board` reports them); the board frame (ChArUco: OpenCV's)
+//! is the stage's X, Y. Defocus follows the paper
 //! rig's focus at the current (`--aperture-mm`, 0 = none); `--blur-px` adds a uniform blur.
 //! Both files are written atomically, and only when the render succeeded.
 
@@ -18,7 +23,7 @@ use etl_core::model::CameraModel;
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::dataset::Board;
+use etl_formats::board::Board;
 use etl_formats::output::{write_file_set, Output};
 use etl_formats::{check_range, Error, Result};
 use etl_formats::{write_atomic, write_json};
@@ -45,6 +50,10 @@ pub struct Args {
     /// Square size, mm.
     #[arg(long, default_value_t = 1.5)]
     pub square: f64,
+    /// The board, an etlcal.board/1 file (ChArUco or checkerboard), instead of
+    /// --pattern and --square.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["pattern", "square"])]
+    pub board: Option<PathBuf>,
     /// Aperture diameter for the defocus, mm (0: no defocus).
     #[arg(long, default_value_t = 2.5)]
     pub aperture_mm: f64,
@@ -76,7 +85,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut corners_path = args.out.clone().into_os_string();
     corners_path.push(".corners.json");
     let corners_path = PathBuf::from(corners_path);
-    crate::output::check([], &[Output::File(&args.out), Output::File(&corners_path)])?;
+    crate::output::check([args.board.as_deref()], &[Output::File(&args.out), Output::File(&corners_path)])?;
     let truth = CameraModel::paper_rig();
     // Documented ranges (docs/RELIABILITY.md), checked before rendering: NaN is in none.
     let e = check_range("--e-com", args.e_com, etl_core::thermal::E_IN_DOMAIN_MA, "mA")?;
@@ -87,7 +96,10 @@ pub fn run(args: Args) -> Result<()> {
         Some(z) => check_range("--z-mm", z, [-10_000.0, 10_000.0], "mm")?,
         None => focused_z_mm(e),
     };
-    let board = Board::checkerboard([args.pattern.cols, args.pattern.rows], args.square)?;
+    let board = match &args.board {
+        Some(path) => Board::load(path)?,
+        None => Board::checkerboard([args.pattern.cols, args.pattern.rows], args.square)?,
+    };
     let scene = Scene::new(truth, e, board, z, CameraModel::PAPER_IMAGE_SIZE);
     let focus = if args.aperture_mm > 0.0 { Optics::paper_focus(&truth, e, args.aperture_mm) } else { Optics::sharp() };
     let opts = RenderOptions {
@@ -97,16 +109,23 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
     };
     let r = render(&scene, &opts)?;
-    let corners = json!({
-        "format": "etlcal.corners/1",
-        "pattern": [args.pattern.cols, args.pattern.rows],
-        "square_mm": args.square,
-        "e_com_ma": e,
-        "z_w_mm": z,
-        "corners_px": r.corners_px,
-        "in_image": r.corners_in_image,
-        "blur_sigma_px": r.blur_sigma_px,
-    });
+    let corners = match args.board {
+        Some(_) => {
+            let (ids, corners_px) = r.visible();
+            json!({"format": "etlcal.corners/1", "board": board, "e_com_ma": e, "z_w_mm": z, "ids": ids,
+                "corners_px": corners_px, "blur_sigma_px": r.blur_sigma_px})
+        }
+        None => json!({
+            "format": "etlcal.corners/1",
+            "pattern": [args.pattern.cols, args.pattern.rows],
+            "square_mm": args.square,
+            "e_com_ma": e,
+            "z_w_mm": z,
+            "corners_px": r.corners_px,
+            "in_image": r.corners_in_image,
+            "blur_sigma_px": r.blur_sigma_px,
+        }),
+    };
     let mut bytes = std::io::Cursor::new(Vec::new());
     r.image.to_dynamic().write_to(&mut bytes, format).map_err(|e| Error::Output {
         path: args.out.clone(),

@@ -96,3 +96,60 @@ fn writes_the_format_its_extension_names_and_creates_the_directory() {
     let det = etlcal(&["detect", dir.path().join("a/b.jpg").to_str().unwrap(), "--pattern", "14x12", "--json"]);
     assert!(det.status.success(), "{}", String::from_utf8_lossy(&det.stderr));
 }
+
+/// `--board FILE` renders a ChArUco board: at the near stage position at 225 mA it
+/// overflows the frame, and the corners file lists the corners inside it with their ids,
+/// each the model's projection of OpenCV's corner coordinates. A bad board file fails in
+/// one line naming the field, and nothing is written.
+#[test]
+fn renders_a_charuco_board_from_its_file_with_the_visible_ids() {
+    let dir = tempfile::tempdir().unwrap();
+    let board = dir.path().join("board.json");
+    std::fs::write(
+        &board,
+        r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#,
+    )
+    .unwrap();
+    let img = dir.path().join("c.png");
+    let (b, i) = (board.to_str().unwrap(), img.to_str().unwrap());
+    let out = etlcal(&["render", "--out", i, "--board", b, "--e-com", "225", "--z-mm", "2", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let j: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["board"]["type"], "charuco");
+    let ids: Vec<u64> = j["ids"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    let px = j["corners_px"].as_array().unwrap();
+    assert_eq!(ids.len(), px.len());
+    // Part of the 14 x 12 corners only, in increasing id order.
+    assert!(ids.len() > 20 && ids.len() < 168, "{}", ids.len());
+    assert!(ids.windows(2).all(|w| w[0] < w[1]));
+    let truth = CameraModel::paper_rig();
+    for (&id, p) in ids.iter().zip(px) {
+        let (c, r) = ((id % 14) as f64, (id / 14) as f64);
+        let q = truth.project([1.5 * (c + 1.0), 1.5 * (r + 1.0), 2.0], 225.0).unwrap();
+        let (u, v) = (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
+        assert!((u - q[0]).abs() < 1e-9 && (v - q[1]).abs() < 1e-9, "{id}");
+        assert!((0.0..=1935.0).contains(&u) && (0.0..=1457.0).contains(&v), "{id}");
+    }
+    // Bad boards and flag conflicts: one line, nothing written.
+    let bad = dir.path().join("bad.json");
+    std::fs::write(
+        &bad,
+        r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_10"}"#,
+    )
+    .unwrap();
+    let x = dir.path().join("x.png");
+    for (args, needle, code) in [
+        (vec!["--board", bad.to_str().unwrap()], "dictionary \"DICT_5X5_10\" is not one of OpenCV's", 1),
+        (vec!["--board", "/nonexistent/board.json"], "/nonexistent/board.json", 1),
+        (vec!["--board", b, "--pattern", "5x5"], "--pattern", 2),
+    ] {
+        let mut all = vec!["render", "--out", x.to_str().unwrap()];
+        all.extend(args);
+        let out = etlcal(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{all:?}: {err}");
+        assert!(err.contains(needle), "{all:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!x.exists());
+    }
+}

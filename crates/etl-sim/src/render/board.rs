@@ -374,4 +374,60 @@ mod tests {
         let m = [[-1.75, 0.2], [-1.25, 0.2], [-1.25, 0.3], [-1.75, 0.3]];
         assert!((b.mean_over(&m) - 155.0).abs() < 1e-12);
     }
+
+    /// A ChArUco board of 5 x 4 squares of 10 mm, markers 7 mm of DICT_4X4_50 (cells of
+    /// 7/6 mm, inset 1.5 mm): squares, gaps, marker borders and data cells as etl-core's
+    /// codes say, the margin and background around.
+    #[test]
+    fn charuco_cells_are_the_codes() {
+        let board = Board::charuco([5, 4], 10.0, 7.0, "DICT_4X4_50").unwrap();
+        let b = *board.as_charuco().unwrap();
+        let layout = BoardLayout::of(&board, 2.0, L);
+        let cell = 7.0 / 6.0;
+        for id in 0..b.markers() as u32 {
+            let [tl, ..] = b.marker_corners_mm(id).unwrap();
+            for row in 0..6 {
+                for col in 0..6 {
+                    let (x, y) = (tl[0] + (col as f64 + 0.5) * cell, tl[1] + (row as f64 + 0.5) * cell);
+                    let border = row == 0 || col == 0 || row == 5 || col == 5;
+                    let white = !border && b.dictionary().is_white(id, row - 1, col - 1).unwrap();
+                    assert_eq!(layout.level_at(x, y), if white { 210.0 } else { 40.0 }, "{id} ({row}, {col})");
+                }
+            }
+            // The white gap around the marker.
+            assert_eq!(layout.level_at(tl[0] - 0.75, tl[1] + 3.0), 210.0);
+            assert_eq!(layout.level_at(tl[0] + 7.75, tl[1] + 3.0), 210.0);
+        }
+        assert_eq!(layout.level_at(5.0, 5.0), 40.0); // square (0, 0): black
+        assert_eq!(layout.level_at(45.0, 35.0), 40.0); // square (4, 3): black
+        assert_eq!(layout.level_at(-1.0, 5.0), 210.0); // margin
+        assert_eq!(layout.level_at(51.0, 39.0), 210.0);
+        assert_eq!(layout.level_at(-2.5, 5.0), 100.0); // background
+                                                       // Marker 0, DICT_4X4_50, as OpenCV draws it: first data row 1011.
+        let row0: Vec<f64> =
+            (0..4).map(|c| layout.level_at(11.5 + (c as f64 + 1.5) * cell, 1.5 + 1.5 * cell)).collect();
+        assert_eq!(row0, [210.0, 40.0, 210.0, 210.0]);
+    }
+
+    #[test]
+    fn charuco_coverage_is_exact_across_cells() {
+        let board = Board::charuco([5, 4], 10.0, 7.0, "DICT_4X4_50").unwrap();
+        let layout = BoardLayout::of(&board, 2.0, L);
+        // Marker 0 spans x in [11.5, 18.5]: half in the white gap, half in its black border.
+        let q = [[11.0, 1.6], [12.0, 1.6], [12.0, 2.0], [11.0, 2.0]];
+        assert!((layout.mean_over(&q) - 125.0).abs() < 1e-12);
+        // A square over the corner (10, 10) of four squares: two black, two white with
+        // the gaps (1.5 mm) and marker borders of markers 0 (square (1, 0)) and 2 (square
+        // (0, 1)) inside: [9, 11] x [9, 11] is half black squares, the white quarters
+        // [10, 11] x [9, 10] and [9, 10] x [10, 11] all gap (the markers start 1.5 mm in).
+        let c = [[9.0, 9.0], [11.0, 9.0], [11.0, 11.0], [9.0, 11.0]];
+        assert!((layout.mean_over(&c) - 125.0).abs() < 1e-12);
+        // A tilted square over marker 0's corner cell edge: exact by the slab split.
+        let cell = 7.0 / 6.0;
+        let (x0, y0) = (11.5 + cell, 1.5 + cell); // corner between border cells and data cell (0, 0)
+        let d = [[x0 - 0.2, y0], [x0, y0 - 0.2], [x0 + 0.2, y0], [x0, y0 + 0.2]];
+        // Three quarters in the border (black), one in data cell (0, 0): white (row 1011).
+        let m = layout.mean_over(&d);
+        assert!((m - (0.75 * 40.0 + 0.25 * 210.0)).abs() < 1e-9, "{m}");
+    }
 }

@@ -178,18 +178,24 @@ mod tests {
     use etl_core::model::CameraModel;
 
     /// The tiled image equals the one with every pixel corner mapped (the pre-tiling
-    /// renderer), on the paper's view and on a steep, rotated view of a small board.
+    /// renderer), on the paper's view and on a steep, rotated view of a small board, and
+    /// on ChArUco boards (tiles inside a marker's cell are uniform too).
     #[test]
     fn tiles_change_nothing() {
         let levels = Levels { dark: 40.0, light: 210.0, background: 120.0 };
         let paper = CameraModel::paper_rig();
         let om = [0.5f64, -0.4, 0.3];
         let steep = CameraModel { rotation_rodrigues: om, translation_mm: [-8.0, -4.0, 60.0], ..paper };
-        for (model, e, z, size, square) in
-            [(paper, 150.0, 22.0, [14, 12], 1.5), (steep, 0.0, 0.0, [9, 6], 2.0), (paper, 260.0, 40.0, [14, 12], 1.5)]
-        {
+        let checker = |size, square| BoardLayout::new(size, square, square, levels);
+        let charuco = etl_formats::Board::charuco([15, 13], 1.5, 1.1, "DICT_5X5_100").unwrap();
+        for (model, e, z, layout) in [
+            (paper, 150.0, 22.0, checker([14, 12], 1.5)),
+            (steep, 0.0, 0.0, checker([9, 6], 2.0)),
+            (paper, 260.0, 40.0, checker([14, 12], 1.5)),
+            (paper, 150.0, 22.0, BoardLayout::of(&charuco, 1.5, levels)),
+            (paper, 225.0, 2.0, BoardLayout::of(&charuco, 1.5, levels)),
+        ] {
             let map = PixelToBoard::new(&model, e, z).unwrap();
-            let layout = BoardLayout::new(size, square, square, levels);
             let (pw, ph, pad) = (1936 / 2 + 13, 1458 / 2 + 5, 6);
             let nodes = Nodes::new(&map, (pw, ph), pad);
             let tiled = render_sharp(&map, &layout, &nodes, (pw, ph), pad);
