@@ -1,8 +1,9 @@
 //! etl-sim: simulation. The synthetic camera ([`render`]: a board rendered through a camera
 //! model with exact coverage, defocus and noise), the paper's rig and its noise model
 //! ([`rig`], [`simulate`]) and the virtual rig of the temperature procedure
-//! ([`virtual_rig`]).
+//! ([`virtual_rig`]); the printable board ([`print`]: SVG at true size, exact raster).
 
+pub mod print;
 pub mod render;
 pub mod rig;
 pub mod simulate;

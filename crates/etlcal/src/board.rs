@@ -1,7 +1,22 @@
-//! The board flags shared by the verbs that look for a board in images (`zhang`,
+//! `etlcal board --board FILE --out board.svg|board.png [--dpi N] [--margin-mm M]
+//! [--json]`: the print-ready target of an `etlcal.board/1` file ([`etl_sim::print`]): an
+//! SVG whose `width`/`height` are in mm (it prints at true size at 100 % scale) or a PNG
+//! rendered exactly at `--dpi` (default 600) that records its resolution; a white margin
+//! of `--margin-mm` (default: one square) around the pattern. Any other extension is
+//! refused before anything is read or written; the file is written atomically (its
+//! directory created if missing). `--json`: `{"out", "board", "width_mm", "height_mm",
+//! "margin_mm"}`, with `"dpi", "width_px", "height_px"` for a PNG.
+//!
+//! Also the board flags shared by the verbs that look for a board in images (`zhang`,
 //! `measure`): `--pattern CxR --square MM`.
 
+use std::path::PathBuf;
+
 use etl_formats::board::Board;
+use etl_formats::output::Output;
+use etl_formats::{check_range, compact, write_atomic, Error, Result};
+use etl_sim::print;
+use serde_json::json;
 
 /// Parses a pattern `CxR` (inner corners, columns x rows), e.g. `14x12`.
 pub fn parse_pattern(s: &str) -> std::result::Result<[usize; 2], String> {
@@ -31,4 +46,84 @@ impl BoardArgs {
             etl_formats::Error::InvalidInput(format!("--pattern {c}x{r} --square {}: {e}", self.square))
         })
     }
+}
+
+/// Arguments of `etlcal board`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The board, an etlcal.board/1 file (ChArUco or checkerboard).
+    #[arg(long, value_name = "FILE")]
+    pub board: PathBuf,
+    /// The file to write: .svg (sizes in mm: print at 100 %) or .png (at --dpi); its
+    /// directory is created if missing.
+    #[arg(long, value_name = "board.svg|board.png")]
+    pub out: PathBuf,
+    /// Resolution of a PNG, dots per inch [default: 600]; not for an SVG (sized in mm).
+    #[arg(long, value_name = "N")]
+    pub dpi: Option<f64>,
+    /// White margin around the pattern, mm [default: one square].
+    #[arg(long, value_name = "M")]
+    pub margin_mm: Option<f64>,
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
+    pub json: bool,
+}
+
+/// The resolution of a PNG when `--dpi` is not given.
+pub const DEFAULT_DPI: f64 = 600.0;
+
+/// Runs `etlcal board`.
+pub fn run(args: Args) -> Result<()> {
+    let ext = args.out.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let png = match ext.as_str() {
+        "svg" => false,
+        "png" => true,
+        _ => {
+            return Err(Error::InvalidInput(format!(
+                "{}: unsupported extension \"{ext}\": use .svg (true size in mm) or .png (at --dpi)",
+                args.out.display()
+            )))
+        }
+    };
+    if let (false, Some(d)) = (png, args.dpi) {
+        return Err(Error::InvalidInput(format!(
+            "--dpi {} applies to a .png only (an SVG is sized in mm)",
+            compact(d)
+        )));
+    }
+    let dpi = check_range("--dpi", args.dpi.unwrap_or(DEFAULT_DPI), print::DPI_RANGE, "dpi")?;
+    if let Some(m) = args.margin_mm {
+        check_range("--margin-mm", m, [0.0, print::MAX_MARGIN_MM], "mm")?;
+    }
+    crate::output::check([Some(args.board.as_path())], &[Output::File(&args.out)])?;
+    let board = Board::load(&args.board)?;
+    let margin_mm = args.margin_mm.unwrap_or(board.square_mm());
+    let [width_mm, height_mm] = print::page_mm(&board, margin_mm);
+    let mut report = json!({"out": args.out, "board": board, "width_mm": width_mm, "height_mm": height_mm,
+        "margin_mm": margin_mm});
+    let bytes = if png {
+        let image = print::raster(&board, dpi, margin_mm)?;
+        report["dpi"] = json!(dpi);
+        report["width_px"] = json!(image.width);
+        report["height_px"] = json!(image.height);
+        print::encode_png(&image, dpi)?
+    } else {
+        print::svg(&board, margin_mm)?.into_bytes()
+    };
+    crate::output::create_parent(&args.out)?;
+    write_atomic(&args.out, &bytes)?;
+    if args.json {
+        super::print_json(&report);
+    } else {
+        let at = if png { format!(" at {} dpi", compact(dpi)) } else { String::new() };
+        outln!(
+            "wrote {}{at}: {}, page {} x {} mm (margin {} mm); print at 100 % (no scaling)",
+            args.out.display(),
+            board.describe(),
+            compact(width_mm),
+            compact(height_mm),
+            compact(margin_mm)
+        );
+    }
+    Ok(())
 }

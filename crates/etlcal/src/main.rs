@@ -13,7 +13,6 @@ use clap::{Parser, Subcommand};
 
 use etl_formats::Result;
 
-mod board;
 mod output;
 mod progress;
 mod setting;
@@ -27,6 +26,7 @@ macro_rules! outln {
     }};
 }
 
+pub mod board;
 pub mod calibrate;
 pub mod demo;
 pub mod detect;
@@ -95,6 +95,8 @@ enum Command {
     Detect(detect::Args),
     /// A synthetic image of a board through the paper rig's camera, and its true corners.
     Render(render::Args),
+    /// A print-ready board (SVG at true size in mm, or PNG at a dpi) from its etlcal.board/1 file.
+    Board(board::Args),
     /// Drive an Optotune lens (Lens Driver 4) or the virtual lens: info, current, temperature, hold.
     Lens(lens::Args),
     /// Run a virtual lens on a pseudo-terminal and print its port path.
@@ -139,6 +141,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),
         Command::Render(a) => done(render::run(render::Args { json, ..a })),
+        Command::Board(a) => done(board::run(board::Args { json, ..a })),
         Command::Lens(a) => done(lens::run(lens::Args { json, ..a })),
         Command::LensSim(a) => done(lens_sim::run(lens_sim::Args { json, ..a })),
     }
