@@ -91,7 +91,7 @@ fn real_image_set_agrees_with_opencv() {
         .collect();
     images.sort();
     assert_eq!(images.len(), 25);
-    let board = etl_formats::dataset::Board { inner_corners: [9, 6], square_mm: 1.0 };
+    let board = etl_formats::Board::checkerboard([9, 6], 1.0).unwrap();
     let found = etl_calib::pipeline::detect_views(&images, &board, &etl_core::progress::NoProgress).unwrap();
     let (views, size) = (found.views, found.image_size);
     assert_eq!((views.len(), size), (25, [640, 512]));

@@ -12,61 +12,38 @@
 //! ```
 //!
 //! Image paths are relative to the dataset file (absolute paths are taken as they are).
-//! Inner corner (i, j) of the board, i along the `cols` direction, sits at
-//! (i * square_mm, j * square_mm) in the board frame; for an ETL view its world point is
-//! (i * square_mm, j * square_mm, z_w_mm) (the stage moves the board along Z_W).
+//! Corner (X, Y) of the board frame is at world (X, Y, z_w_mm) in an ETL view (the stage
+//! moves the board along Z_W); a checkerboard's inner corner (i, j), i along the `cols`
+//! direction, is at (i * square_mm, j * square_mm).
 //! `e_com_ma` is optional as in the observations. `offstate_board` defaults to `board`.
 //! `setting_views` are the per-setting baseline's views (several per current, board in a
 //! free pose each).
 //!
+//! A board is an `etlcal.board/1` object inline ([`crate::board`]; `"format"` may be left
+//! out there): a ChArUco board, whose corners are known by their ids wherever they are
+//! seen, or a checkerboard (`{"inner_corners", "square_mm"}` without `"type"`, as written
+//! before the board format, still reads as one). A view's world points are its detected
+//! corners' board coordinates ([`Board::corner_mm`]) at Z = `z_w_mm`.
+//!
 //! Extension (optional, per view of any kind): `"board"` overrides the dataset's board for
-//! that image and `"first_corner": [i0, j0]` says which inner corner of the physical board
-//! the image's corner (0, 0) is; corner (i, j) of the image then sits at
+//! that image. For a checkerboard, `"first_corner": [i0, j0]` says which inner corner of
+//! the physical board the image's corner (0, 0) is; corner (i, j) of the image then sits at
 //! ((i0 + i) square_mm, (j0 + j) square_mm). This is how views that see only part of a
-//! large board are recorded: the detector is asked for the part that is fully visible
-//! (a board found only in part is otherwise an error).
+//! large checkerboard are recorded: the detector is asked for the part that is fully
+//! visible (a checkerboard found only in part is otherwise an error). A ChArUco view needs
+//! neither: the detector reads which corners it sees from the markers (`first_corner` is
+//! refused with a ChArUco board).
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
+pub use crate::board::{Board, Checkerboard};
 use crate::{Error, Result};
 
 /// The format tag.
 pub const FORMAT: &str = "etlcal.dataset/1";
-
-/// A checkerboard: its inner corners (columns, rows) and square size, mm.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Board {
-    /// Inner corners along the columns and rows, `[cols, rows]`.
-    pub inner_corners: [usize; 2],
-    /// Side of a square, mm.
-    pub square_mm: f64,
-}
-
-impl Board {
-    /// Checks a board: at least 3 x 3 inner corners and a positive, finite square.
-    pub fn validate(&self) -> Result<()> {
-        if !(self.square_mm.is_finite() && self.square_mm > 0.0) {
-            return Err(Error::InvalidInput(format!("square size must be positive, got {} mm", self.square_mm)));
-        }
-        if self.inner_corners[0] < 3 || self.inner_corners[1] < 3 {
-            return Err(Error::InvalidInput(format!(
-                "a board needs at least 3 x 3 inner corners, got {} x {}",
-                self.inner_corners[0], self.inner_corners[1]
-            )));
-        }
-        Ok(())
-    }
-
-    /// Board-frame (X, Y) of every inner corner, row by row (i fastest), mm.
-    pub fn corners_mm(&self) -> Vec<[f64; 2]> {
-        let [cols, rows] = self.inner_corners;
-        (0..rows).flat_map(|j| (0..cols).map(move |i| [i as f64 * self.square_mm, j as f64 * self.square_mm])).collect()
-    }
-}
 
 /// One ETL view: an image of the board on the stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -182,9 +159,25 @@ impl Dataset {
         self.offstate_board.unwrap_or(self.board)
     }
 
+    /// Every image with its kind (`"view"`, `"offstate view"`, `"setting view"`), the board
+    /// it shows and its `first_corner`, in the file's order.
+    fn images_with_boards(&self) -> impl Iterator<Item = (&'static str, &Path, Board, Option<[usize; 2]>)> + '_ {
+        let views =
+            self.views.iter().map(|v| ("view", v.image.as_path(), v.board.unwrap_or(self.board), v.first_corner));
+        let off = self
+            .offstate_views
+            .iter()
+            .map(|v| ("offstate view", v.image.as_path(), v.board.unwrap_or(self.offstate_board()), v.first_corner));
+        let settings = self
+            .setting_views
+            .iter()
+            .map(|v| ("setting view", v.image.as_path(), v.board.unwrap_or(self.board), v.first_corner));
+        views.chain(off).chain(settings)
+    }
+
     /// Checks boards, numbers and that there is something to calibrate.
     pub fn validate(&self) -> Result<()> {
-        self.board.validate()?;
+        self.board.validate().map_err(|e| Error::InvalidInput(format!("board: {e}")))?;
         if let Some(b) = self.offstate_board {
             b.validate().map_err(|e| Error::InvalidInput(format!("offstate_board: {e}")))?;
         }
@@ -217,6 +210,15 @@ impl Dataset {
                 b.validate().map_err(|e| Error::InvalidInput(format!("{kind} {}: board: {e}", image.display())))?;
             }
         }
+        for (kind, image, board, first) in self.images_with_boards() {
+            if let (Board::Charuco(_), Some([i, j])) = (board, first) {
+                return Err(Error::InvalidInput(format!(
+                    "{kind} {}: first_corner [{i}, {j}] applies to checkerboards only (a ChArUco board's \
+                     corners are known by their ids)",
+                    image.display()
+                )));
+            }
+        }
         Ok(())
     }
 
@@ -245,7 +247,7 @@ mod tests {
 
     #[test]
     fn corners_are_row_by_row() {
-        let b = Board { inner_corners: [3, 4], square_mm: 2.0 };
+        let b = Checkerboard { inner_corners: [3, 4], square_mm: 2.0 };
         let c = b.corners_mm();
         assert_eq!(c.len(), 12);
         assert_eq!(c[1], [2.0, 0.0]);
@@ -253,12 +255,57 @@ mod tests {
         assert_eq!(c[11], [4.0, 6.0]);
     }
 
+    fn dataset(text: &str) -> Result<Dataset> {
+        let d: Dataset = crate::parse_json(text, Path::new("d.json"), FORMAT)?;
+        d.validate()?;
+        Ok(d)
+    }
+
+    const VIEW: &str = r#"{"image": "v.png", "e_in_ma": 100, "temperature_c": 30, "z_w_mm": 5"#;
+
     #[test]
     fn bad_boards_are_named() {
-        let e = Board { inner_corners: [3, 4], square_mm: -1.5 }.validate().unwrap_err().to_string();
-        assert!(e.contains("square size must be positive"), "{e}");
-        let e = Board { inner_corners: [2, 4], square_mm: 1.5 }.validate().unwrap_err().to_string();
-        assert!(e.contains("3 x 3"), "{e}");
+        let e = Board::Checkerboard(Checkerboard { inner_corners: [3, 4], square_mm: -1.5 });
+        let e = e.validate().unwrap_err().to_string();
+        assert!(e.contains("square_mm -1.5 must be positive"), "{e}");
+        let e = Board::Checkerboard(Checkerboard { inner_corners: [2, 4], square_mm: 1.5 });
+        assert!(e.validate().unwrap_err().to_string().contains("3 to 999"));
+        // Inline, a bad board of a dataset is named with the place in the file.
+        let text = format!(
+            r#"{{"format": "etlcal.dataset/1", "image_size": [10, 10], "board": {{"type": "charuco",
+            "squares": [12, 9], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_9X9"}}, "views": [{VIEW}}}]}}"#
+        );
+        let e = dataset(&text).unwrap_err().to_string();
+        assert!(e.contains("dictionary \"DICT_9X9\" is not") && e.contains("line 2"), "{e}");
+    }
+
+    /// Old datasets (checkerboard objects without a type, first_corner hints) read as
+    /// before; a ChArUco board stands inline anywhere a board does; a hint with a ChArUco
+    /// board is refused.
+    #[test]
+    fn boards_inline_old_and_new() {
+        let old = format!(
+            r#"{{"format": "etlcal.dataset/1", "image_size": [10, 10], "board": {{"inner_corners": [14, 12], "square_mm": 1.5}},
+            "views": [{VIEW}, "board": {{"inner_corners": [4, 3], "square_mm": 1.5}}, "first_corner": [2, 3]}}],
+            "offstate_board": {{"inner_corners": [11, 8], "square_mm": 4}}, "offstate_views": [{{"image": "o.png"}}]}}"#
+        );
+        let d = dataset(&old).unwrap();
+        assert_eq!(d.board, Board::checkerboard([14, 12], 1.5).unwrap());
+        assert_eq!(d.view_board(0), Some((Board::checkerboard([4, 3], 1.5).unwrap(), [2, 3])));
+        assert_eq!(d.offstate_board(), Board::checkerboard([11, 8], 4.0).unwrap());
+        let charuco = r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#;
+        let new = format!(
+            r#"{{"format": "etlcal.dataset/1", "image_size": [10, 10], "board": {charuco},
+            "views": [{VIEW}}}], "offstate_board": {charuco}, "offstate_views": [{{"image": "o.png", "board": {charuco}}}]}}"#
+        );
+        let d = dataset(&new).unwrap();
+        assert_eq!(d.board.as_charuco().map(|b| b.squares()), Some([15, 13]));
+        // Written and read back the same.
+        let back = dataset(&serde_json::to_string(&d).unwrap()).unwrap();
+        assert_eq!(back, d);
+        let hinted = new.replace(r#""z_w_mm": 5}"#, r#""z_w_mm": 5, "first_corner": [1, 1]}"#);
+        let e = dataset(&hinted).unwrap_err().to_string();
+        assert!(e.contains("view v.png: first_corner [1, 1] applies to checkerboards only"), "{e}");
     }
 
     #[test]

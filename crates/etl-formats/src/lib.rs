@@ -45,6 +45,7 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 pub mod a0;
+pub mod board;
 pub mod calibration;
 pub mod dataset;
 mod error;
@@ -56,8 +57,9 @@ pub mod thermal;
 pub use error::{Error, ErrorKind, Result};
 
 pub use a0::A0File;
+pub use board::{Board, Checkerboard};
 pub use calibration::{Calibration, ThermalRef};
-pub use dataset::{Board, Dataset};
+pub use dataset::Dataset;
 pub use etl_core::camera::{Camera, CameraAt, Extrapolated, Trust};
 pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
 pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};

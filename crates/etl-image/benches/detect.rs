@@ -7,15 +7,15 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::model::CameraModel;
 use etl_image::detect::{detect_corners, Pattern};
-use etl_sim::render::{render, BitDepth, Board, Optics, Photometry, RenderOptions, Scene};
+use etl_sim::render::{render, BitDepth, Board, Checkerboard, Optics, Photometry, RenderOptions, Scene};
 
 fn view(blur: f64) -> image::GrayImage {
     let rot = [0.35, -0.25, 0.1];
     let e_com_ma = 150.0;
     let mut model = CameraModel::paper_rig();
     let (fx, _) = model.focal_lengths(e_com_ma);
-    let board = Board { inner_corners: [14, 12], square_mm: 1.5 };
-    let z_mm = fx * board.square_mm / 66.0;
+    let board = Board::Checkerboard(Checkerboard { inner_corners: [14, 12], square_mm: 1.5 });
+    let z_mm = fx * board.square_mm() / 66.0;
     let rc = mat_vec(&rodrigues_to_matrix(rot), [6.5 * 1.5, 5.5 * 1.5, 0.0]);
     model.rotation_rodrigues = rot;
     model.translation_mm = [-rc[0], -rc[1], z_mm - rc[2]];

@@ -233,12 +233,12 @@ fn not_found(r: etl_formats::Result<etl_image::detect::Detection>) -> String {
 fn rendered_view(rot: [f64; 3], square_px: f64, blur: f64, seed: u64) -> etl_sim::render::Rendered {
     use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
     use etl_core::model::CameraModel;
-    use etl_sim::render::{render, BitDepth, Board, Optics, Photometry, RenderOptions, Scene};
+    use etl_sim::render::{render, BitDepth, Board, Checkerboard, Optics, Photometry, RenderOptions, Scene};
     let e_com_ma = 150.0;
     let mut model = CameraModel::paper_rig();
     let (fx, _) = model.focal_lengths(e_com_ma);
-    let board = Board { inner_corners: [14, 12], square_mm: 1.5 };
-    let z_mm = fx * board.square_mm / square_px;
+    let board = Board::Checkerboard(Checkerboard { inner_corners: [14, 12], square_mm: 1.5 });
+    let z_mm = fx * board.square_mm() / square_px;
     let centre = [6.5 * 1.5, 5.5 * 1.5, 0.0];
     let rc = mat_vec(&rodrigues_to_matrix(rot), centre);
     model.rotation_rodrigues = rot;

@@ -43,9 +43,7 @@ fn board_of(d: &Bound<'_, PyDict>, what: &str) -> PyResult<Board> {
         .map_err(|_| input_error(format!("{what}[\"inner_corners\"] must be (cols, rows)")))?;
     let square_mm: f64 =
         get("square_mm")?.extract().map_err(|_| input_error(format!("{what}[\"square_mm\"] must be a number")))?;
-    let board = Board { inner_corners: [c, r], square_mm };
-    board.validate().map_err(|e| input_error(format!("{what}: {e}")))?;
-    Ok(board)
+    Board::checkerboard([c, r], square_mm).map_err(|e| input_error(format!("{what}: {e}")))
 }
 
 #[pymethods]
@@ -75,8 +73,7 @@ impl Dataset {
         if image_size.0 == 0 || image_size.1 == 0 {
             return Err(input_error("image_size must be positive"));
         }
-        let board = Board { inner_corners: [inner_corners.0, inner_corners.1], square_mm };
-        board.validate().py()?;
+        let board = Board::checkerboard([inner_corners.0, inner_corners.1], square_mm).py()?;
         let mut file = DatasetFile::new([image_size.0, image_size.1], board);
         file.offstate_board = offstate_board.map(|b| board_of(&b, "offstate_board")).transpose()?;
         Ok(Dataset { file, path: base_dir.map(|d| d.join("dataset.json")) })
@@ -244,8 +241,18 @@ impl Dataset {
     #[getter]
     fn board<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        d.set_item("inner_corners", (self.file.board.inner_corners[0], self.file.board.inner_corners[1]))?;
-        d.set_item("square_mm", self.file.board.square_mm)?;
+        match &self.file.board {
+            Board::Checkerboard(c) => {
+                d.set_item("inner_corners", (c.inner_corners[0], c.inner_corners[1]))?;
+            }
+            Board::Charuco(b) => {
+                d.set_item("type", "charuco")?;
+                d.set_item("squares", (b.squares()[0], b.squares()[1]))?;
+                d.set_item("marker_mm", b.marker_mm())?;
+                d.set_item("dictionary", b.dictionary().name())?;
+            }
+        }
+        d.set_item("square_mm", self.file.board.square_mm())?;
         Ok(d)
     }
 
@@ -279,13 +286,11 @@ impl Dataset {
 
     fn __repr__(&self) -> String {
         format!(
-            "Dataset(image_size={:?}, views={}, offstate_views={}, board={}x{} @ {} mm)",
+            "Dataset(image_size={:?}, views={}, offstate_views={}, board={})",
             self.file.image_size,
             self.file.views.len(),
             self.file.offstate_views.len(),
-            self.file.board.inner_corners[0],
-            self.file.board.inner_corners[1],
-            self.file.board.square_mm
+            self.file.board.describe()
         )
     }
 

@@ -195,8 +195,7 @@ pub fn render<'py>(
     };
     let truth = CameraModel::paper_rig();
     let z = z_mm.unwrap_or_else(|| etl_sim::simulate::focused_z_mm(e_com_ma));
-    let board = etl_formats::dataset::Board { inner_corners: [pattern.cols, pattern.rows], square_mm };
-    board.validate().py()?;
+    let board = etl_formats::Board::checkerboard([pattern.cols, pattern.rows], square_mm).py()?;
     let scene = Scene::new(truth, e_com_ma, board, z, CameraModel::PAPER_IMAGE_SIZE);
     let focus = if aperture_mm > 0.0 { Optics::paper_focus(&truth, e_com_ma, aperture_mm) } else { Optics::sharp() };
     let opts = RenderOptions {

@@ -20,7 +20,7 @@ use image::GrayImage;
 use crate::render::{render, Optics, RenderOptions, Scene};
 use etl_calib::thermal_calibration::{run_procedure, Camera, Climate, ProcedureOptions, ProcedureResult};
 use etl_core::progress::Progress;
-use etl_formats::dataset::Board;
+use etl_formats::board::{Board, Checkerboard};
 use etl_formats::{Error, Result};
 use etl_hw::client::{LensClient, OpenOptions};
 
@@ -37,7 +37,7 @@ pub struct VirtualCamera<'a> {
     pub aperture_mm: f64,
     /// Image width and height, px.
     pub image_size: [u32; 2],
-    board: Board,
+    board: Checkerboard,
     board_depth_mm: f64,
     frames: u64,
 }
@@ -52,7 +52,7 @@ impl<'a> VirtualCamera<'a> {
             physics: LensPhysics::paper(),
             aperture_mm: 10.0,
             image_size: [800, 600],
-            board: Board { inner_corners: [5, 4], square_mm: 1.5 },
+            board: Checkerboard { inner_corners: [5, 4], square_mm: 1.5 },
             board_depth_mm: 150.0,
             frames: 0,
         }
@@ -88,7 +88,7 @@ impl Camera for VirtualCamera<'_> {
             distortion_a: [0.0; 9],
         };
         self.frames += 1;
-        let scene = Scene::new(model, 0.0, self.board, 0.0, self.image_size);
+        let scene = Scene::new(model, 0.0, Board::Checkerboard(self.board), 0.0, self.image_size);
         let opts = RenderOptions {
             optics: Optics { focus_depth_mm: Some(focus), aperture_mm: self.aperture_mm, base_sigma_px: 0.0 },
             seed: self.frames,

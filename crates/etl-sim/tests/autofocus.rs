@@ -17,13 +17,13 @@
 use etl_core::focus::{autofocus, AutofocusOptions, AutofocusResult};
 use etl_core::model::CameraModel;
 use etl_image::sharpness::{sharpness, Metric};
-use etl_sim::render::{render, Board, Optics, RenderOptions, Scene};
+use etl_sim::render::{render, Board, Checkerboard, Optics, RenderOptions, Scene};
 
 /// Autofocus with `metric` on the board at camera depth `z_mm`; returns the result and the
 /// true best focus.
 fn focus_on(z_mm: f64, metric: Metric) -> (AutofocusResult, f64) {
     let truth = CameraModel::paper_rig();
-    let board = Board { inner_corners: [14, 12], square_mm: 1.5 };
+    let board = Board::Checkerboard(Checkerboard { inner_corners: [14, 12], square_mm: 1.5 });
     let mut cam = truth;
     cam.rotation_rodrigues = [0.0; 3];
     cam.translation_mm = [-0.5 * 1.5 * 13.0, -0.5 * 1.5 * 11.0, z_mm];

@@ -26,7 +26,7 @@ use etl_core::calib::View;
 use etl_core::focus::FocusLaw;
 use etl_core::model::CameraModel;
 use etl_image::sharpness::{sharpness, Metric};
-use etl_sim::render::{render, Board, Optics, RenderOptions, Scene};
+use etl_sim::render::{render, Board, Checkerboard, Optics, RenderOptions, Scene};
 use etl_sim::rig::{focus_law_current_ma, focus_law_depth_mm, PAPER_FOCUS_LAW_MA, PAPER_TEMPERATURE_C};
 use etl_sim::simulate::{paper_rig, NoiseModel};
 
@@ -60,7 +60,7 @@ fn the_rig_lens_is_the_law_fitted_to_the_paper_views() {
 /// current `e_com_ma` through the rig's lens.
 fn board_sharpness(depth_mm: f64, e_com_ma: f64, seed: u64) -> f64 {
     let truth = CameraModel::paper_rig();
-    let board = Board { inner_corners: [30, 24], square_mm: 0.5 };
+    let board = Board::Checkerboard(Checkerboard { inner_corners: [30, 24], square_mm: 0.5 });
     let size = [192u32, 144];
     // The board's centre on the crop's centre: camera X, Y of that ray at this depth (the
     // pinhole, undistorted; the distortion moves it by a few pixels, which does not matter).

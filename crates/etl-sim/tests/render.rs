@@ -3,7 +3,7 @@
 //! supersampling through `CameraModel::ray`, the thin-lens blur, determinism and bad input.
 use etl_core::model::CameraModel;
 use etl_sim::render::{
-    defocus_sigma_px, render, BitDepth, Board, Image, Optics, Photometry, RenderOptions, Rendered, Scene,
+    defocus_sigma_px, render, BitDepth, Board, Checkerboard, Image, Optics, Photometry, RenderOptions, Rendered, Scene,
 };
 
 /// Noise-free 16-bit options with the given optics.
@@ -21,7 +21,13 @@ fn tilted_scene() -> Scene {
         translation_mm: [2.0 - c[0], -1.0 - c[1], 125.0 - c[2]],
         ..CameraModel::paper_rig()
     };
-    Scene::new(model, 0.0, Board { inner_corners: [11, 8], square_mm: 4.0 }, 0.0, [1936, 1458])
+    Scene::new(
+        model,
+        0.0,
+        Board::Checkerboard(Checkerboard { inner_corners: [11, 8], square_mm: 4.0 }),
+        0.0,
+        [1936, 1458],
+    )
 }
 
 /// Lanczos window of `A` lobes: near-exact interpolation of an image blurred by sigma >= 2
@@ -113,11 +119,12 @@ fn corners_px_are_the_model_projections_and_the_image_agrees() {
     let truth = CameraModel::paper_rig();
     for scene in [Scene::paper_view(&truth, 150.0, 22.0), tilted_scene()] {
         let r = render(&scene, &clean(Optics::uniform_blur(2.0))).unwrap();
-        let [cols, rows] = scene.board.inner_corners;
+        let [cols, rows] = scene.board.corner_grid();
         assert_eq!(r.corners_px.len(), cols * rows);
         for j in 0..rows {
             for i in 0..cols {
-                let p = scene.model.project(scene.corner_world_mm(i, j), scene.e_com_ma).unwrap();
+                let w = [i as f64 * scene.board.square_mm(), j as f64 * scene.board.square_mm(), scene.board_z_mm];
+                let p = scene.model.project(w, scene.e_com_ma).unwrap();
                 assert_eq!(r.corners_px[j * cols + i], p);
             }
         }
@@ -135,8 +142,8 @@ fn corners_px_are_the_model_projections_and_the_image_agrees() {
 fn sharp_coverage_matches_supersampling_through_the_ray() {
     let scene = tilted_scene();
     let r = render(&scene, &clean(Optics::sharp())).unwrap();
-    let s = scene.board.square_mm;
-    let [cols, rows] = scene.board.inner_corners;
+    let s = scene.board.square_mm();
+    let [cols, rows] = scene.board.corner_grid();
     let colour = |x: f64, y: f64| -> f64 {
         let (a, b) = ((x / s).floor(), (y / s).floor());
         let inside = a >= -1.0 && a <= (cols - 1) as f64 && b >= -1.0 && b <= (rows - 1) as f64;
@@ -223,7 +230,7 @@ fn varying_defocus_matches_a_uniform_blur_where_the_sigmas_agree() {
     let varying = render(&scene, &clean(optics)).unwrap();
     // The depth of field is shallow (0.6 px of sigma per mm here): compare around corner
     // (6, 6) with the uniform blur of that corner's own depth.
-    let zc = truth.world_to_camera(scene.corner_world_mm(6, 6))[2];
+    let zc = truth.world_to_camera(scene.corner_world_mm(6 * 14 + 6).unwrap())[2];
     let (fx, fy) = truth.focal_lengths(e);
     let sigma = defocus_sigma_px(0.5 * (fx + fy), 2.5, zc, optics.focus_depth_mm.unwrap());
     assert!(sigma > 1.0, "{sigma}");
@@ -267,8 +274,22 @@ fn bad_input_is_refused() {
     let opts = RenderOptions::default();
     let err = |s: &Scene, o: &RenderOptions| render(s, o).unwrap_err().to_string();
     let cases: Vec<(Scene, RenderOptions, &str)> = vec![
-        (Scene { board: Board { inner_corners: [2, 5], square_mm: 1.5 }, ..good.clone() }, opts, "3 x 3"),
-        (Scene { board: Board { inner_corners: [14, 12], square_mm: -1.0 }, ..good.clone() }, opts, "square"),
+        (
+            Scene {
+                board: Board::Checkerboard(Checkerboard { inner_corners: [2, 5], square_mm: 1.5 }),
+                ..good.clone()
+            },
+            opts,
+            "inner_corners [2, 5]",
+        ),
+        (
+            Scene {
+                board: Board::Checkerboard(Checkerboard { inner_corners: [14, 12], square_mm: -1.0 }),
+                ..good.clone()
+            },
+            opts,
+            "square",
+        ),
         (Scene { e_com_ma: f64::NAN, ..good.clone() }, opts, "e_com_ma"),
         (Scene { board_z_mm: f64::INFINITY, ..good.clone() }, opts, "board plane"),
         (Scene { image_size: [0, 10], ..good.clone() }, opts, "image size"),

@@ -12,7 +12,7 @@
 use etl_core::focus::{autofocus, AutofocusOptions};
 use etl_core::model::CameraModel;
 use etl_image::sharpness::{sharpness, Metric};
-use etl_sim::render::{render, Board, Optics, Photometry, RenderOptions, Scene};
+use etl_sim::render::{render, Board, Checkerboard, Optics, Photometry, RenderOptions, Scene};
 
 /// Working distances (camera depth of the board), mm.
 const DEPTHS_MM: [f64; 3] = [95.0, 70.0, 55.0];
@@ -20,7 +20,7 @@ const DEPTHS_MM: [f64; 3] = [95.0, 70.0, 55.0];
 fn main() {
     let realisations: u64 = std::env::args().nth(1).map(|a| a.parse().expect("a count")).unwrap_or(8);
     let truth = CameraModel::paper_rig();
-    let board = Board { inner_corners: [14, 12], square_mm: 1.5 };
+    let board = Board::Checkerboard(Checkerboard { inner_corners: [14, 12], square_mm: 1.5 });
     println!("| read noise (grey levels) | measure | depth (mm) | best focus (mA) | bias (mA) | std (mA) | max abs (mA) | renders |");
     println!("|---|---|---|---|---|---|---|---|");
     for read_noise in [2.0, 8.0] {

@@ -249,7 +249,7 @@ fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result
     use etl_sim::render::{render, Optics, RenderOptions, Scene};
     use etl_sim::simulate::images::{visible_block, ImageOptions};
     let (inner_corners, square_mm) = etl_sim::simulate::PAPER_BOARD;
-    let board = etl_formats::dataset::Board { inner_corners, square_mm };
+    let board = etl_formats::Checkerboard { inner_corners, square_mm };
     let size = CameraModel::PAPER_IMAGE_SIZE;
     let options = ImageOptions::default();
     let blocks: Vec<_> = [z_mm, z_mm + 2.0]
@@ -260,14 +260,14 @@ fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result
     // The block visible at both positions.
     let i0 = blocks[0].1[0].max(blocks[1].1[0]);
     let j0 = blocks[0].1[1].max(blocks[1].1[1]);
-    let i1 = (blocks[0].1[0] + blocks[0].0.inner_corners[0]).min(blocks[1].1[0] + blocks[1].0.inner_corners[0]);
-    let j1 = (blocks[0].1[1] + blocks[0].0.inner_corners[1]).min(blocks[1].1[1] + blocks[1].0.inner_corners[1]);
-    let block =
-        etl_formats::dataset::Board { inner_corners: [i1.saturating_sub(i0), j1.saturating_sub(j0)], square_mm };
+    let i1 = (blocks[0].1[0] + blocks[0].0.corner_grid()[0]).min(blocks[1].1[0] + blocks[1].0.corner_grid()[0]);
+    let j1 = (blocks[0].1[1] + blocks[0].0.corner_grid()[1]).min(blocks[1].1[1] + blocks[1].0.corner_grid()[1]);
+    let block = etl_formats::Checkerboard { inner_corners: [i1.saturating_sub(i0), j1.saturating_sub(j0)], square_mm };
     let first = [i0, j0];
     let mut out = vec![];
     for (n, z) in [z_mm, z_mm + 2.0].into_iter().enumerate() {
-        let scene = Scene::new(etl_sim::simulate::images::shifted(truth, first, square_mm), e_ma, block, z, size);
+        let cam = etl_sim::simulate::images::shifted(truth, first, square_mm);
+        let scene = Scene::new(cam, e_ma, etl_formats::Board::Checkerboard(block), z, size);
         let opts = RenderOptions {
             optics: Optics::paper_focus(truth, e_ma, options.aperture_mm),
             photometry: options.photometry,

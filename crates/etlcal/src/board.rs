@@ -1,7 +1,7 @@
 //! The board flags shared by the verbs that look for a board in images (`zhang`,
 //! `measure`): `--pattern CxR --square MM`.
 
-use etl_formats::dataset::Board;
+use etl_formats::board::Board;
 
 /// Parses a pattern `CxR` (inner corners, columns x rows), e.g. `14x12`.
 pub fn parse_pattern(s: &str) -> std::result::Result<[usize; 2], String> {
@@ -22,8 +22,13 @@ pub struct BoardArgs {
 }
 
 impl BoardArgs {
-    /// The board the flags describe (checked where it is used).
-    pub fn board(&self) -> Board {
-        Board { inner_corners: self.pattern, square_mm: self.square }
+    /// The board the flags describe; an error names the flags.
+    pub fn board(&self) -> etl_formats::Result<Board> {
+        let [c, r] = self.pattern;
+        Board::checkerboard(self.pattern, self.square).map_err(|e| {
+            let e = e.to_string();
+            let e = e.strip_prefix("invalid input: ").unwrap_or(&e);
+            etl_formats::Error::InvalidInput(format!("--pattern {c}x{r} --square {}: {e}", self.square))
+        })
     }
 }

@@ -48,7 +48,7 @@ fn pose_json(p: &BoardPose, u: &PoseUncertainty) -> serde_json::Value {
 
 /// Runs `etlcal measure`: [`measure_displacement`] with the default detector.
 pub fn run(args: Args) -> Result<()> {
-    let board = args.board.board();
+    let board = args.board.board()?;
     let at = &args.setting;
     let cal = Calibration::load(&at.calibration)?;
     let images = [args.image_a.as_path(), args.image_b.as_path()];

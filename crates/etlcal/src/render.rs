@@ -87,8 +87,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(z) => check_range("--z-mm", z, [-10_000.0, 10_000.0], "mm")?,
         None => focused_z_mm(e),
     };
-    let board = Board { inner_corners: [args.pattern.cols, args.pattern.rows], square_mm: args.square };
-    board.validate()?;
+    let board = Board::checkerboard([args.pattern.cols, args.pattern.rows], args.square)?;
     let scene = Scene::new(truth, e, board, z, CameraModel::PAPER_IMAGE_SIZE);
     let focus = if args.aperture_mm > 0.0 { Optics::paper_focus(&truth, e, args.aperture_mm) } else { Optics::sharp() };
     let opts = RenderOptions {

@@ -31,7 +31,7 @@ pub struct Args {
 
 /// Runs `etlcal zhang`.
 pub fn run(args: Args) -> Result<()> {
-    let board = args.board.board();
+    let board = args.board.board()?;
     let found = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
     for m in &found.skipped {
         eprintln!("etlcal: warning: skipped: {m}");

@@ -18,18 +18,41 @@ use etl_formats::{Error, Result};
 pub struct Detection {
     /// Width and height of the image, px.
     pub image_size: [u32; 2],
-    /// Each corner found: its (column, row) index on the board and its pixel.
-    pub corners: Vec<([usize; 2], [f64; 2])>,
+    /// Each corner found: its id on the board asked for (row by row over its corner grid,
+    /// [`Board::corner_grid`]; a ChArUco board's own ids) and its pixel.
+    pub corners: Vec<(u32, [f64; 2])>,
 }
 
-/// Finds the inner corners of a checkerboard in an image file.
+impl Detection {
+    /// The board-frame (X, Y) of every corner, mm: [`Board::corner_mm`] of its id, moved by
+    /// `first_corner` squares (the index on the physical checkerboard of the corner (0, 0)
+    /// of the sub-board `board` that was detected; [0, 0] for a whole board).
+    pub fn board_mm(&self, board: &Board, first_corner: [usize; 2]) -> Vec<[f64; 2]> {
+        let s = board.square_mm();
+        let [dx, dy] = first_corner.map(|k| k as f64 * s);
+        // Detectors return only ids of the board asked for; an id beyond it is a bug of
+        // the detector, kept visible as a NaN point that every solver refuses.
+        self.corners
+            .iter()
+            .map(|&(id, _)| board.corner_mm(id).map_or([f64::NAN; 2], |[x, y]| [x + dx, y + dy]))
+            .collect()
+    }
+
+    /// The pixel of every corner, in the order of [`Detection::board_mm`].
+    pub fn pixels(&self) -> Vec<[f64; 2]> {
+        self.corners.iter().map(|c| c.1).collect()
+    }
+}
+
+/// Finds the corners of a board (ChArUco or checkerboard) in an image file.
 ///
 /// Implementations return [`Error::BoardNotFound`] when the board is not in the image
 /// (the view is then skipped) and [`Error::Image`] / [`Error::Io`] when the file cannot be
 /// read (the run fails).
 pub trait CornerDetector: Sync {
-    /// Detects the board of `inner_corners` (columns, rows) in the image at `path`.
-    fn detect(&self, path: &Path, inner_corners: [usize; 2]) -> Result<Detection>;
+    /// Detects `board` in the image at `path`: a checkerboard whole, a ChArUco board in
+    /// part (the corners it can tell by their markers).
+    fn detect(&self, path: &Path, board: &Board) -> Result<Detection>;
 }
 
 /// A view of the dataset that was skipped, and why.
@@ -85,7 +108,7 @@ pub fn observations_from_dataset(
     let results: Vec<Result<Detection>> = jobs
         .par_iter()
         .map(|(_, path, board, _)| {
-            let r = detector.detect(path, board.inner_corners);
+            let r = detector.detect(path, board);
             progress.advance(1);
             r
         })
@@ -94,7 +117,7 @@ pub fn observations_from_dataset(
 
     let mut obs = Observations::new(dataset.image_size);
     let mut summary = DetectionSummary { images: jobs.len(), ..DetectionSummary::default() };
-    for ((kind, path, board, [i0, j0]), result) in jobs.iter().zip(results) {
+    for ((kind, path, board, first_corner), result) in jobs.iter().zip(results) {
         let det = match result {
             Ok(d) => d,
             Err(Error::BoardNotFound(reason)) => {
@@ -115,12 +138,10 @@ pub fn observations_from_dataset(
             _ => 0.0,
         };
         let points: Vec<PointObs> = det
-            .corners
-            .iter()
-            .map(|&([i, j], pixel)| PointObs {
-                world_mm: [(i0 + i) as f64 * board.square_mm, (j0 + j) as f64 * board.square_mm, z],
-                pixel,
-            })
+            .board_mm(board, *first_corner)
+            .into_iter()
+            .zip(det.pixels())
+            .map(|([x, y], pixel)| PointObs { world_mm: [x, y, z], pixel })
             .collect();
         match *kind {
             Kind::View(i) => {
@@ -223,25 +244,27 @@ pub fn default_detector() -> ImageDetector {
 }
 
 impl CornerDetector for ImageDetector {
-    fn detect(&self, path: &Path, inner_corners: [usize; 2]) -> Result<Detection> {
+    fn detect(&self, path: &Path, board: &Board) -> Result<Detection> {
         // The one image reader: it refuses what is not a regular file before opening it
         // and images above its pixel-count limit before decoding them.
         let img = etl_image::read_image(path)?.to_luma8();
         let image_size = [img.width(), img.height()];
         let corners =
-            find_corners(&img, inner_corners).map_err(|e| Error::BoardNotFound(format!("{}: {e}", path.display())))?;
+            find_corners(&img, board).map_err(|e| Error::BoardNotFound(format!("{}: {e}", path.display())))?;
         Ok(Detection { image_size, corners })
     }
 }
 
-/// ((column, row) of the inner corner; pixel) of each corner found.
-type GridCorners = Vec<([usize; 2], [f64; 2])>;
-
-fn find_corners(img: &image::GrayImage, inner: [usize; 2]) -> std::result::Result<GridCorners, String> {
-    let pattern = etl_image::detect::Pattern::new(inner[0], inner[1]).map_err(|e| e.to_string())?;
+/// (id, pixel) of each corner found.
+fn find_corners(img: &image::GrayImage, board: &Board) -> std::result::Result<Vec<(u32, [f64; 2])>, String> {
+    let Board::Checkerboard(c) = board else {
+        return Err("ChArUco detection is not in this build yet".into());
+    };
+    let [cols, rows] = c.inner_corners;
+    let pattern = etl_image::detect::Pattern::new(cols, rows).map_err(|e| e.to_string())?;
     let det = etl_image::detect::detect_corners(img, pattern).map_err(|e| match e {
         Error::BoardNotFound(m) => m,
         other => other.to_string(),
     })?;
-    Ok(det.indexed().collect())
+    Ok(det.indexed().map(|([i, j], p)| ((j * cols + i) as u32, p)).collect())
 }

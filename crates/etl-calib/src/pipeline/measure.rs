@@ -46,9 +46,9 @@ pub struct Measurement {
 
 /// Measures the move of `board` between `images` at the driver current `e_in_ma` and the
 /// lens temperature `temperature_c`: E_com = E_in - E_T(T, E_in) through the calibration's
-/// thermal surface, the corners found by `detector` (corner (i, j) at (i s, j s, 0) mm on
-/// the board), each pose by PnP with the calibrated model at E_com, and the displacement
-/// t_b - t_a, with its covariance (module docs).
+/// thermal surface, the corners found by `detector` (at their board coordinates,
+/// [`Board::corner_mm`], Z = 0), each pose by PnP with the calibrated model at E_com, and
+/// the displacement t_b - t_a, with its covariance (module docs).
 ///
 /// Errors: a setting outside the calibrated ranges (temperature, E_in, E_com, with the
 /// margins of [`etl_core::camera`]) unless `trust` is [`Trust::Extrapolate`]; an image
@@ -69,11 +69,10 @@ pub fn measure_displacement(
     let mut uncertainty = Vec::with_capacity(2);
     for path in images {
         std::fs::metadata(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
-        let d = detector.detect(path, board.inner_corners)?;
+        let d = detector.detect(path, board)?;
         super::check_image_size(path, d.image_size, cal.image_size, "the calibration is for")?;
-        let sq = board.square_mm;
-        let pts: Vec<[f64; 3]> = d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq, 0.0]).collect();
-        let px: Vec<[f64; 2]> = d.corners.iter().map(|c| c.1).collect();
+        let pts: Vec<[f64; 3]> = d.board_mm(board, [0, 0]).into_iter().map(|[x, y]| [x, y, 0.0]).collect();
+        let px = d.pixels();
         let pose = camera.solve_pnp(&pts, &px)?;
         let u = pose_uncertainty(camera.model(), camera.e_com_ma(), &pts, &px, &pose, PixelNoise::FromResidual)?;
         uncertainty.push(u);

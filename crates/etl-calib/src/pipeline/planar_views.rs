@@ -36,7 +36,7 @@ pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) 
     let results: Vec<_> = images
         .par_iter()
         .map(|p| {
-            let r = det.detect(p, board.inner_corners);
+            let r = det.detect(p, board);
             progress.advance(1);
             r
         })
@@ -56,11 +56,7 @@ pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) 
                     });
                 }
                 size = Some(d.image_size);
-                let sq = board.square_mm;
-                views.push(PlanarView {
-                    board_mm: d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq]).collect(),
-                    pixels: d.corners.iter().map(|c| c.1).collect(),
-                });
+                views.push(PlanarView { board_mm: d.board_mm(board, [0, 0]), pixels: d.pixels() });
             }
             Err(Error::BoardNotFound(m)) => skipped.push(m),
             Err(e) => return Err(e),

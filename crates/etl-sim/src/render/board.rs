@@ -1,17 +1,25 @@
 //! The printed board and its exact area coverage over a pixel's footprint.
 //!
-//! Board frame (formats::dataset): inner corner (i, j) at (i s, j s). The pattern covers
-//! [-s, cols s] x [-s, rows s], i.e. (cols + 1) x (rows + 1) squares; square (a, b), the one
-//! whose lower corner is (a s, b s) for a = -1..cols-1, b = -1..rows-1, is black when
-//! a + b is even, so the outer corner square (-1, -1) is black. Around the pattern lies a
-//! white margin `margin_mm` wide, and beyond it the background, a flat surface in the
+//! Board frames (formats::board): a checkerboard's inner corner (i, j) at (i s, j s), its
+//! pattern covering [-s, cols s] x [-s, rows s], i.e. (cols + 1) x (rows + 1) squares; a
+//! ChArUco board's pattern covering [0, cols s] x [0, rows s] (OpenCV's frame, origin at
+//! the top-left outer corner). Either way the pattern's first square is black and the
+//! colours alternate; a ChArUco board's white squares hold its markers, centred,
+//! `marker_mm` wide: (n + 2) x (n + 2) cells, a black border one cell wide around the
+//! n x n data cells of the dictionary's code (white for a 1 bit). Around the pattern lies
+//! a white margin `margin_mm` wide, and beyond it the background, a flat surface in the
 //! board's plane.
 //!
 //! Along each axis the board frame splits into slabs: background (below), margin, the
-//! pattern's squares, margin, background (above). The reflectance is constant on every
-//! product of an X slab and a Y slab, so the exact mean over a pixel's footprint (a
-//! quadrilateral on the board) is the sum over the slab rectangles it touches of the area
-//! clipped by that rectangle times its grey level, over the footprint's area.
+//! pattern's squares, margin, background (above); on a ChArUco board each square splits
+//! further at the markers' cell boundaries (the white gap, the n + 2 cells, the white gap),
+//! the same in every square. The reflectance is constant on every product of an X slab and
+//! a Y slab, so the exact mean over a pixel's footprint (a quadrilateral on the board) is
+//! the sum over the slab rectangles it touches of the area clipped by that rectangle times
+//! its grey level, over the footprint's area.
+
+use etl_core::board::CharucoBoard;
+use etl_formats::board::Board;
 
 /// Grey level of a region, before shading and noise (8-bit scale).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,15 +29,24 @@ pub(crate) struct Levels {
     pub background: f64,
 }
 
+/// Most slabs a square splits into: a marker of 7 x 7 data bits has 9 cells, plus the white
+/// gap on either side.
+const MAX_CUTS: usize = 11;
+
 /// One axis of the board's slab grid.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Axis {
-    /// Start of the pattern, mm (= -square).
+    /// Start of the pattern, mm (-square for a checkerboard, 0 for a ChArUco board).
     lo_mm: f64,
     square_mm: f64,
-    /// Squares of the pattern along this axis (inner corners + 1).
+    /// Squares of the pattern along this axis.
     squares: i32,
     margin_mm: f64,
+    /// Where each slab of a square starts, mm from the square's start: `cuts[0] = 0`,
+    /// increasing, below `square_mm`.
+    cuts: [f64; MAX_CUTS],
+    /// Slabs per square (1 for a checkerboard).
+    per_square: i32,
 }
 
 impl Axis {
@@ -37,8 +54,14 @@ impl Axis {
         self.lo_mm + self.squares as f64 * self.square_mm
     }
 
-    /// Slab index of coordinate `x`: -2 background, -1 margin, 0..squares the pattern's
-    /// squares, `squares` margin, `squares + 1` background.
+    /// Slabs of the pattern.
+    fn slabs(&self) -> i32 {
+        self.squares * self.per_square
+    }
+
+    /// Slab index of coordinate `x`: -2 background, -1 margin, 0..slabs() the pattern's
+    /// slabs (square `s / per_square`, its slab `s % per_square`), `slabs()` margin,
+    /// `slabs() + 1` background.
     #[inline]
     fn slab(&self, x: f64) -> i32 {
         let hi = self.hi_mm();
@@ -49,27 +72,40 @@ impl Axis {
                 -1
             }
         } else if x < hi {
-            (((x - self.lo_mm) / self.square_mm) as i32).min(self.squares - 1)
+            let k = (((x - self.lo_mm) / self.square_mm) as i32).min(self.squares - 1);
+            let off = x - (self.lo_mm + k as f64 * self.square_mm);
+            let j = self.cuts[1..self.per_square as usize].iter().take_while(|&&c| c <= off).count() as i32;
+            k * self.per_square + j
         } else if x < hi + self.margin_mm {
-            self.squares
+            self.slabs()
         } else {
-            self.squares + 1
+            self.slabs() + 1
         }
     }
 
     /// The interval of slab `s`.
     fn bounds(&self, s: i32) -> (f64, f64) {
         let hi = self.hi_mm();
+        let n = self.slabs();
         match s {
             i32::MIN..=-2 => (f64::NEG_INFINITY, self.lo_mm - self.margin_mm),
             -1 => (self.lo_mm - self.margin_mm, self.lo_mm),
-            s if s < self.squares => {
-                // Consistent with `slab` at the boundaries: square k is [lo + k s, lo + (k+1) s).
-                let a = self.lo_mm + s as f64 * self.square_mm;
-                let b = if s + 1 == self.squares { hi } else { self.lo_mm + (s + 1) as f64 * self.square_mm };
+            s if s < n => {
+                // Consistent with `slab` at the boundaries: square k is [lo + k s, lo + (k+1) s),
+                // its slab j [start + cuts[j], start + cuts[j + 1]).
+                let (k, j) = (s / self.per_square, (s % self.per_square) as usize);
+                let start = self.lo_mm + k as f64 * self.square_mm;
+                let a = start + self.cuts[j];
+                let b = if j + 1 < self.per_square as usize {
+                    start + self.cuts[j + 1]
+                } else if k + 1 == self.squares {
+                    hi
+                } else {
+                    self.lo_mm + (k + 1) as f64 * self.square_mm
+                };
                 (a, b)
             }
-            s if s == self.squares => (hi, hi + self.margin_mm),
+            s if s == n => (hi, hi + self.margin_mm),
             _ => (hi + self.margin_mm, f64::INFINITY),
         }
     }
@@ -81,6 +117,8 @@ pub(crate) struct BoardLayout {
     x: Axis,
     y: Axis,
     levels: Levels,
+    /// The ChArUco board whose markers fill the white squares; `None` for a checkerboard.
+    markers: Option<CharucoBoard>,
 }
 
 /// A polygon of at most `N` vertices on the stack (clipping a quadrilateral by a rectangle
@@ -130,16 +168,43 @@ impl Poly {
 }
 
 impl BoardLayout {
-    /// The layout of a board with `inner_corners` [cols, rows] and `square_mm` squares,
-    /// with a white margin of `margin_mm`.
+    /// The layout of a checkerboard with `inner_corners` [cols, rows] and `square_mm`
+    /// squares, with a white margin of `margin_mm`.
     pub fn new(inner_corners: [usize; 2], square_mm: f64, margin_mm: f64, levels: Levels) -> Self {
         let axis = |n: usize| Axis {
             lo_mm: -square_mm,
             square_mm,
             squares: i32::try_from(n + 1).unwrap_or(i32::MAX / 4),
             margin_mm,
+            cuts: [0.0; MAX_CUTS],
+            per_square: 1,
         };
-        BoardLayout { x: axis(inner_corners[0]), y: axis(inner_corners[1]), levels }
+        BoardLayout { x: axis(inner_corners[0]), y: axis(inner_corners[1]), levels, markers: None }
+    }
+
+    /// The layout of `board` with a white margin of `margin_mm`.
+    pub fn of(board: &Board, margin_mm: f64, levels: Levels) -> Self {
+        let b = match board {
+            Board::Checkerboard(c) => return BoardLayout::new(c.inner_corners, c.square_mm, margin_mm, levels),
+            Board::Charuco(b) => *b,
+        };
+        let (s, m) = (b.square_mm(), b.marker_mm());
+        let cells = b.dictionary().marker_bits() + 2;
+        let (inset, cell) = (0.5 * (s - m), m / cells as f64);
+        // The white gap, the marker's cells, the white gap: cells + 2 slabs per square.
+        let mut cuts = [0.0; MAX_CUTS];
+        for (k, c) in cuts.iter_mut().enumerate().take(cells + 2).skip(1) {
+            *c = inset + (k - 1) as f64 * cell;
+        }
+        let axis = |n: u32| Axis {
+            lo_mm: 0.0,
+            square_mm: s,
+            squares: n as i32,
+            margin_mm,
+            cuts,
+            per_square: cells as i32 + 2,
+        };
+        BoardLayout { x: axis(b.squares()[0]), y: axis(b.squares()[1]), levels, markers: Some(b) }
     }
 
     /// The region (X slab, Y slab) of a board point.
@@ -151,17 +216,40 @@ impl BoardLayout {
     /// Grey level of region (sx, sy).
     #[inline]
     pub fn level(&self, (sx, sy): (i32, i32)) -> f64 {
-        let bg = |s: i32, a: &Axis| s <= -2 || s > a.squares;
-        let margin = |s: i32, a: &Axis| s == -1 || s == a.squares;
+        let bg = |s: i32, a: &Axis| s <= -2 || s > a.slabs();
+        let margin = |s: i32, a: &Axis| s == -1 || s == a.slabs();
         if bg(sx, &self.x) || bg(sy, &self.y) {
-            self.levels.background
-        } else if margin(sx, &self.x) || margin(sy, &self.y) {
-            self.levels.light
-        } else if (sx + sy) % 2 == 0 {
-            self.levels.dark
-        } else {
-            self.levels.light
+            return self.levels.background;
         }
+        if margin(sx, &self.x) || margin(sy, &self.y) {
+            return self.levels.light;
+        }
+        let (kx, jx) = (sx / self.x.per_square, sx % self.x.per_square);
+        let (ky, jy) = (sy / self.y.per_square, sy % self.y.per_square);
+        if (kx + ky) % 2 == 0 {
+            return self.levels.dark;
+        }
+        match &self.markers {
+            Some(b) if self.marker_is_dark(b, [kx, ky], [jx, jy]) => self.levels.dark,
+            _ => self.levels.light,
+        }
+    }
+
+    /// Whether slab [jx, jy] of the white square [kx, ky] of `b` is a dark cell of its
+    /// marker: the border ring of cells, or a 0 bit of the code.
+    fn marker_is_dark(&self, b: &CharucoBoard, [kx, ky]: [i32; 2], [jx, jy]: [i32; 2]) -> bool {
+        let cells = self.x.per_square - 2;
+        // Slab 0 and slab cells + 1 are the white gaps; slabs 1..=cells the marker's cells.
+        let (cx, cy) = (jx - 1, jy - 1);
+        if !(0..cells).contains(&cx) || !(0..cells).contains(&cy) {
+            return false;
+        }
+        if cx == 0 || cy == 0 || cx == cells - 1 || cy == cells - 1 {
+            return true;
+        }
+        let Some(id) = b.marker_at(kx as u32, ky as u32) else { return false };
+        let (row, col) = ((cy - 1) as usize, (cx - 1) as usize);
+        b.dictionary().is_white(id, row, col) == Some(false)
     }
 
     /// Grey level of a board point.
@@ -171,8 +259,8 @@ impl BoardLayout {
     }
 
     /// The grey level over the rectangle [lo[0], hi[0]] x [lo[1], hi[1]] (mm) when it is
-    /// the same all over it: the rectangle lies in one square, or in the background, or in
-    /// the white margin's frame; `None` otherwise (it may still be uniform, e.g. when the
+    /// the same all over it: the rectangle lies in one slab rectangle (a checkerboard's
+    /// square, a marker's cell), or in the background, or in the white margin's frame; `None` otherwise (it may still be uniform, e.g. when the
     /// background is as light as the margin).
     pub fn level_over(&self, lo: [f64; 2], hi: [f64; 2]) -> Option<f64> {
         let (sx0, sy0) = self.region(lo[0], lo[1]);
@@ -181,12 +269,12 @@ impl BoardLayout {
             return Some(self.level((sx0, sy0)));
         }
         // Slabs are monotone in the coordinate: [s0, s1] are all the slabs met.
-        let beyond = |a: &Axis, s0: i32, s1: i32| s1 <= -2 || s0 > a.squares;
+        let beyond = |a: &Axis, s0: i32, s1: i32| s1 <= -2 || s0 > a.slabs();
         if beyond(&self.x, sx0, sx1) || beyond(&self.y, sy0, sy1) {
             return Some(self.levels.background);
         }
-        let margin_strip = |a: &Axis, s0: i32, s1: i32| s0 == s1 && (s0 == -1 || s0 == a.squares);
-        let inside = |a: &Axis, s0: i32, s1: i32| s0 >= -1 && s1 <= a.squares;
+        let margin_strip = |a: &Axis, s0: i32, s1: i32| s0 == s1 && (s0 == -1 || s0 == a.slabs());
+        let inside = |a: &Axis, s0: i32, s1: i32| s0 >= -1 && s1 <= a.slabs();
         if (margin_strip(&self.x, sx0, sx1) && inside(&self.y, sy0, sy1))
             || (margin_strip(&self.y, sy0, sy1) && inside(&self.x, sx0, sx1))
         {

@@ -1,6 +1,7 @@
-//! The synthetic camera: renders a checkerboard seen through a [`CameraModel`] at a lens
-//! current, with exact anti-aliasing, the model's distortion, thin-lens defocus, shading,
-//! photon and read noise, and returns the true pixel of every inner corner.
+//! The synthetic camera: renders a board (a checkerboard or a ChArUco board) seen through a
+//! [`CameraModel`] at a lens current, with exact anti-aliasing, the model's distortion,
+//! thin-lens defocus, shading, photon and read noise, and returns the true pixel of every
+//! corner with its id.
 //!
 //! Pipeline of [`render`]:
 //! 1. Geometry ([`mapping`]): pixel corners (x +- 0.5, y +- 0.5) are mapped back to the
@@ -8,10 +9,10 @@
 //!    homography), exactly (Newton to 1e-10 px).
 //! 2. Coverage ([`coverage`], [`board`]): a pixel's grey level is the exact mean of the
 //!    printed board over its footprint, the quadrilateral through its four mapped corners
-//!    (polygon clipping against the squares). The footprint's edges are straight on the
+//!    (polygon clipping against the squares and the markers' cells). The footprint's edges are straight on the
 //!    board while the true images of the pixel's edges bend with the distortion and
 //!    perspective by far less than 1e-4 px over one pixel; that is the only approximation
-//!    of the coverage. Tiles of 8 x 8 pixels that provably lie inside one square are
+//!    of the coverage. Tiles of 8 x 8 pixels that provably lie inside one square (or cell) are
 //!    filled without mapping their pixels; only the tiles along the squares' edges are
 //!    done pixel by pixel.
 //! 3. Defocus ([`defocus`]): each pixel is blurred by the Gaussian of the thin-lens circle
@@ -44,7 +45,7 @@ pub mod mapping;
 pub mod photometry;
 
 pub use defocus::{defocus_sigma_px, MAX_SIGMA_PX};
-pub use etl_formats::dataset::Board;
+pub use etl_formats::board::{Board, Checkerboard};
 pub use image::{BitDepth, Image};
 pub use photometry::Photometry;
 
@@ -60,17 +61,17 @@ pub const MAX_IMAGE_SIDE_PX: u32 = 1 << 15;
 ///
 /// The paper rig: the stage moves the board along Z_W ([`Scene::paper_view`]). Lens-off or
 /// tilted views: a `CameraModel` whose rotation and translation put the board frame where
-/// wanted, and `board_z_mm = 0`. Inner corner (i, j) is at world (i s, j s, board_z_mm)
-/// (formats::dataset); the printed pattern has (cols + 1) x (rows + 1) squares around the
-/// inner corners, then a white margin of `margin_mm`, then the background (a flat surface in
-/// the same plane).
+/// wanted, and `board_z_mm = 0`. Board point (X, Y) of the board's frame
+/// ([`Board::corner_mm`]: a checkerboard's inner corner (i, j) at (i s, j s), a ChArUco
+/// board's frame OpenCV's) is at world (X, Y, board_z_mm); around the printed pattern lies
+/// a white margin of `margin_mm`, then the background (a flat surface in the same plane).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
     /// The camera (pose and intrinsics as functions of the current).
     pub model: CameraModel,
     /// Compensated lens current, mA.
     pub e_com_ma: f64,
-    /// Inner corners and square size.
+    /// The board.
     pub board: Board,
     /// Z_W of the board plane, mm.
     pub board_z_mm: f64,
@@ -83,7 +84,7 @@ pub struct Scene {
 impl Scene {
     /// A scene with a white margin of one square.
     pub fn new(model: CameraModel, e_com_ma: f64, board: Board, board_z_mm: f64, image_size: [u32; 2]) -> Self {
-        Scene { model, e_com_ma, board, board_z_mm, image_size, margin_mm: board.square_mm }
+        Scene { model, e_com_ma, board, board_z_mm, image_size, margin_mm: board.square_mm() }
     }
 
     /// The paper rig's view: its board (14 x 12 inner corners, 1.5 mm squares, a margin of
@@ -91,19 +92,22 @@ impl Scene {
     /// 1936 x 1458 sensor. Pair it with [`Optics::paper_focus`] for the blur the lens gives.
     pub fn paper_view(truth: &CameraModel, e_com_ma: f64, z_w_mm: f64) -> Self {
         let (inner_corners, square_mm) = PAPER_BOARD;
-        Scene::new(*truth, e_com_ma, Board { inner_corners, square_mm }, z_w_mm, CameraModel::PAPER_IMAGE_SIZE)
+        let board = Board::Checkerboard(Checkerboard { inner_corners, square_mm });
+        Scene::new(*truth, e_com_ma, board, z_w_mm, CameraModel::PAPER_IMAGE_SIZE)
     }
 
-    /// World coordinates of inner corner (i, j), mm.
-    pub fn corner_world_mm(&self, i: usize, j: usize) -> [f64; 3] {
-        [i as f64 * self.board.square_mm, j as f64 * self.board.square_mm, self.board_z_mm]
+    /// World coordinates of corner `id` (row by row over the board's corner grid), mm;
+    /// `None` beyond the board.
+    pub fn corner_world_mm(&self, id: u32) -> Option<[f64; 3]> {
+        self.board.corner_mm(id).map(|[x, y]| [x, y, self.board_z_mm])
     }
 
-    /// World coordinates of the centre of the inner-corner grid, mm.
+    /// World coordinates of the centre of the corner grid, mm.
     pub fn board_centre_world_mm(&self) -> [f64; 3] {
-        let [c, r] = self.board.inner_corners;
-        let s = self.board.square_mm;
-        [0.5 * s * (c as f64 - 1.0), 0.5 * s * (r as f64 - 1.0), self.board_z_mm]
+        let [x0, y0] = self.board.corner_mm(0).unwrap_or([0.0; 2]);
+        let last = (self.board.corner_count() as u32).saturating_sub(1);
+        let [x1, y1] = self.board.corner_mm(last).unwrap_or([0.0; 2]);
+        [0.5 * (x0 + x1), 0.5 * (y0 + y1), self.board_z_mm]
     }
 
     /// Checks the scene: a valid model and board, a finite current and plane, a focal
@@ -270,21 +274,48 @@ pub struct RenderOptions {
 pub struct Rendered {
     /// The image.
     pub image: Image,
-    /// The true pixel of every inner corner, row by row (i fastest): exactly
-    /// `model.project(corner_world_mm(i, j), e_com_ma)`. Corners outside the image are
-    /// listed too (see `corners_in_image`).
+    /// The true pixel of every corner, in id order (row by row over the board's corner
+    /// grid, column fastest: entry `id` is corner `id`): exactly
+    /// `model.project(corner_world_mm(id), e_com_ma)`. Corners outside the image are
+    /// listed too (see `corners_in_image` and [`Rendered::visible`]).
     pub corners_px: Vec<[f64; 2]>,
     /// Whether each corner lies inside the image, 0 <= u <= width - 1 and
     /// 0 <= v <= height - 1.
     pub corners_in_image: Vec<bool>,
-    /// The blur (sigma, px) at the board's centre (centre of the inner-corner grid).
+    /// The blur (sigma, px) at the board's centre (centre of the corner grid).
     pub blur_sigma_px: f64,
+}
+
+impl Rendered {
+    /// The corners inside the image with their ids, in id order: what a detector can find
+    /// (a ChArUco detector by the ids; a checkerboard's ids are its row-major index).
+    ///
+    /// ```
+    /// use etl_sim::render::{render, Board, RenderOptions, Scene};
+    /// use etl_core::model::CameraModel;
+    /// let board = Board::charuco([12, 9], 1.5, 1.1, "DICT_5X5_100").unwrap();
+    /// let scene = Scene::new(CameraModel::paper_rig(), 225.0, board, 2.0, [1936, 1458]);
+    /// let r = render(&scene, &RenderOptions::default()).unwrap();
+    /// let (ids, px) = r.visible();
+    /// // The near view at high magnification sees part of the board only.
+    /// assert!(ids.len() > 10 && ids.len() < board.corner_count());
+    /// assert!(px.iter().all(|p| p[0] >= 0.0 && p[0] <= 1935.0));
+    /// ```
+    pub fn visible(&self) -> (Vec<u32>, Vec<[f64; 2]>) {
+        self.corners_px
+            .iter()
+            .zip(&self.corners_in_image)
+            .enumerate()
+            .filter(|(_, (_, &inside))| inside)
+            .map(|(id, (&p, _))| (id as u32, p))
+            .unzip()
+    }
 }
 
 /// Renders `scene` with `opts`.
 ///
 /// Errors ([`Error::InvalidInput`] or the core's): an invalid scene or options
-/// ([`Scene::validate`], [`Optics::validate`], [`Photometry::validate`]); an inner corner at
+/// ([`Scene::validate`], [`Optics::validate`], [`Photometry::validate`]); a corner at
 /// or behind the camera (its pixel would not exist); the board seen edge-on.
 ///
 /// ```
@@ -307,19 +338,19 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
     scene.validate()?;
     opts.optics.validate()?;
     opts.photometry.validate()?;
-    let [cols, rows] = scene.board.inner_corners;
     let [w, h] = scene.image_size;
     let (w, h) = (w as usize, h as usize);
 
-    let mut corners_px = Vec::with_capacity(cols * rows);
-    for j in 0..rows {
-        for i in 0..cols {
-            let p = scene
-                .model
-                .project(scene.corner_world_mm(i, j), scene.e_com_ma)
-                .map_err(|e| Error::InvalidInput(format!("inner corner ({i}, {j}) cannot be projected: {e}")))?;
-            corners_px.push(p);
-        }
+    let [cols, _] = scene.board.corner_grid();
+    let mut corners_px = Vec::with_capacity(scene.board.corner_count());
+    for id in 0..scene.board.corner_count() as u32 {
+        let (i, j) = (id as usize % cols, id as usize / cols);
+        let p = scene
+            .corner_world_mm(id)
+            .ok_or(etl_core::Error::BehindCamera)
+            .and_then(|w| scene.model.project(w, scene.e_com_ma))
+            .map_err(|e| Error::InvalidInput(format!("corner {id} ({i}, {j}) cannot be projected: {e}")))?;
+        corners_px.push(p);
     }
     let corners_in_image = corners_px
         .iter()
@@ -333,9 +364,8 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
     let blur_sigma_px = opts.optics.sigma_px(f_px, map.depth_mm(centre[0], centre[1]));
 
     let p = &opts.photometry;
-    let layout = BoardLayout::new(
-        scene.board.inner_corners,
-        scene.board.square_mm,
+    let layout = BoardLayout::of(
+        &scene.board,
         scene.margin_mm,
         Levels { dark: p.dark, light: p.light, background: p.background },
     );

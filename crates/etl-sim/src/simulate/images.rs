@@ -28,7 +28,8 @@ use rayon::prelude::*;
 
 use super::{lens_off_poses, Simulation, LENS_OFF_BOARD, PAPER_BOARD};
 use crate::render::{render, BitDepth, Optics, Photometry, RenderOptions, Scene};
-use etl_formats::dataset::{Board, Dataset, DatasetView, OffstateImage};
+use etl_formats::board::{Board, Checkerboard};
+use etl_formats::dataset::{Dataset, DatasetView, OffstateImage};
 use etl_formats::{Error, Result};
 
 /// How the rig's images are made.
@@ -65,7 +66,7 @@ impl Default for ImageOptions {
 pub fn visible_block(
     cam: &CameraModel,
     e_ma: f64,
-    board: Board,
+    board: Checkerboard,
     z_mm: f64,
     image_size: [u32; 2],
     margin_px: f64,
@@ -111,7 +112,9 @@ pub fn visible_block(
             }
         }
     }
-    best.map(|(_, [i0, i1, j0, j1])| (Board { inner_corners: [i1 - i0 + 1, j1 - j0 + 1], square_mm: s }, [i0, j0]))
+    best.map(|(_, [i0, i1, j0, j1])| {
+        (Board::Checkerboard(Checkerboard { inner_corners: [i1 - i0 + 1, j1 - j0 + 1], square_mm: s }), [i0, j0])
+    })
 }
 
 /// `cam` with its world frame moved so that the board's corner `first` is the origin:
@@ -147,8 +150,8 @@ pub fn render_rig(
     let truth = &sim.truth;
     let size = sim.observations.image_size;
     let (paper_inner, paper_square) = PAPER_BOARD;
-    let paper_board = Board { inner_corners: paper_inner, square_mm: paper_square };
-    let mut dataset = Dataset::new(size, paper_board);
+    let paper_board = Checkerboard { inner_corners: paper_inner, square_mm: paper_square };
+    let mut dataset = Dataset::new(size, Board::Checkerboard(paper_board));
     let mut jobs = vec![];
     for (k, view) in sim.observations.views.iter().enumerate() {
         let z_rec =
@@ -179,8 +182,8 @@ pub fn render_rig(
         });
     }
     let (off_inner, off_square) = LENS_OFF_BOARD;
-    let off_board = Board { inner_corners: off_inner, square_mm: off_square };
-    dataset.offstate_board = Some(off_board);
+    let off_board = Checkerboard { inner_corners: off_inner, square_mm: off_square };
+    dataset.offstate_board = Some(Board::Checkerboard(off_board));
     for (k, pose) in lens_off_poses(truth).iter().enumerate() {
         let Some((block, first)) = visible_block(pose, 0.0, off_board, 0.0, size, options.margin_px) else {
             return Err(Error::InvalidInput(format!("lens-off view {k}: not even 3 x 3 corners fit the image")));
@@ -228,15 +231,15 @@ mod tests {
     fn the_block_is_the_largest_that_fits_and_shrinks_near_the_camera() {
         let truth = CameraModel::paper_rig();
         let (inner, sq) = PAPER_BOARD;
-        let board = Board { inner_corners: inner, square_mm: sq };
+        let board = Checkerboard { inner_corners: inner, square_mm: sq };
         let far = visible_block(&truth, 150.0, board, super::super::focused_z_mm(150.0), [1936, 1458], 12.0).unwrap();
         let near = visible_block(&truth, 225.0, board, super::super::focused_z_mm(225.0), [1936, 1458], 12.0).unwrap();
-        let n = |b: &(Board, [usize; 2])| b.0.inner_corners[0] * b.0.inner_corners[1];
+        let n = |b: &(Board, [usize; 2])| b.0.corner_count();
         assert!(n(&near) < n(&far) && n(&far) <= 168, "{near:?} {far:?}");
         // Every square corner of the block (outer ring included) is inside the margin.
         let (b, [i0, j0]) = near;
-        for l in 0..b.inner_corners[1] + 2 {
-            for k in 0..b.inner_corners[0] + 2 {
+        for l in 0..b.corner_grid()[1] + 2 {
+            for k in 0..b.corner_grid()[0] + 2 {
                 let w = [(i0 + k) as f64 * sq - sq, (j0 + l) as f64 * sq - sq, super::super::focused_z_mm(225.0)];
                 let p = truth.project(w, 225.0).unwrap();
                 assert!(p[0] >= 12.0 && p[1] >= 12.0 && p[0] <= 1923.0 && p[1] <= 1445.0, "{p:?}");
