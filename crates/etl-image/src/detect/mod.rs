@@ -38,8 +38,8 @@
 mod candidates;
 mod grid;
 mod order;
-mod plane;
-mod refine;
+pub(crate) mod plane;
+pub(crate) mod refine;
 mod response;
 
 use std::collections::HashMap;

@@ -60,6 +60,26 @@ impl<'a, T: Sample> GrayView<'a, T> {
         let need = if height == 0 || width == 0 { 0 } else { (height - 1).checked_mul(stride)?.checked_add(width)? };
         (data.len() >= need).then_some(Self { width, height, stride, data })
     }
+
+    /// The grey level at (x, y) px ((0, 0) the centre of the top-left pixel), interpolated
+    /// bilinearly; `None` outside `[0, width - 1] x [0, height - 1]`.
+    #[inline]
+    pub fn bilinear(&self, x: f64, y: f64) -> Option<f32> {
+        if !(x >= 0.0 && y >= 0.0 && x <= (self.width - 1) as f64 && y <= (self.height - 1) as f64) {
+            return None;
+        }
+        // The last row and column interpolate with themselves.
+        let (x0, y0) =
+            ((x as usize).min(self.width.saturating_sub(2)), (y as usize).min(self.height.saturating_sub(2)));
+        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        let i = y0 * self.stride + x0;
+        let (dx, dy) = (usize::from(self.width > 1), if self.height > 1 { self.stride } else { 0 });
+        let (a, b) = (self.data[i].grey(), self.data[i + dx].grey());
+        let (c, d) = (self.data[i + dy].grey(), self.data[i + dy + dx].grey());
+        let top = a + fx * (b - a);
+        let bot = c + fx * (d - c);
+        Some(top + fy * (bot - top))
+    }
 }
 
 /// An owned single-precision image (row-major, packed).

@@ -48,6 +48,16 @@ impl Window {
         }
         Self { radius, offsets }
     }
+
+    /// [`Window::new`] (step 1) keeping only the offsets `d` for which `keep(dx, dy)` holds;
+    /// `keep` must be point-symmetric (`keep(d) == keep(-d)`), as the cost pairs `d` with
+    /// `-d`. For a corner where only part of the neighbourhood is point-symmetric (a ChArUco
+    /// corner: the markers' data differ between its two white squares).
+    pub fn masked(radius: usize, keep: impl Fn(isize, isize) -> bool) -> Self {
+        let mut w = Self::new(radius, 1);
+        w.offsets.retain(|&(dx, dy, _)| keep(dx, dy));
+        w
+    }
 }
 
 /// The cost as a quadratic form in m = (1, x, y, xy), x, y the fractional position.

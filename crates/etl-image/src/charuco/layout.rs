@@ -1,0 +1,96 @@
+//! Step 5: the decoded markers checked against the board's layout.
+//!
+//! Kept: markers whose id is on the board, once (an id decoded at two places is ambiguous
+//! and both are dropped; the same marker found twice is kept once), and confirmed by a
+//! neighbour: another kept marker within two squares on the board lies where this marker's
+//! own homography (board mm to image, from its four corners) puts it, within 30 % of a
+//! square. A misread id places its homography at least one square off, so a marker is
+//! kept only when more of its decoded neighbours agree with it than disagree. A lone marker
+//! cannot be confirmed and gives no corner.
+
+use std::collections::HashMap;
+
+use etl_core::board::CharucoBoard;
+
+use super::decode::Decoded;
+use super::homography::Homography;
+
+/// A marker placed on the board.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Placed {
+    pub id: u32,
+    /// Printed top-left, top-right, bottom-right, bottom-left, px.
+    pub corners_px: [[f64; 2]; 4],
+    /// Board mm to image px, from the four corners.
+    pub h: Homography,
+    /// Its square [col, row].
+    pub square: [u32; 2],
+}
+
+/// Farthest neighbour checked, squares along either axis.
+const REACH: i64 = 2;
+/// Agreement needed between a predicted and an observed marker centre, squares.
+const TOLERANCE: f64 = 0.3;
+
+/// The markers of `decoded` that are on `board`, unique and confirmed by a neighbour,
+/// in increasing id order.
+pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed> {
+    let mut by_id: HashMap<u32, Vec<&Decoded>> = HashMap::new();
+    for d in decoded {
+        by_id.entry(d.id).or_default().push(d);
+    }
+    let mut placed: Vec<Placed> = Vec::new();
+    for (id, found) in by_id {
+        let Some(square) = board.marker_square(id) else { continue };
+        let Some(board_mm) = board.marker_corners_mm(id) else { continue };
+        let first = found[0];
+        let size = side_px(&first.corners_px);
+        if found.iter().any(|d| dist(centre(&d.corners_px), centre(&first.corners_px)) > 0.25 * size) {
+            continue;
+        }
+        if let Some(h) = Homography::fit(&board_mm, &first.corners_px) {
+            placed.push(Placed { id, corners_px: first.corners_px, h, square });
+        }
+    }
+    placed.sort_by_key(|p| p.id);
+    let at: HashMap<[u32; 2], usize> = placed.iter().enumerate().map(|(k, p)| (p.square, k)).collect();
+    let s = board.square_mm();
+    let keep: Vec<bool> = placed
+        .iter()
+        .map(|p| {
+            let (mut agree, mut disagree) = (0, 0);
+            for dr in -REACH..=REACH {
+                for dc in -REACH..=REACH {
+                    let (c, r) = (p.square[0] as i64 + dc, p.square[1] as i64 + dr);
+                    if (dc, dr) == (0, 0) || c < 0 || r < 0 {
+                        continue;
+                    }
+                    let Some(&k) = at.get(&[c as u32, r as u32]) else { continue };
+                    let q = &placed[k];
+                    let predicted = p.h.map([(c as f64 + 0.5) * s, (r as f64 + 0.5) * s]);
+                    let square_px = side_px(&q.corners_px) * s / board.marker_mm();
+                    if dist(predicted, centre(&q.corners_px)) <= TOLERANCE * square_px {
+                        agree += 1;
+                    } else {
+                        disagree += 1;
+                    }
+                }
+            }
+            agree > 0 && agree > disagree
+        })
+        .collect();
+    placed.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+}
+
+pub(crate) fn centre(q: &[[f64; 2]; 4]) -> [f64; 2] {
+    [0.25 * (q[0][0] + q[1][0] + q[2][0] + q[3][0]), 0.25 * (q[0][1] + q[1][1] + q[2][1] + q[3][1])]
+}
+
+/// Mean side of a quadrilateral, px.
+pub(crate) fn side_px(q: &[[f64; 2]; 4]) -> f64 {
+    0.25 * (0..4).map(|k| dist(q[k], q[(k + 1) % 4])).sum::<f64>()
+}
+
+pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}

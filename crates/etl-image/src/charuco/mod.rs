@@ -1,0 +1,251 @@
+//! ChArUco detection: the markers of a [`CharucoBoard`] found and identified in a grey
+//! image, and every board corner next to a marker located and refined to a few hundredths of
+//! a pixel, with its id. A board seen in part (overflowing the frame, partly hidden) gives
+//! the corners that are seen, each with its id: no hint about which part is visible.
+//!
+//! The steps, one file each:
+//! 1. `threshold`: at a detection level (the image box-downsampled 2x from 1280 x 800, as
+//!    the checkerboard detector's), dark pixels by an adaptive mean threshold (7 grey levels
+//!    below the mean of a 15 x 15 neighbourhood, OpenCV's offset).
+//! 2. `contours`: 8-connected dark regions, the outer boundary of each traced.
+//! 3. `quad`: boundaries that a convex quadrilateral approximates (Douglas-Peucker, 3 % of
+//!    the perimeter), not touching the frame; their sides are then located at full
+//!    resolution (steepest rise across each side, a line through the points).
+//! 4. `decode`: the cells sampled through the quad's homography, split into black and white
+//!    (Otsu over the cells), the border checked, the data identified with the dictionary's
+//!    error correction (OpenCV's defaults), ties refused.
+//! 5. `layout`: ids on the board, each once, each confirmed by a neighbouring marker where
+//!    its own homography puts it (a misread id cannot be confirmed).
+//! 6. `corners`: each inner corner of a confirmed marker's square predicted by the
+//!    marker's homography and refined by the checkerboard detector's point-symmetry
+//!    refinement over the part of the neighbourhood that is point-symmetric on a ChArUco
+//!    board (the black squares and the white margins, the markers masked); kept when its
+//!    window fits in the frame and the refined point is a saddle of the board's colours.
+//!
+//! If no marker is found at the detection level, the image is searched again at full
+//! resolution (small markers).
+//!
+//! Pixel (0, 0) is the centre of the top-left pixel. Ids, board layout and marker corner
+//! order are OpenCV's (see [`etl_core::board`]).
+
+mod contours;
+mod corners;
+mod decode;
+mod homography;
+mod layout;
+mod quad;
+mod threshold;
+
+use std::path::{Path, PathBuf};
+
+use etl_core::board::CharucoBoard;
+use image::{DynamicImage, GrayImage, ImageBuffer, Luma};
+use rayon::prelude::*;
+
+use crate::detect::plane::{self, GrayView, Sample};
+use etl_formats::{Error, Result};
+
+/// A marker found in the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectedMarker {
+    /// Its id in the board's dictionary.
+    pub id: u32,
+    /// Its corners as printed: top left, top right, bottom right, bottom left (OpenCV's
+    /// order), px.
+    pub corners_px: [[f64; 2]; 4],
+}
+
+/// A ChArUco board found in an image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CharucoDetection {
+    /// Image width and height, px.
+    pub image_size: [u32; 2],
+    /// The ids of the corners found (`row * (cols - 1) + col`), increasing, each once.
+    pub ids: Vec<u32>,
+    /// `corners_px[k]` is corner `ids[k]`, px ((0, 0) the centre of the top-left pixel).
+    pub corners_px: Vec<[f64; 2]>,
+    /// The markers the corners were located from, in increasing id order.
+    pub markers: Vec<DetectedMarker>,
+}
+
+impl CharucoDetection {
+    /// (id, board position in mm, pixel) for each corner found.
+    pub fn board_points<'a>(&'a self, board: &'a CharucoBoard) -> impl Iterator<Item = (u32, [f64; 2], [f64; 2])> + 'a {
+        self.ids.iter().zip(&self.corners_px).filter_map(|(&id, &p)| Some((id, board.corner_mm(id)?, p)))
+    }
+}
+
+/// Adaptive threshold: neighbourhood radius at the detection level, px.
+const THRESHOLD_RADIUS: usize = 7;
+/// Adaptive threshold: grey levels below the neighbourhood mean (OpenCV's 7).
+const THRESHOLD_OFFSET: f32 = 7.0;
+/// Smallest marker cell that can be read, full-resolution px.
+const MIN_CELL_PX: f64 = 2.5;
+
+/// Finds the ChArUco board in an 8-bit image.
+///
+/// ```
+/// use etl_core::board::{CharucoBoard, Dictionary};
+/// use etl_image::charuco::detect_charuco;
+/// let board = CharucoBoard::new([5, 4], 7.0, 5.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+/// // The board drawn sharp at 10 px per mm, 20 px of white around it.
+/// let img = image::GrayImage::from_fn(390, 320, |x, y| {
+///     let (bx, by) = ((x as f64 + 0.5 - 20.0) / 10.0, (y as f64 + 0.5 - 20.0) / 10.0);
+///     let dark = bx >= 0.0 && by >= 0.0 && bx < 35.0 && by < 28.0 && {
+///         let (c, r) = ((bx / 7.0) as u32, (by / 7.0) as u32);
+///         match board.marker_at(c, r) {
+///             None => true,
+///             Some(id) => {
+///                 // Cell (i, j) of the marker's 6 x 6 cells, 1 mm inside its square.
+///                 let (mx, my) = (bx - c as f64 * 7.0 - 1.0, by - r as f64 * 7.0 - 1.0);
+///                 let (i, j) = ((mx / (5.0 / 6.0)).floor() as i32, (my / (5.0 / 6.0)).floor() as i32);
+///                 let inside = (0..6).contains(&i) && (0..6).contains(&j);
+///                 let data = (1..5).contains(&i) && (1..5).contains(&j);
+///                 inside && !(data && board.dictionary().is_white(id, (j - 1) as usize, (i - 1) as usize).unwrap())
+///             }
+///         }
+///     };
+///     image::Luma([if dark { 40 } else { 210 }])
+/// });
+/// let det = detect_charuco(&img, &board)?;
+/// assert_eq!(det.ids, (0..12).collect::<Vec<u32>>());
+/// // Corner 0 is at (7, 7) mm on the board: 20 + 70 px, on a pixel boundary.
+/// let c = det.corners_px[0];
+/// assert!((c[0] - 89.5).abs() < 0.05 && (c[1] - 89.5).abs() < 0.05);
+/// # Ok::<(), etl_formats::Error>(())
+/// ```
+pub fn detect_charuco(image: &GrayImage, board: &CharucoBoard) -> Result<CharucoDetection> {
+    let view = GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
+        .ok_or_else(|| Error::InvalidInput("image buffer shorter than its size".into()))?;
+    detect_charuco_view(view, board)
+}
+
+/// Finds the board in a 16-bit image (same as [`detect_charuco`]).
+pub fn detect_charuco_u16(image: &ImageBuffer<Luma<u16>, Vec<u16>>, board: &CharucoBoard) -> Result<CharucoDetection> {
+    let view = GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
+        .ok_or_else(|| Error::InvalidInput("image buffer shorter than its size".into()))?;
+    detect_charuco_view(view, board)
+}
+
+/// Finds the board in a decoded image of any type: 16-bit images are read at 16 bits,
+/// everything else as 8-bit grey.
+pub fn detect_charuco_dynamic(image: &DynamicImage, board: &CharucoBoard) -> Result<CharucoDetection> {
+    match image {
+        DynamicImage::ImageLuma8(g) => detect_charuco(g, board),
+        DynamicImage::ImageLuma16(g) => detect_charuco_u16(g, board),
+        DynamicImage::ImageLumaA16(_) | DynamicImage::ImageRgb16(_) | DynamicImage::ImageRgba16(_) => {
+            detect_charuco_u16(&image.to_luma16(), board)
+        }
+        _ => detect_charuco(&image.to_luma8(), board),
+    }
+}
+
+/// Reads an image file (PNG, JPEG, TIFF) and finds the board. An unreadable file is
+/// [`Error::Image`]; a board not found is [`Error::BoardNotFound`].
+pub fn detect_charuco_file(path: &Path, board: &CharucoBoard) -> Result<CharucoDetection> {
+    detect_charuco_dynamic(&crate::read_image(path)?, board)
+}
+
+/// [`detect_charuco_file`] on many images in parallel (rayon); one result per path, in order.
+pub fn detect_charuco_many(paths: &[PathBuf], board: &CharucoBoard) -> Vec<Result<CharucoDetection>> {
+    paths.par_iter().map(|p| detect_charuco_file(p, board)).collect()
+}
+
+/// Finds the board in a borrowed grey view (8- or 16-bit samples).
+///
+/// Errors: [`Error::BoardNotFound`] with the reason when no marker of the board's
+/// dictionary is found, when the markers found cannot be confirmed by a neighbour (a lone
+/// marker, or ids inconsistent with the board), or when no corner next to them could be
+/// refined.
+pub fn detect_charuco_view<T: Sample>(img: GrayView<'_, T>, board: &CharucoBoard) -> Result<CharucoDetection> {
+    let (w, h) = (img.width, img.height);
+    let image_size = [w as u32, h as u32];
+    let dict = board.dictionary();
+    if w < 16 || h < 16 {
+        return Err(Error::BoardNotFound(format!("the image is {w}x{h} px, too small to hold a marker")));
+    }
+    let mut factor = 1;
+    while w / (2 * factor) >= 640 && h / (2 * factor) >= 400 {
+        factor *= 2;
+    }
+    let mut quads = 0;
+    let found = loop {
+        let (refined, looked_at) = markers_at_level(&img, factor, dict.marker_bits());
+        quads += looked_at;
+        let found: Vec<(decode::Decoded, quad::Quad)> =
+            refined.iter().filter_map(|q| decode::decode(&img, &q.corners, dict).map(|d| (d, *q))).collect();
+        if !found.is_empty() || factor == 1 {
+            break found;
+        }
+        factor /= 2;
+    };
+    if found.is_empty() {
+        return Err(Error::BoardNotFound(format!(
+            "no marker of {} in the image ({quads} dark quadrilaterals looked at)",
+            dict.name()
+        )));
+    }
+    let decoded: Vec<decode::Decoded> = found.iter().map(|(d, _)| *d).collect();
+    let placed = layout::confirmed(board, &decoded);
+    if placed.is_empty() {
+        return Err(Error::BoardNotFound(format!(
+            "{} marker(s) of {} decoded, none confirmed by a neighbour where the {}x{} board puts it",
+            decoded.len(),
+            dict.name(),
+            board.squares()[0],
+            board.squares()[1]
+        )));
+    }
+    let (blur_px, contrast) = blur_and_contrast(&found);
+    let corners = corners::locate(&img, board, &placed, blur_px, contrast);
+    if corners.is_empty() {
+        return Err(Error::BoardNotFound(format!(
+            "{} marker(s) confirmed, but no board corner next to them could be refined inside the image",
+            placed.len()
+        )));
+    }
+    let markers = placed.iter().map(|p| DetectedMarker { id: p.id, corners_px: p.corners_px }).collect();
+    let (ids, corners_px) = corners.into_iter().unzip();
+    Ok(CharucoDetection { image_size, ids, corners_px, markers })
+}
+
+/// The refined quadrilaterals found at detection level `factor` that could be markers of
+/// `bits` data bits, and how many quadrilaterals were looked at.
+fn markers_at_level<T: Sample>(img: &GrayView<'_, T>, factor: usize, bits: usize) -> (Vec<quad::Quad>, usize) {
+    let level = plane::downsample(*img, factor);
+    let mask = threshold::dark_mask(&level, THRESHOLD_RADIUS, THRESHOLD_OFFSET);
+    let f = factor as f64;
+    let min_side_px = MIN_CELL_PX * (bits + 2) as f64;
+    let min_side = ((min_side_px / f).floor() as usize).max(4);
+    let max_side = level.width.max(level.height);
+    let contours = contours::outer_contours(&mask, min_side, max_side, min_side);
+    let coarse: Vec<[[f64; 2]; 4]> = contours
+        .iter()
+        .filter(|c| !c.touches_border)
+        .filter_map(|c| quad::approximate(&c.points, min_side as f64))
+        .collect();
+    let looked_at = coarse.len();
+    // Detection-level pixel x is centred on full-resolution f x + (f - 1) / 2; the outline
+    // runs through the region's outer pixels, half a pixel inside the edge.
+    let o = 0.5 * (f - 1.0);
+    let reach = 1.5 * f + 1.0;
+    let refined = coarse
+        .par_iter()
+        .filter_map(|q| {
+            let full = q.map(|p| [p[0] * f + o, p[1] * f + o]);
+            quad::refine(img, full, reach)
+        })
+        .collect();
+    (refined, looked_at)
+}
+
+/// The image's blur sigma (px) and the markers' contrast (grey levels), medians over the
+/// markers: a blurred step of contrast C rises at most C / (sigma sqrt(2 pi)) per px.
+fn blur_and_contrast(found: &[(decode::Decoded, quad::Quad)]) -> (f64, f64) {
+    let mut sigma: Vec<f64> =
+        found.iter().map(|(d, q)| (d.white - d.black) / (q.edge_slope * (2.0 * std::f64::consts::PI).sqrt())).collect();
+    let mut contrast: Vec<f64> = found.iter().map(|(d, _)| d.white - d.black).collect();
+    sigma.sort_by(f64::total_cmp);
+    contrast.sort_by(f64::total_cmp);
+    (sigma[sigma.len() / 2], contrast[contrast.len() / 2])
+}
