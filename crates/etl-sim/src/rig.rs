@@ -5,7 +5,9 @@
 //! ([`crate::render`]) and the simulation ([`crate::simulate`]), which import this module
 //! and not each other.
 
+use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::model::CameraModel;
+use etl_formats::board::Board;
 
 /// Stage positions of the paper's 15 views, mm.
 pub const PAPER_Z_W_MM: [f64; 15] =
@@ -15,6 +17,58 @@ pub const PAPER_E_COM_MA: [f64; 15] =
     [80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 170.0, 180.0, 190.0, 200.0, 210.0, 225.0];
 /// Inner corners of the paper's board (columns, rows) and its square, mm.
 pub const PAPER_BOARD: ([usize; 2], f64) = ([14, 12], 1.5);
+
+/// A ChArUco board by its `etlcal.board/1` fields.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CharucoSpec {
+    /// Squares [cols, rows].
+    pub squares: [u32; 2],
+    /// Side of a square, mm.
+    pub square_mm: f64,
+    /// Side of a marker, mm.
+    pub marker_mm: f64,
+    /// OpenCV's name of the dictionary.
+    pub dictionary: &'static str,
+}
+
+impl CharucoSpec {
+    /// The board (checked by [`Board::charuco`]).
+    pub fn board(&self) -> etl_formats::Result<Board> {
+        Board::charuco(self.squares, self.square_mm, self.marker_mm, self.dictionary)
+    }
+}
+
+/// The simulated paper rig's ChArUco board: the squares of the paper's board (15 x 13 of
+/// 1.5 mm, so that its 14 x 12 inner corners are the ChArUco corners) with markers of
+/// 1.1 mm (cells of 0.16 mm, 10 to 19 px over the rig's views) from DICT_5X5_100 (97 of
+/// its 100 markers), where the paper's board is: as the paper's board, it overflows the
+/// frame at the near views. Its frame (OpenCV's) starts one square before the paper
+/// board's first inner corner ([`charuco_frame`]).
+pub const PAPER_CHARUCO: CharucoSpec =
+    CharucoSpec { squares: [15, 13], square_mm: 1.5, marker_mm: 1.1, dictionary: "DICT_5X5_100" };
+
+/// The lens-off views' ChArUco board: the squares of the lens-off checkerboard
+/// ([`crate::simulate::LENS_OFF_BOARD`], 11 x 8 inner corners of 4 mm: 12 x 9 squares)
+/// with 3 mm markers from DICT_5X5_100 (54 of them).
+pub const LENS_OFF_CHARUCO: CharucoSpec =
+    CharucoSpec { squares: [12, 9], square_mm: 4.0, marker_mm: 3.0, dictionary: "DICT_5X5_100" };
+
+/// `cam` (whose world frame has a checkerboard's first inner corner at the origin) with
+/// its world frame moved to the ChArUco frame of the same squares, which starts one
+/// square of `square_mm` earlier on both axes: ChArUco point (x, y) is the old
+/// (x - s, y - s).
+pub fn charuco_frame(cam: &CameraModel, square_mm: f64) -> CameraModel {
+    shifted_mm(cam, [-square_mm, -square_mm])
+}
+
+/// `cam` with its world frame's origin moved to the old point (dx, dy, 0): new point
+/// (x, y, z) is the old (x + dx, y + dy, z) (t' = t + R (dx, dy, 0)).
+pub fn shifted_mm(cam: &CameraModel, [dx, dy]: [f64; 2]) -> CameraModel {
+    let r = rodrigues_to_matrix(cam.rotation_rodrigues);
+    let o = mat_vec(&r, [dx, dy, 0.0]);
+    let t = cam.translation_mm;
+    CameraModel { translation_mm: [t[0] + o[0], t[1] + o[1], t[2] + o[2]], ..*cam }
+}
 /// Lens temperature of the simulated views, degC.
 pub const PAPER_TEMPERATURE_C: f64 = 27.0;
 
@@ -77,4 +131,28 @@ pub fn focus_law_current_ma(depth_mm: f64) -> f64 {
     let [c0, c1, c2] = PAPER_FOCUS_LAW_MA;
     let v = 1000.0 / depth_mm;
     c0 + v * (c1 + v * c2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ChArUco rig boards are valid and their corners are the paper boards' inner
+    /// corners, seen at the same pixels through `charuco_frame`.
+    #[test]
+    fn the_charuco_boards_sit_where_the_checkerboards_do() {
+        let truth = CameraModel::paper_rig();
+        for (spec, (inner, sq)) in [(PAPER_CHARUCO, PAPER_BOARD), (LENS_OFF_CHARUCO, crate::simulate::LENS_OFF_BOARD)] {
+            let b = spec.board().unwrap();
+            assert_eq!(b.corner_grid(), inner);
+            let cam = charuco_frame(&truth, sq);
+            for id in [0u32, 7, (inner[0] * inner[1] - 1) as u32] {
+                let [x, y] = b.corner_mm(id).unwrap();
+                let (i, j) = ((id as usize % inner[0]) as f64, (id as usize / inner[0]) as f64);
+                let a = cam.project([x, y, 20.0], 150.0).unwrap();
+                let c = truth.project([i * sq, j * sq, 20.0], 150.0).unwrap();
+                assert!((a[0] - c[0]).abs() < 1e-9 && (a[1] - c[1]).abs() < 1e-9, "{id}");
+            }
+        }
+    }
 }

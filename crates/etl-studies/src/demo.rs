@@ -22,7 +22,7 @@ use etl_calib::pipeline::{a0_from_offstate, calibrate, CalibrateOptions, Calibra
 use etl_formats::dataset::Dataset;
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
-use etl_sim::simulate::images::{render_rig, ImageOptions};
+use etl_sim::simulate::images::{dataset_truth, render_rig, ImageOptions, RigBoard};
 use etl_sim::simulate::{focused_z_mm, noise_from, observe_board, paper_rig, Simulation};
 
 use crate::common::curve_errors;
@@ -56,12 +56,19 @@ pub struct DemoOptions {
     /// Render every view and detect its corners (else the simulated corners, with the
     /// paper's pixel noise, go straight to the calibration, as in the paper's simulations).
     pub images: bool,
+    /// The boards of the rendered views (`etlcal demo`: ChArUco, the default; the
+    /// checkerboards with per-view hints for comparison). The validation renders the
+    /// ChArUco board either way (its figures do not depend on the board's frame).
+    pub board: RigBoard,
 }
 
 /// The demo's outcome: the data, both calibrations, their validations and the summary.
 pub struct Demo {
-    /// The simulated rig (truth, A0, simulated observations).
+    /// The simulated rig (truth, A0, simulated observations: the paper board's frame).
     pub sim: Simulation,
+    /// The true camera in the world frame of the observations calibrated from: with
+    /// `images` the ChArUco board's ([`dataset_truth`]), else the simulation's.
+    pub truth: CameraModel,
     /// The rendered views (with `images`), to be saved as `dataset.json` in the image
     /// directory.
     pub dataset: Option<Dataset>,
@@ -97,14 +104,15 @@ pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress
     let start = Instant::now();
     let noise = noise_from(options.stage_noise_um, 0.4, 0.2)?;
     let sim = paper_rig(&noise, options.seed);
-    let (dataset, observations, views_detected) = if options.images {
+    let (dataset, observations, views_detected, truth) = if options.images {
         // Render, record, detect: the user's chain from images.
-        let dataset = render_rig(&sim, image_dir, &ImageOptions::default(), options.seed, progress)?;
+        let image_options = ImageOptions { board: options.board, ..ImageOptions::default() };
+        let dataset = render_rig(&sim, image_dir, &image_options, options.seed, progress)?;
         let dataset_path = image_dir.join("dataset.json");
         let (obs, summary) = observations_from_dataset(&dataset, &dataset_path, &default_detector(), progress)?;
-        (Some(dataset), obs, summary.views_detected)
+        (Some(dataset), obs, summary.views_detected, dataset_truth(&sim.truth, &image_options))
     } else {
-        (None, sim.observations.clone(), sim.observations.views.len())
+        (None, sim.observations.clone(), sim.observations.views.len(), sim.truth)
     };
     // The simulated lens follows the paper's surface: the demo chooses it, and the
     // calibrations record that choice ("source": "paper").
@@ -115,10 +123,11 @@ pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress
     let eiv_est = Estimator::Eiv { sigma_z_mm: noise.z_mm.max(1e-4), sigma_e_ma: 0.4, sigma_px: None };
     let eiv =
         calibrate(&observations, &a0, Some(&thermal), &CalibrateOptions { estimator: eiv_est, ..Default::default() })?;
-    let paper_validation = validate(&paper, &sim.truth, options.seed, options.images)?;
-    let eiv_validation = validate(&eiv, &sim.truth, options.seed, options.images)?;
+    let paper_validation = validate(&paper, &truth, options.seed, options.images)?;
+    let eiv_validation = validate(&eiv, &truth, options.seed, options.images)?;
     let mut demo = Demo {
         sim,
+        truth,
         dataset,
         observations,
         views_detected,
@@ -139,7 +148,7 @@ pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress
 /// [`parameter_table`].
 pub fn summary_markdown(demo: &Demo, options: &DemoOptions) -> String {
     let figures = figures_table(&demo.paper_validation, &demo.eiv_validation);
-    let table = parameter_table(&demo.sim.truth, &demo.paper, &demo.eiv);
+    let table = parameter_table(&demo.truth, &demo.paper, &demo.eiv);
     format!(
         "# etlcal demo (seed {}, stage noise {} um)\n\nThe paper rig (docs/METHOD.md, \"The paper rig\"), {} views, {} points{}, the paper's noise model; \
          A0 by Zhang's method from {} lens-off views.\n\n## Errors users feel (validated on fresh views)\n\n{figures}\n## Every parameter\n\n{table}\n({:.2} s)\n",
@@ -243,31 +252,18 @@ pub fn validate(result: &CalibrationResult, truth: &CameraModel, seed: u64, imag
 /// (board X, Y in mm; detected pixel) of each corner of one view.
 type BoardPixelPairs = Vec<([f64; 2], [f64; 2])>;
 
-/// The board at stage positions `z_mm` and `z_mm + 2` at current `e_ma`, rendered and
-/// detected: (board X, Y; detected pixel) of the block of corners visible in both.
+/// The rig's ChArUco board at stage positions `z_mm` and `z_mm + 2` at current `e_ma` seen
+/// by `truth` (its world frame taken as the board's: a frame one square off moves the
+/// board by a square, which changes no figure), rendered and detected: (board X, Y;
+/// detected pixel) of every corner found in each image (each pose from its own corners).
 fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result<(BoardPixelPairs, BoardPixelPairs)> {
     use etl_sim::render::{render, Optics, RenderOptions, Scene};
-    use etl_sim::simulate::images::{visible_block, ImageOptions};
-    let (inner_corners, square_mm) = etl_sim::simulate::PAPER_BOARD;
-    let board = etl_formats::Checkerboard { inner_corners, square_mm };
-    let size = CameraModel::PAPER_IMAGE_SIZE;
+    let board = etl_sim::rig::PAPER_CHARUCO.board()?;
+    let charuco = board.as_charuco().ok_or_else(|| Error::InvalidInput("the rig's board is not ChArUco".into()))?;
     let options = ImageOptions::default();
-    let blocks: Vec<_> = [z_mm, z_mm + 2.0]
-        .iter()
-        .map(|&z| visible_block(truth, e_ma, board, z, size, options.margin_px))
-        .collect::<Option<Vec<_>>>()
-        .ok_or_else(|| Error::InvalidInput(format!("validation at {e_ma} mA: the board does not fit the image")))?;
-    // The block visible at both positions.
-    let i0 = blocks[0].1[0].max(blocks[1].1[0]);
-    let j0 = blocks[0].1[1].max(blocks[1].1[1]);
-    let i1 = (blocks[0].1[0] + blocks[0].0.corner_grid()[0]).min(blocks[1].1[0] + blocks[1].0.corner_grid()[0]);
-    let j1 = (blocks[0].1[1] + blocks[0].0.corner_grid()[1]).min(blocks[1].1[1] + blocks[1].0.corner_grid()[1]);
-    let block = etl_formats::Checkerboard { inner_corners: [i1.saturating_sub(i0), j1.saturating_sub(j0)], square_mm };
-    let first = [i0, j0];
     let mut out = vec![];
     for (n, z) in [z_mm, z_mm + 2.0].into_iter().enumerate() {
-        let cam = etl_sim::simulate::images::shifted(truth, first, square_mm);
-        let scene = Scene::new(cam, e_ma, etl_formats::Board::Checkerboard(block), z, size);
+        let scene = Scene::new(*truth, e_ma, board, z, CameraModel::PAPER_IMAGE_SIZE);
         let opts = RenderOptions {
             optics: Optics::paper_focus(truth, e_ma, options.aperture_mm),
             photometry: options.photometry,
@@ -275,15 +271,8 @@ fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result
             ..RenderOptions::default()
         };
         let image = render(&scene, &opts)?.image.to_dynamic();
-        let det = etl_image::detect::detect_dynamic(
-            &image,
-            etl_image::detect::Pattern::new(block.inner_corners[0], block.inner_corners[1])?,
-        )?;
-        out.push(
-            det.indexed()
-                .map(|([i, j], p)| ([(i0 + i) as f64 * square_mm, (j0 + j) as f64 * square_mm], p))
-                .collect::<Vec<_>>(),
-        );
+        let det = etl_image::charuco::detect_charuco_dynamic(&image, charuco)?;
+        out.push(det.board_points(charuco).map(|(_, xy, p)| (xy, p)).collect::<Vec<_>>());
     }
     let b = out.pop().unwrap_or_default();
     let a = out.pop().unwrap_or_default();
@@ -297,7 +286,7 @@ mod tests {
     #[test]
     fn demo_without_images_recovers_the_paper_rig_and_tabulates_it() {
         let dir = tempfile::tempdir().unwrap();
-        let options = DemoOptions { seed: 1, stage_noise_um: 10.0, images: false };
+        let options = DemoOptions { seed: 1, stage_noise_um: 10.0, images: false, board: RigBoard::Charuco };
         let d = run_demo(&options, dir.path(), &etl_core::progress::NoProgress).unwrap();
         // Nothing written without images: the caller saves.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);

@@ -8,7 +8,7 @@
 //! "margin_mm"}`, with `"dpi", "width_px", "height_px"` for a PNG.
 //!
 //! Also the board flags shared by the verbs that look for a board in images (`zhang`,
-//! `measure`): `--pattern CxR --square MM`.
+//! `measure`): `--pattern CxR --square MM` or `--board FILE`.
 
 use std::path::PathBuf;
 
@@ -25,26 +25,42 @@ pub fn parse_pattern(s: &str) -> std::result::Result<[usize; 2], String> {
     Ok([parse(c)?, parse(r)?])
 }
 
-/// `--pattern CxR --square MM`.
-#[derive(clap::Args, Debug, Clone, Copy)]
+/// `--pattern CxR --square MM` (a whole checkerboard) or `--board FILE` (an
+/// `etlcal.board/1` file: a ChArUco board, found in part too, or a checkerboard).
+#[derive(clap::Args, Debug, Clone)]
 pub struct BoardArgs {
-    /// Inner corners, columns x rows (e.g. 14x12).
-    #[arg(long, value_parser = parse_pattern)]
-    pub pattern: [usize; 2],
-    /// Side of a square, mm.
-    #[arg(long, value_name = "MM")]
-    pub square: f64,
+    /// Inner corners of a checkerboard, columns x rows (e.g. 14x12); with --square.
+    #[arg(long, value_parser = parse_pattern, requires = "square", required_unless_present = "board")]
+    pub pattern: Option<[usize; 2]>,
+    /// Side of a square of the --pattern checkerboard, mm.
+    #[arg(long, value_name = "MM", requires = "pattern")]
+    pub square: Option<f64>,
+    /// The board, an etlcal.board/1 file (ChArUco or checkerboard), instead of --pattern
+    /// and --square.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["pattern", "square"])]
+    pub board: Option<PathBuf>,
 }
 
 impl BoardArgs {
-    /// The board the flags describe; an error names the flags.
+    /// The board the flags describe (read from its file); an error names the flags.
     pub fn board(&self) -> etl_formats::Result<Board> {
-        let [c, r] = self.pattern;
-        Board::checkerboard(self.pattern, self.square).map_err(|e| {
+        if let Some(path) = &self.board {
+            return Board::load(path);
+        }
+        let (Some(pattern), Some(square)) = (self.pattern, self.square) else {
+            return Err(Error::InvalidInput("give --board FILE, or --pattern CxR with --square MM".into()));
+        };
+        let [c, r] = pattern;
+        Board::checkerboard(pattern, square).map_err(|e| {
             let e = e.to_string();
             let e = e.strip_prefix("invalid input: ").unwrap_or(&e);
-            etl_formats::Error::InvalidInput(format!("--pattern {c}x{r} --square {}: {e}", self.square))
+            Error::InvalidInput(format!("--pattern {c}x{r} --square {square}: {e}"))
         })
+    }
+
+    /// The board file, if any (an input the verb's outputs must not overwrite).
+    pub fn file(&self) -> Option<&std::path::Path> {
+        self.board.as_deref()
     }
 }
 

@@ -40,7 +40,8 @@ const DEMO_FILES: &[&str] = &[
 ];
 use etl_formats::{Error, Result};
 use etl_report::Provenance;
-use etl_sim::simulate::write_simulation;
+use etl_sim::simulate::images::RigBoard;
+use etl_sim::simulate::{write_simulation, write_truth};
 use etl_studies::demo::{run_demo, DemoOptions};
 
 /// Arguments of `etlcal demo`.
@@ -66,7 +67,12 @@ pub struct Args {
 /// Runs `etlcal demo`: [`run_demo`], then writes its files and prints its summary.
 pub fn run(args: Args) -> Result<()> {
     crate::output::check([], &[Output::Dir(&args.out)])?;
-    let options = DemoOptions { seed: args.seed, stage_noise_um: args.stage_noise_um, images: !args.no_images };
+    let options = DemoOptions {
+        seed: args.seed,
+        stage_noise_um: args.stage_noise_um,
+        images: !args.no_images,
+        board: RigBoard::Charuco,
+    };
     let inputs = |file: &str| {
         let obs = if options.images { "detected in the rendered views/*.png" } else { "simulated corners" };
         vec![
@@ -79,6 +85,7 @@ pub fn run(args: Args) -> Result<()> {
         let demo = run_demo(&options, out, &crate::progress::Bar::new(!args.json))?;
         write_simulation(&demo.sim, out)?;
         if let Some(dataset) = &demo.dataset {
+            write_truth(&demo.sim, Some(&demo.truth), out)?;
             dataset.save(&out.join("dataset.json"))?;
             demo.observations.save(&out.join("observations.json"))?;
         }

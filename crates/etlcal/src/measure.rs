@@ -1,5 +1,6 @@
-//! `etlcal measure --calibration FILE --e-in MA --t C IMAGE_A IMAGE_B --pattern CxR
-//! --square MM [--allow-extrapolation] [--json]`: the board's pose in both images at the
+//! `etlcal measure --calibration FILE --e-in MA --t C IMAGE_A IMAGE_B (--pattern CxR
+//! --square MM | --board FILE) [--allow-extrapolation] [--json]`: the board's pose in both
+//! images (a ChArUco board from the corners each image shows) at the
 //! compensated current (E_com from E_in and T through the calibration's thermal part;
 //! refused outside its calibrated ranges unless extrapolation is asked for) by plane-based PnP,
 //! and the displacement of the board between them, mm (the paper's measurement of a

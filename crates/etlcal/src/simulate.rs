@@ -1,10 +1,12 @@
 //! `etlcal simulate --out DIR [--observations-only] [--config sim.json] [--seed N]
 //! [--stage-noise-um X] [--setting-views] [--json]`: the paper rig's synthetic data without
 //! calibrating: without `--observations-only`, every view rendered by the synthetic camera
-//! (`views/`, `offstate/`) with `dataset.json` recording them (`simulate::images`); always
-//! observations.json (with the paper's noise model, lens-off views included,
-//! and with `--setting-views` the per-setting baseline's views), a0.json (the A0 a
-//! lens-off calibration would give) and truth.json (the true model and per-view errors).
+//! (`views/`, `offstate/`: ChArUco boards, partial at the near views, no per-view hints)
+//! with `dataset.json` recording them (`simulate::images`); always observations.json (with
+//! the paper's noise model, lens-off views included, and with `--setting-views` the
+//! per-setting baseline's views), a0.json (the A0 a lens-off calibration would give) and
+//! truth.json (the true model and per-view errors; with images also `"dataset_model"`,
+//! the true model in dataset.json's world frame, the ChArUco board's).
 //! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
 //! given on the command line override it.
 //!
@@ -21,7 +23,8 @@ use etl_formats::{Error, Result};
 
 /// The names `simulate` writes into its directory.
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
-use etl_sim::simulate::{simulate, write_simulation, SettingRig, SimConfig};
+use etl_sim::simulate::images::{dataset_truth, render_rig, ImageOptions};
+use etl_sim::simulate::{simulate, write_simulation, write_truth, SettingRig, SimConfig};
 
 /// Arguments of `etlcal simulate`.
 #[derive(clap::Args, Debug)]
@@ -108,14 +111,11 @@ pub fn run(args: Args) -> Result<()> {
         if args.observations_only {
             return Ok(0);
         }
-        let dataset = etl_sim::simulate::images::render_rig(
-            &sim,
-            staging,
-            &etl_sim::simulate::images::ImageOptions::default(),
-            config.seed,
-            &crate::progress::Bar::new(!args.json),
-        )?;
+        let options = ImageOptions::default();
+        let bar = crate::progress::Bar::new(!args.json);
+        let dataset = render_rig(&sim, staging, &options, config.seed, &bar)?;
         dataset.save(&staging.join("dataset.json"))?;
+        write_truth(&sim, Some(&dataset_truth(&sim.truth, &options)), staging)?;
         Ok(dataset.views.len() + dataset.offstate_views.len())
     })?;
     let points: usize = sim.observations.views.iter().map(|v| v.points.len()).sum();

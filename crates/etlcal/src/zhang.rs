@@ -1,6 +1,7 @@
-//! `etlcal zhang IMAGE... --pattern CxR --square MM [--json]`: monofocal calibration of one
-//! fixed-focus camera (Zhang 2000, with the paper's distortion k1, p1, p2 in centred
-//! pixels), printing `{"fx", "fy", "u0", "v0", "k1", "p1", "p2", "rms_px", "views_used"}`
+//! `etlcal zhang IMAGE... (--pattern CxR --square MM | --board FILE) [--json]`: monofocal
+//! calibration of one fixed-focus camera (Zhang 2000, with the paper's distortion k1, p1,
+//! p2 in centred pixels) from a whole checkerboard or a ChArUco board (each view the
+//! corners it shows, no hints), printing `{"fx", "fy", "u0", "v0", "k1", "p1", "p2", "rms_px", "views_used"}`
 //! with `--json`. Images whose board is not found are named on stderr and skipped; at
 //! least 3 views must remain.
 

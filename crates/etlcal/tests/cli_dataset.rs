@@ -38,6 +38,26 @@ fn images_to_calibration_with_skipped_views_and_a_missing_image() {
         let rel = fx(&c["kf_x"], e) / truth.focal_lengths(e).0 - 1.0;
         assert!(rel.abs() < 0.01, "fx({e}) off by {rel}");
     }
+    // The rig's ChArUco boards need no per-view hints; Zhang takes the lens-off views from
+    // their board file, partial views and all (as a checkerboard pattern it could not).
+    let ds: Value = serde_json::from_str(&std::fs::read_to_string(&dataset).unwrap()).unwrap();
+    assert_eq!(ds["board"]["type"], "charuco");
+    assert!(ds["views"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|v| v.get("first_corner").is_none() && v.get("board").is_none()));
+    let off_board = dir.path().join("offstate-board.json");
+    std::fs::write(&off_board, ds["offstate_board"].to_string()).unwrap();
+    let mut args = vec!["zhang".to_owned(), "--board".into(), off_board.to_str().unwrap().into(), "--json".into()];
+    args.extend((0..10).map(|k| dir.path().join(format!("offstate/off{k:02}.png")).to_str().unwrap().to_owned()));
+    let (code, out, err) = etlcal(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    let z: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(z["views_used"], 10);
+    let (f0, pp) = (truth.kf_x[0], truth.principal_point);
+    assert!((z["fx"].as_f64().unwrap() / f0 - 1.0).abs() < 0.005, "{z}");
+    assert!((z["u0"].as_f64().unwrap() - pp[0]).abs() < 5.0 && (z["v0"].as_f64().unwrap() - pp[1]).abs() < 5.0, "{z}");
     // A view whose image shows no board is skipped and named; the run goes on.
     let blank = image::GrayImage::from_pixel(1936, 1458, image::Luma([128]));
     blank.save(dir.path().join("views/view03.png")).unwrap();

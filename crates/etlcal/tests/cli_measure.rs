@@ -79,6 +79,38 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
         assert!((d - (-2.0 * r[i][2])).abs() < 4.0 * s, "axis {i}: {d} against {} +- {s}: {m}", -2.0 * r[i][2]);
     }
     assert!(m["pose_a"]["sigma_px"].as_f64().unwrap() > 0.0, "{m}");
+    // The same move of the rig's ChArUco board, which overflows the frame at this stage
+    // position: `--board FILE`, each pose from the corners its image shows.
+    let board = p("charuco.json");
+    std::fs::write(
+        &board,
+        r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#,
+    )
+    .unwrap();
+    let z_a = a["z_w_mm"].as_f64().unwrap().to_string();
+    let render_charuco = |out: &str, z: &str, seed: &str| {
+        json_of(&["render", "--out", out, "--e-com", &e, "--z-mm", z, "--board", &board, "--seed", seed, "--json"])
+    };
+    let ca = render_charuco(&p("ca.png"), &z_a, "3");
+    render_charuco(&p("cb.png"), &z_b, "4");
+    assert!(ca["ids"].as_array().unwrap().len() < 168, "the board overflows the frame");
+    let (ca_png, cb_png) = (p("ca.png"), p("cb.png"));
+    let mc = json_of(&[
+        "measure",
+        "--calibration",
+        &cal,
+        "--e-in",
+        "153",
+        "--t",
+        "30",
+        &ca_png,
+        &cb_png,
+        "--board",
+        &board,
+        "--json",
+    ]);
+    let dist = mc["distance_mm"].as_f64().unwrap();
+    assert!((dist - 2.0).abs() < 0.02, "ChArUco: distance {dist} mm for a 2 mm move");
     // A calibration file without a covariance (older files): the pixel noise's part alone,
     // said on stderr and in the JSON.
     let mut old: Value = serde_json::from_str(&std::fs::read_to_string(&cal).unwrap()).unwrap();

@@ -247,7 +247,7 @@ impl CornerDetector for ImageDetector {
     fn detect(&self, path: &Path, board: &Board) -> Result<Detection> {
         // The one image reader: it refuses what is not a regular file before opening it
         // and images above its pixel-count limit before decoding them.
-        let img = etl_image::read_image(path)?.to_luma8();
+        let img = etl_image::read_image(path)?;
         let image_size = [img.width(), img.height()];
         let corners =
             find_corners(&img, board).map_err(|e| Error::BoardNotFound(format!("{}: {e}", path.display())))?;
@@ -255,16 +255,23 @@ impl CornerDetector for ImageDetector {
     }
 }
 
-/// (id, pixel) of each corner found.
-fn find_corners(img: &image::GrayImage, board: &Board) -> std::result::Result<Vec<(u32, [f64; 2])>, String> {
-    let Board::Checkerboard(c) = board else {
-        return Err("ChArUco detection is not in this build yet".into());
-    };
-    let [cols, rows] = c.inner_corners;
-    let pattern = etl_image::detect::Pattern::new(cols, rows).map_err(|e| e.to_string())?;
-    let det = etl_image::detect::detect_corners(img, pattern).map_err(|e| match e {
+/// (id, pixel) of each corner found: a ChArUco board's corners that its markers identify
+/// (16-bit images read at 16 bits), or a whole checkerboard's (row-major index).
+fn find_corners(img: &image::DynamicImage, board: &Board) -> std::result::Result<Vec<(u32, [f64; 2])>, String> {
+    let message = |e: Error| match e {
         Error::BoardNotFound(m) => m,
         other => other.to_string(),
-    })?;
-    Ok(det.indexed().map(|([i, j], p)| ((j * cols + i) as u32, p)).collect())
+    };
+    match board {
+        Board::Charuco(b) => {
+            let det = etl_image::charuco::detect_charuco_dynamic(img, b).map_err(message)?;
+            Ok(det.ids.into_iter().zip(det.corners_px).collect())
+        }
+        Board::Checkerboard(c) => {
+            let [cols, rows] = c.inner_corners;
+            let pattern = etl_image::detect::Pattern::new(cols, rows).map_err(|e| e.to_string())?;
+            let det = etl_image::detect::detect_corners(&img.to_luma8(), pattern).map_err(message)?;
+            Ok(det.indexed().map(|([i, j], p)| ((j * cols + i) as u32, p)).collect())
+        }
+    }
 }

@@ -6,11 +6,19 @@
 //! Choices of this simulation (the paper gives no images):
 //! - each ETL view is rendered at its *true* stage position and current (recorded value
 //!   plus the simulated error) and recorded with the noisy values, as a user records them;
-//! - the paper rig's board does not fit the image at the nearest stage positions (docs/METHOD.md
-//!   keeps the visible corners). A detector must not guess which part of a board it sees,
-//!   so each image shows the largest block of the board's squares that lies fully inside the
-//!   image with a margin (the part a user would cut, or mask, for that view), and the
-//!   dataset says which corner of the board that block starts at (`first_corner`);
+//! - the boards are ChArUco boards by default ([`RigBoard::Charuco`]:
+//!   [`crate::rig::PAPER_CHARUCO`], [`crate::rig::LENS_OFF_CHARUCO`], the squares of the
+//!   paper's boards with markers in the white squares), rendered whole: the ETL board
+//!   overflows the frame at the near views, as the paper's does (docs/METHOD.md keeps the
+//!   visible corners), and the detector tells which corners it sees by their markers, so
+//!   the dataset holds no per-view hints. The dataset's world frame is then the ChArUco
+//!   board's (OpenCV's), one square before the paper board's first inner corner
+//!   ([`dataset_truth`] is the truth in it);
+//! - with [`RigBoard::CheckerboardBlocks`] (the paper's checkerboards, as before ChArUco),
+//!   a detector must not guess which part of a checkerboard it sees, so each image shows
+//!   the largest block of the board's squares that lies fully inside the image with a
+//!   margin (the part a user would cut, or mask, for that view), and the dataset says which
+//!   corner of the board that block starts at (`first_corner`);
 //! - the ETL views are focused by the simulated lens's smooth focus law
 //!   ([`crate::render::Optics::paper_focus`], fitted to the paper's views; the views' whole-mm
 //!   stage positions are off it by its residual, at most about 1 px of blur) through an aperture of
@@ -21,20 +29,34 @@
 
 use std::path::{Path, PathBuf};
 
-use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::model::CameraModel;
 use etl_core::progress::Progress;
 use rayon::prelude::*;
 
 use super::{lens_off_poses, Simulation, LENS_OFF_BOARD, PAPER_BOARD};
 use crate::render::{render, BitDepth, Optics, Photometry, RenderOptions, Scene};
+use crate::rig::{charuco_frame, shifted_mm, LENS_OFF_CHARUCO, PAPER_CHARUCO};
 use etl_formats::board::{Board, Checkerboard};
 use etl_formats::dataset::{Dataset, DatasetView, OffstateImage};
 use etl_formats::{Error, Result};
 
+/// The boards the rig's images show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RigBoard {
+    /// ChArUco boards ([`crate::rig::PAPER_CHARUCO`], [`crate::rig::LENS_OFF_CHARUCO`]),
+    /// whole: each view shows what falls in the frame, the dataset holds no hints.
+    #[default]
+    Charuco,
+    /// The paper's checkerboards, each view cut to the largest block of squares that fits
+    /// the frame and recorded as a sub-board with its first corner (module docs).
+    CheckerboardBlocks,
+}
+
 /// How the rig's images are made.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImageOptions {
+    /// The boards.
+    pub board: RigBoard,
     /// Aperture diameter of the ETL views, mm.
     pub aperture_mm: f64,
     /// Aperture diameter of the lens-off views, mm.
@@ -50,6 +72,7 @@ pub struct ImageOptions {
 impl Default for ImageOptions {
     fn default() -> Self {
         ImageOptions {
+            board: RigBoard::Charuco,
             aperture_mm: 2.5,
             lens_off_aperture_mm: 1.0,
             lens_off_focus_mm: 125.0,
@@ -120,10 +143,17 @@ pub fn visible_block(
 /// `cam` with its world frame moved so that the board's corner `first` is the origin:
 /// the block then renders as a board of its own at the same place.
 pub fn shifted(cam: &CameraModel, first: [usize; 2], square_mm: f64) -> CameraModel {
-    let r = rodrigues_to_matrix(cam.rotation_rodrigues);
-    let o = mat_vec(&r, [first[0] as f64 * square_mm, first[1] as f64 * square_mm, 0.0]);
-    let t = cam.translation_mm;
-    CameraModel { translation_mm: [t[0] + o[0], t[1] + o[1], t[2] + o[2]], ..*cam }
+    shifted_mm(cam, first.map(|k| k as f64 * square_mm))
+}
+
+/// The true camera of `truth` (the simulation's, in the paper board's frame) in the world
+/// frame of the dataset [`render_rig`] records with `options`: the ChArUco board's frame
+/// for [`RigBoard::Charuco`], the paper board's for [`RigBoard::CheckerboardBlocks`].
+pub fn dataset_truth(truth: &CameraModel, options: &ImageOptions) -> CameraModel {
+    match options.board {
+        RigBoard::Charuco => charuco_frame(truth, PAPER_CHARUCO.square_mm),
+        RigBoard::CheckerboardBlocks => *truth,
+    }
 }
 
 /// One image to make.
@@ -136,10 +166,11 @@ struct Job {
 
 /// Renders every ETL and lens-off view of `sim` into `dir` (`views/`, `offstate/`, 8-bit
 /// PNG) and returns the dataset that records them (image paths relative to `dir`, where the
-/// caller writes it). Rendering runs in parallel; `progress` shows a bar.
+/// caller writes it; its world frame is that of [`dataset_truth`]). Rendering runs in
+/// parallel; `progress` shows a bar.
 ///
-/// Errors: a view in which not even 3 x 3 corners fit the image (named); rendering or
-/// writing failures.
+/// Errors: with [`RigBoard::CheckerboardBlocks`], a view in which not even 3 x 3 corners
+/// fit the image (named); rendering or writing failures.
 pub fn render_rig(
     sim: &Simulation,
     dir: &Path,
@@ -147,60 +178,8 @@ pub fn render_rig(
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<Dataset> {
-    let truth = &sim.truth;
-    let size = sim.observations.image_size;
-    let (paper_inner, paper_square) = PAPER_BOARD;
-    let paper_board = Checkerboard { inner_corners: paper_inner, square_mm: paper_square };
-    let mut dataset = Dataset::new(size, Board::Checkerboard(paper_board));
-    let mut jobs = vec![];
-    for (k, view) in sim.observations.views.iter().enumerate() {
-        let z_rec =
-            view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
-                Error::InvalidInput(format!("simulated view {k} has no points, so no stage position"))
-            })?;
-        let e_rec = view.e_com_ma.unwrap_or(view.e_in_ma);
-        let z = z_rec + sim.true_dz_mm.get(k).copied().unwrap_or(0.0);
-        let e = e_rec + sim.true_de_ma.get(k).copied().unwrap_or(0.0);
-        let (block, first) = visible_block(truth, e, paper_board, z, size, options.margin_px).ok_or_else(|| {
-            Error::InvalidInput(format!("view {k}: not even 3 x 3 corners of the board fit the image"))
-        })?;
-        let image = PathBuf::from(format!("views/view{k:02}.png"));
-        jobs.push(Job {
-            path: dir.join(&image),
-            scene: Scene::new(shifted(truth, first, paper_square), e, block, z, size),
-            optics: Optics::paper_focus(truth, e, options.aperture_mm),
-            seed: seed.wrapping_mul(1_000_003).wrapping_add(k as u64),
-        });
-        dataset.views.push(DatasetView {
-            image,
-            e_in_ma: view.e_in_ma,
-            temperature_c: view.temperature_c,
-            e_com_ma: view.e_com_ma,
-            z_w_mm: z_rec,
-            board: Some(block),
-            first_corner: Some(first),
-        });
-    }
-    let (off_inner, off_square) = LENS_OFF_BOARD;
-    let off_board = Checkerboard { inner_corners: off_inner, square_mm: off_square };
-    dataset.offstate_board = Some(Board::Checkerboard(off_board));
-    for (k, pose) in lens_off_poses(truth).iter().enumerate() {
-        let Some((block, first)) = visible_block(pose, 0.0, off_board, 0.0, size, options.margin_px) else {
-            return Err(Error::InvalidInput(format!("lens-off view {k}: not even 3 x 3 corners fit the image")));
-        };
-        let image = PathBuf::from(format!("offstate/off{k:02}.png"));
-        jobs.push(Job {
-            path: dir.join(&image),
-            scene: Scene::new(shifted(pose, first, off_square), 0.0, block, 0.0, size),
-            optics: Optics {
-                focus_depth_mm: Some(options.lens_off_focus_mm),
-                aperture_mm: options.lens_off_aperture_mm,
-                base_sigma_px: 0.0,
-            },
-            seed: seed.wrapping_mul(1_000_003).wrapping_add(500 + k as u64),
-        });
-        dataset.offstate_views.push(OffstateImage { image, board: Some(block), first_corner: Some(first) });
-    }
+    let (mut dataset, mut jobs) = etl_views(sim, dir, options, seed)?;
+    lens_off_views(sim, dir, options, seed, &mut dataset, &mut jobs)?;
     for sub in ["views", "offstate"] {
         let d = dir.join(sub);
         std::fs::create_dir_all(&d).map_err(|source| Error::Io { path: d, source })?;
@@ -221,6 +200,102 @@ pub fn render_rig(
         .collect::<Result<Vec<()>>>()?;
     progress.finish();
     Ok(dataset)
+}
+
+/// The dataset with its ETL views, and their render jobs: each view at its true stage
+/// position and current, recorded with the noisy ones.
+fn etl_views(sim: &Simulation, dir: &Path, options: &ImageOptions, seed: u64) -> Result<(Dataset, Vec<Job>)> {
+    let truth = &sim.truth;
+    let size = sim.observations.image_size;
+    let (paper_inner, paper_square) = PAPER_BOARD;
+    let paper_board = Checkerboard { inner_corners: paper_inner, square_mm: paper_square };
+    let mut dataset = match options.board {
+        RigBoard::Charuco => Dataset::new(size, PAPER_CHARUCO.board()?),
+        RigBoard::CheckerboardBlocks => Dataset::new(size, Board::Checkerboard(paper_board)),
+    };
+    let mut jobs = vec![];
+    for (k, view) in sim.observations.views.iter().enumerate() {
+        let z_rec =
+            view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
+                Error::InvalidInput(format!("simulated view {k} has no points, so no stage position"))
+            })?;
+        let e_rec = view.e_com_ma.unwrap_or(view.e_in_ma);
+        let z = z_rec + sim.true_dz_mm.get(k).copied().unwrap_or(0.0);
+        let e = e_rec + sim.true_de_ma.get(k).copied().unwrap_or(0.0);
+        let (scene, board, first_corner) = match options.board {
+            RigBoard::Charuco => (Scene::new(dataset_truth(truth, options), e, dataset.board, z, size), None, None),
+            RigBoard::CheckerboardBlocks => {
+                let (block, first) =
+                    visible_block(truth, e, paper_board, z, size, options.margin_px).ok_or_else(|| {
+                        Error::InvalidInput(format!("view {k}: not even 3 x 3 corners of the board fit the image"))
+                    })?;
+                (Scene::new(shifted(truth, first, paper_square), e, block, z, size), Some(block), Some(first))
+            }
+        };
+        let image = PathBuf::from(format!("views/view{k:02}.png"));
+        jobs.push(Job {
+            path: dir.join(&image),
+            scene,
+            optics: Optics::paper_focus(truth, e, options.aperture_mm),
+            seed: seed.wrapping_mul(1_000_003).wrapping_add(k as u64),
+        });
+        dataset.views.push(DatasetView {
+            image,
+            e_in_ma: view.e_in_ma,
+            temperature_c: view.temperature_c,
+            e_com_ma: view.e_com_ma,
+            z_w_mm: z_rec,
+            board,
+            first_corner,
+        });
+    }
+    Ok((dataset, jobs))
+}
+
+/// The lens-off views (E = 0, focused at [`ImageOptions::lens_off_focus_mm`]) into
+/// `dataset` and their render jobs into `jobs`.
+fn lens_off_views(
+    sim: &Simulation,
+    dir: &Path,
+    options: &ImageOptions,
+    seed: u64,
+    dataset: &mut Dataset,
+    jobs: &mut Vec<Job>,
+) -> Result<()> {
+    let size = sim.observations.image_size;
+    let (off_inner, off_square) = LENS_OFF_BOARD;
+    let off_board = Checkerboard { inner_corners: off_inner, square_mm: off_square };
+    let charuco = LENS_OFF_CHARUCO.board()?;
+    dataset.offstate_board = Some(match options.board {
+        RigBoard::Charuco => charuco,
+        RigBoard::CheckerboardBlocks => Board::Checkerboard(off_board),
+    });
+    for (k, pose) in lens_off_poses(&sim.truth).iter().enumerate() {
+        let (scene, board, first_corner) = match options.board {
+            RigBoard::Charuco => (Scene::new(charuco_frame(pose, off_square), 0.0, charuco, 0.0, size), None, None),
+            RigBoard::CheckerboardBlocks => {
+                let Some((block, first)) = visible_block(pose, 0.0, off_board, 0.0, size, options.margin_px) else {
+                    return Err(Error::InvalidInput(format!(
+                        "lens-off view {k}: not even 3 x 3 corners fit the image"
+                    )));
+                };
+                (Scene::new(shifted(pose, first, off_square), 0.0, block, 0.0, size), Some(block), Some(first))
+            }
+        };
+        let image = PathBuf::from(format!("offstate/off{k:02}.png"));
+        jobs.push(Job {
+            path: dir.join(&image),
+            scene,
+            optics: Optics {
+                focus_depth_mm: Some(options.lens_off_focus_mm),
+                aperture_mm: options.lens_off_aperture_mm,
+                base_sigma_px: 0.0,
+            },
+            seed: seed.wrapping_mul(1_000_003).wrapping_add(500 + k as u64),
+        });
+        dataset.offstate_views.push(OffstateImage { image, board, first_corner });
+    }
+    Ok(())
 }
 
 #[cfg(test)]

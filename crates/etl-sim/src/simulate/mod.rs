@@ -317,14 +317,26 @@ pub fn noise_from(stage_um: f64, current_ma: f64, pixel_px: f64) -> Result<Noise
     Ok(NoiseModel { z_mm: stage_um / 1000.0, e_ma: current_ma, px: pixel_px, ..NoiseModel::PAPER })
 }
 
-/// Writes a simulation's files into `dir`.
+/// Writes a simulation's files into `dir`: observations.json, a0.json, truth.json
+/// ([`write_truth`] without a dataset).
 pub fn write_simulation(sim: &Simulation, dir: &std::path::Path) -> Result<()> {
     sim.observations.save(&dir.join("observations.json"))?;
     A0File::new(&sim.a0).save(&dir.join("a0.json"))?;
-    write_json(
-        &dir.join("truth.json"),
-        &json!({"format": "etlcal.truth/1", "model": sim.truth, "dz_mm": sim.true_dz_mm, "de_ma": sim.true_de_ma}),
-    )
+    write_truth(sim, None, dir)
+}
+
+/// Writes `dir/truth.json`: `{"format": "etlcal.truth/1", "model", "dz_mm", "de_ma"}`, the
+/// true model in the simulated observations' world frame (the paper board's) and each
+/// view's true stage and current errors, and with rendered images `"dataset_model"`, the
+/// true model in the world frame of dataset.json (its ETL board's, e.g. the ChArUco
+/// board's: [`images::dataset_truth`]).
+pub fn write_truth(sim: &Simulation, dataset_model: Option<&CameraModel>, dir: &std::path::Path) -> Result<()> {
+    let mut truth =
+        json!({"format": "etlcal.truth/1", "model": sim.truth, "dz_mm": sim.true_dz_mm, "de_ma": sim.true_de_ma});
+    if let Some(m) = dataset_model {
+        truth["dataset_model"] = json!(m);
+    }
+    write_json(&dir.join("truth.json"), &truth)
 }
 
 /// Simulates `config`.
