@@ -121,14 +121,25 @@ pub fn map1<'py>(x: &Bound<'py, PyAny>, what: &str, f: impl Fn(f64) -> PyResult<
     Ok(out.into_pyarray(py).into_any())
 }
 
-/// Applies `f` to two floats, or elementwise to two array-likes broadcast against each
-/// other (numpy's rules).
-pub fn map2<'py>(
-    a: &Bound<'py, PyAny>,
-    b: &Bound<'py, PyAny>,
-    what: (&str, &str),
-    f: impl Fn(f64, f64) -> PyResult<f64>,
-) -> PyResult<Bound<'py, PyAny>> {
+/// Two arguments read as numbers, or as float64 arrays broadcast against each other
+/// (numpy's rules).
+pub enum Broadcast2 {
+    /// Both were numbers (floats, integers; not 0-d arrays or sequences).
+    Scalar(f64, f64),
+    /// At least one was an array-like: the broadcast shape and both operands in
+    /// row-major order over it.
+    Array {
+        /// The broadcast shape (empty for two 0-d arrays).
+        shape: Vec<usize>,
+        /// The first operand, broadcast.
+        x: Vec<f64>,
+        /// The second operand, broadcast.
+        y: Vec<f64>,
+    },
+}
+
+/// Reads two number-or-array arguments (`what` names them in errors) and broadcasts them.
+pub fn broadcast2<'py>(a: &Bound<'py, PyAny>, b: &Bound<'py, PyAny>, what: (&str, &str)) -> PyResult<Broadcast2> {
     let py = a.py();
     let scalar = |x: &Bound<'py, PyAny>| -> PyResult<bool> {
         Ok(x.cast::<PyFloat>().is_ok() || (!x.hasattr("__len__")? && !x.hasattr("__array__")?))
@@ -136,7 +147,7 @@ pub fn map2<'py>(
     if scalar(a)? && scalar(b)? {
         let x: f64 = a.extract().map_err(|e| input_error(format!("{} must be a number or an array: {e}", what.0)))?;
         let y: f64 = b.extract().map_err(|e| input_error(format!("{} must be a number or an array: {e}", what.1)))?;
-        return Ok(PyFloat::new(py, f(x, y)?).into_any());
+        return Ok(Broadcast2::Scalar(x, y));
     }
     let np = py.import("numpy")?;
     let asf = |x: &Bound<'py, PyAny>, name: &str| -> PyResult<Bound<'py, PyAny>> {
@@ -150,15 +161,34 @@ pub fn map2<'py>(
     let x: Bound<'py, PyArrayDyn<f64>> = pair.get_item(0)?.cast_into()?;
     let y: Bound<'py, PyArrayDyn<f64>> = pair.get_item(1)?.cast_into()?;
     let (x, y) = (x.readonly(), y.readonly());
-    let mut out = x.as_array().mapv(|_| 0.0);
-    for ((o, u), v) in out.iter_mut().zip(x.as_array().iter()).zip(y.as_array().iter()) {
-        *o = f(*u, *v)?;
+    let shape = x.shape().to_vec();
+    Ok(Broadcast2::Array {
+        shape,
+        x: x.as_array().iter().copied().collect(),
+        y: y.as_array().iter().copied().collect(),
+    })
+}
+
+/// Applies `f` to two floats, or elementwise to two array-likes broadcast against each
+/// other (numpy's rules): a float for two numbers or two 0-d arrays, else a float64 array
+/// of the broadcast shape. Stops at the first error.
+pub fn map2<'py>(
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    what: (&str, &str),
+    f: impl Fn(f64, f64) -> PyResult<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let py = a.py();
+    match broadcast2(a, b, what)? {
+        Broadcast2::Scalar(x, y) => Ok(PyFloat::new(py, f(x, y)?).into_any()),
+        Broadcast2::Array { shape, x, y } => {
+            let out = x.iter().zip(&y).map(|(u, v)| f(*u, *v)).collect::<PyResult<Vec<f64>>>()?;
+            if shape.is_empty() {
+                return Ok(PyFloat::new(py, out.first().copied().unwrap_or(f64::NAN)).into_any());
+            }
+            stacked(py, &shape, &[], out)
+        }
     }
-    if out.ndim() == 0 {
-        let v = out.iter().next().copied().unwrap_or(f64::NAN);
-        return Ok(PyFloat::new(py, v).into_any());
-    }
-    Ok(out.into_pyarray(py).into_any())
 }
 
 /// Currents given to a per-current model function: a number (the function's scalar

@@ -7,7 +7,7 @@ import pytest
 import etlcal
 
 
-def test_hierarchy():
+def test_hierarchy() -> None:
     assert issubclass(etlcal.Error, Exception)
     assert issubclass(etlcal.InputError, etlcal.Error)
     assert issubclass(etlcal.InputError, ValueError)
@@ -55,19 +55,19 @@ RUST_ERRORS = [
 
 
 @pytest.mark.parametrize("variant,cls,message", RUST_ERRORS)
-def test_every_rust_error_variant_maps_to_its_class_with_the_same_message(variant, cls, message):
+def test_every_rust_error_variant_maps_to_its_class_with_the_same_message(variant: str, cls: str, message: str) -> None:
     with pytest.raises(getattr(etlcal, cls)) as info:
         etlcal._etlcal._raise_rust_error(variant)
     assert type(info.value) is getattr(etlcal, cls)
     assert str(info.value) == message
 
 
-def test_unknown_variant_is_an_input_error():
+def test_unknown_variant_is_an_input_error() -> None:
     with pytest.raises(etlcal.InputError, match="unknown error kind"):
         etlcal._etlcal._raise_rust_error("core:Nope")
 
 
-def test_exceptions_pickle():
+def test_exceptions_pickle() -> None:
     e = etlcal.InputError("t_c is NaN or infinite; pass finite numbers")
     back = pickle.loads(pickle.dumps(e))
     assert type(back) is etlcal.InputError and str(back) == str(e)
