@@ -96,6 +96,7 @@ impl Fig5 {
                         ),
                         Series::scatter("paper (cubic)", 1, vec![(3.0, PAPER_CUBIC_RMSE_MM)]),
                     ],
+                    x_names: vec![],
                 },
                 Chart {
                     title: "(b) residual of the cubic".into(),
@@ -107,6 +108,7 @@ impl Fig5 {
                         0,
                         self.cubic_residual_mm.iter().map(|&(e, r)| (e, 1000.0 * r)).collect(),
                     )],
+                    x_names: vec![],
                 },
             ],
         };

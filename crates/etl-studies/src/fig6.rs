@@ -474,6 +474,7 @@ impl Fig6 {
                 y_label: "mean relative error".into(),
                 log_y: true,
                 series,
+                x_names: vec![],
             }
         };
         let curve = Chart {
@@ -497,6 +498,7 @@ impl Fig6 {
                     levels.iter().map(|l| (l.level, l.bound.fx_curve_rel_pixel_only)).collect(),
                 ),
             ],
+            x_names: vec![],
         };
         let pnp = Chart {
             title: "PnP error of a 2 mm move at 225 mA, mean ± 1 s.e.".into(),
@@ -509,6 +511,7 @@ impl Fig6 {
                 Series::line("eiv BA", 1, levels.iter().map(|l| (l.level, l.eiv.pnp_um)).collect())
                     .with_se(levels.iter().map(|l| l.eiv.pnp_um_se).collect()),
             ],
+            x_names: vec![],
         };
         Figure {
             name: format!("fig6_{}", study.key()),
