@@ -268,13 +268,7 @@ impl Subsets {
                 "rms_per_coordinate_px_min": lo, "rms_per_coordinate_px_max": hi,
                 "eiv_rms_per_coordinate_px_min": elo, "eiv_rms_per_coordinate_px_max": ehi, "noise_px": self.noise_px},
             "checks": {"converged_within_5_iterations": iters_ok, "eiv_rms_within_10_percent_of_noise": rms_ok},
-            "distortion_band": (0..3).map(|k| {
-                let band = self.band(k);
-                json!({"coefficient": BAND_NAMES[k], "unit": BAND_UNITS[k], "e_com_ma": band_currents(),
-                    "mean": band.iter().map(|b| b.0).collect::<Vec<_>>(),
-                    "mean_se": band.iter().map(|b| b.1).collect::<Vec<_>>(),
-                    "spread_std": band.iter().map(|b| b.2).collect::<Vec<_>>()})
-            }).collect::<Vec<_>>(),
+            "distortion_band": self.band_json(),
         });
         StudyOutput { name: "subsets".into(), json: j, markdown: md, figures: vec![self.figure(&numbers)] }
     }
@@ -311,6 +305,21 @@ impl Subsets {
             .collect()
     }
 
+    /// The figure's band ([`Self::band`]) of k1, p1, p2 as JSON: per coefficient its name,
+    /// unit, the currents and the means, their standard errors and the spreads.
+    fn band_json(&self) -> Value {
+        let bands = (0..3).map(|k| {
+            let band = self.band(k);
+            json!({"coefficient": BAND_NAMES[k], "unit": BAND_UNITS[k], "e_com_ma": band_currents(),
+                "mean": band.iter().map(|b| b.0).collect::<Vec<_>>(),
+                "mean_se": band.iter().map(|b| b.1).collect::<Vec<_>>(),
+                "spread_std": band.iter().map(|b| b.2).collect::<Vec<_>>()})
+        });
+        Value::Array(bands.collect())
+    }
+
+    /// The paper's Fig. 11: k1, p1, p2 against the current, one panel each (the module
+    /// doc says what is drawn); `numbers`: the first 6..9 views of data set 1.
     fn figure(&self, numbers: &[&SubsetFit]) -> Figure {
         let es = band_currents();
         let truth = truth_params();
