@@ -16,7 +16,7 @@ use pyo3::types::PyDict;
 use etl_core::lens::LensError as _;
 use etl_formats::compact;
 
-use crate::errors::{lens_kind, raise, Kind};
+use crate::errors::{invalid, invalid_value, lens_kind, raise, Kind};
 use crate::thermal::ThermalCalibration;
 
 /// `t_c` if the lens temperature sensor can read it (-40..=125 degC), else InputError
@@ -26,12 +26,19 @@ fn sensor_range(what: &str, t_c: f64) -> PyResult<f64> {
     if (lo..=hi).contains(&t_c) {
         Ok(t_c)
     } else {
-        Err(raise(Kind::Input, format!("{what} must lie in -40..=125 degC, got {}", compact(t_c))))
+        Err(invalid_value(what, t_c, format!("{what} must lie in -40..=125 degC, got {}", compact(t_c))))
     }
 }
 
 fn hw_err(e: HwError) -> PyErr {
-    raise(lens_kind(e.kind()), e.to_string())
+    match &e {
+        // Refused input (its class, InputError, from the lens's kind): name it.
+        HwError::Core(c) => {
+            let (what, value) = etl_formats::Error::core_input(c);
+            crate::errors::input_error_about(e.to_string(), what, value.as_deref())
+        }
+        _ => raise(lens_kind(e.kind()), e.to_string()),
+    }
 }
 
 /// A lens on an Optotune Lens Driver 4 (USB serial port), or on a `VirtualLens`'s port.
@@ -68,12 +75,15 @@ impl Lens {
 /// The hold's error with its own message ("lens: ..." / "compensation: ..."), the class
 /// from what failed.
 fn hold_err(e: HoldError<HwError>) -> PyErr {
-    let kind = match &e {
-        HoldError::Lens(l) => lens_kind(l.kind()),
+    match &e {
+        HoldError::Lens(l) => raise(lens_kind(l.kind()), e.to_string()),
+        HoldError::Core(c) => {
+            let (what, value) = etl_formats::Error::core_input(c);
+            crate::errors::input_error_about(e.to_string(), what, value.as_deref())
+        }
         // The wanted E_com is beyond what the driver's limits give: the caller's input.
-        HoldError::Core(_) | HoldError::Unreachable { .. } => Kind::Input,
-    };
-    raise(kind, e.to_string())
+        HoldError::Unreachable { e_com_ma, .. } => invalid_value("e_com_ma", *e_com_ma, e.to_string()),
+    }
 }
 
 /// One step of a hold as an `etlcal.results.HoldStep`.
@@ -195,15 +205,19 @@ impl Lens {
         on_step: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         if steps.is_none() && duration_s.is_none() && on_step.is_none() {
-            return Err(raise(Kind::Input, "hold needs steps, duration_s or on_step to stop"));
+            return Err(invalid("steps", "hold needs steps, duration_s or on_step to stop"));
         }
         if steps == Some(0) {
-            return Err(raise(Kind::Input, "hold steps must be >= 1"));
+            return Err(invalid_value("steps", 0_u64, "hold steps must be >= 1"));
         }
         let duration = match duration_s.map(|d| (d, duration_from_s(d))) {
             Some((_, Ok(d))) => Some(d),
             Some((d, Err(_))) => {
-                return Err(raise(Kind::Input, format!("duration_s must lie in 0..=1e7 s, got {}", compact(d))))
+                return Err(invalid_value(
+                    "duration_s",
+                    d,
+                    format!("duration_s must lie in 0..=1e7 s, got {}", compact(d)),
+                ))
             }
             None => None,
         };
@@ -335,7 +349,7 @@ impl VirtualLens {
     /// longest hold; InputError otherwise).
     fn advance_s(&self, dt_s: f64) -> PyResult<()> {
         if !(0.0..=etl_hw::hold::MAX_DURATION_S).contains(&dt_s) {
-            return Err(raise(Kind::Input, format!("dt_s must lie in 0..=1e7 s, got {}", compact(dt_s))));
+            return Err(invalid_value("dt_s", dt_s, format!("dt_s must lie in 0..=1e7 s, got {}", compact(dt_s))));
         }
         self.device.advance_s(dt_s);
         Ok(())
@@ -369,7 +383,8 @@ impl VirtualLens {
         garbage_before_next: Vec<u8>,
     ) -> PyResult<()> {
         let reply_delay = Faults::reply_delay_from_ms(reply_delay_ms).map_err(|_| {
-            raise(Kind::Input, format!("reply_delay_ms must lie in 0..=60000 ms, got {}", compact(reply_delay_ms)))
+            let message = format!("reply_delay_ms must lie in 0..=60000 ms, got {}", compact(reply_delay_ms));
+            invalid_value("reply_delay_ms", reply_delay_ms, message)
         })?;
         self.device.set_faults(Faults {
             reply_delay,

@@ -16,7 +16,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::arrays::{broadcast2, map2, stacked, vec_out, Broadcast2};
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, CoreResultExt};
 
 /// The cubic surface E_T(T, E_in) of the paper (section 5.2.2), in mA.
 ///
@@ -161,10 +161,10 @@ impl ThermalSurface {
 /// A 1-D float column of an array-like.
 pub(crate) fn column(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     let arr: numpy::PyArrayLikeDyn<'_, f64, numpy::AllowTypeChange> =
-        obj.extract().map_err(|e| input_error(format!("{what} must be a 1-D array of numbers: {e}")))?;
+        obj.extract().map_err(|e| invalid(what, format!("{what} must be a 1-D array of numbers: {e}")))?;
     use numpy::PyUntypedArrayMethods;
     if arr.ndim() != 1 {
-        return Err(input_error(format!("{what} must be a 1-D array, got shape {:?}", arr.shape())));
+        return Err(invalid(what, format!("{what} must be a 1-D array, got shape {:?}", arr.shape())));
     }
     Ok(arr.as_array().iter().copied().collect())
 }

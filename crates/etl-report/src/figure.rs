@@ -318,7 +318,9 @@ where
 pub fn write_figure(dir: &Path, f: &Figure) -> Result<Vec<PathBuf>> {
     let size = ((560 + legend_px(f)) * f.grid.1 as u32, 420 * f.grid.0 as u32);
     let text = crate::font_available();
-    let fail = |e: Box<dyn std::error::Error>| Error::InvalidInput(format!("plot {}: {e}", f.name));
+    // No input of the user's is at fault when a plot fails: `what` names the plot.
+    let plot = format!("plot {}", f.name);
+    let fail = |e: Box<dyn std::error::Error>| Error::invalid(&plot, format!("{plot}: {e}"));
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -330,10 +332,10 @@ pub fn write_figure(dir: &Path, f: &Figure) -> Result<Vec<PathBuf>> {
         draw_figure(&root, f, text).map_err(fail)?;
     }
     let img = image::RgbImage::from_raw(size.0, size.1, buf)
-        .ok_or_else(|| Error::InvalidInput(format!("plot {}: bitmap size mismatch", f.name)))?;
+        .ok_or_else(|| Error::invalid(&plot, format!("{plot}: bitmap size mismatch")))?;
     let mut png = std::io::Cursor::new(vec![]);
     img.write_to(&mut png, image::ImageFormat::Png)
-        .map_err(|e| Error::InvalidInput(format!("plot {}: PNG encoding: {e}", f.name)))?;
+        .map_err(|e| Error::invalid(&plot, format!("{plot}: PNG encoding: {e}")))?;
     let (p, s) = (dir.join(format!("{}.png", f.name)), dir.join(format!("{}.svg", f.name)));
     write_atomic(&p, png.get_ref())?;
     write_atomic(&s, svg.as_bytes())?;

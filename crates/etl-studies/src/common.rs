@@ -382,7 +382,7 @@ impl StudyOutput {
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         let mut files = vec![];
         let j = dir.join(format!("{}.json", self.name));
-        let text = serde_json::to_string_pretty(&self.json).map_err(|e| Error::InvalidInput(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&self.json).map_err(|e| Error::invalid(&self.name, e.to_string()))?;
         write_atomic(&j, text.as_bytes())?;
         files.push(j);
         let m = dir.join(format!("{}.md", self.name));

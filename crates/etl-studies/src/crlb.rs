@@ -142,7 +142,7 @@ pub fn crlb(opts: &StudyOptions) -> Result<Crlb> {
         }
     }
     if est.iter().any(|e| e.len() < 2) {
-        return Err(Error::InvalidInput("the CRLB study needs at least 2 trials that calibrate".into()));
+        return Err(Error::invalid("trials", "the CRLB study needs at least 2 trials that calibrate"));
     }
     let x = truth_params();
     let p: [Vec<[f64; PARAMS]>; 2] = [est[0].iter().map(to_params).collect(), est[1].iter().map(to_params).collect()];

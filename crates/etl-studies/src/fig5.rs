@@ -43,7 +43,7 @@ pub fn fig5() -> Result<Fig5> {
     let mut fit = PolyFit::new(3, RANGE_MA)?;
     let mut f = Vec::with_capacity(es.len());
     for &e in &es {
-        let v = lens.f_com_mm(e).map_err(|err| Error::InvalidInput(format!("at E = {e} mA: {err}")))?;
+        let v = lens.f_com_mm(e).map_err(|err| Error::invalid_value("e_ma", e, format!("at E = {e} mA: {err}")))?;
         fit.add(e, v)?;
         f.push((e, v));
     }

@@ -301,7 +301,7 @@ pub fn fig6_of(studies: &[Fig6Study], opts: &StudyOptions) -> Result<Fig6> {
                 level,
                 paper: summarise(&at, |o| (o.paper, o.pnp_um[0], o.iterations[0])),
                 eiv: summarise(&at, |o| (o.eiv, o.pnp_um[1], o.iterations[1])),
-                bound: bounds.next().ok_or_else(|| etl_formats::Error::InvalidInput("fig6: missing bound".into()))?,
+                bound: bounds.next().ok_or_else(|| etl_formats::Error::invalid("fig6", "fig6: missing bound"))?,
             });
         }
         result.push((*study, levels));

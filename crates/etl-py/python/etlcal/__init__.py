@@ -34,7 +34,9 @@ a `CompensationArray` for arrays).
 
 Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 `NotConvergedError`, `BoardNotFoundError`, `FileError` (also an OSError), `DeviceError`,
-`DeviceTimeoutError` (also a TimeoutError).
+`DeviceTimeoutError` (also a TimeoutError). An `InputError` names what to change in `what`
+(a file key, field or argument: `"views[3].points"`, `"square_mm"`) and the offending
+value in `value` (text, numbers compact), each None when the error names none.
 """
 from ._etlcal import (
     __version__,
