@@ -116,14 +116,14 @@ const MIN_CELL_PX: f64 = 2.5;
 /// ```
 pub fn detect_charuco(image: &GrayImage, board: &CharucoBoard) -> Result<CharucoDetection> {
     let view = GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
-        .ok_or_else(|| Error::InvalidInput("image buffer shorter than its size".into()))?;
+        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))?;
     detect_charuco_view(view, board)
 }
 
 /// Finds the board in a 16-bit image (same as [`detect_charuco`]).
 pub fn detect_charuco_u16(image: &ImageBuffer<Luma<u16>, Vec<u16>>, board: &CharucoBoard) -> Result<CharucoDetection> {
     let view = GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
-        .ok_or_else(|| Error::InvalidInput("image buffer shorter than its size".into()))?;
+        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))?;
     detect_charuco_view(view, board)
 }
 
