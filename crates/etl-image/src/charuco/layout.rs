@@ -4,7 +4,7 @@
 //! and both are dropped; the same marker found twice is kept once), and confirmed by a
 //! neighbour: another kept marker within two squares on the board lies where this marker's
 //! own homography (board mm to image, from its four corners) puts it, within 30 % of a
-//! square. A misread id places its homography at least one square off, so a marker is
+//! square and 1.5 px per square of distance. A misread id places its homography at least one square off, so a marker is
 //! kept only when more of its decoded neighbours agree with it than disagree. A lone marker
 //! cannot be confirmed and gives no corner.
 
@@ -29,8 +29,11 @@ pub(crate) struct Placed {
 
 /// Farthest neighbour checked, squares along either axis.
 const REACH: i64 = 2;
-/// Agreement needed between a predicted and an observed marker centre, squares.
+/// Agreement needed between a predicted and an observed marker centre, squares, plus
+/// [`EXTRAPOLATION_PX`] per square of distance (a small marker's corners, a fraction of a
+/// pixel off, tilt its homography noticeably a few squares away).
 const TOLERANCE: f64 = 0.3;
+const EXTRAPOLATION_PX: f64 = 1.5;
 
 /// The markers of `decoded` that are on `board`, unique and confirmed by a neighbour,
 /// in increasing id order.
@@ -54,7 +57,6 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
     }
     placed.sort_by_key(|p| p.id);
     let at: HashMap<[u32; 2], usize> = placed.iter().enumerate().map(|(k, p)| (p.square, k)).collect();
-    let s = board.square_mm();
     let keep: Vec<bool> = placed
         .iter()
         .map(|p| {
@@ -67,9 +69,10 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
                     }
                     let Some(&k) = at.get(&[c as u32, r as u32]) else { continue };
                     let q = &placed[k];
-                    let predicted = p.h.map([(c as f64 + 0.5) * s, (r as f64 + 0.5) * s]);
-                    let square_px = side_px(&q.corners_px) * s / board.marker_mm();
-                    if dist(predicted, centre(&q.corners_px)) <= TOLERANCE * square_px {
+                    // Either marker's homography may place the other: a misread id puts
+                    // both predictions a square or more off, while one marker seen small or
+                    // obliquely may extrapolate poorly.
+                    if predicts(board, p, q) || predicts(board, q, p) {
                         agree += 1;
                     } else {
                         disagree += 1;
@@ -80,6 +83,15 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
         })
         .collect();
     placed.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+}
+
+/// Whether `p`'s homography puts `q`'s centre where `q` was found.
+fn predicts(board: &CharucoBoard, p: &Placed, q: &Placed) -> bool {
+    let s = board.square_mm();
+    let predicted = p.h.map([(q.square[0] as f64 + 0.5) * s, (q.square[1] as f64 + 0.5) * s]);
+    let square_px = side_px(&q.corners_px) * s / board.marker_mm();
+    let squares = (p.square[0] as f64 - q.square[0] as f64).abs().max((p.square[1] as f64 - q.square[1] as f64).abs());
+    dist(predicted, centre(&q.corners_px)) <= TOLERANCE * square_px + EXTRAPOLATION_PX * squares
 }
 
 pub(crate) fn centre(q: &[[f64; 2]; 4]) -> [f64; 2] {
