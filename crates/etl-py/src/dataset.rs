@@ -32,18 +32,11 @@ fn finite(v: f64, what: &str) -> PyResult<f64> {
     }
 }
 
-/// A board from the dict form of `Dataset.board`: {"inner_corners": (cols, rows),
-/// "square_mm": mm}.
-fn board_of(d: &Bound<'_, PyDict>, what: &str) -> PyResult<Board> {
-    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        d.get_item(k)?.ok_or_else(|| input_error(format!("{what} needs \"inner_corners\" and \"square_mm\"")))
-    };
-    let (c, r): (usize, usize) = get("inner_corners")?
-        .extract()
-        .map_err(|_| input_error(format!("{what}[\"inner_corners\"] must be (cols, rows)")))?;
-    let square_mm: f64 =
-        get("square_mm")?.extract().map_err(|_| input_error(format!("{what}[\"square_mm\"] must be a number")))?;
-    Board::checkerboard([c, r], square_mm).map_err(|e| input_error(format!("{what}: {e}")))
+/// A board argument: an `etlcal.Board` or the dict form of `Dataset.board`
+/// ({"inner_corners": (cols, rows), "square_mm": mm} for a checkerboard, the fields of the
+/// `etlcal.board/1` object otherwise).
+fn board_of(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Board> {
+    crate::board::board_arg(obj, what)
 }
 
 #[pymethods]
@@ -53,27 +46,36 @@ impl Dataset {
     ///
     /// Args:
     ///     image_size: (width, height) of every image, px.
-    ///     inner_corners: the board's inner corners (cols, rows), at least 3 x 3.
-    ///     square_mm: the board's square size, mm.
+    ///     inner_corners: a checkerboard's inner corners (cols, rows), at least 3 x 3, with
+    ///         square_mm (or give `board`).
+    ///     square_mm: the checkerboard's square size, mm.
     ///     base_dir: where relative image paths resolve until the dataset is saved or
     ///         loaded (default: the working directory).
-    ///     offstate_board: the lens-off views' board when it differs, as a dict
-    ///         {"inner_corners": (cols, rows), "square_mm": mm}.
+    ///     offstate_board: the lens-off views' board when it differs: an etlcal.Board, or a
+    ///         dict {"inner_corners": (cols, rows), "square_mm": mm}.
+    ///     board: the board, an etlcal.Board (e.g. `Board.charuco(...)`: its views need
+    ///         no hints), instead of inner_corners and square_mm.
     ///
-    /// Raises: InputError for a zero image size or a bad board.
+    /// Raises: InputError for a zero image size, a bad board, or both or neither of
+    /// `board` and `inner_corners` with `square_mm`.
     #[new]
-    #[pyo3(signature = (image_size, inner_corners, square_mm, base_dir=None, offstate_board=None))]
+    #[pyo3(signature = (image_size, inner_corners=None, square_mm=None, base_dir=None, offstate_board=None, board=None))]
     fn new(
         image_size: (u32, u32),
-        inner_corners: (usize, usize),
-        square_mm: f64,
+        inner_corners: Option<(usize, usize)>,
+        square_mm: Option<f64>,
         base_dir: Option<PathBuf>,
-        offstate_board: Option<Bound<'_, PyDict>>,
+        offstate_board: Option<Bound<'_, PyAny>>,
+        board: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         if image_size.0 == 0 || image_size.1 == 0 {
             return Err(input_error("image_size must be positive"));
         }
-        let board = Board::checkerboard([inner_corners.0, inner_corners.1], square_mm).py()?;
+        let board = match (board, inner_corners, square_mm) {
+            (Some(b), None, None) => board_of(&b, "board")?,
+            (None, Some((c, r)), Some(s)) => Board::checkerboard([c, r], s).py()?,
+            _ => return Err(input_error("give board=etlcal.Board(...), or inner_corners with square_mm")),
+        };
         let mut file = DatasetFile::new([image_size.0, image_size.1], board);
         file.offstate_board = offstate_board.map(|b| board_of(&b, "offstate_board")).transpose()?;
         Ok(Dataset { file, path: base_dir.map(|d| d.join("dataset.json")) })
@@ -88,10 +90,12 @@ impl Dataset {
     ///     z_w_mm: the stage position Z_W, mm.
     ///     e_com_ma: the compensated current, mA (None: computed from the thermal
     ///         calibration when the observations are made).
-    ///     board: this image's board when it differs (a part of the physical board, e.g.
-    ///         when the rest is out of view), {"inner_corners": (cols, rows), "square_mm": mm}.
-    ///     first_corner: (i, j), the index on the physical board of this image's corner
-    ///         (0, 0) (default (0, 0)).
+    ///     board: this image's board when it differs: an etlcal.Board, or for a part of a
+    ///         physical checkerboard (e.g. when the rest is out of view) a dict
+    ///         {"inner_corners": (cols, rows), "square_mm": mm}; a ChArUco board needs no part.
+    ///     first_corner: (i, j), the index on the physical checkerboard of this image's
+    ///         corner (0, 0) (default (0, 0)); refused with a ChArUco board when saved or
+    ///         detected.
     ///
     /// Raises: InputError for a non-finite number or a bad board.
     #[pyo3(signature = (image, e_in_ma, temperature_c, z_w_mm, e_com_ma=None, board=None, first_corner=None))]
@@ -103,7 +107,7 @@ impl Dataset {
         temperature_c: f64,
         z_w_mm: f64,
         e_com_ma: Option<f64>,
-        board: Option<Bound<'_, PyDict>>,
+        board: Option<Bound<'_, PyAny>>,
         first_corner: Option<(usize, usize)>,
     ) -> PyResult<()> {
         let view = DatasetView {
@@ -123,17 +127,19 @@ impl Dataset {
     ///
     /// Args:
     ///     image: the image file, relative to the dataset file (or absolute).
-    ///     board: this image's board when it differs (a part of the physical board, e.g.
-    ///         when the rest is out of view), {"inner_corners": (cols, rows), "square_mm": mm}.
-    ///     first_corner: (i, j), the index on the physical board of this image's corner
-    ///         (0, 0) (default (0, 0)).
+    ///     board: this image's board when it differs: an etlcal.Board, or for a part of a
+    ///         physical checkerboard (e.g. when the rest is out of view) a dict
+    ///         {"inner_corners": (cols, rows), "square_mm": mm}; a ChArUco board needs no part.
+    ///     first_corner: (i, j), the index on the physical checkerboard of this image's
+    ///         corner (0, 0) (default (0, 0)); refused with a ChArUco board when saved or
+    ///         detected.
     ///
     /// Raises: InputError for a bad board.
     #[pyo3(signature = (image, board=None, first_corner=None))]
     fn add_offstate_view(
         &mut self,
         image: PathBuf,
-        board: Option<Bound<'_, PyDict>>,
+        board: Option<Bound<'_, PyAny>>,
         first_corner: Option<(usize, usize)>,
     ) -> PyResult<()> {
         self.file.offstate_views.push(OffstateImage {
@@ -151,10 +157,12 @@ impl Dataset {
     ///     e_in_ma: the commanded lens current, mA.
     ///     temperature_c: the lens temperature, degC.
     ///     e_com_ma: the compensated current, mA (optional).
-    ///     board: this image's board when it differs (a part of the physical board, e.g.
-    ///         when the rest is out of view), {"inner_corners": (cols, rows), "square_mm": mm}.
-    ///     first_corner: (i, j), the index on the physical board of this image's corner
-    ///         (0, 0) (default (0, 0)).
+    ///     board: this image's board when it differs: an etlcal.Board, or for a part of a
+    ///         physical checkerboard (e.g. when the rest is out of view) a dict
+    ///         {"inner_corners": (cols, rows), "square_mm": mm}; a ChArUco board needs no part.
+    ///     first_corner: (i, j), the index on the physical checkerboard of this image's
+    ///         corner (0, 0) (default (0, 0)); refused with a ChArUco board when saved or
+    ///         detected.
     ///
     /// Raises: InputError for a non-finite number or a bad board.
     #[pyo3(signature = (image, e_in_ma, temperature_c, e_com_ma=None, board=None, first_corner=None))]
@@ -165,7 +173,7 @@ impl Dataset {
         e_in_ma: f64,
         temperature_c: f64,
         e_com_ma: Option<f64>,
-        board: Option<Bound<'_, PyDict>>,
+        board: Option<Bound<'_, PyAny>>,
         first_corner: Option<(usize, usize)>,
     ) -> PyResult<()> {
         self.file.setting_views.push(SettingImage {
@@ -237,7 +245,10 @@ impl Dataset {
         (self.file.image_size[0], self.file.image_size[1])
     }
 
-    /// The board: dict with "inner_corners" (cols, rows) and "square_mm".
+    /// The board as a dict: {"inner_corners": (cols, rows), "square_mm"} for a
+    /// checkerboard; {"type": "charuco", "squares": (cols, rows), "marker_mm",
+    /// "dictionary", "square_mm"} for a ChArUco board (`etlcal.Board.from_dict` makes it
+    /// a Board).
     #[getter]
     fn board<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);

@@ -1,7 +1,7 @@
 //! The Python module `etlcal` (built by maturin as `etlcal._etlcal`).
 //!
 //! A file per noun: [`errors`] (the exception hierarchy), [`calibration`], [`thermal`],
-//! [`physics`], [`observations`], [`dataset`], [`pipeline`] (calibrate), [`zhang`],
+//! [`physics`], [`observations`], [`board`], [`dataset`], [`pipeline`] (calibrate), [`zhang`],
 //! [`images`] (detect_corners, sharpness, render), [`focus`] (autofocus), [`lens`] (Lens,
 //! VirtualLens), [`thermal_calibration`], [`studies`]; [`arrays`] converts numpy arrays.
 //! The Python package (`python/etlcal/`) re-exports these and adds the submodules and type
@@ -9,6 +9,7 @@
 use pyo3::prelude::*;
 
 pub mod arrays;
+pub mod board;
 pub mod calibration;
 pub mod camera;
 pub mod dataset;
@@ -41,6 +42,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<physics::LensPhysics>()?;
     m.add_class::<observations::Observations>()?;
     m.add_class::<dataset::Dataset>()?;
+    m.add_class::<board::Board>()?;
     m.add_class::<observations::A0>()?;
     m.add_class::<pose::BoardPose>()?;
     m.add_class::<simulate::Simulation>()?;

@@ -15,7 +15,9 @@ def test_dataset_detect_and_calibrate(tmp_path, etlcal_binary):
                    capture_output=True)
     ds = etlcal.Dataset.load(tmp_path / "dataset.json")
     assert len(ds) == 15 and ds.image_size == (1936, 1458)
-    assert ds.board["inner_corners"] == (14, 12)
+    # The rig's ChArUco board: partial views, no per-view hints.
+    assert ds.board["type"] == "charuco" and ds.board["squares"] == (15, 13)
+    assert etlcal.Board.from_dict(ds.board).inner_corners == (14, 12)
     obs, summary = ds.detect()
     assert summary["views_detected"] == 15 and summary["skipped"] == []
     assert obs.offstate_count == 10
@@ -25,16 +27,15 @@ def test_dataset_detect_and_calibrate(tmp_path, etlcal_binary):
         assert abs(cal.intrinsics(e)[0, 0] / truth.intrinsics(e)[0, 0] - 1.0) < 0.01
     # The same file built view by view from Python (what a capture script does).
     truth = json.loads(ds.to_json())
-    built = etlcal.Dataset(tuple(truth["image_size"]), tuple(truth["board"]["inner_corners"]),
-                           truth["board"]["square_mm"], base_dir=tmp_path)
+    built = etlcal.Dataset(tuple(truth["image_size"]), board=etlcal.Board.from_dict(truth["board"]),
+                           offstate_board=etlcal.Board.from_dict(truth["offstate_board"]), base_dir=tmp_path)
     for v in truth["views"]:
         built.add_view(v["image"], v["e_in_ma"], v["temperature_c"], v["z_w_mm"], v.get("e_com_ma"))
     for v in truth.get("offstate_views", []):
         built.add_offstate_view(v["image"])
     for v in truth.get("setting_views", []):
         built.add_setting_view(v["image"], v["e_in_ma"], v["temperature_c"], v.get("e_com_ma"))
-    if "offstate_board" not in truth:
-        assert json.loads(built.to_json()) == truth
+    assert json.loads(built.to_json()) == truth
     assert built.images() == ds.images() and built.offstate_count == ds.offstate_count == 10
     again = pickle.loads(pickle.dumps(ds))
     assert again.to_json() == ds.to_json() and again.images() == ds.images()

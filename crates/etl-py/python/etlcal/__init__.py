@@ -19,6 +19,10 @@ Main nouns:
   `sharpness(image, "cpbd")`, `render(e_com_ma=...)` (the synthetic camera),
   `autofocus(callable)`; `zhang(views, image_size)` (fixed-focus calibration, e.g. A0);
   `Dataset` (images + what was recorded; `.detect()` gives Observations).
+- `Board`: the calibration target (etlcal.board/1): `Board.charuco(squares, square_mm,
+  marker_mm, dictionary)` (OpenCV's layout and ids; partial views need no hints) or
+  `Board.checkerboard(inner_corners, square_mm)`; `load`, `save`, `to_svg()` (print at
+  true size), `to_image(dpi)`.
 - `etlcal.studies.fig5()`, `.fig6(trials)`, `.subsets()`, `.baseline()`, `.crlb(trials)`
   (also `study(name)`): the paper's simulation studies.
 
@@ -37,6 +41,7 @@ Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 from ._etlcal import (
     __version__,
     A0,
+    Board,
     BoardNotFoundError,
     BoardPose,
     Calibration,
@@ -84,6 +89,7 @@ from . import options, physics, results, simulate, studies
 __all__ = [
     "__version__",
     "A0",
+    "Board",
     "BoardNotFoundError",
     "BoardPose",
     "Calibration",

@@ -34,6 +34,7 @@ _Currents = Union[_F64, Sequence[float]]
 
 __all__ = [
     "A0",
+    "Board",
     "BoardNotFoundError",
     "BoardPose",
     "Calibration",
@@ -616,16 +617,55 @@ def thermal_calibration(
     ...
 
 @final
+class Board:
+    """A calibration target (etlcal.board/1): a ChArUco board in OpenCV's layout and ids
+    (views that see part of it need no hint) or a plain checkerboard."""
+    @staticmethod
+    def charuco(squares: Tuple[int, int], square_mm: float, marker_mm: float, dictionary: str) -> Board: ...
+    @staticmethod
+    def checkerboard(inner_corners: Tuple[int, int], square_mm: float) -> Board: ...
+    @staticmethod
+    def load(path: Union[str, os.PathLike[str]]) -> Board: ...
+    def save(self, path: Union[str, os.PathLike[str]]) -> None: ...
+    @staticmethod
+    def from_dict(d: Union[Board, Mapping[str, Any]]) -> Board: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> Board: ...
+    def to_svg(self, margin_mm: Optional[float] = None) -> str: ...
+    def to_image(self, dpi: float, margin_mm: Optional[float] = None) -> npt.NDArray[np.uint8]: ...
+    @property
+    def type(self) -> Literal["charuco", "checkerboard"]: ...
+    @property
+    def squares(self) -> Optional[Tuple[int, int]]: ...
+    @property
+    def square_mm(self) -> float: ...
+    @property
+    def marker_mm(self) -> Optional[float]: ...
+    @property
+    def dictionary(self) -> Optional[str]: ...
+    @property
+    def inner_corners(self) -> Tuple[int, int]: ...
+    @property
+    def corner_count(self) -> int: ...
+    @property
+    def corners_mm(self) -> npt.NDArray[np.float64]: ...
+    def __eq__(self, value: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+
+@final
 class Dataset:
     """An etlcal.dataset/1 file: images with E_in, T and stage Z per view; `detect()` gives
     Observations."""
     def __new__(
         cls,
         image_size: Tuple[int, int],
-        inner_corners: Tuple[int, int],
-        square_mm: float,
+        inner_corners: Optional[Tuple[int, int]] = None,
+        square_mm: Optional[float] = None,
         base_dir: Union[str, os.PathLike[str], None] = None,
-        offstate_board: Optional[Dict[str, Any]] = None,
+        offstate_board: Union[Board, Dict[str, Any], None] = None,
+        board: Union[Board, Dict[str, Any], None] = None,
     ) -> Dataset: ...
     def add_view(
         self,
@@ -634,13 +674,13 @@ class Dataset:
         temperature_c: float,
         z_w_mm: float,
         e_com_ma: Optional[float] = None,
-        board: Optional[Dict[str, Any]] = None,
+        board: Union[Board, Dict[str, Any], None] = None,
         first_corner: Optional[Tuple[int, int]] = None,
     ) -> None: ...
     def add_offstate_view(
         self,
         image: Union[str, os.PathLike[str]],
-        board: Optional[Dict[str, Any]] = None,
+        board: Union[Board, Dict[str, Any], None] = None,
         first_corner: Optional[Tuple[int, int]] = None,
     ) -> None: ...
     def add_setting_view(
@@ -649,7 +689,7 @@ class Dataset:
         e_in_ma: float,
         temperature_c: float,
         e_com_ma: Optional[float] = None,
-        board: Optional[Dict[str, Any]] = None,
+        board: Union[Board, Dict[str, Any], None] = None,
         first_corner: Optional[Tuple[int, int]] = None,
     ) -> None: ...
     @property
