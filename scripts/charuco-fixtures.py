@@ -7,7 +7,9 @@ parameters) finds on the ChArUco fixtures, the reference of crates/etl-image/tes
    layout), warped by a homography (drawn at 4x and reduced with INTER_AREA, so each pixel
    integrates its area), blurred (Gaussian sigma 1 px) and noised (sigma 2 grey levels, fixed
    seed): fixtures/charuco/opencv_<dictionary>.png, 8-bit.
-2. Real photographs (fixtures/charuco/SOURCE.md names their sources), read as they are.
+2. The same in OpenCV's legacy layout (`setLegacyPattern(True)`, 8 x 6 squares), which etlcal
+   does not read (it must give no ids rather than wrong ones).
+3. Real photographs (fixtures/charuco/SOURCE.md names their sources), read as they are.
 
 For each image: the board, OpenCV's corner ids and pixels, its marker ids, and the board
 coordinates OpenCV gives each corner id (`getChessboardCorners`), so that the test can check
@@ -33,6 +35,10 @@ GENERATED = [
     ("DICT_APRILTAG_36h11", (9, 6), 20.0, 16.0, (-0.3, -0.3, 0.3), (640, 480)),
     ("DICT_ARUCO_ORIGINAL", (7, 6), 30.0, 21.0, (0.2, 0.25, 3.0), (640, 480)),
 ]
+
+# A board in OpenCV's legacy layout (before 4.6; differs from today's for an even number of
+# rows), which etlcal does not read: it must give no ids rather than wrong ones.
+LEGACY = ("DICT_5X5_100", (8, 6), 25.0, 18.0, (-0.25, 0.35, -0.4), (640, 480))
 
 # Real photographs: (file, dictionary, squares, square_mm, marker_mm).
 REAL = [
@@ -109,6 +115,17 @@ def main():
         entry.update(opencv_result(board, img))
         entry["truth_px"] = truth
         out.append(entry)
+    name, squares, s, m, rot, size = LEGACY
+    board = board_of(name, squares, s, m)
+    board.setLegacyPattern(True)
+    img, truth = generated_image(board, squares, rot, size, 99)
+    file = f"opencv_legacy_{name}.png"
+    cv2.imwrite(os.path.join(ROOT, file), img)
+    entry = {"file": file, "source": "legacy", "board": {"squares": list(squares), "square_mm": s, "marker_mm": m,
+                                                         "dictionary": name}}
+    entry.update(opencv_result(board, img))
+    entry["truth_px"] = truth
+    out.append(entry)
     for file, name, squares, s, m in REAL:
         board = board_of(name, squares, s, m)
         img = cv2.imread(os.path.join(ROOT, file), cv2.IMREAD_GRAYSCALE)

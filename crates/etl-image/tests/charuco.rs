@@ -317,6 +317,19 @@ fn no_ids_where_there_is_no_board_of_the_dictionary() {
     }
 }
 
+/// A board in OpenCV's legacy layout (before 4.6: with an even number of rows, rows of one
+/// parity shifted against today's), read as today's layout: locally it looks like a valid
+/// board one square off, so only the markers' disagreement across rows reveals it. No ids,
+/// rather than wrong ones (OpenCV, told of the legacy layout, finds all 35).
+#[test]
+fn a_board_in_opencvs_legacy_layout_gives_no_wrong_ids() {
+    let r = reference();
+    let e = r["images"].as_array().unwrap().iter().find(|e| e["source"] == "legacy").expect("the legacy fixture");
+    assert_eq!(ids(&e["ids"]).len(), 35);
+    let m = not_found(detect_charuco_file(&fixtures().join(e["file"].as_str().unwrap()), &board_of(e)));
+    assert!(m.contains("none confirmed"), "{m}");
+}
+
 /// The board-generic entry point: a ChArUco board as `detect_charuco`, a checkerboard as
 /// the checkerboard detector with ids its row-major index.
 #[test]

@@ -1,12 +1,15 @@
 //! Step 5: the decoded markers checked against the board's layout.
 //!
 //! Kept: markers whose id is on the board, once (an id decoded at two places is ambiguous
-//! and both are dropped; the same marker found twice is kept once), and confirmed by a
-//! neighbour: another kept marker within two squares on the board lies where this marker's
-//! own homography (board mm to image, from its four corners) puts it, within 30 % of a
-//! square and 1.5 px per square of distance. A misread id places its homography at least one square off, so a marker is
-//! kept only when more of its decoded neighbours agree with it than disagree. A lone marker
-//! cannot be confirmed and gives no corner.
+//! and both are dropped; the same marker found twice is kept once), and confirmed by their
+//! neighbours. Two decoded markers within two squares of each other on the board agree when
+//! one's homography (board mm to image, from its four corners) puts the other's centre where
+//! it was found, within 30 % of a square and 1.5 px per square of distance. A misread id
+//! places its homography at least one square off, so a marker is kept when some neighbours
+//! agree with it and those outnumber three times the nearest ones (diagonal) that disagree.
+//! A board laid out otherwise than the board asked for (OpenCV's legacy layout of boards with
+//! an even number of rows: rows of one parity shifted against the others) is thus refused,
+//! and a lone marker, unconfirmed, gives no corner.
 
 use std::collections::HashMap;
 
@@ -27,6 +30,9 @@ pub(crate) struct Placed {
     pub square: [u32; 2],
 }
 
+/// A marker is kept when its agreeing neighbours outnumber its disagreeing diagonal ones this
+/// many times over.
+const DISAGREEMENT: usize = 3;
 /// Farthest neighbour checked, squares along either axis.
 const REACH: i64 = 2;
 /// Agreement needed between a predicted and an observed marker centre, squares, plus
@@ -74,12 +80,15 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
                     // obliquely may extrapolate poorly.
                     if predicts(board, p, q) || predicts(board, q, p) {
                         agree += 1;
-                    } else {
+                    } else if dc.abs() <= 1 && dr.abs() <= 1 {
+                        // Only the nearest neighbours (diagonal, a square and a half apart)
+                        // may veto: two squares away a small marker's homography can be
+                        // off by more than the tolerance.
                         disagree += 1;
                     }
                 }
             }
-            agree > 0 && agree > disagree
+            agree > 0 && DISAGREEMENT * disagree < agree
         })
         .collect();
     placed.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()

@@ -6,16 +6,19 @@
 //! The steps, one file each:
 //! 1. `threshold`: at a detection level (the image box-downsampled 2x from 1280 x 800, as
 //!    the checkerboard detector's), dark pixels by an adaptive mean threshold (7 grey levels
-//!    below the mean of a 15 x 15 neighbourhood, OpenCV's offset).
+//!    below the mean of a 15 x 15 neighbourhood, OpenCV's offset; at full resolution also
+//!    5 x 5 and 3 x 3, which separate small markers from the black squares).
 //! 2. `contours`: 8-connected dark regions, the outer boundary of each traced.
 //! 3. `quad`: boundaries that a convex quadrilateral approximates (Douglas-Peucker, 3 % of
 //!    the perimeter), not touching the frame; their sides are then located at full
-//!    resolution (steepest rise across each side, a line through the points).
+//!    resolution (half-way crossing next to the steepest rise across each side, a line
+//!    through the points).
 //! 4. `decode`: the cells sampled through the quad's homography, split into black and white
 //!    (Otsu over the cells), the border checked, the data identified with the dictionary's
-//!    error correction (OpenCV's defaults), ties refused.
-//! 5. `layout`: ids on the board, each once, each confirmed by a neighbouring marker where
-//!    its own homography puts it (a misread id cannot be confirmed).
+//!    error correction (OpenCV's defaults), ties refused. A quad whose sides could not be
+//!    located, or that does not decode with them, is read from its outline's corners.
+//! 5. `layout`: ids on the board, each once, each confirmed by a neighbouring marker (one's
+//!    homography puts the other where it was found: a misread id cannot be confirmed).
 //! 6. `corners`: each inner corner of a confirmed marker's square predicted by the
 //!    marker's homography and refined by the checkerboard detector's point-symmetry
 //!    refinement over the part of the neighbourhood that is point-symmetric on a ChArUco
@@ -25,8 +28,14 @@
 //! If no marker is found at the detection level, the image is searched again at full
 //! resolution (small markers).
 //!
+//! Accuracy (1936 x 1458 renders, squares of 150-200 px, noise 2 grey levels): RMS
+//! 0.007-0.011 px at blur sigma 0.5 to 3 px, 96 % of the corners in the frame; OpenCV 5's
+//! `CharucoDetector` on the same images 0.026-0.052 px and 76 %, at 6x the time
+//! (docs/BENCHMARKS.md, tests/charuco.rs).
+//!
 //! Pixel (0, 0) is the centre of the top-left pixel. Ids, board layout and marker corner
-//! order are OpenCV's (see [`etl_core::board`]).
+//! order are OpenCV's (see [`etl_core::board`]; OpenCV's legacy layout of boards with an even
+//! number of rows, before 4.6, is not read: its markers would not confirm each other).
 
 mod contours;
 mod corners;
