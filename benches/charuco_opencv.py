@@ -45,6 +45,11 @@ POSES = [
     ((0.2, 0.3, -1.0), 180.0, (2.0, 2.0), (0.5, 0.5)),
 ]
 BLURS = [0.5, 1.5, 3.0]
+# Sharp views of smaller squares, sharpened and JPEG-compressed (--phone).
+PHONE_POSES = [
+    ((0.2, -0.15, 0.05), 80.0, (9.0, 6.75), (0.5, 0.5)),
+    ((-0.3, 0.25, 0.3), 90.0, (9.0, 6.75), (0.5, 0.5)),
+]
 DARK, LIGHT, NOISE = 40.0, 210.0, 2.0
 
 
@@ -165,6 +170,9 @@ def main():
     ap.add_argument("--out", default="target/charuco-views")
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--reuse", action="store_true", help="reuse the PNGs already in --out")
+    ap.add_argument("--phone", action="store_true",
+                    help="also two sharp views of 80-90 px squares processed as a phone does (unsharp mask 0.8, "
+                         "JPEG quality 90)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     cv2.setNumThreads(2)
@@ -181,7 +189,15 @@ def main():
             if not (args.reuse and os.path.exists(path)):
                 cv2.imwrite(path, render(hm, blur, 100 * pi + int(10 * blur), bits))
             views.append((path, pi, blur, truth(hm)))
-    np.save(os.path.join(args.out, "truth.npy"), np.array([v[3] for v in views]))
+    if args.phone:
+        for k, pose in enumerate(PHONE_POSES):
+            hm = homography(*pose)
+            path = os.path.join(args.out, f"charuco_phone{k}.jpg")
+            if not (args.reuse and os.path.exists(path)):
+                img = render(hm, 0.6, 7 + k, bits).astype(np.float64)
+                sharp = np.clip(img + 0.8 * (img - cv2.GaussianBlur(img, (0, 0), 1.0)), 0, 255).astype(np.uint8)
+                cv2.imwrite(path, sharp, [cv2.IMWRITE_JPEG_QUALITY, 90])
+            views.append((path, 10 + k, "phone", truth(hm)))
     detector = opencv_detector()
     results = {}
     etl = {}
@@ -216,7 +232,7 @@ def main():
         results[path] = row
         print(line)
     print("\nper blur (all poses):")
-    for blur in BLURS:
+    for blur in BLURS + (["phone"] if args.phone else []):
         rows = [r for r in results.values() if r["blur"] == blur]
         n_in = sum(r["in_frame"] for r in rows)
         for who in ["opencv", "etlcal"]:

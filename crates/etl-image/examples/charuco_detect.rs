@@ -36,7 +36,7 @@ fn main() {
         }
         let ms = t0.elapsed().as_secs_f64() * 1e3 / repeat as f64;
         out.push(match r {
-            Ok(d) => json!({"path": path, "found": true, "corners_px": d.corners_px, "ids": d.ids, "ms": ms, "markers": d.markers.len()}),
+            Ok(d) => json!({"path": path, "found": true, "corners_px": d.corners_px, "ids": d.ids, "ms": ms, "markers": d.markers.iter().map(|m| (m.id, m.corners_px[0])).collect::<Vec<_>>()}),
             Err(e) => json!({"path": path, "found": false, "error": e.to_string(), "corners_px": [], "ids": [], "ms": ms}),
         });
     }

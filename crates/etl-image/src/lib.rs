@@ -4,6 +4,7 @@
 //! package, and the gradient measures of etl-core over images, [`sharpness`]); and
 //! whole-image undistortion at any focus, parallel over bands of rows ([`undistort`]).
 
+pub mod board;
 pub mod charuco;
 pub mod detect;
 mod read;

@@ -6,16 +6,20 @@
 
 use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView, Pixel};
 use etl_core::model::CameraModel;
+use etl_image::board::detect_board_view;
 use etl_image::detect::{detect_view, GrayView, Pattern};
 use etl_image::sharpness::cpbd::cpbd;
 use etl_image::sharpness::{sharpness_u16, Gray16Image, Metric};
 use etl_sim::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};
-use numpy::ndarray::Array2;
+use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::arrays::points_out;
+use crate::board::board_arg;
 use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
+use crate::results;
 
 /// A grey image read from numpy: 8- or 16-bit samples, row-major.
 enum Pixels {
@@ -77,35 +81,75 @@ fn pattern_of(obj: &Bound<'_, PyAny>) -> PyResult<Pattern> {
     Pattern::new(c, r).py()
 }
 
-/// Finds the inner corners of a checkerboard in an image, refined to sub-pixel accuracy.
+/// Finds a board in an image: its corners refined to sub-pixel accuracy.
 ///
 /// Args:
 ///     image: 2-D numpy array, dtype uint8 or uint16 (rows x columns).
-///     pattern: inner corners as "CxR" (e.g. "14x12") or (cols, rows).
+///     board: the board. An `etlcal.Board` (or a dict of its fields): a ChArUco board
+///         (the corners seen, each with its id: partial views need no hint) or a
+///         checkerboard (the whole board). Or a checkerboard's inner corners as "CxR"
+///         (e.g. "14x12") or (cols, rows), as before.
+///     pattern: the same as a "CxR" or (cols, rows) `board` (the old keyword).
 ///
-/// Returns: (cols * rows, 2) float64 array of pixels (u, v), px, (0, 0) the centre of the
-/// top-left pixel; row by row on the board (corner (i, j) at index j * cols + i); the
-/// board square between corners (0, 0) and (1, 1) is the dark one.
+/// Returns: for an `etlcal.Board`, a `BoardDetection` (`etlcal.results`): `corners_px`
+/// ((N, 2) float64, px, (0, 0) the centre of the top-left pixel), `ids` ((N,) int64,
+/// increasing: OpenCV's ChArUco corner ids, a checkerboard's row-major index
+/// `row * cols + col`), `board_mm` ((N, 2) float64, each corner on the board, mm),
+/// `image_size` ((width, height)). For "CxR" or (cols, rows): the (cols * rows, 2) float64
+/// array of pixels, row by row on the board (corner (i, j) at index j * cols + i; the
+/// board square between corners (0, 0) and (1, 1) is the dark one).
 ///
-/// Raises: BoardNotFoundError when the board is absent, partly outside the image or of
-/// another size (never a wrong grid); InputError for a bad array or pattern.
+/// Raises: BoardNotFoundError with the reason (no marker of the board's dictionary, none
+/// confirmed by its neighbours; a checkerboard absent, partly outside the image or of
+/// another size: never a wrong grid); InputError for a bad array, board or pattern.
 #[pyfunction]
+#[pyo3(signature = (image, board=None, *, pattern=None))]
 pub fn detect_corners<'py>(
     py: Python<'py>,
     image: &Bound<'py, PyAny>,
-    pattern: &Bound<'py, PyAny>,
+    board: Option<&Bound<'py, PyAny>>,
+    pattern: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let pattern = pattern_of(pattern)?;
-    let corners = with_image(image, |w, h, px| {
-        let bad = || invalid("image", format!("image of {w} x {h} px has an inconsistent buffer"));
+    let target = match (board, pattern) {
+        (Some(_), Some(_)) => return Err(input_error("give the board once: board or pattern, not both")),
+        (None, None) => return Err(input_error("give the board: an etlcal.Board, or a pattern \"CxR\"")),
+        (Some(b), None) if b.extract::<String>().is_err() && b.extract::<(usize, usize)>().is_err() => {
+            Some(board_arg(b, "board")?)
+        }
+        _ => None,
+    };
+    let Some(target) = target else {
+        let pattern = pattern_of(board.or(pattern).ok_or_else(|| input_error("no pattern"))?)?;
+        let corners = with_view(py, image, |v| detect_view(v, pattern), |v| detect_view(v, pattern))?;
+        return points_out(py, corners.corners_px, false);
+    };
+    let d = with_view(py, image, |v| detect_board_view(v, &target), |v| detect_board_view(v, &target))?;
+    let fields = PyDict::new(py);
+    let board_mm: Vec<[f64; 2]> = d.ids.iter().filter_map(|&id| target.corner_mm(id)).collect();
+    let ids: Vec<i64> = d.ids.iter().map(|&id| i64::from(id)).collect();
+    fields.set_item("corners_px", points_out(py, d.corners_px, false)?)?;
+    fields.set_item("ids", Array1::from(ids).into_pyarray(py))?;
+    fields.set_item("board_mm", points_out(py, board_mm, false)?)?;
+    fields.set_item("image_size", (d.image_size[0], d.image_size[1]))?;
+    results::make(py, "BoardDetection", &fields)
+}
+
+/// Runs a detector on the image's grey view (8- or 16-bit), without the GIL.
+fn with_view<'py, R: Send>(
+    py: Python<'py>,
+    image: &Bound<'py, PyAny>,
+    at8: impl FnOnce(GrayView<'_, u8>) -> etl_formats::Result<R> + Send,
+    at16: impl FnOnce(GrayView<'_, u16>) -> etl_formats::Result<R> + Send,
+) -> PyResult<R> {
+    with_image(image, |w, h, px| {
+        let bad = || input_error(format!("image of {w} x {h} px has an inconsistent buffer"));
         py.detach(|| match px {
-            ImageRef::U8(s) => GrayView::new(w, h, s).map(|v| detect_view(v, pattern)),
-            ImageRef::U16(s) => GrayView::new(w, h, s).map(|v| detect_view(v, pattern)),
+            ImageRef::U8(s) => GrayView::new(w, h, s).map(at8),
+            ImageRef::U16(s) => GrayView::new(w, h, s).map(at16),
         })
         .ok_or_else(bad)?
         .py()
-    })?;
-    points_out(py, corners.corners_px, false)
+    })
 }
 
 fn metric_of(name: &str) -> PyResult<Metric> {

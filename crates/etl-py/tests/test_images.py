@@ -1,5 +1,7 @@
 """Images from Python: render, detect_corners, sharpness, autofocus; the same numbers as
 the Rust side, and each bad input as the right exception class."""
+import json
+import pathlib
 from typing import Any, List, Tuple
 
 import numpy as np
@@ -154,3 +156,65 @@ def test_autofocus_bad_options() -> None:
     # A callable that does not return a number: Python's own TypeError, as for float("x").
     with pytest.raises(TypeError):
         etlcal.autofocus(lambda e: "sharp")  # type: ignore[arg-type, return-value]  # the refusal under test
+
+
+CHARUCO = pathlib.Path(__file__).resolve().parents[3] / "fixtures" / "charuco"
+
+
+@pytest.fixture(scope="module")
+def drawn_board():
+    """A board drawn by OpenCV (fixtures/charuco/SOURCE.md) and what OpenCV 5's
+    CharucoDetector finds on it, with the true corners (fixtures/charuco/opencv.json)."""
+    cv2 = pytest.importorskip("cv2")
+    reference = json.loads((CHARUCO / "opencv.json").read_text())
+    entry = next(e for e in reference["images"] if e["file"] == "opencv_DICT_5X5_100.png")
+    image = cv2.imread(str(CHARUCO / entry["file"]), cv2.IMREAD_GRAYSCALE)
+    return image, entry
+
+
+def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
+    image, entry = drawn_board
+    b = entry["board"]
+    board = etlcal.Board.charuco(tuple(b["squares"]), b["square_mm"], b["marker_mm"], b["dictionary"])
+    found = etlcal.detect_corners(image, board)
+    assert isinstance(found, etlcal.BoardDetection)
+    assert found.ids.dtype == np.int64 and found.ids.tolist() == entry["ids"]
+    assert found.corners_px.shape == (len(entry["ids"]), 2)
+    assert np.allclose(found.board_mm, entry["board_mm"], atol=1e-6)
+    assert found.image_size == (640, 480)
+    truth = np.array(entry["truth_px"])[found.ids]
+    rms = np.sqrt(np.mean(np.sum((found.corners_px - truth) ** 2, axis=1)))
+    assert rms < 0.015, rms
+    # The board as a dict of its fields, and a 16-bit image: the same corners.
+    as_dict = dict(b, type="charuco")
+    again = etlcal.detect_corners(image.astype(np.uint16) * 257, board=as_dict)
+    assert again.ids.tolist() == entry["ids"]
+    assert np.allclose(again.corners_px, found.corners_px, atol=1e-3)
+
+
+def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board):
+    image, _ = board
+    found = etlcal.detect_corners(image, etlcal.Board.checkerboard((14, 12), 1.5))
+    assert found.ids.tolist() == list(range(168))
+    assert np.array_equal(found.corners_px, etlcal.detect_corners(image, "14x12"))
+    assert np.array_equal(etlcal.detect_corners(image, pattern="14x12"), found.corners_px)
+    assert np.allclose(found.board_mm[15], [1.5, 1.5])
+
+
+def test_detect_corners_of_a_charuco_board_bad_input(drawn_board):
+    image, entry = drawn_board
+    b = entry["board"]
+    other = etlcal.Board.charuco(tuple(b["squares"]), b["square_mm"], b["marker_mm"], "DICT_APRILTAG_36h11")
+    with pytest.raises(etlcal.BoardNotFoundError, match="DICT_APRILTAG_36h11"):
+        etlcal.detect_corners(image, other)
+    with pytest.raises(etlcal.BoardNotFoundError):
+        etlcal.detect_corners(np.full((480, 640), 128, np.uint8), etlcal.Board.charuco((8, 6), 25, 18, "DICT_5X5_100"))
+    with pytest.raises(etlcal.InputError, match="dictionary"):
+        etlcal.detect_corners(image, {"type": "charuco", "squares": [8, 6], "square_mm": 25, "marker_mm": 18,
+                                      "dictionary": "DICT_5X5_99"})
+    with pytest.raises(etlcal.InputError, match="not both"):
+        etlcal.detect_corners(image, etlcal.Board.checkerboard((9, 6), 1.0), pattern="9x6")
+    with pytest.raises(etlcal.InputError):
+        etlcal.detect_corners(image)
+    with pytest.raises(etlcal.InputError):
+        etlcal.detect_corners(image, 42)

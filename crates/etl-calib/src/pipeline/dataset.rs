@@ -246,32 +246,14 @@ pub fn default_detector() -> ImageDetector {
 impl CornerDetector for ImageDetector {
     fn detect(&self, path: &Path, board: &Board) -> Result<Detection> {
         // The one image reader: it refuses what is not a regular file before opening it
-        // and images above its pixel-count limit before decoding them.
+        // and images above its pixel-count limit before decoding them. The board-generic
+        // detector: a ChArUco board's corners that its markers identify, a whole
+        // checkerboard's (row-major ids); 16-bit images read at 16 bits.
         let img = etl_image::read_image(path)?;
-        let image_size = [img.width(), img.height()];
-        let corners =
-            find_corners(&img, board).map_err(|e| Error::BoardNotFound(format!("{}: {e}", path.display())))?;
-        Ok(Detection { image_size, corners })
-    }
-}
-
-/// (id, pixel) of each corner found: a ChArUco board's corners that its markers identify
-/// (16-bit images read at 16 bits), or a whole checkerboard's (row-major index).
-fn find_corners(img: &image::DynamicImage, board: &Board) -> std::result::Result<Vec<(u32, [f64; 2])>, String> {
-    let message = |e: Error| match e {
-        Error::BoardNotFound(m) => m,
-        other => other.to_string(),
-    };
-    match board {
-        Board::Charuco(b) => {
-            let det = etl_image::charuco::detect_charuco_dynamic(img, b).map_err(message)?;
-            Ok(det.ids.into_iter().zip(det.corners_px).collect())
-        }
-        Board::Checkerboard(c) => {
-            let [cols, rows] = c.inner_corners;
-            let pattern = etl_image::detect::Pattern::new(cols, rows).map_err(|e| e.to_string())?;
-            let det = etl_image::detect::detect_corners(&img.to_luma8(), pattern).map_err(message)?;
-            Ok(det.indexed().map(|([i, j], p)| ((j * cols + i) as u32, p)).collect())
-        }
+        let d = etl_image::board::detect_board_dynamic(&img, board).map_err(|e| match e {
+            Error::BoardNotFound(m) => Error::BoardNotFound(format!("{}: {m}", path.display())),
+            other => other,
+        })?;
+        Ok(Detection { image_size: d.image_size, corners: d.ids.into_iter().zip(d.corners_px).collect() })
     }
 }

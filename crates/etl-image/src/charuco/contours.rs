@@ -64,7 +64,8 @@ fn runs(mask: &Mask) -> (Vec<Run>, Vec<usize>) {
 }
 
 /// The outer contours of the dark regions whose bounding box is at least `min_side` px
-/// each way and at most `max_side` px either way, with at least `min_pixels` pixels.
+/// one way and half that the other (a marker seen obliquely), at most `max_side` px either
+/// way, with at least `min_pixels` pixels.
 pub(crate) fn outer_contours(mask: &Mask, min_side: usize, max_side: usize, min_pixels: usize) -> Vec<Contour> {
     let (runs, row_start) = runs(mask);
     let mut parent: Vec<usize> = (0..runs.len()).collect();
@@ -99,7 +100,7 @@ pub(crate) fn outer_contours(mask: &Mask, min_side: usize, max_side: usize, min_
         .flatten()
         .filter(|g| {
             let (bw, bh) = (g.bbox[2] - g.bbox[0] + 1, g.bbox[3] - g.bbox[1] + 1);
-            bw >= min_side && bh >= min_side && bw.max(bh) <= max_side && g.pixels >= min_pixels
+            bw.min(bh) >= min_side / 2 && bw.max(bh) >= min_side && bw.max(bh) <= max_side && g.pixels >= min_pixels
         })
         .map(|g| {
             let start = runs[g.first];

@@ -2,7 +2,8 @@
 //!
 //! Each corner of a confirmed marker's square that is an inner corner of the board is
 //! predicted by that marker's homography (board mm to image); a corner seen by both its
-//! markers takes the mean of the two predictions, which must agree within 25 % of a square.
+//! markers takes the mean of the two predictions, which must agree within 25 % of a square
+//! and 2 px.
 //!
 //! The prediction is refined by the checkerboard detector's point-symmetry refinement
 //! (`detect::refine`: `I(c + d) = I(c - d)`, unbiased under blur and perspective for two
@@ -42,12 +43,18 @@ pub(crate) const MIN_RADIUS: f64 = 4.0;
 const BLUR_SIGMAS: f64 = 2.5;
 /// The binomial smoothing of the refinement, as a Gaussian variance (px^2).
 const SMOOTHING_VAR: f64 = 0.5;
-/// Uncertainty of the prediction (and the walk of the refinement over a few pixel cells), px.
+/// Uncertainty of the prediction (and the walk of the refinement over a few pixel cells), px,
+/// at most this fraction of the square.
 const PREDICTION_PX: f64 = 1.5;
+const PREDICTION_FRACTION: f64 = 0.05;
+/// Smallest unmasked window of a board too small for the mask, px.
+const MIN_SMALL_RADIUS: f64 = 2.0;
 /// Narrowest margin strip worth refining on, px.
 const MIN_STRIP_PX: f64 = 1.5;
-/// Two predictions of one corner must agree within this fraction of a square.
+/// Two predictions of one corner must agree within this fraction of a square, plus a few
+/// px (markers of a few pixels per cell are read from their outlines, a pixel or two off).
 const AGREEMENT: f64 = 0.25;
+const AGREEMENT_PX: f64 = 2.0;
 
 /// Locates and refines every corner next to a confirmed marker: (id, px) in increasing id
 /// order. `blur_px`: the image's blur sigma; `contrast`: the markers' white minus black.
@@ -80,7 +87,7 @@ pub(crate) fn locate<T: Sample>(
             let preds: Vec<[f64; 2]> = from.iter().map(|&k| markers[k].h.map(corner_mm)).collect();
             let jac = markers[from[0]].h.jacobian(corner_mm);
             let spacing = spacing_px(jac, s);
-            if preds.len() == 2 && dist(preds[0], preds[1]) > AGREEMENT * spacing {
+            if preds.len() == 2 && dist(preds[0], preds[1]) > AGREEMENT * spacing + AGREEMENT_PX {
                 return None;
             }
             let n = preds.len() as f64;
@@ -109,33 +116,48 @@ impl Corner<'_> {
     }
 
     fn refine<T: Sample>(&self, img: &GrayView<'_, T>, p: [f64; 2], blur_px: f64, contrast: f64) -> Option<[f64; 2]> {
-        let inv = inverse2(self.jac)?;
         let (w, h) = (img.width as f64, img.height as f64);
         let room = p[0].min(p[1]).min(w - 3.0 - p[0]).min(h - 3.0 - p[1]).floor();
         let radius = (WINDOW_FRACTION * self.spacing).min(MAX_RADIUS).min(room);
-        if !(radius >= MIN_RADIUS) {
-            return None;
-        }
+        let window = self.window(radius, blur_px)?;
+        let refined = refine::refine_smoothed(img, &window, p, 0.1 * self.spacing + 2.0)?;
+        let margin_mm = 0.5 * (self.board.square_mm() - self.board.marker_mm());
+        self.is_saddle(img, refined, margin_mm.min(0.25 * self.board.square_mm()), contrast).then_some(refined)
+    }
+
+    /// The refinement window of radius `radius` px, masked to the board's point-symmetric
+    /// part: the black squares and, in the white squares, the margin strips along the
+    /// corner's edges (`margin - delta` wide), or when those are too thin, the margins and
+    /// the markers' black borders. When even those are narrower than [`MIN_STRIP_PX`] (a
+    /// board of a few pixels per cell) the window is the unmasked disc that reaches no
+    /// farther than the markers' borders: biased by their blurred data, but the only part
+    /// of the image that tells where the corner is. `None` when the radius is below
+    /// [`MIN_RADIUS`] (the corner is too near the frame) or the board too small to refine.
+    fn window(&self, radius: f64, blur_px: f64) -> Option<Window> {
+        let inv = inverse2(self.jac)?;
+        let b = self.board;
         // px of image across the board lines x = const and y = const, per mm.
         let det = (self.jac[0][0] * self.jac[1][1] - self.jac[0][1] * self.jac[1][0]).abs();
         let across = [det / self.jac[0][1].hypot(self.jac[1][1]), det / self.jac[0][0].hypot(self.jac[1][0])];
-        let delta_px = BLUR_SIGMAS * (blur_px * blur_px + SMOOTHING_VAR).sqrt() + PREDICTION_PX;
-        let b = self.board;
+        let prediction_px = PREDICTION_PX.min(PREDICTION_FRACTION * self.spacing);
+        let delta_px = BLUR_SIGMAS * (blur_px * blur_px + SMOOTHING_VAR).sqrt() + prediction_px;
         let margin_mm = 0.5 * (b.square_mm() - b.marker_mm());
         let cell_mm = b.marker_mm() / (b.dictionary().marker_bits() + 2) as f64;
-        let strip_px = margin_mm * across[0].min(across[1]) - delta_px;
-        let limit_mm = if strip_px >= MIN_STRIP_PX { margin_mm } else { margin_mm + cell_mm };
-        let limit = [limit_mm - delta_px / across[0], limit_mm - delta_px / across[1]];
-        if limit[0] <= 0.0 || limit[1] <= 0.0 {
+        let narrow = across[0].min(across[1]);
+        let limit_mm = [margin_mm, margin_mm + cell_mm].into_iter().find(|l| l * narrow - delta_px >= MIN_STRIP_PX);
+        let Some(limit_mm) = limit_mm else {
+            let small = ((margin_mm + cell_mm) * narrow).max(MIN_SMALL_RADIUS).min(radius).floor();
+            return (small >= MIN_SMALL_RADIUS).then(|| Window::new(small as usize, 1));
+        };
+        if !(radius >= MIN_RADIUS) {
             return None;
         }
+        let limit = [limit_mm - delta_px / across[0], limit_mm - delta_px / across[1]];
         let to_board = |dx: f64, dy: f64| [inv[0][0] * dx + inv[0][1] * dy, inv[1][0] * dx + inv[1][1] * dy];
-        let window = Window::masked(radius as usize, |dx, dy| {
+        Some(Window::masked(radius as usize, |dx, dy| {
             let q = to_board(dx as f64, dy as f64);
             self.black_at(q) || q[0].abs() <= limit[0] || q[1].abs() <= limit[1]
-        });
-        let refined = refine::refine_smoothed(img, &window, p, 0.1 * self.spacing + 2.0)?;
-        self.is_saddle(img, refined, margin_mm.min(0.25 * b.square_mm()), contrast).then_some(refined)
+        }))
     }
 
     /// Whether the black quadrants at `c` are darker than the white ones by a quarter of

@@ -1,12 +1,15 @@
 //! Step 5: the decoded markers checked against the board's layout.
 //!
 //! Kept: markers whose id is on the board, once (an id decoded at two places is ambiguous
-//! and both are dropped; the same marker found twice is kept once), and confirmed by a
-//! neighbour: another kept marker within two squares on the board lies where this marker's
-//! own homography (board mm to image, from its four corners) puts it, within 30 % of a
-//! square. A misread id places its homography at least one square off, so a marker is
-//! kept only when more of its decoded neighbours agree with it than disagree. A lone marker
-//! cannot be confirmed and gives no corner.
+//! and both are dropped; the same marker found twice is kept once), and confirmed by their
+//! neighbours. Two decoded markers within two squares of each other on the board agree when
+//! one's homography (board mm to image, from its four corners) puts the other's centre where
+//! it was found, within 30 % of a square and 1.5 px per square of distance. A misread id
+//! places its homography at least one square off, so a marker is kept when some neighbours
+//! agree with it and those outnumber three times the nearest ones (diagonal) that disagree.
+//! A board laid out otherwise than the board asked for (OpenCV's legacy layout of boards with
+//! an even number of rows: rows of one parity shifted against the others) is thus refused,
+//! and a lone marker, unconfirmed, gives no corner.
 
 use std::collections::HashMap;
 
@@ -27,10 +30,16 @@ pub(crate) struct Placed {
     pub square: [u32; 2],
 }
 
+/// A marker is kept when its agreeing neighbours outnumber its disagreeing diagonal ones this
+/// many times over.
+const DISAGREEMENT: usize = 3;
 /// Farthest neighbour checked, squares along either axis.
 const REACH: i64 = 2;
-/// Agreement needed between a predicted and an observed marker centre, squares.
+/// Agreement needed between a predicted and an observed marker centre, squares, plus
+/// [`EXTRAPOLATION_PX`] per square of distance (a small marker's corners, a fraction of a
+/// pixel off, tilt its homography noticeably a few squares away).
 const TOLERANCE: f64 = 0.3;
+const EXTRAPOLATION_PX: f64 = 1.5;
 
 /// The markers of `decoded` that are on `board`, unique and confirmed by a neighbour,
 /// in increasing id order.
@@ -54,7 +63,6 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
     }
     placed.sort_by_key(|p| p.id);
     let at: HashMap<[u32; 2], usize> = placed.iter().enumerate().map(|(k, p)| (p.square, k)).collect();
-    let s = board.square_mm();
     let keep: Vec<bool> = placed
         .iter()
         .map(|p| {
@@ -67,19 +75,32 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
                     }
                     let Some(&k) = at.get(&[c as u32, r as u32]) else { continue };
                     let q = &placed[k];
-                    let predicted = p.h.map([(c as f64 + 0.5) * s, (r as f64 + 0.5) * s]);
-                    let square_px = side_px(&q.corners_px) * s / board.marker_mm();
-                    if dist(predicted, centre(&q.corners_px)) <= TOLERANCE * square_px {
+                    // Either marker's homography may place the other: a misread id puts
+                    // both predictions a square or more off, while one marker seen small or
+                    // obliquely may extrapolate poorly.
+                    if predicts(board, p, q) || predicts(board, q, p) {
                         agree += 1;
-                    } else {
+                    } else if dc.abs() <= 1 && dr.abs() <= 1 {
+                        // Only the nearest neighbours (diagonal, a square and a half apart)
+                        // may veto: two squares away a small marker's homography can be
+                        // off by more than the tolerance.
                         disagree += 1;
                     }
                 }
             }
-            agree > 0 && agree > disagree
+            agree > 0 && DISAGREEMENT * disagree < agree
         })
         .collect();
     placed.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+}
+
+/// Whether `p`'s homography puts `q`'s centre where `q` was found.
+fn predicts(board: &CharucoBoard, p: &Placed, q: &Placed) -> bool {
+    let s = board.square_mm();
+    let predicted = p.h.map([(q.square[0] as f64 + 0.5) * s, (q.square[1] as f64 + 0.5) * s]);
+    let square_px = side_px(&q.corners_px) * s / board.marker_mm();
+    let squares = (p.square[0] as f64 - q.square[0] as f64).abs().max((p.square[1] as f64 - q.square[1] as f64).abs());
+    dist(predicted, centre(&q.corners_px)) <= TOLERANCE * square_px + EXTRAPOLATION_PX * squares
 }
 
 pub(crate) fn centre(q: &[[f64; 2]; 4]) -> [f64; 2] {

@@ -157,28 +157,40 @@ const MIN_WINDOW: usize = 2;
 /// # Ok::<(), etl_formats::Error>(())
 /// ```
 pub fn detect_corners(image: &GrayImage, pattern: Pattern) -> Result<Detection> {
-    let view = GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
-        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))?;
-    detect_view(view, pattern)
+    detect_view(view_of(image)?, pattern)
 }
 
 /// Finds the board in a 16-bit image (same as [`detect_corners`]).
 pub fn detect_corners_u16(image: &ImageBuffer<Luma<u16>, Vec<u16>>, pattern: Pattern) -> Result<Detection> {
-    let view = GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
-        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))?;
-    detect_view(view, pattern)
+    detect_view(view_of(image)?, pattern)
 }
 
 /// Finds the board in a decoded image of any type: 16-bit images are read at 16 bits,
 /// everything else as 8-bit grey.
 pub fn detect_dynamic(image: &DynamicImage, pattern: Pattern) -> Result<Detection> {
+    with_grey_view(image, |v| detect_view(v, pattern), |v| detect_view(v, pattern))
+}
+
+/// The grey view of an image buffer; `InvalidInput` when the buffer is shorter than its size.
+pub(crate) fn view_of<T: Sample + image::Primitive>(image: &ImageBuffer<Luma<T>, Vec<T>>) -> Result<GrayView<'_, T>> {
+    GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
+        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))
+}
+
+/// Calls `at8` on the 8-bit grey view of a decoded image, or `at16` on its 16-bit one when
+/// the image has 16-bit samples (converting colour to grey first).
+pub(crate) fn with_grey_view<R>(
+    image: &DynamicImage,
+    at8: impl FnOnce(GrayView<'_, u8>) -> Result<R>,
+    at16: impl FnOnce(GrayView<'_, u16>) -> Result<R>,
+) -> Result<R> {
     match image {
-        DynamicImage::ImageLuma8(g) => detect_corners(g, pattern),
-        DynamicImage::ImageLuma16(g) => detect_corners_u16(g, pattern),
+        DynamicImage::ImageLuma8(g) => at8(view_of(g)?),
+        DynamicImage::ImageLuma16(g) => at16(view_of(g)?),
         DynamicImage::ImageLumaA16(_) | DynamicImage::ImageRgb16(_) | DynamicImage::ImageRgba16(_) => {
-            detect_corners_u16(&image.to_luma16(), pattern)
+            at16(view_of(&image.to_luma16())?)
         }
-        _ => detect_corners(&image.to_luma8(), pattern),
+        _ => at8(view_of(&image.to_luma8())?),
     }
 }
 

@@ -15,7 +15,9 @@ Main nouns:
   keeps E_com while the lens warms) and `VirtualLens()` (the simulated device on a
   pseudo-terminal: `Lens(VirtualLens().port)`, with fault injection);
   `thermal_calibration(lens, capture, set_temperature)` (section 4.1 with your camera).
-- Images (2-D uint8/uint16 numpy arrays): `detect_corners(image, "14x12")`,
+- Images (2-D uint8/uint16 numpy arrays): `detect_corners(image, board)` (an `etlcal.Board`:
+  a `BoardDetection` with `corners_px`, `ids`, `board_mm`; a ChArUco board gives the
+  corners seen, each with its id) or `detect_corners(image, "14x12")` (a whole checkerboard),
   `sharpness(image, "cpbd")`, `render(e_com_ma=...)` (the synthetic camera),
   `autofocus(callable)`; `zhang(views, image_size)` (fixed-focus calibration, e.g. A0);
   `Dataset` (images + what was recorded; `.detect()` gives Observations).
@@ -76,6 +78,7 @@ from ._etlcal import (
 )
 from .results import (
     AutofocusResult,
+    BoardDetection,
     Compensation,
     CompensationArray,
     DetectionSummary,
@@ -127,6 +130,7 @@ __all__ = [
     "thermal_calibration",
     "zhang",
     "AutofocusResult",
+    "BoardDetection",
     "Compensation",
     "CompensationArray",
     "DetectionSummary",

@@ -9,6 +9,7 @@ from numpy.polynomial import Polynomial
 from etlcal.options import Estimator, ExportFormat, Method, NoisePreset, RobustLoss, SharpnessMetric, StudyName
 from etlcal.results import (
     AutofocusResult,
+    BoardDetection,
     Compensation,
     CompensationArray,
     DetectionSummary,
@@ -592,10 +593,20 @@ def cramer_rao_std(
 ) -> ModelStd: ...
 
 
-def detect_corners(image: np.ndarray, pattern: Union[str, Tuple[int, int]]) -> np.ndarray:
-    """Inner corners of a checkerboard, sub-pixel: (cols*rows, 2) float64 pixels, row by row.
-    `image`: 2-D uint8/uint16. Raises BoardNotFoundError (absent, partial, other size)."""
+@overload
+def detect_corners(image: np.ndarray, board: Union[Board, Mapping[str, Any]], *, pattern: None = None) -> BoardDetection:
+    """A board's corners, sub-pixel, with their ids: `corners_px` (N, 2), `ids` (N,),
+    `board_mm` (N, 2). A ChArUco board gives the corners seen (partial views need no hint),
+    a checkerboard all of them. `image`: 2-D uint8/uint16. Raises BoardNotFoundError with
+    the reason."""
     ...
+@overload
+def detect_corners(image: np.ndarray, board: Union[str, Tuple[int, int]], *, pattern: None = None) -> np.ndarray:
+    """Inner corners of a checkerboard "CxR", sub-pixel: (cols*rows, 2) float64 pixels, row by
+    row. `image`: 2-D uint8/uint16. Raises BoardNotFoundError (absent, partial, other size)."""
+    ...
+@overload
+def detect_corners(image: np.ndarray, board: None = None, *, pattern: Union[str, Tuple[int, int]]) -> np.ndarray: ...
 
 def sharpness(image: np.ndarray, metric: SharpnessMetric = "cpbd") -> float:
     """Sharpness (larger is sharper): "cpbd" (bit-exact with the cpbd package), "tenengrad",

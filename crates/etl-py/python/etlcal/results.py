@@ -20,6 +20,7 @@ _Bool = npt.NDArray[np.bool_]
 
 __all__ = [
     "AutofocusResult",
+    "BoardDetection",
     "Compensation",
     "CompensationArray",
     "DetectionSummary",
@@ -286,6 +287,19 @@ class OffstateView(_Result):
 
     world_mm: _F64
     pixels: _F64
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class BoardDetection(_Result):
+    """`detect_corners(image, board)` for an `etlcal.Board`: `corners_px` ((N, 2), px),
+    `ids` ((N,) int64, increasing: OpenCV's ChArUco corner ids, a checkerboard's row-major
+    index), `board_mm` ((N, 2), each corner on the board, mm), `image_size` ((width,
+    height), px)."""
+
+    corners_px: _F64
+    ids: npt.NDArray[np.int64]
+    board_mm: _F64
+    image_size: Tuple[int, int]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
