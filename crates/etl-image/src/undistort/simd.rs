@@ -73,10 +73,14 @@ pub(super) struct FusedBand<'a, T: Sample> {
 impl<T: Sample> WithSimd for FusedBand<'_, T> {
     type Output = etl_core::Result<()>;
     #[inline(always)]
-    fn with_simd<S: Simd>(self, _: S) -> Self::Output {
+    fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
         let n = self.rows.len() * self.out.width_px;
-        let (mx, my) = (&mut self.scratch_x[..n], &mut self.scratch_y[..n]);
-        etl_core::undistort::undistort_maps(self.k, self.d, self.out, self.rows, mx, my)?;
-        etl_core::undistort::remap(self.src, mx, my, self.border, self.dst)
+        let got = self.scratch_x.len().min(self.scratch_y.len());
+        let (Some(map_x), Some(map_y)) = (self.scratch_x.get_mut(..n), self.scratch_y.get_mut(..n)) else {
+            return Err(etl_core::Error::BufferTooSmall { what: "band scratch maps", needed: n, got });
+        };
+        let (k, d, out, rows) = (self.k, self.d, self.out, self.rows);
+        MapsBand { k, d, out, rows, map_x: &mut *map_x, map_y: &mut *map_y }.with_simd(simd)?;
+        RemapBand { src: self.src, map_x, map_y, border: self.border, dst: self.dst }.with_simd(simd)
     }
 }
