@@ -33,6 +33,9 @@ use crate::model::{Distortion, Intrinsics};
 /// ([`Error::InvalidArgument`] / [`Error::NotFinite`]); rows beyond the image
 /// ([`Error::OutOfRange`]); a buffer too short ([`Error::BufferTooSmall`] naming it).
 /// On error nothing is written.
+// Inlined into its callers, so that one running it under a wider instruction set (the
+// runtime dispatch of etl-image's undistortion: AVX2, AVX-512) compiles this loop for it.
+#[inline(always)]
 pub fn undistort_maps(
     k: &Intrinsics,
     d: &Distortion,

@@ -29,6 +29,7 @@
 //! # Ok::<(), etl_core::Error>(())
 //! ```
 
+mod bilinear;
 pub mod camera;
 pub mod maps;
 pub mod remap;
