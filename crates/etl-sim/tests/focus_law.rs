@@ -139,7 +139,7 @@ fn measured_depth_mm(model: &CameraModel, depth_mm: f64, e_com_ma: f64, rng: &mu
 /// focuses there, measures again at that current, and asks the law once more. Returns the
 /// E_com it sets.
 fn service_focus_ma(cal: &etl_formats::Calibration, depth_mm: f64, rng: &mut ChaCha8Rng) -> f64 {
-    let (law, model) = (cal.focus_law().unwrap(), cal.model());
+    let (law, model) = (cal.focus_law().unwrap(), cal.model().unwrap());
     let [near, far] = law.distance_range_mm;
     let mut e = law.e_com_ma(0.5 * (near + far)).unwrap();
     for _ in 0..2 {
@@ -177,7 +177,7 @@ fn the_calibrated_law_predicts_the_sharpest_current_within_0_3_ma() {
         let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
         let mut line = format!(
             "seed {seed:2}, tz error {:+.3} mm:",
-            cal.model().translation_mm[2] - CameraModel::paper_rig().translation_mm[2]
+            cal.model().unwrap().translation_mm[2] - CameraModel::paper_rig().translation_mm[2]
         );
         for (&d, &best) in depths.iter().zip(&sharpest) {
             // The front ends: E_in for a distance and back, through the thermal surface.

@@ -32,6 +32,7 @@
 mod bilinear;
 pub mod camera;
 pub mod maps;
+mod opencv_maps;
 pub mod remap;
 
 pub use camera::{OutputCamera, MAX_SIDE_PX};
