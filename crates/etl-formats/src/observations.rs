@@ -100,7 +100,7 @@ fn check_points(points: &[PointObs], name: &str, i: usize, image_size: [u32; 2],
     for (j, p) in points.iter().enumerate() {
         let bad = |what: String| Error::InvalidInput(format!("{name} {i} point {j}: {what}"));
         if let Some(x) = p.world_mm.iter().find(|x| !(wr0..=wr1).contains(*x)) {
-            return Err(bad(format!("world coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(*x))));
+            return Err(bad(format!("world_mm coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(*x))));
         }
         for (x, side) in p.pixel.iter().zip(image_size) {
             let margin = PIXEL_MARGIN_IMAGES * f64::from(side);
@@ -115,7 +115,7 @@ fn check_points(points: &[PointObs], name: &str, i: usize, image_size: [u32; 2],
         }
         if planar && p.world_mm[2] != 0.0 {
             return Err(bad(format!(
-                "Z = {} mm, but this board is planar: its points must have Z = 0",
+                "world_mm Z = {} mm, but this board is planar: its points must have Z = 0",
                 crate::compact(p.world_mm[2])
             )));
         }
