@@ -268,7 +268,7 @@ fn numbers_out_of_their_documented_ranges_are_refused_naming_the_quantity() {
         (
             "z.json",
             |v| v["offstate_views"][1]["points"][3]["world_mm"][2] = 2.0.into(),
-            "lens-off view 1 point 3: Z = 2 mm",
+            "lens-off view 1 point 3: world_mm Z = 2 mm",
         ),
         (
             "px.json",
@@ -311,4 +311,60 @@ fn a_fifo_as_a_dataset_image_is_refused_not_opened() {
         refused(&["calibrate", "--dataset", s(&p("dataset.json")), "--thermal", "paper", "--out", s(&p("c.json"))]);
     assert!(err.contains("not a regular file"), "{err}");
     assert!(!p("c.json").exists());
+}
+
+/// A read-only output is refused, not replaced (as root, too: a rename would replace it),
+/// and stays as it was.
+#[test]
+fn a_read_only_output_is_refused_and_kept() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    thermal_table(&p("t.csv"));
+    std::fs::write(p("ro.json"), "the user's, read-only").unwrap();
+    std::fs::set_permissions(p("ro.json"), std::fs::Permissions::from_mode(0o444)).unwrap();
+    let before = tree(d.path());
+    let err = refused(&["thermal", "fit", s(&p("t.csv")), "--out", s(&p("ro.json"))]);
+    assert!(err.contains("is read-only: refused as an output"), "{err}");
+    assert_eq!(tree(d.path()), before);
+}
+
+/// `render` writes its image and the image's corners as one set: when the corners cannot
+/// be written (a directory stands where the file goes), the earlier image is kept whole.
+#[test]
+fn render_keeps_the_earlier_image_when_its_corners_cannot_be_written() {
+    let d = tempfile::tempdir().unwrap();
+    let img = d.path().join("view.png");
+    std::fs::write(&img, "the earlier image").unwrap();
+    std::fs::create_dir(d.path().join("view.png.corners.json")).unwrap();
+    let before = tree(d.path());
+    let err = refused(&["render", "--out", s(&img)]);
+    assert!(err.contains("view.png.corners.json") && err.contains("not a regular file"), "{err}");
+    assert_eq!(tree(d.path()), before, "the image was replaced");
+}
+
+/// `thermal calibrate` writes its surface and its table as one set: an output that cannot
+/// be written (its directory is a file) leaves the earlier table whole.
+#[test]
+fn thermal_calibrate_writes_its_surface_and_table_both_or_neither() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    std::fs::create_dir(p("tables")).unwrap();
+    thermal_table(&p("tables/t.csv"));
+    std::fs::write(p("blocked"), "a file where a directory is expected").unwrap();
+    let before = tree(d.path());
+    let out = etlcal(&[
+        "thermal",
+        "calibrate",
+        "--virtual",
+        "--quick",
+        "--table",
+        s(&p("tables/t.csv")),
+        "--out",
+        s(&p("blocked/t.json")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("blocked/t.json"), "{err}");
+    assert_eq!(tree(d.path()), before, "the table was replaced alone");
 }
