@@ -368,3 +368,54 @@ fn thermal_calibrate_writes_its_surface_and_table_both_or_neither() {
     assert!(err.contains("blocked/t.json"), "{err}");
     assert_eq!(tree(d.path()), before, "the table was replaced alone");
 }
+
+/// Runs `args`, killing it after `limit_s` seconds: `None` if it had to be killed (a hang).
+fn within(args: &[&str], limit_s: u64) -> Option<Output> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_etlcal"))
+        .args(args)
+        .current_dir(ROOT)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() >= limit_s {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            return None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    Some(child.wait_with_output().unwrap())
+}
+
+/// `report` spun forever inside the plotting library on a range of 1e308 (a calibration's
+/// E_com range, an observation's pixel): both are refused by the readers, in one line,
+/// before a plot is drawn or the output directory made.
+#[test]
+fn report_refuses_ranges_of_1e308_instead_of_hanging() {
+    let d = tempfile::tempdir().unwrap();
+    let fixture = format!("{ROOT}/fixtures/service/calibration.json");
+    let mut cal: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&fixture).unwrap()).unwrap();
+    cal["e_com_range_ma"] = serde_json::json!([80.0, 1e308]);
+    let wide = d.path().join("wide.json");
+    std::fs::write(&wide, serde_json::to_string(&cal).unwrap()).unwrap();
+    let obs = observations_with(d.path(), "far.json", |v| v["views"][3]["points"][7]["pixel"][1] = 1e308.into());
+    let out = d.path().join("report");
+    let cases = [
+        (vec!["report", "--calibration", s(&wide), "--out", s(&out)], "e_com_range_ma [80, 1e308] must be"),
+        (
+            vec!["report", "--calibration", &fixture, "--observations", s(&obs), "--out", s(&out)],
+            "view 3 point 7: pixel coordinate 1e308 px",
+        ),
+    ];
+    for (args, needle) in cases {
+        let run = within(&args, 120).unwrap_or_else(|| panic!("{args:?} hung (killed after 120 s)"));
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?}: wrote {}", out.display());
+    }
+}
