@@ -47,18 +47,28 @@ fn child_writes_the_set_and_is_killed() {
     );
 }
 
+/// Runs [`child_writes_the_set_and_is_killed`] (this test binary again, in a child
+/// process) on the outputs under `dir`, killed after step `stop` of [`STEPS`].
+fn write_and_be_killed(dir: &Path, stop: usize) {
+    let status = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["output::file_set::tests::child_writes_the_set_and_is_killed", "--exact", "--test-threads=1"])
+        .env("ETLCAL_TEST_SET_DIR", dir)
+        .env("ETLCAL_TEST_SET_STOP", stop.to_string())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(!status.success(), "{:?}: the child was not killed", STEPS[stop]);
+}
+
 /// What a reader of `first` then `second` gets (each through `check_input`, as every
 /// reader does).
 fn read_in_order(first: &Path, second: &Path) -> (String, String) {
     let read = |p: &Path| {
-        check_input_for_test(p);
+        super::super::check_input(p).unwrap();
         std::fs::read_to_string(p).unwrap()
     };
     (read(first), read(second))
-}
-
-fn check_input_for_test(p: &Path) {
-    super::super::check_input(p).unwrap();
 }
 
 /// Killed after each step of the commit (a real SIGKILL, in a child process), the set is
@@ -67,7 +77,6 @@ fn check_input_for_test(p: &Path) {
 /// No marker is left after the read, and no temporary after the next write.
 #[test]
 fn a_kill_at_any_step_of_the_commit_leaves_one_whole_set() {
-    let exe = std::env::current_exe().unwrap();
     for (stop, step) in STEPS.iter().enumerate() {
         for reversed in [false, true] {
             let d = tempfile::tempdir().unwrap();
@@ -76,15 +85,7 @@ fn a_kill_at_any_step_of_the_commit_leaves_one_whole_set() {
                 std::fs::create_dir_all(p.parent().unwrap()).unwrap();
                 std::fs::write(p, text).unwrap();
             }
-            let status = std::process::Command::new(&exe)
-                .args(["output::file_set::tests::child_writes_the_set_and_is_killed", "--exact", "--test-threads=1"])
-                .env("ETLCAL_TEST_SET_DIR", d.path())
-                .env("ETLCAL_TEST_SET_STOP", stop.to_string())
-                .stdout(std::process::Stdio::null())
-                .stderr(std::process::Stdio::null())
-                .status()
-                .unwrap();
-            assert!(!status.success(), "{step:?}: the child was not killed");
+            write_and_be_killed(d.path(), stop);
             let (cr, or) = if reversed {
                 let (or, cr) = read_in_order(&o, &c);
                 (cr, or)
@@ -122,7 +123,6 @@ fn a_kill_at_any_step_of_the_commit_leaves_one_whole_set() {
 /// or writes anything (a single-file write of one of its outputs included).
 #[test]
 fn a_writer_completes_a_committed_set_first() {
-    let exe = std::env::current_exe().unwrap();
     let d = tempfile::tempdir().unwrap();
     let [c, o] = outputs(d.path());
     for (p, text) in [(&c, "old-c"), (&o, "old-o")] {
@@ -130,15 +130,7 @@ fn a_writer_completes_a_committed_set_first() {
         std::fs::write(p, text).unwrap();
     }
     // Killed after the first rename: c.json new, o.json old on disk.
-    let status = std::process::Command::new(&exe)
-        .args(["output::file_set::tests::child_writes_the_set_and_is_killed", "--exact", "--test-threads=1"])
-        .env("ETLCAL_TEST_SET_DIR", d.path())
-        .env("ETLCAL_TEST_SET_STOP", "3")
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .unwrap();
-    assert!(!status.success());
+    write_and_be_killed(d.path(), 3);
     assert_eq!(std::fs::read_to_string(&o).unwrap(), "old-o");
     // Rewriting c.json alone: o.json is first made the set's new one.
     crate::write_atomic(&c, b"alone").unwrap();
