@@ -47,19 +47,26 @@ pub struct Board {
 }
 
 impl Board {
-    /// Checks a board: at least 3 x 3 inner corners and a positive, finite square.
+    /// Checks a board: at least 3 x 3 inner corners and a positive, finite square. The
+    /// error's `what` is the board's key (`square_mm`, `inner_corners`); the caller puts it
+    /// under the board's place ([`Error::under`]).
     pub fn validate(&self) -> Result<()> {
         if !(self.square_mm.is_finite() && self.square_mm > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "square_mm must be a positive square size, got {} mm",
-                crate::compact(self.square_mm)
-            )));
+            return Err(Error::invalid_value(
+                "square_mm",
+                self.square_mm,
+                format!("square_mm must be a positive square size, got {} mm", crate::compact(self.square_mm)),
+            ));
         }
         if self.inner_corners[0] < 3 || self.inner_corners[1] < 3 {
-            return Err(Error::InvalidInput(format!(
-                "inner_corners: a board needs at least 3 x 3 inner corners, got {} x {}",
-                self.inner_corners[0], self.inner_corners[1]
-            )));
+            return Err(Error::invalid_value(
+                "inner_corners",
+                self.inner_corners,
+                format!(
+                    "inner_corners: a board needs at least 3 x 3 inner corners, got {} x {}",
+                    self.inner_corners[0], self.inner_corners[1]
+                ),
+            ));
         }
         Ok(())
     }
@@ -176,7 +183,7 @@ impl Dataset {
 
     /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
-        self.validate().map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
+        self.validate().map_err(|e| e.within(path.display(), None))?;
         write_json(path, self)
     }
 
@@ -187,37 +194,43 @@ impl Dataset {
 
     /// Checks boards, numbers and that there is something to calibrate.
     pub fn validate(&self) -> Result<()> {
-        self.board.validate()?;
+        self.board.validate().map_err(|e| e.under("board"))?;
         if let Some(b) = self.offstate_board {
-            b.validate().map_err(|e| Error::InvalidInput(format!("offstate_board: {e}")))?;
+            b.validate().map_err(|e| e.within("offstate_board", Some("offstate_board")))?;
         }
         if self.image_size[0] == 0 || self.image_size[1] == 0 {
-            return Err(Error::InvalidInput("image_size must be positive".into()));
+            return Err(Error::invalid_value("image_size", self.image_size, "image_size must be positive"));
         }
         if self.views.is_empty() && self.setting_views.is_empty() {
-            return Err(Error::InvalidInput("the dataset holds no views".into()));
+            return Err(Error::invalid("views", "the dataset holds no views"));
         }
         for (i, v) in self.views.iter().enumerate() {
-            if ![v.e_in_ma, v.temperature_c, v.z_w_mm].iter().all(|x| x.is_finite())
-                || !v.e_com_ma.is_none_or(f64::is_finite)
-            {
-                return Err(Error::InvalidInput(format!("view {i}: current, temperature or z_w_mm is not finite")));
+            let numbers = [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c))]
+                .into_iter()
+                .chain([("z_w_mm", Some(v.z_w_mm)), ("e_com_ma", v.e_com_ma)]);
+            if let Some((key, x)) = crate::first_not_finite(numbers) {
+                let message = format!("view {i}: current, temperature or z_w_mm is not finite");
+                return Err(Error::invalid_value(format!("views[{i}].{key}"), x, message));
             }
         }
         for (i, v) in self.setting_views.iter().enumerate() {
-            if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
-                return Err(Error::InvalidInput(format!("setting view {i}: current or temperature is not finite")));
+            let numbers =
+                [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
+            if let Some((key, x)) = crate::first_not_finite(numbers) {
+                let message = format!("setting view {i}: current or temperature is not finite");
+                return Err(Error::invalid_value(format!("setting_views[{i}].{key}"), x, message));
             }
         }
-        let overrides = self
-            .views
-            .iter()
-            .map(|v| ("view", &v.image, v.board))
-            .chain(self.offstate_views.iter().map(|v| ("offstate view", &v.image, v.board)))
-            .chain(self.setting_views.iter().map(|v| ("setting view", &v.image, v.board)));
-        for (kind, image, board) in overrides {
+        let views = self.views.iter().map(|v| (&v.image, v.board)).enumerate().map(|(i, v)| ("view", "views", i, v));
+        let offstate = self.offstate_views.iter().map(|v| (&v.image, v.board)).enumerate();
+        let setting = self.setting_views.iter().map(|v| (&v.image, v.board)).enumerate();
+        let overrides = views
+            .chain(offstate.map(|(i, v)| ("offstate view", "offstate_views", i, v)))
+            .chain(setting.map(|(i, v)| ("setting view", "setting_views", i, v)));
+        for (kind, key, i, (image, board)) in overrides {
             if let Some(b) = board {
-                b.validate().map_err(|e| Error::InvalidInput(format!("{kind} {}: board: {e}", image.display())))?;
+                let context = format!("{kind} {}: board", image.display());
+                b.validate().map_err(|e| e.within(context, Some(&format!("{key}[{i}].board"))))?;
             }
         }
         Ok(())

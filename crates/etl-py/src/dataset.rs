@@ -8,7 +8,7 @@ use etl_formats::dataset::{Board, Dataset as DatasetFile, DatasetView, OffstateI
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::observations::Observations;
 
 /// The images of a calibration and what was recorded with each (the README's "File formats":
@@ -28,7 +28,7 @@ fn finite(v: f64, what: &str) -> PyResult<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(input_error(format!("{what} must be finite, got {v}")))
+        Err(invalid_value(what, v, format!("{what} must be finite, got {v}")))
     }
 }
 
@@ -36,15 +36,20 @@ fn finite(v: f64, what: &str) -> PyResult<f64> {
 /// "square_mm": mm}.
 fn board_of(d: &Bound<'_, PyDict>, what: &str) -> PyResult<Board> {
     let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        d.get_item(k)?.ok_or_else(|| input_error(format!("{what} needs \"inner_corners\" and \"square_mm\"")))
+        d.get_item(k)?.ok_or_else(|| invalid(what, format!("{what} needs \"inner_corners\" and \"square_mm\"")))
     };
-    let (c, r): (usize, usize) = get("inner_corners")?
+    let (c, r): (usize, usize) = get("inner_corners")?.extract().map_err(|_| {
+        invalid(&format!("{what}.inner_corners"), format!("{what}[\"inner_corners\"] must be (cols, rows)"))
+    })?;
+    let square_mm: f64 = get("square_mm")?
         .extract()
-        .map_err(|_| input_error(format!("{what}[\"inner_corners\"] must be (cols, rows)")))?;
-    let square_mm: f64 =
-        get("square_mm")?.extract().map_err(|_| input_error(format!("{what}[\"square_mm\"] must be a number")))?;
+        .map_err(|_| invalid(&format!("{what}.square_mm"), format!("{what}[\"square_mm\"] must be a number")))?;
     let board = Board { inner_corners: [c, r], square_mm };
-    board.validate().map_err(|e| input_error(format!("{what}: {e}")))?;
+    // The board's own key under the argument's name (`offstate_board.square_mm`).
+    board.validate().map_err(|e| {
+        let inner = e.input_what().map(|w| format!("{what}.{w}"));
+        crate::errors::input_error_about(format!("{what}: {e}"), inner.as_deref(), e.input_value().as_deref())
+    })?;
     Ok(board)
 }
 
@@ -73,7 +78,7 @@ impl Dataset {
         offstate_board: Option<Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         if image_size.0 == 0 || image_size.1 == 0 {
-            return Err(input_error("image_size must be positive"));
+            return Err(invalid_value("image_size", [image_size.0, image_size.1], "image_size must be positive"));
         }
         let board = Board { inner_corners: [inner_corners.0, inner_corners.1], square_mm };
         board.validate().py()?;

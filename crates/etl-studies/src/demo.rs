@@ -256,7 +256,14 @@ fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result
         .iter()
         .map(|&z| visible_block(truth, e_ma, board, z, size, options.margin_px))
         .collect::<Option<Vec<_>>>()
-        .ok_or_else(|| Error::InvalidInput(format!("validation at {e_ma} mA: the board does not fit the image")))?;
+        .ok_or_else(|| {
+            // The demo's fixed validation rig, not an input of the user's: `what` names it.
+            Error::invalid_value(
+                "validation",
+                e_ma,
+                format!("validation at {e_ma} mA: the board does not fit the image"),
+            )
+        })?;
     // The block visible at both positions.
     let i0 = blocks[0].1[0].max(blocks[1].1[0]);
     let j0 = blocks[0].1[1].max(blocks[1].1[1]);

@@ -20,9 +20,7 @@
 //! loss is not covered beyond what `fsync` of the files and markers gives; concurrent
 //! writers of the same outputs are not supported (as before: the last rename wins).
 
-use std::ffi::OsStr;
 use std::io::Write;
-use std::os::unix::ffi::OsStrExt;
 use std::path::{Path, PathBuf};
 
 use super::{absolute, check_paths, kept_mode, process_runs, remove_stale_temps, resolve_output, temp_of, Output};
@@ -63,13 +61,40 @@ fn temp_for(target: &Path, pid: u32) -> PathBuf {
     temp_of(dir, target.file_name().unwrap_or_default(), pid)
 }
 
+/// The bytes of a path as a marker keeps it: its OS bytes on Unix (any path); elsewhere
+/// its text (module doc of [`super`], "Portability").
+fn path_bytes(p: &Path) -> Vec<u8> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        p.as_os_str().as_bytes().to_vec()
+    }
+    #[cfg(not(unix))]
+    {
+        p.to_string_lossy().into_owned().into_bytes()
+    }
+}
+
+/// The path of bytes [`path_bytes`] gave.
+fn path_of(bytes: &[u8]) -> PathBuf {
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        PathBuf::from(std::ffi::OsStr::from_bytes(bytes))
+    }
+    #[cfg(not(unix))]
+    {
+        PathBuf::from(String::from_utf8_lossy(bytes).into_owned())
+    }
+}
+
 /// A marker's content: the writer's pid and the set's outputs (absolute paths, the commit
 /// output first), one per line between [`MAGIC`] and [`END`], separated by NUL bytes
 /// (a path may hold a newline, never a NUL).
 fn marker_bytes(pid: u32, targets: &[PathBuf]) -> Vec<u8> {
     let mut b = format!("{MAGIC}\0{pid}\0").into_bytes();
     for t in targets {
-        b.extend_from_slice(t.as_os_str().as_bytes());
+        b.extend_from_slice(&path_bytes(t));
         b.push(0);
     }
     b.extend_from_slice(END.as_bytes());
@@ -84,7 +109,7 @@ fn parse_marker(bytes: &[u8]) -> Option<(u32, Vec<PathBuf>)> {
         return None;
     }
     let pid = std::str::from_utf8(fields[1]).ok()?.parse().ok()?;
-    Some((pid, fields[2..].iter().map(|f| PathBuf::from(OsStr::from_bytes(f))).collect()))
+    Some((pid, fields[2..].iter().map(|f| path_of(f)).collect()))
 }
 
 /// Writes `bytes` to `path` and flushes it to disk.
@@ -231,5 +256,6 @@ fn commit(
     Ok(())
 }
 
-#[cfg(test)]
+// The tests kill a child process with SIGKILL: Unix only.
+#[cfg(all(test, unix))]
 mod tests;

@@ -151,15 +151,20 @@ pub fn render_rig(
     let mut dataset = Dataset::new(size, paper_board);
     let mut jobs = vec![];
     for (k, view) in sim.observations.views.iter().enumerate() {
-        let z_rec =
-            view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
-                Error::InvalidInput(format!("simulated view {k} has no points, so no stage position"))
-            })?;
+        let z_rec = view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
+            Error::invalid(
+                format!("views[{k}].points"),
+                format!("simulated view {k} has no points, so no stage position"),
+            )
+        })?;
         let e_rec = view.e_com_ma.unwrap_or(view.e_in_ma);
         let z = z_rec + sim.true_dz_mm.get(k).copied().unwrap_or(0.0);
         let e = e_rec + sim.true_de_ma.get(k).copied().unwrap_or(0.0);
         let (block, first) = visible_block(truth, e, paper_board, z, size, options.margin_px).ok_or_else(|| {
-            Error::InvalidInput(format!("view {k}: not even 3 x 3 corners of the board fit the image"))
+            Error::invalid(
+                format!("views[{k}]"),
+                format!("view {k}: not even 3 x 3 corners of the board fit the image"),
+            )
         })?;
         let image = PathBuf::from(format!("views/view{k:02}.png"));
         jobs.push(Job {
@@ -183,7 +188,10 @@ pub fn render_rig(
     dataset.offstate_board = Some(off_board);
     for (k, pose) in lens_off_poses(truth).iter().enumerate() {
         let Some((block, first)) = visible_block(pose, 0.0, off_board, 0.0, size, options.margin_px) else {
-            return Err(Error::InvalidInput(format!("lens-off view {k}: not even 3 x 3 corners fit the image")));
+            return Err(Error::invalid(
+                format!("offstate_views[{k}]"),
+                format!("lens-off view {k}: not even 3 x 3 corners fit the image"),
+            ));
         };
         let image = PathBuf::from(format!("offstate/off{k:02}.png"));
         jobs.push(Job {
