@@ -156,7 +156,10 @@ fn a_board_is_named_where_it_stands_in_the_dataset() {
     bad.views[0].board = Some(Board { inner_corners: [5, 4], square_mm: f64::NAN });
     let (what, value, line) = fields(bad.validate().unwrap_err());
     assert_eq!((what.as_str(), value.as_deref()), ("views[0].board.square_mm", Some("NaN")));
-    assert_eq!(line, "invalid input: view v0.png: board: invalid input: square_mm must be a positive square size, got NaN mm");
+    assert_eq!(
+        line,
+        "invalid input: view v0.png: board: invalid input: square_mm must be a positive square size, got NaN mm"
+    );
     let mut bad = d;
     bad.views[0].z_w_mm = f64::NEG_INFINITY;
     let (what, value, line) = fields(bad.validate().unwrap_err());
