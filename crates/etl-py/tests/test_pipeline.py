@@ -446,7 +446,7 @@ def test_calibrate_reports_outliers_and_warns(sim: etlcal.Simulation) -> None:
     assert again.outliers == cal.outliers and again.warnings == cal.warnings
 
 
-def test_per_setting_baseline_names_zhangs_outliers_by_setting_view():
+def test_per_setting_baseline_names_zhangs_outliers_by_setting_view() -> None:
     # Issue 19: corners of setting views moved far off are left out by Zhang's method at
     # their setting and listed as (setting view, point, residual_px), the view counted in
     # the observations' setting_views; a clean baseline has none.
