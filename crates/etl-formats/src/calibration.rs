@@ -317,6 +317,12 @@ pub struct Calibration {
     /// the final solve (optional: absent when there are none, and in older files).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub outliers: Vec<Outlier>,
+    /// The corners Zhang's method left out as gross outliers at the settings of the
+    /// per-setting baseline (`estimator` "per-setting"): `view` indexes the observations'
+    /// `setting_views`, `point` that view's `points` (optional: absent when there are none,
+    /// and in files of the other estimators).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub setting_outliers: Vec<Outlier>,
     /// Why the result may be implausible (e.g. current corrections far beyond their prior,
     /// an RMS far above the detector's noise), one sentence each (optional: absent when
     /// there are none).
@@ -324,7 +330,8 @@ pub struct Calibration {
     pub warnings: Vec<String>,
 }
 
-/// A corner left out of a calibration as a gross outlier.
+/// A corner left out of a calibration as a gross outlier (`outliers`: of the observations'
+/// `views`; `setting_outliers`: of their `setting_views`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Outlier {
@@ -363,6 +370,7 @@ impl Calibration {
             std: ModelStd::zero(&layout),
             estimator: String::new(),
             outliers: Vec::new(),
+            setting_outliers: Vec::new(),
             warnings: Vec::new(),
             iterations: 0,
             initial_rms_px: 0.0,
@@ -593,8 +601,10 @@ impl Calibration {
                 return bad(e.to_string());
             }
         }
-        if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| !(o.residual_px >= 0.0)) {
-            return bad(format!("outliers[{i}].residual_px = {} must be a number >= 0", o.residual_px));
+        for (key, list) in [("outliers", &self.outliers), ("setting_outliers", &self.setting_outliers)] {
+            if let Some((i, o)) = list.iter().enumerate().find(|(_, o)| !(o.residual_px >= 0.0)) {
+                return bad(format!("{key}[{i}].residual_px = {} must be a number >= 0", o.residual_px));
+            }
         }
         if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| o.view >= self.views.len()) {
             return bad(format!("outliers[{i}].view = {} must name one of the {} views", o.view, self.views.len()));

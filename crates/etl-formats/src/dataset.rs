@@ -55,7 +55,7 @@ impl Board {
             return Err(Error::invalid_value(
                 "square_mm",
                 self.square_mm,
-                format!("square size must be positive, got {} mm", self.square_mm),
+                format!("square_mm must be a positive square size, got {} mm", crate::compact(self.square_mm)),
             ));
         }
         if self.inner_corners[0] < 3 || self.inner_corners[1] < 3 {
@@ -63,7 +63,7 @@ impl Board {
                 "inner_corners",
                 self.inner_corners,
                 format!(
-                    "a board needs at least 3 x 3 inner corners, got {} x {}",
+                    "inner_corners: a board needs at least 3 x 3 inner corners, got {} x {}",
                     self.inner_corners[0], self.inner_corners[1]
                 ),
             ));
@@ -272,7 +272,7 @@ mod tests {
     #[test]
     fn bad_boards_are_named() {
         let e = Board { inner_corners: [3, 4], square_mm: -1.5 }.validate().unwrap_err().to_string();
-        assert!(e.contains("square size must be positive"), "{e}");
+        assert!(e.contains("square_mm must be a positive square size, got -1.5 mm"), "{e}");
         let e = Board { inner_corners: [2, 4], square_mm: 1.5 }.validate().unwrap_err().to_string();
         assert!(e.contains("3 x 3"), "{e}");
     }

@@ -250,6 +250,15 @@ impl Calibration {
         self.file.outliers.iter().map(|o| (o.view, o.point, o.residual_px)).collect()
     }
 
+    /// The corners Zhang's method left out as gross outliers at the settings of the
+    /// per-setting baseline, as (view, point, residual_px): indices into the observations'
+    /// setting_views and that view's points, and the corner's distance from Zhang's model
+    /// at its setting, px. Empty when there are none (and for the other methods).
+    #[getter]
+    fn setting_outliers(&self) -> Vec<(usize, usize, f64)> {
+        self.file.setting_outliers.iter().map(|o| (o.view, o.point, o.residual_px)).collect()
+    }
+
     /// Why the calibration may be implausible (outliers left out, an RMS far above the
     /// corner noise, view corrections far beyond their priors), one sentence each; empty
     /// when none. `calibrate` also issues each as a UserWarning.

@@ -110,7 +110,7 @@ def test_input_errors_of_real_calls_name_the_key_or_argument():
         o.add_view([[0, 0, 1e308]], [[1, 2]], e_in_ma=100.0, temperature_c=30.0)
     assert (info.value.what, info.value.value) == ("views[0].points[0].world_mm", "1e308")
     assert str(info.value) == (
-        "invalid input: view 0 point 0: world coordinate 1e308 mm is outside [-10000, 10000] mm"
+        "invalid input: view 0 point 0: world_mm coordinate 1e308 mm is outside [-10000, 10000] mm"
     )
     # An argument of the bindings themselves, and an option word.
     with pytest.raises(etlcal.InputError) as info:

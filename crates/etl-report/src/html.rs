@@ -252,21 +252,27 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1300px;margin:auto;pa
     figcaption{color:#333;max-width:1000px}.files{color:#777}.note{background:#f3f3f3;padding:.5em 1em}\
     ul.pairs{columns:4;max-width:1000px}";
 
-/// The corners the calibration left out of its final solve (empty when none).
+/// The corners the calibration left out of its final solve (empty when none): the bundle
+/// adjustment's (of the observations' views) and Zhang's at the per-setting baseline's
+/// settings (of their setting views).
 fn outliers_table(d: &Data) -> String {
     let c = &d.cal;
-    if c.outliers.is_empty() {
+    let lists = [("view", &c.outliers), ("setting view", &c.setting_outliers)];
+    let count: usize = lists.iter().map(|(_, l)| l.len()).sum();
+    if count == 0 {
         return String::new();
     }
-    let rows: String = c
-        .outliers
+    let rows: String = lists
         .iter()
-        .map(|o| format!("<tr><td>{}</td><td>{}</td><td>{:.2}</td></tr>\n", o.view, o.point, o.residual_px))
+        .flat_map(|(kind, list)| {
+            list.iter().map(move |o| {
+                format!("<tr><td>{kind} {}</td><td>{}</td><td>{:.2}</td></tr>\n", o.view, o.point, o.residual_px)
+            })
+        })
         .collect();
     format!(
-        "<h2 id=\"outliers\">Outliers</h2>\n<p>{} corners left out of the final solve (not in the residual plots).</p>\n\
-         <table class=\"num\"><tr><th>view</th><th>point</th><th>residual (px)</th></tr>\n{rows}</table>\n",
-        c.outliers.len()
+        "<h2 id=\"outliers\">Outliers</h2>\n<p>{count} corners left out of the final solve (not in the residual plots).</p>\n\
+         <table class=\"num\"><tr><th>view</th><th>point</th><th>residual (px)</th></tr>\n{rows}</table>\n"
     )
 }
 
