@@ -128,7 +128,7 @@ fn setting_outliers_name_the_observations_setting_views() {
         without.setting_views[v].points.remove(p);
     }
     let want = per_setting(&without, Some(&thermal)).unwrap();
-    let (m, c) = (b.calibration.model(), want.calibration.model());
+    let (m, c) = (b.calibration.model().unwrap(), want.calibration.model().unwrap());
     for e in [90.0, 150.0, 210.0] {
         let (fx, cx) = (m.focal_lengths(e).0, c.focal_lengths(e).0);
         assert!((fx / cx - 1.0).abs() < 1e-6, "{e} mA: fx {fx} vs {cx} without the outliers");

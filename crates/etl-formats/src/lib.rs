@@ -50,6 +50,7 @@ pub mod dataset;
 mod error;
 pub mod export;
 mod input_value;
+mod json_path;
 pub mod observations;
 pub mod output;
 pub mod thermal;
@@ -110,8 +111,7 @@ pub fn read_json<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> 
 /// Parses JSON text of format `expected`; `path` is used in messages only.
 pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path, expected: &str) -> Result<T> {
     // Malformed JSON is located by the path of the value it breaks in (any shape will do).
-    let parse_error =
-        |e: serde_json::Error| Error::Parse { path: path.to_owned(), message: at_field::<serde_json::Value>(text, e) };
+    let parse_error = |e: serde_json::Error| Error::Parse { path: path.to_owned(), message: at_field(text, e) };
     // The tag first, then the typed value straight from the text: no serde_json::Value
     // tree, which allocates a map per point and was most of the time of reading an
     // observations file. Files etlcal writes lead with the tag, read without a scan.
@@ -123,19 +123,16 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path, expected: &str) 
     if found != expected {
         return Err(Error::Format { path: path.to_owned(), found: found.to_owned(), expected: expected.to_owned() });
     }
-    serde_json::from_str(text).map_err(|e| Error::Parse { path: path.to_owned(), message: at_field::<T>(text, e) })
+    serde_json::from_str(text).map_err(|e| Error::Parse { path: path.to_owned(), message: at_field(text, e) })
 }
 
-/// The message of `e`, the error of parsing `text` as a `T`, led by the path of the field
-/// it stopped at (`kf_x: invalid length 3, expected an array of length 4 at line 9
-/// column 3`; `views[2].points[0].pixel[1]: ...`). The path is found by parsing `text`
-/// again through `serde_path_to_error`, which tracks it at a cost (a string per key): it
-/// is paid on a failure only, so a good file reads at full speed.
-fn at_field<T: DeserializeOwned>(text: &str, e: serde_json::Error) -> String {
-    let mut de = serde_json::Deserializer::from_str(text);
-    match serde_path_to_error::deserialize::<_, T>(&mut de) {
-        Err(located) if located.path().iter().next().is_some() => format!("{}: {}", located.path(), located.inner()),
-        _ => e.to_string(),
+/// The message of `e`, an error of parsing `text`, led by the path of the field it stopped
+/// at (`kf_x: invalid length 3, expected an array of length 4 at line 9 column 3`;
+/// `views[2].points[0].pixel[1]: ...`), found from its position ([`json_path`]).
+fn at_field(text: &str, e: serde_json::Error) -> String {
+    match json_path::path_at(text, e.line(), e.column()) {
+        Some(path) => format!("{path}: {e}"),
+        None => e.to_string(),
     }
 }
 

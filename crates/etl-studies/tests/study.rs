@@ -107,7 +107,9 @@ fn subsets_band_is_the_subsets_mean_with_its_standard_error(s: &subsets::Subsets
                 let v: Vec<f64> = fits[4..]
                     .iter()
                     .map(|f| {
-                        let d = etl_core::calib::jacobian::from_params(&etl_core::calib::Layout::PAPER, &f.params).distortion(150.0).unwrap();
+                        let d = etl_core::calib::jacobian::from_params(&etl_core::calib::Layout::PAPER, &f.params)
+                            .distortion(150.0)
+                            .unwrap();
                         scale * d.padded()[k]
                     })
                     .collect();

@@ -8,9 +8,9 @@
 use std::fmt::Debug;
 use std::path::{Path, PathBuf};
 
-use etl_core::calib::params::PARAMS;
+use etl_core::calib::params::MAX_PARAMS;
 use etl_core::focus::FocusLaw;
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface, E_IN_DOMAIN_MA, T_DOMAIN_C};
 use etl_formats::calibration::{ModelStd, Outlier, ViewSummary};
 use etl_formats::dataset::{Board, DatasetView, OffstateImage, SettingImage};
@@ -63,18 +63,30 @@ fn image_size() -> BoxedStrategy<[u32; 2]> {
     (1..=MAX_IMAGE_SIDE_PX, 1..=4096u32).prop_map(|(w, h)| [w, h]).boxed()
 }
 
-/// A camera model: any finite numbers.
+/// A camera model of either distortion family and any focal degree (1..=5): any finite
+/// numbers.
 fn camera_model() -> BoxedStrategy<CameraModel> {
     let v3 = || prop::array::uniform3(finite());
-    let v4 = || prop::array::uniform4(finite());
-    (v3(), v3(), v4(), v4(), prop::array::uniform2(finite()), prop::array::uniform9(finite()))
-        .prop_map(|(r, t, kx, ky, pp, a)| CameraModel {
-            rotation_rodrigues: r,
-            translation_mm: t,
-            kf_x: kx,
-            kf_y: ky,
-            principal_point: pp,
-            distortion_a: a,
+    let family = prop_oneof![Just(DistortionModel::Paper), Just(DistortionModel::OpenCv)];
+    (family, 1..=5usize)
+        .prop_flat_map(move |(family, degree)| {
+            let poly = move || prop::collection::vec(finite(), degree + 1);
+            (
+                v3(),
+                v3(),
+                poly(),
+                poly(),
+                prop::array::uniform2(finite()),
+                prop::collection::vec(finite(), family.a_len()),
+            )
+                .prop_map(move |(r, t, kx, ky, pp, a)| CameraModel {
+                    rotation_rodrigues: r,
+                    translation_mm: t,
+                    kf_x: FocalPoly::new(&kx).unwrap(),
+                    kf_y: FocalPoly::new(&ky).unwrap(),
+                    principal_point: pp,
+                    distortion_a: DistortionA::new(family, &a).unwrap(),
+                })
         })
         .boxed()
 }
@@ -120,12 +132,12 @@ fn focus_law() -> BoxedStrategy<FocusLaw> {
 }
 
 /// A covariance the validator accepts: diagonal std^2, symmetric, |c_ij| <= s_i s_j.
-fn covariance(std: [f64; PARAMS]) -> BoxedStrategy<[[f64; PARAMS]; PARAMS]> {
-    prop::collection::vec(-1.0..=1.0f64, PARAMS * PARAMS)
+fn covariance(std: [f64; MAX_PARAMS]) -> BoxedStrategy<[[f64; MAX_PARAMS]; MAX_PARAMS]> {
+    prop::collection::vec(-1.0..=1.0f64, MAX_PARAMS * MAX_PARAMS)
         .prop_map(move |r| {
             core::array::from_fn(|i| {
                 core::array::from_fn(|j| {
-                    let rho = if i == j { 1.0 } else { r[i.min(j) * PARAMS + i.max(j)] };
+                    let rho = if i == j { 1.0 } else { r[i.min(j) * MAX_PARAMS + i.max(j)] };
                     rho * std[i] * std[j]
                 })
             })
@@ -181,7 +193,8 @@ impl Format for Calibration {
     ];
 
     fn strategy() -> BoxedStrategy<Self> {
-        let std = prop::array::uniform25(0.0..1e3f64);
+        let std =
+            prop::collection::vec(0.0..1e3f64, MAX_PARAMS).prop_map(|v| <[f64; MAX_PARAMS]>::try_from(v).unwrap());
         let head = (camera_model(), image_size(), ordered(E_IN_DOMAIN_MA), non_negative(), std);
         let tail = (
             proptest::option::of(thermal_ref()),
@@ -197,7 +210,7 @@ impl Format for Calibration {
                 |((model, size, range, rms, std), (thermal, estimator, iterations, initial, views, law, warnings))| {
                     let mut c = Calibration::from_model(&model, size, range);
                     c.rms_reprojection_px = rms;
-                    c.std = ModelStd::from_params(&std);
+                    c.std = ModelStd::from_params(&model.layout(), &std);
                     c.thermal = thermal;
                     c.estimator = estimator;
                     c.iterations = iterations;
@@ -211,7 +224,7 @@ impl Format for Calibration {
             )
             .prop_map(|(mut c, cov, outliers, setting_outliers)| {
                 if let Some(cov) = cov {
-                    c.set_covariance(&cov);
+                    c.set_covariance(&cov).unwrap();
                 }
                 c.outliers = outliers;
                 c.setting_outliers = setting_outliers;
