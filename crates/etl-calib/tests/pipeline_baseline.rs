@@ -47,11 +47,11 @@ fn baseline_error_grows_with_current_and_the_proposed_method_beats_it_there() {
         let (s_lo, s_hi) = (&b.settings[0], &b.settings[6]);
         base_lo += (s_lo.zhang.fx / t.focal_lengths(s_lo.e_com_ma).0 - 1.0).abs() / trials as f64;
         base_hi += (s_hi.zhang.fx / t.focal_lengths(s_hi.e_com_ma).0 - 1.0).abs() / trials as f64;
-        curve_hi += rel_err(&b.calibration.model(), 225.0) / trials as f64;
+        curve_hi += rel_err(&b.calibration.model().unwrap(), 225.0) / trials as f64;
         let a0 = etl_calib::pipeline::a0_from_offstate(&sim.observations).unwrap().a0();
         let opts = CalibrateOptions { estimator: Estimator::EIV_PAPER, ..CalibrateOptions::default() };
         let p = calibrate(&sim.observations, &a0, Some(&thermal), &opts).unwrap();
-        eiv_hi += rel_err(&p.calibration.model(), 225.0) / trials as f64;
+        eiv_hi += rel_err(&p.calibration.model().unwrap(), 225.0) / trials as f64;
     }
     println!(
         "mean |fx error|: baseline settings {:.3} % at 80 mA, {:.3} % at 225 mA; baseline curve {:.3} %, \
@@ -91,9 +91,51 @@ fn noise_free_baseline_recovers_the_curve() {
     let mut sim = paper_rig(&NoiseModel::NONE, 1);
     add_setting_views(&mut sim.observations, &rig, &NoiseModel::NONE, 1);
     let b = per_setting(&sim.observations, Some(&ThermalRef::paper())).unwrap();
-    let m = b.calibration.model();
+    let m = b.calibration.model().unwrap();
     for e in [80.0, 120.0, 170.0, 225.0] {
         assert!(rel_err(&m, e) < 1e-7, "{e}: {}", rel_err(&m, e));
     }
     assert!((m.principal_point[0] - 900.0).abs() < 1e-4 && (m.principal_point[1] - 550.0).abs() < 1e-4);
+}
+
+/// Zhang's outliers at each setting reach the baseline's file as `setting_outliers`,
+/// named by the observations' setting view (not the view's place within its setting) and
+/// point; the clean data give none, and the curve is what the data without them give.
+#[test]
+fn setting_outliers_name_the_observations_setting_views() {
+    let rig = SettingRig { e_com_ma: vec![90.0, 150.0, 210.0], views_per_setting: 5, ..SettingRig::default() };
+    let mut sim = paper_rig(&NoiseModel::PAPER, 3);
+    add_setting_views(&mut sim.observations, &rig, &NoiseModel::PAPER, 3);
+    // Highest current first: a setting's k-th view is not the observations' k-th.
+    sim.observations.setting_views.reverse();
+    let thermal = ThermalRef::paper();
+    let clean = per_setting(&sim.observations, Some(&thermal)).unwrap();
+    assert!(clean.calibration.setting_outliers.is_empty(), "{:?}", clean.calibration.setting_outliers);
+    let bad = [(1usize, 20usize), (12, 5), (12, 60)];
+    let mut obs = sim.observations.clone();
+    for &(v, p) in &bad {
+        let px = &mut obs.setting_views[v].points[p].pixel;
+        *px = [px[0] - 80.0, px[1] + 130.0];
+    }
+    let b = per_setting(&obs, Some(&thermal)).unwrap();
+    let found: Vec<(usize, usize)> = b.calibration.setting_outliers.iter().map(|o| (o.view, o.point)).collect();
+    assert_eq!(found, bad);
+    assert!(b.calibration.setting_outliers.iter().all(|o| o.residual_px > 100.0), "{:?}", b.calibration);
+    assert!(b.calibration.outliers.is_empty());
+    // The outliers are left out: the curve is that of the clean data without those corners.
+    let mut without = sim.observations.clone();
+    for &(v, p) in bad.iter().rev() {
+        without.setting_views[v].points.remove(p);
+    }
+    let want = per_setting(&without, Some(&thermal)).unwrap();
+    let (m, c) = (b.calibration.model().unwrap(), want.calibration.model().unwrap());
+    for e in [90.0, 150.0, 210.0] {
+        let (fx, cx) = (m.focal_lengths(e).0, c.focal_lengths(e).0);
+        assert!((fx / cx - 1.0).abs() < 1e-6, "{e} mA: fx {fx} vs {cx} without the outliers");
+    }
+    // The file keeps them.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("baseline.json");
+    b.calibration.save(&path).unwrap();
+    assert_eq!(etl_formats::Calibration::load(&path).unwrap().setting_outliers, b.calibration.setting_outliers);
 }

@@ -69,12 +69,12 @@ impl Checkerboard {
         // The messages of the checkerboards of before the board format, which users match
         // on; `what` names the key.
         if !(self.square_mm.is_finite() && self.square_mm > 0.0) {
-            let message = format!("square size must be positive, got {} mm", self.square_mm);
+            let message = format!("square_mm must be a positive square size, got {} mm", compact(self.square_mm));
             return Err(Error::invalid_value("square_mm", self.square_mm, message));
         }
         let [c, r] = self.inner_corners;
         if c < 3 || r < 3 {
-            let message = format!("a board needs at least 3 x 3 inner corners, got {c} x {r}");
+            let message = format!("inner_corners: a board needs at least 3 x 3 inner corners, got {c} x {r}");
             return Err(Error::invalid_value("inner_corners", self.inner_corners, message));
         }
         if c > MAX_INNER_CORNERS || r > MAX_INNER_CORNERS {
@@ -433,7 +433,7 @@ mod tests {
             (ch(r#""inner_corners": [3, 3], "squares": [12, 9], "square_mm": 1.5, "marker_mm": 1, "dictionary": "DICT_5X5_100""#), "inner_corners is not a field of a ChArUco board"),
             (r#"{"type": "checkerboard", "inner_corners": [14, 0], "square_mm": 1.5}"#.into(), "a board needs at least 3 x 3 inner corners, got 14 x 0"),
             (r#"{"type": "checkerboard", "inner_corners": [14, 1000], "square_mm": 1.5}"#.into(), "at most 999 x 999 inner corners, got 14 x 1000"),
-            (r#"{"type": "checkerboard", "inner_corners": [14, 12], "square_mm": -1}"#.into(), "square size must be positive, got -1 mm"),
+            (r#"{"type": "checkerboard", "inner_corners": [14, 12], "square_mm": -1}"#.into(), "square_mm must be a positive square size, got -1 mm"),
             (r#"{"inner_corners": [14, 12], "square_mm": 1, "dictionary": "DICT_5X5_100"}"#.into(), "fields of a ChArUco board"),
             (r#"{"type": "circles", "inner_corners": [14, 12], "square_mm": 1}"#.into(), "type \"circles\" is not"),
             (r#"{"format": "etlcal.board/2", "type": "checkerboard", "inner_corners": [14, 12], "square_mm": 1}"#.into(), "format \"etlcal.board/2\""),

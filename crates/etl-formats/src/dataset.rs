@@ -45,6 +45,17 @@ use crate::{Error, Result};
 /// The format tag.
 pub const FORMAT: &str = "etlcal.dataset/1";
 
+/// An image of a dataset with the board it shows ([`Dataset::images_with_boards`]).
+struct ImageBoard<'a> {
+    kind: &'static str,
+    key: String,
+    image: &'a Path,
+    board: Board,
+    /// Where the board is given: `"views[3].board"`, `"board"`, `"offstate_board"`.
+    from: String,
+    first_corner: Option<[usize; 2]>,
+}
+
 /// One ETL view: an image of the board on the stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -160,20 +171,29 @@ impl Dataset {
     }
 
     /// Every image with its kind (`"view"`, `"offstate view"`, `"setting view"`), its key
-    /// path (`"views[3]"`), the board it shows and its `first_corner`, in the file's order.
-    fn images_with_boards(
-        &self,
-    ) -> impl Iterator<Item = (&'static str, String, &Path, Board, Option<[usize; 2]>)> + '_ {
-        let views = self.views.iter().enumerate().map(|(i, v)| {
-            ("view", format!("views[{i}]"), v.image.as_path(), v.board.unwrap_or(self.board), v.first_corner)
+    /// path (`"views[3]"`), the board it shows, where that board is given (its own
+    /// `board`, or the dataset's `board` or `offstate_board`) and its `first_corner`, in
+    /// the file's order.
+    fn images_with_boards(&self) -> impl Iterator<Item = ImageBoard<'_>> + '_ {
+        let own_or = |own: Option<Board>, key: &str, default: Board, default_key: &'static str| match own {
+            Some(b) => (b, format!("{key}.board")),
+            None => (default, default_key.to_owned()),
+        };
+        let off_key = if self.offstate_board.is_some() { "offstate_board" } else { "board (no offstate_board)" };
+        let views = self.views.iter().enumerate().map(move |(i, v)| {
+            let key = format!("views[{i}]");
+            let (board, from) = own_or(v.board, &key, self.board, "board");
+            ImageBoard { kind: "view", key, image: &v.image, board, from, first_corner: v.first_corner }
         });
-        let off = self.offstate_views.iter().enumerate().map(|(i, v)| {
-            let board = v.board.unwrap_or(self.offstate_board());
-            ("offstate view", format!("offstate_views[{i}]"), v.image.as_path(), board, v.first_corner)
+        let off = self.offstate_views.iter().enumerate().map(move |(i, v)| {
+            let key = format!("offstate_views[{i}]");
+            let (board, from) = own_or(v.board, &key, self.offstate_board(), off_key);
+            ImageBoard { kind: "offstate view", key, image: &v.image, board, from, first_corner: v.first_corner }
         });
-        let settings = self.setting_views.iter().enumerate().map(|(i, v)| {
-            let board = v.board.unwrap_or(self.board);
-            ("setting view", format!("setting_views[{i}]"), v.image.as_path(), board, v.first_corner)
+        let settings = self.setting_views.iter().enumerate().map(move |(i, v)| {
+            let key = format!("setting_views[{i}]");
+            let (board, from) = own_or(v.board, &key, self.board, "board");
+            ImageBoard { kind: "setting view", key, image: &v.image, board, from, first_corner: v.first_corner }
         });
         views.chain(off).chain(settings)
     }
@@ -219,14 +239,16 @@ impl Dataset {
                 b.validate().map_err(|e| e.within(context, Some(&format!("{key}[{i}].board"))))?;
             }
         }
-        for (kind, key, image, board, first) in self.images_with_boards() {
-            if let (Board::Charuco(_), Some([i, j])) = (board, first) {
+        for v in self.images_with_boards() {
+            if let (Board::Charuco(_), Some([i, j])) = (v.board, v.first_corner) {
                 let message = format!(
-                    "{kind} {}: first_corner [{i}, {j}] applies to checkerboards only (a ChArUco board's \
-                     corners are known by their ids)",
-                    image.display()
+                    "{} {}: first_corner [{i}, {j}] applies to checkerboards only, and its board ({}) is \
+                     ChArUco (its corners are known by their ids)",
+                    v.kind,
+                    v.image.display(),
+                    v.from
                 );
-                return Err(Error::invalid_value(format!("{key}.first_corner"), [i, j], message));
+                return Err(Error::invalid_value(format!("{}.first_corner", v.key), [i, j], message));
             }
         }
         Ok(())
@@ -277,7 +299,7 @@ mod tests {
     fn bad_boards_are_named() {
         let e = Board::Checkerboard(Checkerboard { inner_corners: [3, 4], square_mm: -1.5 });
         let e = e.validate().unwrap_err().to_string();
-        assert!(e.contains("square size must be positive"), "{e}");
+        assert!(e.contains("square_mm must be a positive square size, got -1.5 mm"), "{e}");
         let e = Board::Checkerboard(Checkerboard { inner_corners: [2, 4], square_mm: 1.5 });
         assert!(e.validate().unwrap_err().to_string().contains("3 x 3"));
         // Inline, a bad board of a dataset is named with the place in the file.
@@ -315,7 +337,10 @@ mod tests {
         assert_eq!(back, d);
         let hinted = new.replace(r#""z_w_mm": 5}"#, r#""z_w_mm": 5, "first_corner": [1, 1]}"#);
         let e = dataset(&hinted).unwrap_err().to_string();
-        assert!(e.contains("view v.png: first_corner [1, 1] applies to checkerboards only"), "{e}");
+        assert!(
+            e.contains("view v.png: first_corner [1, 1] applies to checkerboards only, and its board (board)"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -51,6 +51,7 @@ pub mod dataset;
 mod error;
 pub mod export;
 mod input_value;
+mod json_path;
 pub mod observations;
 pub mod output;
 pub mod thermal;
@@ -111,7 +112,8 @@ pub fn read_json<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> 
 
 /// Parses JSON text of format `expected`; `path` is used in messages only.
 pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path, expected: &str) -> Result<T> {
-    let parse_error = |e: serde_json::Error| Error::Parse { path: path.to_owned(), message: e.to_string() };
+    // Malformed JSON is located by the path of the value it breaks in (any shape will do).
+    let parse_error = |e: serde_json::Error| Error::Parse { path: path.to_owned(), message: at_field(text, e) };
     // The tag first, then the typed value straight from the text: no serde_json::Value
     // tree, which allocates a map per point and was most of the time of reading an
     // observations file. Files etlcal writes lead with the tag, read without a scan.
@@ -123,7 +125,17 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path, expected: &str) 
     if found != expected {
         return Err(Error::Format { path: path.to_owned(), found: found.to_owned(), expected: expected.to_owned() });
     }
-    serde_json::from_str(text).map_err(parse_error)
+    serde_json::from_str(text).map_err(|e| Error::Parse { path: path.to_owned(), message: at_field(text, e) })
+}
+
+/// The message of `e`, an error of parsing `text`, led by the path of the field it stopped
+/// at (`kf_x: invalid length 3, expected an array of length 4 at line 9 column 3`;
+/// `views[2].points[0].pixel[1]: ...`), found from its position ([`json_path`]).
+fn at_field(text: &str, e: serde_json::Error) -> String {
+    match json_path::path_at(text, e.line(), e.column()) {
+        Some(path) => format!("{path}: {e}"),
+        None => e.to_string(),
+    }
 }
 
 /// The tag of a document that opens with `{"format": "<string>"`, read without looking

@@ -141,7 +141,7 @@ fn check_points(points: &[PointObs], view: ViewRef<'_>, image_size: [u32; 2], pl
             return Err(bad(
                 "world_mm",
                 x,
-                format!("world coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(x)),
+                format!("world_mm coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(x)),
             ));
         }
         for (&x, side) in p.pixel.iter().zip(image_size) {
@@ -164,7 +164,7 @@ fn check_points(points: &[PointObs], view: ViewRef<'_>, image_size: [u32; 2], pl
             return Err(bad(
                 "world_mm",
                 z,
-                format!("Z = {} mm, but this board is planar: its points must have Z = 0", crate::compact(z)),
+                format!("world_mm Z = {} mm, but this board is planar: its points must have Z = 0", crate::compact(z)),
             ));
         }
     }

@@ -9,7 +9,8 @@
 //!   the link kept; a dangling symlink is refused.
 //! - A replaced file keeps its permission bits; a read-only file is refused.
 //! - One file is written atomically by [`crate::write_atomic`] (a temporary sibling, then a
-//!   rename); files of one run in several places by [`write_file_set`] (renamed last). A
+//!   rename); files of one run in several places by [`write_file_set`] (renamed last,
+//!   made one step by a journal that readers complete: crates/etl-formats/src/output/file_set.rs). A
 //!   set of files in one directory swapped in whole is the `etlcal` binary's (its
 //!   `output::write_dir_set`, built on [`resolve_output`], [`temp_sibling`],
 //!   [`remove_stale_temps`] and [`kept_permissions`]): the atomic exchange of two
@@ -113,7 +114,7 @@ pub fn check_paths(inputs: &[&Path], outputs: &[Output<'_>]) -> Result<()> {
 
 /// `path` with its existing directory made canonical, for comparing outputs that do not
 /// exist yet (`t.json` and `./t.json` are one file).
-fn absolute(path: &Path) -> PathBuf {
+pub(crate) fn absolute(path: &Path) -> PathBuf {
     let lexical: PathBuf = path.components().collect();
     let dir = match lexical.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -125,44 +126,13 @@ fn absolute(path: &Path) -> PathBuf {
     }
 }
 
-/// Writes several files as one set, wherever they are: `write` gets one temporary sibling
-/// path per output (`.NAME.tmpPID`, in order) and writes each (with the formats' own
-/// savers, which validate); then every temporary is renamed onto its output, last step.
-/// On an error before the renames nothing is replaced and every temporary is removed.
-/// The outputs are checked as [`check_paths`] does (policy of the module doc) first.
-/// Not atomic as a set under a kill between the renames (a window of a few system
-/// calls); sets in one directory use the `etlcal` binary's `output::write_dir_set`, which
-/// is.
-pub fn write_file_set<T>(outputs: &[&Path], write: impl FnOnce(&[PathBuf]) -> Result<T>) -> Result<T> {
-    let files: Vec<Output<'_>> = outputs.iter().map(|p| Output::File(p)).collect();
-    check_paths(&[], &files)?;
-    let mut targets = Vec::with_capacity(outputs.len());
-    let mut temps = Vec::with_capacity(outputs.len());
-    for p in outputs {
-        let (target, dir, name) = resolve_output(p)?;
-        remove_stale_temps(&dir, &name);
-        temps.push(temp_sibling(&dir, &name));
-        targets.push(target);
-    }
-    let result = write(&temps).and_then(|value| {
-        for ((tmp, target), out) in temps.iter().zip(&targets).zip(outputs) {
-            let io = |source| Error::Output { path: out.to_path_buf(), source };
-            if let Some(mode) = kept_mode(target) {
-                std::fs::set_permissions(tmp, mode).map_err(io)?;
-            }
-            std::fs::rename(tmp, target).map_err(io)?;
-        }
-        Ok(value)
-    });
-    for tmp in &temps {
-        let _ = std::fs::remove_file(tmp);
-    }
-    result
-}
-
 /// The metadata of the input `path` (symlinks followed), refusing anything but a regular
 /// file; `None` when it does not exist.
+///
+/// A set of files that a killed run left half renamed ([`write_file_set`]) is completed
+/// first, so that the input read is the set's new file, never a mix of two runs.
 pub fn check_input(path: &Path) -> Result<Option<std::fs::Metadata>> {
+    file_set::complete_pending(path)?;
     match std::fs::metadata(path) {
         Ok(m) if m.file_type().is_file() => Ok(Some(m)),
         Ok(_) => Err(Error::Io {
@@ -213,13 +183,22 @@ pub fn resolve_output(path: &Path) -> Result<(PathBuf, PathBuf, std::ffi::OsStri
 
 /// The temporary sibling of `name` in `dir` for this process: `.NAME.tmpPID`.
 pub fn temp_sibling(dir: &Path, name: &std::ffi::OsStr) -> PathBuf {
-    dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()))
+    temp_of(dir, name, std::process::id())
+}
+
+/// The temporary sibling of `name` in `dir` for process `pid`: `.NAME.tmpPID`.
+pub(crate) fn temp_of(dir: &Path, name: &std::ffi::OsStr, pid: u32) -> PathBuf {
+    dir.join(format!(".{}.tmp{}", name.to_string_lossy(), pid))
 }
 
 /// Removes the temporaries `.NAME.tmpPID` (files or directories) in `dir` left by
 /// processes that no longer run (a killed run); best effort, errors ignored. Another
 /// running process's temporary is left alone.
+///
+/// A file set of a killed run pending on `dir/name` ([`write_file_set`]) is completed or
+/// abandoned first: its temporaries are either the set's new files or garbage.
 pub fn remove_stale_temps(dir: &Path, name: &std::ffi::OsStr) {
+    let _ = file_set::complete_pending(&dir.join(name));
     let prefix = format!(".{}.tmp", name.to_string_lossy());
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
@@ -238,7 +217,7 @@ pub fn remove_stale_temps(dir: &Path, name: &std::ffi::OsStr) {
 
 /// Whether the process `pid` (decimal) runs: this one does; another one when `/proc/PID`
 /// exists (Linux); elsewhere every process is taken as running (its temporary is kept).
-fn process_runs(pid: &str) -> bool {
+pub(crate) fn process_runs(pid: &str) -> bool {
     if pid == std::process::id().to_string() {
         return true;
     }
@@ -268,6 +247,9 @@ pub fn kept_permissions(m: &std::fs::Metadata) -> std::fs::Permissions {
         m.permissions()
     }
 }
+
+mod file_set;
+pub use file_set::write_file_set;
 
 // The policy's tests make symlinks, hard links, FIFOs and modes: Unix only.
 #[cfg(all(test, unix))]

@@ -73,14 +73,14 @@ fn each_refused_number_of_the_observations_is_named_by_its_key_path() {
             |o| o.views[0].points[1].world_mm[1] = -2e4,
             "views[0].points[1].world_mm",
             Some("-20000"),
-            "invalid input: view 0 point 1: world coordinate -20000 mm is outside [-10000, 10000] mm",
+            "invalid input: view 0 point 1: world_mm coordinate -20000 mm is outside [-10000, 10000] mm",
         ),
         (|o| o.views[0].points.clear(), "views[0].points", None, "invalid input: view 0 has no points"),
         (
             |o| o.offstate_views.push(OffstateView { points: vec![point([1.0, 2.0, 3.0], [5.0, 5.0])] }),
             "offstate_views[0].points[0].world_mm",
             Some("3"),
-            "invalid input: lens-off view 0 point 0: Z = 3 mm, but this board is planar: its points must have Z = 0",
+            "invalid input: lens-off view 0 point 0: world_mm Z = 3 mm, but this board is planar: its points must have Z = 0",
         ),
     ];
     for (spoil, what, value, line) in cases {
@@ -143,20 +143,23 @@ fn a_board_is_named_where_it_stands_in_the_dataset() {
     bad.board = Board::Checkerboard(Checkerboard { inner_corners: [5, 4], square_mm: -1.5 });
     let (what, value, line) = fields(bad.validate().unwrap_err());
     assert_eq!((what.as_str(), value.as_deref()), ("board.square_mm", Some("-1.5")));
-    assert_eq!(line, "invalid input: square size must be positive, got -1.5 mm");
+    assert_eq!(line, "invalid input: square_mm must be a positive square size, got -1.5 mm");
     let mut bad = d.clone();
     bad.offstate_board = Some(Board::Checkerboard(Checkerboard { inner_corners: [2, 4], square_mm: 2.0 }));
     let (what, value, line) = fields(bad.validate().unwrap_err());
     assert_eq!((what.as_str(), value.as_deref()), ("offstate_board.inner_corners", Some("[2, 4]")));
     assert_eq!(
         line,
-        "invalid input: offstate_board: invalid input: a board needs at least 3 x 3 inner corners, got 2 x 4"
+        "invalid input: offstate_board: invalid input: inner_corners: a board needs at least 3 x 3 inner corners, got 2 x 4"
     );
     let mut bad = d.clone();
     bad.views[0].board = Some(Board::Checkerboard(Checkerboard { inner_corners: [5, 4], square_mm: f64::NAN }));
     let (what, value, line) = fields(bad.validate().unwrap_err());
     assert_eq!((what.as_str(), value.as_deref()), ("views[0].board.square_mm", Some("NaN")));
-    assert_eq!(line, "invalid input: view v0.png: board: invalid input: square size must be positive, got NaN mm");
+    assert_eq!(
+        line,
+        "invalid input: view v0.png: board: invalid input: square_mm must be a positive square size, got NaN mm"
+    );
     let mut bad = d;
     bad.views[0].z_w_mm = f64::NEG_INFINITY;
     let (what, value, line) = fields(bad.validate().unwrap_err());

@@ -23,6 +23,14 @@ fn bench(c: &mut Criterion) {
     let image: Vec<u8> = (0..W * H).map(|i| ((i % W) * 7 + (i / W) * 13) as u8).collect();
     let src = SourceImage::new(&image, W, H, 1).expect("image");
     let maps = undistort_maps(&k, &d, &out).expect("maps");
+    // Release builds vectorise (tests run unoptimised): check here that the dispatched
+    // loops (AVX2/AVX-512 where the CPU has them) give the baseline build's numbers.
+    let (mut mx, mut my) = (vec![0.0f32; W * H], vec![0.0f32; W * H]);
+    etl_core::undistort::undistort_maps(&k, &d, &out, 0..H, &mut mx, &mut my).expect("core maps");
+    assert!(maps.map_x() == mx.as_slice() && maps.map_y() == my.as_slice(), "dispatched maps differ");
+    let mut dst = vec![0u8; W * H];
+    etl_core::undistort::remap(&src, &mx, &my, 0, &mut dst).expect("core remap");
+    assert!(remap(&src, &maps, 0u8).expect("remap") == dst, "dispatched remap differs");
     let mut g = c.benchmark_group("undistort_1936x1458");
     g.sample_size(20);
     g.bench_function("undistort_maps", |b| b.iter(|| undistort_maps(&k, &d, &out).expect("maps")));

@@ -11,6 +11,6 @@ mod read;
 pub mod sharpness;
 pub mod undistort;
 
-pub use read::read_image;
+pub use read::{read_image, MAX_JPEG_PIXELS_PER_BYTE, MAX_PNG_PIXELS_PER_BYTE};
 
 pub use etl_formats::{Error, Result};

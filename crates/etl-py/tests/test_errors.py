@@ -1,6 +1,7 @@
 """The exception hierarchy, and every variant of the Rust error types mapped to its class
 with the Rust message unchanged."""
 import pickle
+from typing import Optional
 
 import numpy as np
 import pytest
@@ -86,13 +87,13 @@ INPUT_FIELDS = [
 
 
 @pytest.mark.parametrize("variant,what,value", INPUT_FIELDS)
-def test_input_error_names_what_and_value(variant, what, value):
+def test_input_error_names_what_and_value(variant: str, what: Optional[str], value: Optional[str]) -> None:
     with pytest.raises(etlcal.InputError) as info:
         etlcal._etlcal._raise_rust_error(variant)
     assert (info.value.what, info.value.value) == (what, value)
 
 
-def test_input_error_fields_default_to_none_and_survive_pickling():
+def test_input_error_fields_default_to_none_and_survive_pickling() -> None:
     e = etlcal.InputError("made in Python")
     assert (e.what, e.value) == (None, None)
     with pytest.raises(etlcal.InputError) as info:
@@ -101,7 +102,7 @@ def test_input_error_fields_default_to_none_and_survive_pickling():
     assert (back.what, back.value, str(back)) == ("square_mm", "-1.5", "invalid input: negative")
 
 
-def test_input_errors_of_real_calls_name_the_key_or_argument():
+def test_input_errors_of_real_calls_name_the_key_or_argument() -> None:
     o = etlcal.Observations((100, 100))
     with pytest.raises(etlcal.InputError) as info:
         o.add_view([[0, 0, 10]], [[1, 2]], e_in_ma=float("nan"), temperature_c=30.0)
@@ -110,12 +111,12 @@ def test_input_errors_of_real_calls_name_the_key_or_argument():
         o.add_view([[0, 0, 1e308]], [[1, 2]], e_in_ma=100.0, temperature_c=30.0)
     assert (info.value.what, info.value.value) == ("views[0].points[0].world_mm", "1e308")
     assert str(info.value) == (
-        "invalid input: view 0 point 0: world coordinate 1e308 mm is outside [-10000, 10000] mm"
+        "invalid input: view 0 point 0: world_mm coordinate 1e308 mm is outside [-10000, 10000] mm"
     )
     # An argument of the bindings themselves, and an option word.
     with pytest.raises(etlcal.InputError) as info:
         etlcal.Observations((0, 10))
     assert (info.value.what, info.value.value) == ("image_size", "[0, 10]")
     with pytest.raises(etlcal.InputError) as info:
-        etlcal.sharpness(np.zeros((8, 8), np.uint8), "sharpest")
+        etlcal.sharpness(np.zeros((8, 8), np.uint8), "sharpest")  # type: ignore[arg-type]  # the run-time check is the test
     assert (info.value.what, info.value.value) == ("metric", "sharpest")

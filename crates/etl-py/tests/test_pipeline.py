@@ -444,3 +444,21 @@ def test_calibrate_reports_outliers_and_warns(sim: etlcal.Simulation) -> None:
     assert abs(cal.principal_point[0] - clean.principal_point[0]) < 0.5
     again = etlcal.Calibration.from_json(cal.to_json())
     assert again.outliers == cal.outliers and again.warnings == cal.warnings
+
+
+def test_per_setting_baseline_names_zhangs_outliers_by_setting_view() -> None:
+    # Issue 19: corners of setting views moved far off are left out by Zhang's method at
+    # their setting and listed as (setting view, point, residual_px), the view counted in
+    # the observations' setting_views; a clean baseline has none.
+    sim = etlcal.simulate.paper_rig(seed=3, setting_views=True)
+    doc = json.loads(sim.observations.to_json())
+    clean = etlcal.calibrate(etlcal.Observations.from_json(json.dumps(doc)), method="per-setting")
+    assert clean.setting_outliers == [] and clean.outliers == []
+    last = len(doc["setting_views"]) - 1
+    for v, p in [(2, 9), (last, 40)]:
+        px = doc["setting_views"][v]["points"][p]["pixel"]
+        doc["setting_views"][v]["points"][p]["pixel"] = [px[0] + 150.0, px[1] - 90.0]
+    base = etlcal.calibrate(etlcal.Observations.from_json(json.dumps(doc)), method="per-setting")
+    assert [(v, p) for v, p, _ in base.setting_outliers] == [(2, 9), (last, 40)]
+    assert all(r > 100.0 for _, _, r in base.setting_outliers)
+    assert etlcal.Calibration.from_json(base.to_json()).setting_outliers == base.setting_outliers

@@ -18,15 +18,13 @@
 //! moment), and each efficiency with the one that implies.
 
 use etl_core::calib::crlb::{crlb_covariance, crlb_covariance_eiv};
-use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
 use serde_json::json;
 
 use super::common::{
-    calibrate_pair, calibrate_paper, cov_std, fx_std_px, md_table, run_jobs, sci, stat, truth_params, Chart, Figure,
-    Series, StudyOptions, StudyOutput,
+    calibrate_pair, calibrate_paper, cov_std, fx_std_px, md_table, paper_params, param_name, run_jobs, sci, stat,
+    truth_params, Chart, Figure, Series, StudyOptions, StudyOutput, PARAMS,
 };
 use etl_formats::{Error, Result};
 use etl_sim::simulate::{core_points, paper_rig, NoiseModel, PAPER_E_COM_MA};
@@ -48,7 +46,7 @@ pub const PER_VIEW: NoiseModel =
 /// One parameter's row.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ParamRow {
-    /// Name (`PARAM_NAMES`).
+    /// Name ([`super::common::param_name`]).
     pub name: &'static str,
     /// True value.
     pub truth: f64,
@@ -145,14 +143,15 @@ pub fn crlb(opts: &StudyOptions) -> Result<Crlb> {
         return Err(Error::invalid("trials", "the CRLB study needs at least 2 trials that calibrate"));
     }
     let x = truth_params();
-    let p: [Vec<[f64; PARAMS]>; 2] = [est[0].iter().map(to_params).collect(), est[1].iter().map(to_params).collect()];
+    let p: [Vec<[f64; PARAMS]>; 2] =
+        [est[0].iter().map(paper_params).collect(), est[1].iter().map(paper_params).collect()];
     let (cs, fs) = (cov_std(&plain), cov_std(&full));
     let parameters = (0..PARAMS)
         .map(|i| {
             let s0 = stat(&p[0].iter().map(|v| v[i]).collect::<Vec<_>>());
             let s1 = stat(&p[1].iter().map(|v| v[i]).collect::<Vec<_>>());
             ParamRow {
-                name: PARAM_NAMES[i],
+                name: param_name(i),
                 truth: x[i],
                 crlb_std: cs[i],
                 mc_std: s0.std,
@@ -312,7 +311,7 @@ impl Crlb {
                         Series::reference("1: efficient", 7, vec![(0.0, 1.0), (24.0, 1.0)]),
                         Series::reference("0.9: the acceptance", 2, vec![(0.0, 0.9), (24.0, 0.9)]),
                     ],
-                    x_names: PARAM_NAMES.iter().map(|n| n.to_string()).collect(),
+                    x_names: (0..PARAMS).map(|i| param_name(i).to_string()).collect(),
                 },
                 Chart {
                     title: "std of fx(E): bound and Monte Carlo ± 1 s.e.".into(),

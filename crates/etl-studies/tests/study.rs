@@ -107,8 +107,10 @@ fn subsets_band_is_the_subsets_mean_with_its_standard_error(s: &subsets::Subsets
                 let v: Vec<f64> = fits[4..]
                     .iter()
                     .map(|f| {
-                        let d = etl_core::calib::jacobian::from_params(&f.params).distortion(150.0).unwrap();
-                        scale * [d.k1, d.p1, d.p2][k]
+                        let d = etl_core::calib::jacobian::from_params(&etl_core::calib::Layout::PAPER, &f.params)
+                            .distortion(150.0)
+                            .unwrap();
+                        scale * d.padded()[k]
                     })
                     .collect();
                 (stat(&v).mean, stat(&v).std)
@@ -123,7 +125,7 @@ fn subsets_band_is_the_subsets_mean_with_its_standard_error(s: &subsets::Subsets
         // The truth lies within the subsets' spread of their mean at every current.
         for (e, b) in es.iter().zip(&band) {
             let d = truth.distortion(*e).unwrap();
-            let t = scale * [d.k1, d.p1, d.p2][k];
+            let t = scale * d.padded()[k];
             assert!(b.1 > 0.0 && b.2 > 0.0 && (b.0 - t).abs() < 3.0 * b.2, "{k} at {e} mA: {b:?}, truth {t}");
         }
         let jb = &j["distortion_band"][k];

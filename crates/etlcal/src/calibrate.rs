@@ -181,6 +181,10 @@ pub fn run(args: Args) -> Result<()> {
         if !c.outliers.is_empty() {
             outln!("left out {} outlier corners (listed in the file's \"outliers\")", c.outliers.len());
         }
+        if !c.setting_outliers.is_empty() {
+            let n = c.setting_outliers.len();
+            outln!("left out {n} outlier corners of setting views (listed in the file's \"setting_outliers\")");
+        }
         outln!("wrote {}", args.out.display());
     }
     Ok(())

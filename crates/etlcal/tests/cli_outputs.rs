@@ -268,7 +268,7 @@ fn numbers_out_of_their_documented_ranges_are_refused_naming_the_quantity() {
         (
             "z.json",
             |v| v["offstate_views"][1]["points"][3]["world_mm"][2] = 2.0.into(),
-            "lens-off view 1 point 3: Z = 2 mm",
+            "lens-off view 1 point 3: world_mm Z = 2 mm",
         ),
         (
             "px.json",
@@ -311,4 +311,111 @@ fn a_fifo_as_a_dataset_image_is_refused_not_opened() {
         refused(&["calibrate", "--dataset", s(&p("dataset.json")), "--thermal", "paper", "--out", s(&p("c.json"))]);
     assert!(err.contains("not a regular file"), "{err}");
     assert!(!p("c.json").exists());
+}
+
+/// A read-only output is refused, not replaced (as root, too: a rename would replace it),
+/// and stays as it was.
+#[test]
+fn a_read_only_output_is_refused_and_kept() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    thermal_table(&p("t.csv"));
+    std::fs::write(p("ro.json"), "the user's, read-only").unwrap();
+    std::fs::set_permissions(p("ro.json"), std::fs::Permissions::from_mode(0o444)).unwrap();
+    let before = tree(d.path());
+    let err = refused(&["thermal", "fit", s(&p("t.csv")), "--out", s(&p("ro.json"))]);
+    assert!(err.contains("is read-only: refused as an output"), "{err}");
+    assert_eq!(tree(d.path()), before);
+}
+
+/// `render` writes its image and the image's corners as one set: when the corners cannot
+/// be written (a directory stands where the file goes), the earlier image is kept whole.
+#[test]
+fn render_keeps_the_earlier_image_when_its_corners_cannot_be_written() {
+    let d = tempfile::tempdir().unwrap();
+    let img = d.path().join("view.png");
+    std::fs::write(&img, "the earlier image").unwrap();
+    std::fs::create_dir(d.path().join("view.png.corners.json")).unwrap();
+    let before = tree(d.path());
+    let err = refused(&["render", "--out", s(&img)]);
+    assert!(err.contains("view.png.corners.json") && err.contains("not a regular file"), "{err}");
+    assert_eq!(tree(d.path()), before, "the image was replaced");
+}
+
+/// `thermal calibrate` writes its surface and its table as one set: an output that cannot
+/// be written (its directory is a file) leaves the earlier table whole.
+#[test]
+fn thermal_calibrate_writes_its_surface_and_table_both_or_neither() {
+    let d = tempfile::tempdir().unwrap();
+    let p = |n: &str| d.path().join(n);
+    std::fs::create_dir(p("tables")).unwrap();
+    thermal_table(&p("tables/t.csv"));
+    std::fs::write(p("blocked"), "a file where a directory is expected").unwrap();
+    let before = tree(d.path());
+    let out = etlcal(&[
+        "thermal",
+        "calibrate",
+        "--virtual",
+        "--quick",
+        "--table",
+        s(&p("tables/t.csv")),
+        "--out",
+        s(&p("blocked/t.json")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("blocked/t.json"), "{err}");
+    assert_eq!(tree(d.path()), before, "the table was replaced alone");
+}
+
+/// Runs `args`, killing it after `limit_s` seconds: `None` if it had to be killed (a hang).
+fn within(args: &[&str], limit_s: u64) -> Option<Output> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_etlcal"))
+        .args(args)
+        .current_dir(ROOT)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() >= limit_s {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            return None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    Some(child.wait_with_output().unwrap())
+}
+
+/// `report` spun forever inside the plotting library on a range of 1e308 (a calibration's
+/// E_com range, an observation's pixel): both are refused by the readers, in one line,
+/// before a plot is drawn or the output directory made.
+#[test]
+fn report_refuses_ranges_of_1e308_instead_of_hanging() {
+    let d = tempfile::tempdir().unwrap();
+    let fixture = format!("{ROOT}/fixtures/service/calibration.json");
+    let mut cal: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&fixture).unwrap()).unwrap();
+    cal["e_com_range_ma"] = serde_json::json!([80.0, 1e308]);
+    let wide = d.path().join("wide.json");
+    std::fs::write(&wide, serde_json::to_string(&cal).unwrap()).unwrap();
+    let obs = observations_with(d.path(), "far.json", |v| v["views"][3]["points"][7]["pixel"][1] = 1e308.into());
+    let out = d.path().join("report");
+    let cases = [
+        (vec!["report", "--calibration", s(&wide), "--out", s(&out)], "e_com_range_ma [80, 1e308] must be"),
+        (
+            vec!["report", "--calibration", &fixture, "--observations", s(&obs), "--out", s(&out)],
+            "view 3 point 7: pixel coordinate 1e308 px",
+        ),
+    ];
+    for (args, needle) in cases {
+        let run = within(&args, 120).unwrap_or_else(|| panic!("{args:?} hung (killed after 120 s)"));
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?}: wrote {}", out.display());
+    }
 }

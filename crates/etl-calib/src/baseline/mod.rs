@@ -14,7 +14,7 @@
 use etl_core::linalg::svd::sym_pinv;
 
 use crate::zhang::{zhang, PlanarView, ZhangResult};
-use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary, FORMAT};
+use etl_formats::calibration::{Calibration, ModelStd, Outlier, ThermalRef, ViewSummary, FORMAT};
 use etl_formats::observations::{Observations, SETTING_TOLERANCE_MA};
 use etl_formats::{Error, Result};
 
@@ -27,8 +27,11 @@ pub struct SettingEstimate {
     pub views: usize,
     /// Points in the setting.
     pub points: usize,
-    /// Zhang's result at this setting.
+    /// Zhang's result at this setting (its outliers index this setting's views).
     pub zhang: ZhangResult,
+    /// The index in the observations' `setting_views` of each of this setting's views, in
+    /// the order Zhang's method took them.
+    pub setting_views: Vec<usize>,
 }
 
 /// The baseline's result: every setting and the calibration file it gives.
@@ -190,9 +193,22 @@ fn setting_estimates(obs: &Observations, thermal: Option<&ThermalRef>) -> Result
             }
         })?;
         let points = views.iter().map(|v| v.pixels.len()).sum();
-        settings.push(SettingEstimate { e_com_ma: e, views: g.len(), points, zhang: z });
+        settings.push(SettingEstimate { e_com_ma: e, views: g.len(), points, zhang: z, setting_views: g.clone() });
     }
     Ok(settings)
+}
+
+/// Zhang's outliers of every setting, their views mapped to the observations'
+/// `setting_views` (sorted by view and point).
+fn setting_outliers(settings: &[SettingEstimate]) -> Vec<Outlier> {
+    let mut all: Vec<Outlier> = settings
+        .iter()
+        .flat_map(|s| {
+            s.zhang.outliers.iter().filter_map(|o| Some(Outlier { view: *s.setting_views.get(o.view)?, ..*o }))
+        })
+        .collect();
+    all.sort_by_key(|o| (o.view, o.point));
+    all
 }
 
 /// The calibration the per-setting estimates give: fx, fy as weighted polynomials of
@@ -252,25 +268,27 @@ fn calibration_of(
         image_size,
         rotation_rodrigues: [0.0; 3],
         translation_mm: [0.0; 3],
-        kf_x,
-        kf_y,
+        kf_x: kf_x.to_vec(),
+        kf_y: kf_y.to_vec(),
         principal_point: [u0, v0],
-        distortion_a: a,
+        distortion_model: None,
+        distortion_a: a.to_vec(),
         thermal: thermal.cloned(),
         e_com_range_ma: [es[0], es[es.len() - 1]],
         rms_reprojection_px: rms,
         std: ModelStd {
             rotation_rodrigues: [0.0; 3],
             translation_mm: [0.0; 3],
-            kf_x: sd4(&cx),
-            kf_y: sd4(&cy),
+            kf_x: sd4(&cx).to_vec(),
+            kf_y: sd4(&cy).to_vec(),
             principal_point: [su0, sv0],
-            distortion_a: sa,
+            distortion_a: sa.to_vec(),
         },
         estimator: "per-setting".into(),
-        // Zhang's per-setting solves set their own outliers aside (crate::zhang); the
-        // per-setting views are not indexed like the observations' ETL views.
+        // Zhang's per-setting solves set their own outliers aside (crate::zhang); they are
+        // corners of setting views, not of the observations' ETL views that `outliers` names.
         outliers: vec![],
+        setting_outliers: setting_outliers(settings),
         warnings: vec![],
         // No joint covariance: kf_x, kf_y, (u0, v0) and each a-triple come from separate
         // fits whose cross-covariances are not computed; a block-diagonal matrix would

@@ -15,6 +15,11 @@ use crate::zhang::PlanarView;
 pub struct PlanarViews {
     /// One view per image where the board was found, in the images' order.
     pub views: Vec<PlanarView>,
+    /// The index in the images given of each view's image (as `views`).
+    pub image_index: Vec<usize>,
+    /// The board ids of each view's corners (as `views`, point for point): a ChArUco
+    /// board's, or a checkerboard's row-major index.
+    pub ids: Vec<Vec<u32>>,
     /// The images' size, px (all alike).
     pub image_size: [u32; 2],
     /// Why each image without a view was skipped (the board not found), in order.
@@ -42,8 +47,9 @@ pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) 
         })
         .collect();
     progress.finish();
-    let (mut views, mut size, mut skipped) = (vec![], None::<[u32; 2]>, vec![]);
-    for (p, r) in images.iter().zip(results) {
+    let (mut views, mut image_index, mut ids, mut size, mut skipped) =
+        (vec![], vec![], vec![], None::<[u32; 2]>, vec![]);
+    for (k, (p, r)) in images.iter().zip(results).enumerate() {
         match r {
             Ok(d) => {
                 if let Some(s) = size.filter(|s| *s != d.image_size) {
@@ -57,11 +63,13 @@ pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) 
                 }
                 size = Some(d.image_size);
                 views.push(PlanarView { board_mm: d.board_mm(board, [0, 0]), pixels: d.pixels() });
+                image_index.push(k);
+                ids.push(d.corners.iter().map(|c| c.0).collect());
             }
             Err(Error::BoardNotFound(m)) => skipped.push(m),
             Err(e) => return Err(e),
         }
     }
     let image_size = size.ok_or_else(|| Error::BoardNotFound(format!("in none of the {} images", images.len())))?;
-    Ok(PlanarViews { views, image_size, skipped })
+    Ok(PlanarViews { views, image_index, ids, image_size, skipped })
 }

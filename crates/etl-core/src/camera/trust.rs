@@ -52,11 +52,15 @@ impl ThermalTrust {
     /// The surface is valid and each known range is finite and ordered.
     pub fn validate(&self) -> Result<()> {
         self.surface.validate()?;
-        for (r, what) in [(self.t_range_c, "t_range_c"), (self.e_in_range_ma, "e_in_range_ma")] {
+        let ranges = [
+            (self.t_range_c, "t_range_c", "t_range_c must be [min, max] with min <= max"),
+            (self.e_in_range_ma, "e_in_range_ma", "e_in_range_ma must be [min, max] with min <= max"),
+        ];
+        for (r, what, unordered) in ranges {
             if let Some(r) = r {
                 all_finite(&r, what)?;
                 if r[0] > r[1] {
-                    return Err(Error::InvalidArgument { what: "calibrated range must be [min, max] with min <= max" });
+                    return Err(Error::InvalidArgument { what: unordered });
                 }
             }
         }

@@ -16,7 +16,8 @@ const CGOLD: f64 = 0.381_966_011_250_105_1;
 /// How [`autofocus`] searches.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AutofocusOptions {
-    /// The current range searched, mA (`[lo, hi]`, `lo < hi`).
+    /// The current range searched, mA (`[lo, hi]`, `lo < hi`, both within the lens
+    /// driver's [`E_IN_DOMAIN_MA`](crate::thermal::E_IN_DOMAIN_MA)).
     pub range_ma: [f64; 2],
     /// Points of the coarse scan, both ends included (at least 3). Their spacing must be
     /// finer than the measure's capture range (the width of its peak).
@@ -58,6 +59,14 @@ fn check_options(options: &AutofocusOptions) -> Result<()> {
     finite(hi, "autofocus range_ma[1]")?;
     if !(hi > lo) {
         return Err(Error::InvalidArgument { what: "autofocus range_ma must have lo < hi" });
+    }
+    // Currents a lens driver can give: a range of 1e308 would also make the coarse grid's
+    // step infinite and every current searched NaN.
+    let [d0, d1] = crate::thermal::E_IN_DOMAIN_MA;
+    for (value, what) in [(lo, "autofocus range_ma[0]"), (hi, "autofocus range_ma[1]")] {
+        if !(d0..=d1).contains(&value) {
+            return Err(Error::OutOfRange { what, value, min: d0, max: d1 });
+        }
     }
     finite(options.tolerance_ma, "autofocus tolerance_ma")?;
     if !(options.tolerance_ma > 0.0) {

@@ -310,6 +310,20 @@ mod tests {
         for o in bad {
             assert!(autofocus(f, &o).is_err(), "{o:?}");
         }
+        // A range beyond the driver's currents (1e308 made every searched current NaN)
+        // is refused before the measure is called once.
+        for range_ma in [[-1e308, 1e308], [75.0, 300.0], [-300.0, 0.0]] {
+            let mut calls = 0;
+            let r = autofocus(
+                |e| {
+                    calls += 1;
+                    Ok(e)
+                },
+                &AutofocusOptions { range_ma, ..base },
+            );
+            assert!(matches!(r, Err(Error::OutOfRange { min: -292.84, max: 292.84, .. })), "{range_ma:?}: {r:?}");
+            assert_eq!(calls, 0, "{range_ma:?}");
+        }
         let r = autofocus(|_| Err(Error::Degenerate { what: "camera" }), &base);
         assert_eq!(r, Err(Error::Degenerate { what: "camera" }));
         let r = autofocus(|e| Ok(if e > 200.0 { f64::NAN } else { 1.0 }), &base);

@@ -125,8 +125,11 @@ impl ThermalCalibration {
         self.surface.validate()?;
         all_finite(&self.t_range_c, "t_range_c")?;
         all_finite(&self.e_in_range_ma, "e_in_range_ma")?;
-        if self.t_range_c[0] > self.t_range_c[1] || self.e_in_range_ma[0] > self.e_in_range_ma[1] {
-            return Err(Error::InvalidArgument { what: "calibrated range must be [min, max] with min <= max" });
+        if self.t_range_c[0] > self.t_range_c[1] {
+            return Err(Error::InvalidArgument { what: "t_range_c must be [min, max] with min <= max" });
+        }
+        if self.e_in_range_ma[0] > self.e_in_range_ma[1] {
+            return Err(Error::InvalidArgument { what: "e_in_range_ma must be [min, max] with min <= max" });
         }
         Ok(())
     }

@@ -29,8 +29,10 @@
 //! # Ok::<(), etl_core::Error>(())
 //! ```
 
+mod bilinear;
 pub mod camera;
 pub mod maps;
+mod opencv_maps;
 pub mod remap;
 
 pub use camera::{OutputCamera, MAX_SIDE_PX};

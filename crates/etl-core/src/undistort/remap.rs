@@ -1,5 +1,6 @@
 //! [`remap`]: bilinear resampling of an image at the source pixels the maps name.
 
+use super::bilinear::{remap_block, remap_block_grey_u8, remap_pixel, Geometry, Positions, Taps, BLOCK, ROUNDER};
 use super::camera::check_side;
 use crate::error::{Error, Result};
 
@@ -10,6 +11,19 @@ pub trait Sample: Copy + private::Sealed {
     /// An interpolated value back to the type: rounded to the nearest level and saturated
     /// for u8 and u16 (a bilinear mix of levels stays within them anyway), as is for f32.
     fn from_f32(v: f32) -> Self;
+    /// One block of [`remap`] (etl-core's kernel; a sample type may have a faster one).
+    #[doc(hidden)]
+    #[inline(always)]
+    fn remap_block<const C: usize>(
+        src: &SourceImage<'_, Self>,
+        pos: &Positions,
+        maps: (&[f32], &[f32]),
+        border: Self,
+        taps: &mut Taps<Self, C>,
+        dst: &mut [Self],
+    ) {
+        remap_block(src, pos, maps, border, taps, dst);
+    }
 }
 
 impl Sample for u8 {
@@ -19,8 +33,25 @@ impl Sample for u8 {
     }
     #[inline(always)]
     fn from_f32(v: f32) -> Self {
-        // `as` saturates (and maps NaN to 0): no panic on any value.
-        (v + 0.5) as u8
+        // What `(v + 0.5) as u8` gives for every v (NaN to 0, saturated), in arithmetic
+        // that vectorises (the saturating cast does not).
+        floor_clamped(v + 0.5, 255.0) as u8
+    }
+    #[inline(always)]
+    fn remap_block<const C: usize>(
+        src: &SourceImage<'_, u8>,
+        pos: &Positions,
+        maps: (&[f32], &[f32]),
+        border: u8,
+        taps: &mut Taps<u8, C>,
+        dst: &mut [u8],
+    ) {
+        // One channel of u8, the common case, has its own gather and blend.
+        if C == 1 {
+            remap_block_grey_u8(src, pos, maps, border, dst);
+        } else {
+            remap_block(src, pos, maps, border, taps, dst);
+        }
     }
 }
 
@@ -31,7 +62,8 @@ impl Sample for u16 {
     }
     #[inline(always)]
     fn from_f32(v: f32) -> Self {
-        (v + 0.5) as u16
+        // As `(v + 0.5) as u16`, vectorisable (see u8's).
+        floor_clamped(v + 0.5, 65535.0) as u16
     }
 }
 
@@ -44,6 +76,16 @@ impl Sample for f32 {
     fn from_f32(v: f32) -> Self {
         v
     }
+}
+
+/// floor(v) clamped to [0, max] (NaN to 0) for max < 2^22, branch-free: the clamped value
+/// rounded to an integer by [`bilinear::ROUNDER`], less one where that rounded up.
+#[inline(always)]
+fn floor_clamped(v: f32, max: f32) -> i32 {
+    // `max` returns the other operand when one is NaN: NaN becomes 0.
+    let c = v.max(0.0).min(max);
+    let r = (c + ROUNDER).to_bits() as i32 - ROUNDER.to_bits() as i32;
+    r - i32::from(r as f32 > c)
 }
 
 mod private {
@@ -95,6 +137,10 @@ impl<'a, T: Sample> SourceImage<'a, T> {
     pub fn channels(&self) -> usize {
         self.channels
     }
+    /// The samples, exactly `width * height * channels` of them.
+    pub(crate) fn data(&self) -> &'a [T] {
+        self.data
+    }
 }
 
 /// Resamples `src` at the maps' source pixels into `dst` (a band of output pixels): output
@@ -109,12 +155,20 @@ impl<'a, T: Sample> SourceImage<'a, T> {
 /// `BORDER_CONSTANT`): each of the four taps outside the image reads `border` (so a pixel
 /// whose source is wholly outside is `border`, and one near the edge blends into it); a
 /// NaN or infinite map entry gives `border`. `dst` pixel i is
-/// `dst[i * channels .. (i + 1) * channels]`. Computed in f32 (exact weights, not
-/// OpenCV's 1/32 px table: the two agree to within the gradient times 1/64 px).
+/// `dst[i * channels .. (i + 1) * channels]`. Computed in f32 (exact weights; OpenCV 5's
+/// `cv2.remap` with float maps does the same, its fixed-point maps quantise the position
+/// to 1/32 px).
+///
+/// Vectorised by blocks of 64 pixels (etl-core's `bilinear` module; at most 6 KB of stack,
+/// for three f32 channels); images wider or taller than 32767 px go one pixel at a time,
+/// with the same numbers.
 ///
 /// Errors: `map_x` and `map_y` of different lengths ([`Error::InvalidArgument`]); `dst`
 /// shorter than `map_x.len() * channels` ([`Error::BufferTooSmall`]). On error nothing is
 /// written.
+// Inlined into its callers (as `undistort_maps`), so that one running it under a wider
+// instruction set compiles the kernel's vector loops for it.
+#[inline(always)]
 pub fn remap<T: Sample>(
     src: &SourceImage<'_, T>,
     map_x: &[f32],
@@ -136,65 +190,32 @@ pub fn remap<T: Sample>(
     Ok(())
 }
 
-/// [`remap`] with the channel count known at compile time (so the inner loop unrolls).
+/// [`remap`] with the channel count known at compile time, block by block.
+#[inline(always)]
 fn remap_channels<T: Sample, const C: usize>(
     src: &SourceImage<'_, T>,
-    mx: &[f32],
-    my: &[f32],
+    map_x: &[f32],
+    map_y: &[f32],
     border: T,
     dst: &mut [T],
 ) {
-    let (w, h) = (src.width, src.height);
-    // Bounds as f32 (exact: sides are at most 2^20). A map entry in [0, w - 1) x [0, h - 1)
-    // has its four taps inside; one in (-1, w) x (-1, h) has at least one.
-    let (wf, hf) = (w as f32, h as f32);
-    let (w1, h1) = ((w - 1) as f32, (h - 1) as f32);
-    let stride = w * C;
-    let data = src.data;
-    for ((&x, &y), out) in mx.iter().zip(my).zip(dst.chunks_exact_mut(C)) {
-        if x >= 0.0 && y >= 0.0 && x < w1 && y < h1 {
-            // Inside: 0 <= x, y < 2^20, so the i32 conversion is floor, exact.
-            let (x0, y0) = (x as i32 as usize, y as i32 as usize);
-            let (a, b) = (x - x0 as f32, y - y0 as f32);
-            let i = y0 * stride + x0 * C;
-            // The four taps are inside since x0 + 1 < w and y0 + 1 < h; `get` keeps that a
-            // checked fact rather than a panic path (the branch is never taken).
-            let tap = |j: usize| data.get(j).map_or(0.0, |s| s.to_f32());
-            for (c, o) in out.iter_mut().enumerate() {
-                let (s00, s01) = (tap(i + c), tap(i + C + c));
-                let (s10, s11) = (tap(i + stride + c), tap(i + stride + C + c));
-                let top = s00 + a * (s01 - s00);
-                let bot = s10 + a * (s11 - s10);
-                *o = T::from_f32(top + b * (bot - top));
-            }
-        } else if x > -1.0 && y > -1.0 && x < wf && y < hf {
-            edge_pixel::<T, C>(data, w, h, x, y, border, out);
-        } else {
-            // Wholly outside, NaN or infinite.
-            out.fill(border);
+    let Some(g) = Geometry::of(src) else {
+        for ((&x, &y), out) in map_x.iter().zip(map_y).zip(dst.chunks_exact_mut(C)) {
+            remap_pixel::<T, C>(src, x, y, border, out);
         }
-    }
-}
-
-/// A pixel whose 2 x 2 neighbourhood straddles the image edge: taps outside read `border`.
-/// Precondition: -1 < x < w, -1 < y < h.
-#[inline(never)]
-fn edge_pixel<T: Sample, const C: usize>(data: &[T], w: usize, h: usize, x: f32, y: f32, border: T, out: &mut [T]) {
-    let (xf, yf) = (libm::floorf(x), libm::floorf(y));
-    let (a, b) = (x - xf, y - yf);
-    // xf, yf in [-1, w - 1], [-1, h - 1]: the casts are exact.
-    let (x0, y0) = (xf as isize, yf as isize);
-    let tap = |xi: isize, yi: isize, c: usize| -> f32 {
-        if xi < 0 || yi < 0 || xi as usize >= w || yi as usize >= h {
-            border.to_f32()
-        } else {
-            data.get((yi as usize * w + xi as usize) * C + c).map_or(border.to_f32(), |s| s.to_f32())
-        }
+        return;
     };
-    for (c, o) in out.iter_mut().enumerate() {
-        let top = tap(x0, y0, c) + a * (tap(x0 + 1, y0, c) - tap(x0, y0, c));
-        let bot = tap(x0, y0 + 1, c) + a * (tap(x0 + 1, y0 + 1, c) - tap(x0, y0 + 1, c));
-        *o = T::from_f32(top + b * (bot - top));
+    let (mut pos, mut taps) = (Positions::new(g), Taps::<T, C>::new(border));
+    // Block starts by hand: zipped `chunks` divide by their (constant) size in code that the
+    // no-panic gate's size-optimised build does not inline, a division-by-zero panic path.
+    for start in (0..map_x.len()).step_by(BLOCK) {
+        let end = (start + BLOCK).min(map_x.len());
+        let (Some(mx), Some(my), Some(out)) = (map_x.get(start..end), map_y.get(start..end), dst.get_mut(start * C..))
+        else {
+            return;
+        };
+        pos.locate(mx, my);
+        T::remap_block::<C>(src, &pos, (mx, my), border, &mut taps, out);
     }
 }
 

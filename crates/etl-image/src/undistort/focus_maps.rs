@@ -38,15 +38,17 @@ impl OutputChoice {
 /// The undistortion maps of a calibrated model at any compensated current of its range.
 ///
 /// Why no cache: the maps are a forward evaluation of the model (about 20 flops per pixel,
-/// no iteration), so computing them at the new current is both exact and as fast as
+/// no iteration), so computing them at the new current is both exact and faster than
 /// interpolating cached ones. Interpolation would read at least two cached maps (4 x 11 MB
 /// for 1936 x 1458) to write one (2 x 11 MB), and linear interpolation in E of the paper
 /// rig's maps over 80..225 mA needs 12 cached currents (271 MB) to stay within 0.0075 px
 /// (measured by `benches/undistort_interpolation.py`: 0.50 px with 2 currents, 0.053 with 5,
 /// 0.018 with 8, 0.0075 with 12, 0.0040 with 16). Here the error bound is f32 rounding
 /// alone: 1.2e-4 px over the whole image (etl-core's test against the model's projection),
-/// and the time is that of [`super::undistort_maps_into`] (buffers reused): 4.8 ms median
-/// for 1936 x 1458 on 2 shared cores (docs/BENCHMARKS.md, "Undistortion").
+/// and the time is that of [`super::undistort_maps_into`] (buffers reused, the loops
+/// dispatched to AVX-512 or AVX2 where the CPU has them): for 1936 x 1458, 0.7 ms of one
+/// core with AVX-512 (3.1 ms with the baseline's SSE2), 1.9 ms median on the 2 shared cores
+/// under a load average of 12 (docs/BENCHMARKS.md, "Undistortion").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FocusMaps {
     model: CameraModel,

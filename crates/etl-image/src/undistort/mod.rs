@@ -4,8 +4,10 @@
 //! ([`undistort_image`]), and the maps at any current of a calibrated range, exact, within
 //! the 5 ms a focus change may cost ([`FocusMaps`]).
 //!
-//! The work per band is etl-core's ([`etl_core::undistort`]): the same numbers as a
-//! single-threaded embedded caller gets, whatever the number of threads.
+//! The work per band is etl-core's ([`etl_core::undistort`]), compiled for the widest
+//! vector instructions of the CPU and chosen at run time (the `simd` module): the same
+//! numbers as a single-threaded embedded caller gets, whatever the number of threads and
+//! the instruction set.
 //!
 //! ```
 //! use etl_core::model::CameraModel;
@@ -22,9 +24,12 @@
 //! ```
 
 mod focus_maps;
+mod simd;
 
 use etl_core::model::{Distortion, Intrinsics};
+use pulp::Arch;
 use rayon::prelude::*;
+use simd::{FusedBand, MapsBand, RemapBand};
 
 pub use etl_core::undistort::{OutputCamera, Sample, SourceImage};
 pub use focus_maps::{FocusMaps, OutputChoice};
@@ -91,11 +96,11 @@ pub fn undistort_maps_into(k: &Intrinsics, d: &Distortion, out: &OutputCamera, m
         (maps.map_x, maps.map_y) = (vec![0.0; w * h], vec![0.0; w * h]);
     }
     (maps.width_px, maps.height_px) = (w, h);
-    let band = BAND_ROWS * w;
+    let (band, arch) = (BAND_ROWS * w, Arch::new());
     maps.map_x.par_chunks_mut(band).zip(maps.map_y.par_chunks_mut(band)).enumerate().try_for_each(
-        |(i, (bx, by))| {
-            let y0 = i * BAND_ROWS;
-            etl_core::undistort::undistort_maps(k, d, out, y0..(y0 + BAND_ROWS).min(h), bx, by)
+        |(i, (map_x, map_y))| {
+            let rows = i * BAND_ROWS..((i + 1) * BAND_ROWS).min(h);
+            arch.dispatch(MapsBand { k, d, out, rows, map_x, map_y })
         },
     )?;
     Ok(())
@@ -108,10 +113,10 @@ pub fn undistort_maps_into(k: &Intrinsics, d: &Distortion, out: &OutputCamera, m
 pub fn remap<T: Sample + Send + Sync>(src: &SourceImage<'_, T>, maps: &UndistortMaps, border: T) -> Result<Vec<T>> {
     let c = src.channels();
     let mut dst = vec![border; maps.map_x.len() * c];
-    let band = BAND_ROWS * maps.width_px.max(1);
+    let (band, arch) = (BAND_ROWS * maps.width_px.max(1), Arch::new());
     dst.par_chunks_mut(band * c)
         .zip(maps.map_x.par_chunks(band).zip(maps.map_y.par_chunks(band)))
-        .try_for_each(|(out, (mx, my))| etl_core::undistort::remap(src, mx, my, border, out))?;
+        .try_for_each(|(dst, (map_x, map_y))| arch.dispatch(RemapBand { src, map_x, map_y, border, dst }))?;
     Ok(dst)
 }
 
@@ -131,13 +136,12 @@ pub fn undistort_image<T: Sample + Send + Sync>(
     etl_core::undistort::undistort_maps(k, d, out, 0..0, &mut [], &mut [])?;
     let (w, h, c) = (out.width_px, out.height_px, src.channels());
     let mut dst = vec![border; w * h * c];
+    let arch = Arch::new();
     dst.par_chunks_mut(BAND_ROWS * w * c).enumerate().try_for_each_init(
         || (vec![0.0f32; BAND_ROWS * w], vec![0.0f32; BAND_ROWS * w]),
-        |(bx, by), (i, chunk)| {
-            let y0 = i * BAND_ROWS;
-            let n = chunk.len() / c;
-            etl_core::undistort::undistort_maps(k, d, out, y0..(y0 + BAND_ROWS).min(h), bx, by)?;
-            etl_core::undistort::remap(src, &bx[..n], &by[..n], border, chunk)
+        |(scratch_x, scratch_y), (i, dst)| {
+            let rows = i * BAND_ROWS..((i + 1) * BAND_ROWS).min(h);
+            arch.dispatch(FusedBand { k, d, out, rows, scratch_x, scratch_y, src, border, dst })
         },
     )?;
     Ok(dst)
