@@ -121,7 +121,8 @@ mod tests {
             .collect();
         let square_mm = views[0].board_mm[1][0] - views[0].board_mm[0][0];
         let cols = views[0].board_mm.iter().filter(|b| b[1] == 0.0).count();
-        let board = Board::checkerboard([cols, 8], square_mm).unwrap();
+        let ([inner_cols, inner_rows], _) = etl_sim::simulate::LENS_OFF_BOARD;
+        let board = Board::checkerboard([inner_cols, inner_rows], square_mm).unwrap();
         // The detector's ids: row-major over the board's inner corners.
         let ids = views
             .iter()
@@ -129,7 +130,7 @@ mod tests {
                 v.board_mm
                     .iter()
                     .map(|b| b.map(|x| (x / square_mm).round() as u32))
-                    .map(|[i, j]| j * cols as u32 + i)
+                    .map(|[i, j]| j * inner_cols as u32 + i)
                     .collect()
             })
             .collect();
@@ -153,7 +154,7 @@ mod tests {
             assert_eq!(o["image"], image, "{o}");
             assert_eq!(o["point"], point, "{o}");
             assert_eq!(o["corner"], json!(corner), "{o}");
-            assert_eq!(o["id"], json!(corner[1] * cols + corner[0]), "{o}");
+            assert_eq!(o["id"], json!(corner[1] * inner_cols + corner[0]), "{o}");
             assert!(o["residual_px"].as_f64().unwrap() > 100.0, "{o}");
         }
     }
