@@ -7,9 +7,11 @@
 //! it was found, within 30 % of a square and 1.5 px per square of distance. A misread id
 //! places its homography at least one square off, so a marker is kept when some neighbours
 //! agree with it and those outnumber three times the nearest ones (diagonal) that disagree.
-//! A board laid out otherwise than the board asked for (OpenCV's legacy layout of boards with
-//! an even number of rows: rows of one parity shifted against the others) is thus refused,
-//! and a lone marker, unconfirmed, gives no corner.
+//! A lone marker, unconfirmed, gives no corner. On a board laid out otherwise than the board
+//! asked for (another number of columns; OpenCV's legacy layout of boards with an even number
+//! of rows: rows of one parity shifted against the others) most markers are contradicted by a
+//! diagonal neighbour, and the detector refuses the image rather than give the few that
+//! happen to agree.
 
 use std::collections::HashMap;
 
@@ -33,6 +35,17 @@ pub(crate) struct Placed {
 /// A marker is kept when its agreeing neighbours outnumber its disagreeing diagonal ones this
 /// many times over.
 const DISAGREEMENT: usize = 3;
+/// The markers checked against the board.
+pub(crate) struct Layout {
+    /// The confirmed markers, in increasing id order.
+    pub kept: Vec<Placed>,
+    /// Markers decoded with an id on the board (each once).
+    pub on_board: usize,
+    /// Of those, how many a diagonal neighbour contradicts. On the board asked for, next to
+    /// none; on a board of another size or layout, most (ids fall in other squares).
+    pub contradicted: usize,
+}
+
 /// Farthest neighbour checked, squares along either axis.
 const REACH: i64 = 2;
 /// Agreement needed between a predicted and an observed marker centre, squares, plus
@@ -41,9 +54,8 @@ const REACH: i64 = 2;
 const TOLERANCE: f64 = 0.3;
 const EXTRAPOLATION_PX: f64 = 1.5;
 
-/// The markers of `decoded` that are on `board`, unique and confirmed by a neighbour,
-/// in increasing id order.
-pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed> {
+/// The markers of `decoded` that are on `board`, unique and confirmed by their neighbours.
+pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Layout {
     let mut by_id: HashMap<u32, Vec<&Decoded>> = HashMap::new();
     for d in decoded {
         by_id.entry(d.id).or_default().push(d);
@@ -63,7 +75,8 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
     }
     placed.sort_by_key(|p| p.id);
     let at: HashMap<[u32; 2], usize> = placed.iter().enumerate().map(|(k, p)| (p.square, k)).collect();
-    let keep: Vec<bool> = placed
+    // (agreeing neighbours, disagreeing diagonal ones) of each marker.
+    let votes: Vec<(usize, usize)> = placed
         .iter()
         .map(|p| {
             let (mut agree, mut disagree) = (0, 0);
@@ -88,10 +101,17 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
                     }
                 }
             }
-            agree > 0 && DISAGREEMENT * disagree < agree
+            (agree, disagree)
         })
         .collect();
-    placed.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+    let contradicted = votes.iter().filter(|v| v.1 > 0).count();
+    let on_board = placed.len();
+    let kept = placed
+        .into_iter()
+        .zip(votes)
+        .filter_map(|(p, (agree, disagree))| (agree > 0 && DISAGREEMENT * disagree < agree).then_some(p))
+        .collect();
+    Layout { kept, on_board, contradicted }
 }
 
 /// Whether `p`'s homography puts `q`'s centre where `q` was found.

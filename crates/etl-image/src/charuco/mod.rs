@@ -184,14 +184,21 @@ pub fn detect_charuco_view<T: Sample>(img: GrayView<'_, T>, board: &CharucoBoard
         )));
     }
     let decoded: Vec<decode::Decoded> = found.iter().map(|m| m.decoded).collect();
-    let placed = layout::confirmed(board, &decoded);
+    let layout = layout::confirmed(board, &decoded);
+    let [cols, rows] = board.squares();
+    if layout.contradicted > layout.kept.len() {
+        return Err(Error::BoardNotFound(format!(
+            "the markers do not fit the {cols}x{rows} board's layout: {} of the {} decoded are contradicted by a \
+             neighbour (a board of another size, or OpenCV's legacy layout?)",
+            layout.contradicted, layout.on_board
+        )));
+    }
+    let placed = layout.kept;
     if placed.is_empty() {
         return Err(Error::BoardNotFound(format!(
-            "{} marker(s) of {} decoded, none confirmed by a neighbour where the {}x{} board puts it",
+            "{} marker(s) of {} decoded, none confirmed by a neighbour where the {cols}x{rows} board puts it",
             decoded.len(),
             dict.name(),
-            board.squares()[0],
-            board.squares()[1]
         )));
     }
     let (blur_px, contrast) = blur_and_contrast(&found);
