@@ -135,3 +135,45 @@ pub(crate) fn side_px(q: &[[f64; 2]; 4]) -> f64 {
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use etl_core::board::Dictionary;
+
+    /// Every marker of a 6 x 5 board seen face-on at 10 px per mm.
+    fn markers(board: &CharucoBoard) -> Vec<Decoded> {
+        (0..board.markers() as u32)
+            .map(|id| {
+                let c = board.marker_corners_mm(id).unwrap().map(|p| [10.0 * p[0] + 20.0, 10.0 * p[1] + 30.0]);
+                Decoded { id, corners_px: c, black: 40.0, white: 210.0 }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_misread_id_is_dropped_and_its_neighbours_kept() {
+        let board = CharucoBoard::new([6, 5], 10.0, 7.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+        let mut found = markers(&board);
+        let all = confirmed(&board, &found);
+        assert_eq!((all.kept.len(), all.on_board, all.contradicted), (15, 15, 0));
+        // Marker 7 read as 9 (another square of the board), 12 read as 40 (not on it).
+        found[7].id = 9;
+        found[12].id = 40;
+        let l = confirmed(&board, &found);
+        let ids: Vec<u32> = l.kept.iter().map(|p| p.id).collect();
+        // 9 is now at two places: both dropped; 12 and 40 are gone; the rest kept.
+        let want: Vec<u32> = (0..15).filter(|i| ![7, 9, 12].contains(i)).collect();
+        assert_eq!(ids, want);
+        // A lone marker is not confirmed.
+        assert!(confirmed(&board, &found[..1]).kept.is_empty());
+    }
+
+    #[test]
+    fn a_board_of_another_width_is_contradicted() {
+        let printed = CharucoBoard::new([6, 5], 10.0, 7.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+        let asked = CharucoBoard::new([7, 5], 10.0, 7.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+        let l = confirmed(&asked, &markers(&printed));
+        assert!(l.contradicted > l.kept.len(), "{} contradicted, {} kept", l.contradicted, l.kept.len());
+    }
+}
