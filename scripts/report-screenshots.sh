@@ -40,7 +40,7 @@ for report in "$@"; do
         dir="$(realpath "$report")"
         {
             echo "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>$dir</title>"
-            echo "<style>body{font-family:sans-serif;margin:1em}img{max-width:100%;border:1px solid #eee}</style></head><body>"
+            echo "<style>body{font-family:sans-serif;margin:1em}img{max-width:100%;border:1px solid #eee}pre{white-space:pre-wrap}</style></head><body>"
             for md in "$dir"/*.md; do
                 [[ -f "$md" ]] || continue
                 echo "<h2>$(basename "$md")</h2><pre>"

@@ -43,7 +43,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Number;
 
 use super::{compact, read_json, write_json};
-use crate::{Error, Result};
+use crate::{Error, InputValue, Result};
 
 /// The format tag.
 pub const FORMAT: &str = "etlcal.board/1";
@@ -66,17 +66,21 @@ impl Checkerboard {
     /// Checks the board: 3 to [`MAX_INNER_CORNERS`] inner corners each way and a positive,
     /// finite square.
     pub fn validate(&self) -> Result<()> {
+        // The messages of the checkerboards of before the board format, which users match
+        // on; `what` names the key.
         if !(self.square_mm.is_finite() && self.square_mm > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "square_mm {} must be positive and finite",
-                compact(self.square_mm)
-            )));
+            let message = format!("square size must be positive, got {} mm", self.square_mm);
+            return Err(Error::invalid_value("square_mm", self.square_mm, message));
         }
         let [c, r] = self.inner_corners;
-        if [c, r].iter().any(|n| !(3..=MAX_INNER_CORNERS).contains(n)) {
-            return Err(Error::InvalidInput(format!(
-                "inner_corners [{c}, {r}]: a checkerboard needs 3 to {MAX_INNER_CORNERS} inner corners each way"
-            )));
+        if c < 3 || r < 3 {
+            let message = format!("a board needs at least 3 x 3 inner corners, got {c} x {r}");
+            return Err(Error::invalid_value("inner_corners", self.inner_corners, message));
+        }
+        if c > MAX_INNER_CORNERS || r > MAX_INNER_CORNERS {
+            let message =
+                format!("a board has at most {MAX_INNER_CORNERS} x {MAX_INNER_CORNERS} inner corners, got {c} x {r}");
+            return Err(Error::invalid_value("inner_corners", self.inner_corners, message));
         }
         Ok(())
     }
@@ -114,11 +118,12 @@ impl Board {
     /// the dictionary has markers.
     pub fn charuco(squares: [u32; 2], square_mm: f64, marker_mm: f64, dictionary: &str) -> Result<Board> {
         let dict = Dictionary::by_name(dictionary).ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "dictionary \"{}\" is not one of OpenCV's predefined dictionaries ({})",
-                dictionary.chars().take(40).collect::<String>(),
+            let name: String = dictionary.chars().take(40).collect();
+            let message = format!(
+                "dictionary \"{name}\" is not one of OpenCV's predefined dictionaries ({})",
                 dictionary_names()
-            ))
+            );
+            Error::invalid_value("dictionary", name, message)
         })?;
         CharucoBoard::new(squares, square_mm, marker_mm, dict).map(Board::Charuco).map_err(|e| {
             // etl-core's message names the field; the values make it actionable.
@@ -126,15 +131,17 @@ impl Board {
                 etl_core::Error::InvalidArgument { what } => what.to_string(),
                 other => other.to_string(),
             };
-            let detail = if what.starts_with("squares") {
-                format!("squares [{}, {}]", squares[0], squares[1])
-            } else if what.starts_with("dictionary") {
+            let field = what.split([' ', ':']).next().unwrap_or("board").to_owned();
+            let (detail, value) = if field == "squares" {
+                (format!("squares [{}, {}]", squares[0], squares[1]), squares.to_input_value())
+            } else if field == "dictionary" {
                 let white = (squares[0] as usize * squares[1] as usize) / 2;
-                format!("{} has {} markers, the board {white}", dict.name(), dict.len())
+                (format!("{} has {} markers, the board {white}", dict.name(), dict.len()), dict.name().into())
             } else {
-                format!("square_mm {}, marker_mm {}", compact(square_mm), compact(marker_mm))
+                let value = if field == "square_mm" { square_mm } else { marker_mm };
+                (format!("square_mm {}, marker_mm {}", compact(square_mm), compact(marker_mm)), compact(value))
             };
-            Error::InvalidInput(format!("{what} ({detail})"))
+            Error::invalid_value(field, value, format!("{what} ({detail})"))
         })
     }
 
@@ -155,7 +162,7 @@ impl Board {
 
     /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
-        self.validate().map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
+        self.validate().map_err(|e| e.within(path.display(), None))?;
         write_json(path, self)
     }
 
@@ -353,7 +360,7 @@ impl TryFrom<BoardObject> for Board {
 /// reader wraps it again).
 fn without_prefix(e: &Error) -> String {
     match e {
-        Error::InvalidInput(m) => m.clone(),
+        Error::InvalidInput { message, .. } => message.clone(),
         other => other.to_string(),
     }
 }
@@ -424,8 +431,9 @@ mod tests {
             (ch(r#""squares": [-12, 9], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100""#), "squares [-12, 9] must be whole numbers"),
             (ch(r#""squares": [12, 9], "square_mm": 1.5, "dictionary": "DICT_5X5_100""#), "a charuco board needs \"marker_mm\""),
             (ch(r#""inner_corners": [3, 3], "squares": [12, 9], "square_mm": 1.5, "marker_mm": 1, "dictionary": "DICT_5X5_100""#), "inner_corners is not a field of a ChArUco board"),
-            (r#"{"type": "checkerboard", "inner_corners": [14, 0], "square_mm": 1.5}"#.into(), "inner_corners [14, 0]: a checkerboard needs 3 to 999"),
-            (r#"{"type": "checkerboard", "inner_corners": [14, 12], "square_mm": -1}"#.into(), "square_mm -1 must be positive and finite"),
+            (r#"{"type": "checkerboard", "inner_corners": [14, 0], "square_mm": 1.5}"#.into(), "a board needs at least 3 x 3 inner corners, got 14 x 0"),
+            (r#"{"type": "checkerboard", "inner_corners": [14, 1000], "square_mm": 1.5}"#.into(), "at most 999 x 999 inner corners, got 14 x 1000"),
+            (r#"{"type": "checkerboard", "inner_corners": [14, 12], "square_mm": -1}"#.into(), "square size must be positive, got -1 mm"),
             (r#"{"inner_corners": [14, 12], "square_mm": 1, "dictionary": "DICT_5X5_100"}"#.into(), "fields of a ChArUco board"),
             (r#"{"type": "circles", "inner_corners": [14, 12], "square_mm": 1}"#.into(), "type \"circles\" is not"),
             (r#"{"format": "etlcal.board/2", "type": "checkerboard", "inner_corners": [14, 12], "square_mm": 1}"#.into(), "format \"etlcal.board/2\""),
@@ -465,8 +473,9 @@ mod tests {
         assert_eq!(Board::load(&p).unwrap(), b);
         let bad = Board::Checkerboard(Checkerboard { inner_corners: [2, 9], square_mm: 1.0 });
         let q = dir.path().join("bad.json");
-        let e = bad.save(&q).unwrap_err().to_string();
-        assert!(e.contains("inner_corners [2, 9]"), "{e}");
+        let e = bad.save(&q).unwrap_err();
+        assert_eq!((e.input_what(), e.input_value().as_deref()), (Some("inner_corners"), Some("[2, 9]")));
+        assert!(e.to_string().contains("a board needs at least 3 x 3 inner corners, got 2 x 9"), "{e}");
         assert!(!q.exists());
         std::fs::write(&q, r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [12, 9], "square_mm": 1.5, "marker_mm": 2, "dictionary": "DICT_5X5_100"}"#).unwrap();
         let e = Board::load(&q).unwrap_err();

@@ -142,10 +142,10 @@ impl ThermalRef {
                 t_range_c,
                 e_in_range_ma,
             }),
-            _ => Err(Error::InvalidInput(
+            _ => Err(Error::invalid(
+                if self.t_range_c.is_none() { "thermal.t_range_c" } else { "thermal.e_in_range_ma" },
                 "the thermal part of this calibration has no calibrated ranges (an older file): re-run calibrate \
-                 with --thermal FILE or --thermal paper"
-                    .into(),
+                 with --thermal FILE or --thermal paper",
             )),
         }
     }
@@ -344,9 +344,9 @@ impl Calibration {
     /// The covariance, or an error saying that the file has none.
     pub fn require_covariance(&self) -> Result<[[f64; PARAMS]; PARAMS]> {
         self.covariance_matrix().ok_or_else(|| {
-            Error::InvalidInput(
-                "this calibration has no covariance (files written before it was recorded): calibrate again to get one"
-                    .into(),
+            Error::invalid(
+                "covariance",
+                "this calibration has no covariance (files written before it was recorded): calibrate again to get one",
             )
         })
     }
@@ -420,8 +420,9 @@ impl Calibration {
     /// The thermal part, refused when absent (as [`Self::thermal_surface`]).
     pub fn thermal_ref(&self) -> Result<&ThermalRef> {
         self.thermal.as_ref().ok_or_else(|| {
-            Error::InvalidInput(
-                "this calibration has no temperature compensation (thermal); pass E_com directly or add one".into(),
+            Error::invalid(
+                "thermal",
+                "this calibration has no temperature compensation (thermal); pass E_com directly or add one",
             )
         })
     }
@@ -490,9 +491,9 @@ impl Calibration {
     /// The focus law, or an error saying that this calibration has none.
     pub fn focus_law(&self) -> Result<&FocusLaw> {
         self.focus_law.as_ref().ok_or_else(|| {
-            Error::InvalidInput(
-                "this calibration has no focus law (focus_law); recalibrate with views at >= 4 distinct currents"
-                    .into(),
+            Error::invalid(
+                "focus_law",
+                "this calibration has no focus law (focus_law); recalibrate with views at >= 4 distinct currents",
             )
         })
     }

@@ -150,7 +150,7 @@ impl Dataset {
 
     /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
-        self.validate().map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
+        self.validate().map_err(|e| e.within(path.display(), None))?;
         write_json(path, self)
     }
 
@@ -159,64 +159,74 @@ impl Dataset {
         self.offstate_board.unwrap_or(self.board)
     }
 
-    /// Every image with its kind (`"view"`, `"offstate view"`, `"setting view"`), the board
-    /// it shows and its `first_corner`, in the file's order.
-    fn images_with_boards(&self) -> impl Iterator<Item = (&'static str, &Path, Board, Option<[usize; 2]>)> + '_ {
-        let views =
-            self.views.iter().map(|v| ("view", v.image.as_path(), v.board.unwrap_or(self.board), v.first_corner));
-        let off = self
-            .offstate_views
-            .iter()
-            .map(|v| ("offstate view", v.image.as_path(), v.board.unwrap_or(self.offstate_board()), v.first_corner));
-        let settings = self
-            .setting_views
-            .iter()
-            .map(|v| ("setting view", v.image.as_path(), v.board.unwrap_or(self.board), v.first_corner));
+    /// Every image with its kind (`"view"`, `"offstate view"`, `"setting view"`), its key
+    /// path (`"views[3]"`), the board it shows and its `first_corner`, in the file's order.
+    fn images_with_boards(
+        &self,
+    ) -> impl Iterator<Item = (&'static str, String, &Path, Board, Option<[usize; 2]>)> + '_ {
+        let views = self.views.iter().enumerate().map(|(i, v)| {
+            ("view", format!("views[{i}]"), v.image.as_path(), v.board.unwrap_or(self.board), v.first_corner)
+        });
+        let off = self.offstate_views.iter().enumerate().map(|(i, v)| {
+            let board = v.board.unwrap_or(self.offstate_board());
+            ("offstate view", format!("offstate_views[{i}]"), v.image.as_path(), board, v.first_corner)
+        });
+        let settings = self.setting_views.iter().enumerate().map(|(i, v)| {
+            let board = v.board.unwrap_or(self.board);
+            ("setting view", format!("setting_views[{i}]"), v.image.as_path(), board, v.first_corner)
+        });
         views.chain(off).chain(settings)
     }
 
     /// Checks boards, numbers and that there is something to calibrate.
     pub fn validate(&self) -> Result<()> {
-        self.board.validate().map_err(|e| Error::InvalidInput(format!("board: {e}")))?;
+        self.board.validate().map_err(|e| e.under("board"))?;
         if let Some(b) = self.offstate_board {
-            b.validate().map_err(|e| Error::InvalidInput(format!("offstate_board: {e}")))?;
+            b.validate().map_err(|e| e.within("offstate_board", Some("offstate_board")))?;
         }
         if self.image_size[0] == 0 || self.image_size[1] == 0 {
-            return Err(Error::InvalidInput("image_size must be positive".into()));
+            return Err(Error::invalid_value("image_size", self.image_size, "image_size must be positive"));
         }
         if self.views.is_empty() && self.setting_views.is_empty() {
-            return Err(Error::InvalidInput("the dataset holds no views".into()));
+            return Err(Error::invalid("views", "the dataset holds no views"));
         }
         for (i, v) in self.views.iter().enumerate() {
-            if ![v.e_in_ma, v.temperature_c, v.z_w_mm].iter().all(|x| x.is_finite())
-                || !v.e_com_ma.is_none_or(f64::is_finite)
-            {
-                return Err(Error::InvalidInput(format!("view {i}: current, temperature or z_w_mm is not finite")));
+            let numbers = [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c))]
+                .into_iter()
+                .chain([("z_w_mm", Some(v.z_w_mm)), ("e_com_ma", v.e_com_ma)]);
+            if let Some((key, x)) = crate::first_not_finite(numbers) {
+                let message = format!("view {i}: current, temperature or z_w_mm is not finite");
+                return Err(Error::invalid_value(format!("views[{i}].{key}"), x, message));
             }
         }
         for (i, v) in self.setting_views.iter().enumerate() {
-            if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
-                return Err(Error::InvalidInput(format!("setting view {i}: current or temperature is not finite")));
+            let numbers =
+                [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
+            if let Some((key, x)) = crate::first_not_finite(numbers) {
+                let message = format!("setting view {i}: current or temperature is not finite");
+                return Err(Error::invalid_value(format!("setting_views[{i}].{key}"), x, message));
             }
         }
-        let overrides = self
-            .views
-            .iter()
-            .map(|v| ("view", &v.image, v.board))
-            .chain(self.offstate_views.iter().map(|v| ("offstate view", &v.image, v.board)))
-            .chain(self.setting_views.iter().map(|v| ("setting view", &v.image, v.board)));
-        for (kind, image, board) in overrides {
+        let views = self.views.iter().map(|v| (&v.image, v.board)).enumerate().map(|(i, v)| ("view", "views", i, v));
+        let offstate = self.offstate_views.iter().map(|v| (&v.image, v.board)).enumerate();
+        let setting = self.setting_views.iter().map(|v| (&v.image, v.board)).enumerate();
+        let overrides = views
+            .chain(offstate.map(|(i, v)| ("offstate view", "offstate_views", i, v)))
+            .chain(setting.map(|(i, v)| ("setting view", "setting_views", i, v)));
+        for (kind, key, i, (image, board)) in overrides {
             if let Some(b) = board {
-                b.validate().map_err(|e| Error::InvalidInput(format!("{kind} {}: board: {e}", image.display())))?;
+                let context = format!("{kind} {}: board", image.display());
+                b.validate().map_err(|e| e.within(context, Some(&format!("{key}[{i}].board"))))?;
             }
         }
-        for (kind, image, board, first) in self.images_with_boards() {
+        for (kind, key, image, board, first) in self.images_with_boards() {
             if let (Board::Charuco(_), Some([i, j])) = (board, first) {
-                return Err(Error::InvalidInput(format!(
+                let message = format!(
                     "{kind} {}: first_corner [{i}, {j}] applies to checkerboards only (a ChArUco board's \
                      corners are known by their ids)",
                     image.display()
-                )));
+                );
+                return Err(Error::invalid_value(format!("{key}.first_corner"), [i, j], message));
             }
         }
         Ok(())
@@ -267,9 +277,9 @@ mod tests {
     fn bad_boards_are_named() {
         let e = Board::Checkerboard(Checkerboard { inner_corners: [3, 4], square_mm: -1.5 });
         let e = e.validate().unwrap_err().to_string();
-        assert!(e.contains("square_mm -1.5 must be positive"), "{e}");
+        assert!(e.contains("square size must be positive"), "{e}");
         let e = Board::Checkerboard(Checkerboard { inner_corners: [2, 4], square_mm: 1.5 });
-        assert!(e.validate().unwrap_err().to_string().contains("3 to 999"));
+        assert!(e.validate().unwrap_err().to_string().contains("3 x 3"));
         // Inline, a bad board of a dataset is named with the place in the file.
         let text = format!(
             r#"{{"format": "etlcal.dataset/1", "image_size": [10, 10], "board": {{"type": "charuco",

@@ -6,10 +6,33 @@
 //! It lives here, in the bottom std crate, so that every crate above shares it and a
 //! failure keeps its kind on the way up (a lens timeout in the temperature procedure is
 //! still [`ErrorKind::DeviceTimeout`] when it reaches Python).
+//!
+//! Bad input is [`Error::InvalidInput`] with fields: `what` the user must change (a flag
+//! `"--trials"`, a key path `"views[3].points"`, an argument `"image"`), the offending
+//! `value` when there is one, and the one-line `message`. Build it with the constructors,
+//! not `format!` alone:
+//!
+//! - [`Error::invalid`]`(what, message)`: no single offending value (a missing key, flags
+//!   that exclude each other, too few views);
+//! - [`Error::invalid_value`]`(what, value, message)`: `value` is kept as text the way
+//!   messages print it ([`InputValue`]: numbers through [`crate::compact`]);
+//! - [`crate::check_range`]`(what, value, range, unit)`: a number outside a range;
+//! - [`Error::within`]`(context, what_prefix)`: an error as bad input of a larger whole
+//!   (the file being written, the board of a view), its `what` kept under the prefix.
+//!
+//! ```
+//! use etl_formats::Error;
+//! let n = 0_u32;
+//! let e = Error::invalid_value("--trials", n, format!("--trials {n} must lie in 1..=100000"));
+//! assert_eq!(e.to_string(), "invalid input: --trials 0 must lie in 1..=100000");
+//! assert_eq!((e.input_what(), e.input_value().as_deref()), (Some("--trials"), Some("0")));
+//! ```
 
 use std::path::PathBuf;
 
 use etl_core::lens::{LensError, LensErrorKind};
+
+use crate::InputValue;
 
 /// Result with [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;
@@ -66,9 +89,24 @@ pub enum Error {
     /// A checkerboard was not found (or only in part) in an image.
     #[error("board not found: {0}")]
     BoardNotFound(String),
-    /// An input value is invalid (e.g. a negative square size).
-    #[error("invalid input: {0}")]
-    InvalidInput(String),
+    /// An input the user gave is invalid (e.g. a negative square size). Build it with
+    /// [`Error::invalid`] (no single offending value) or [`Error::invalid_value`] (with
+    /// the value); [`crate::check_range`] fills it for a number outside a range.
+    #[error("invalid input: {message}")]
+    InvalidInput {
+        /// What the user must change: a command-line flag (`"--trials"`), a file's key
+        /// as a path into the document (`"square_mm"`, `"views[3].points"`,
+        /// `"setting_rig.e_com_ma"`), a function's argument (`"image"`). Where no input of
+        /// the user's is at fault (a plot that could not be drawn), the thing that failed.
+        what: String,
+        /// The offending value as given, printed compactly ([`crate::compact`] for
+        /// numbers, see [`InputValue`]); `None` when the fault is no single value (a
+        /// missing key, two flags that exclude each other, too few views).
+        value: Option<String>,
+        /// The one-line message after `invalid input: `, which names `what` (and the value)
+        /// in words; users and tests match on it, so it does not change with the fields.
+        message: String,
+    },
     /// The core refused the problem (its message names the unmet precondition).
     #[error("{0}")]
     Core(#[from] etl_core::Error),
@@ -80,6 +118,15 @@ pub enum Error {
         /// The driver's message.
         message: String,
     },
+}
+
+/// `prefix.what`, or `prefix[i]...` when `what` starts with an index.
+fn join_what(prefix: &str, what: &str) -> String {
+    if what.starts_with('[') {
+        format!("{prefix}{what}")
+    } else {
+        format!("{prefix}.{what}")
+    }
 }
 
 /// The cause of an [`Error`], for callers that act on it.
@@ -124,7 +171,7 @@ impl Error {
             Error::Format { .. } => ErrorKind::Format,
             Error::Image { .. } => ErrorKind::Image,
             Error::BoardNotFound(_) => ErrorKind::BoardNotFound,
-            Error::InvalidInput(_) => ErrorKind::InvalidInput,
+            Error::InvalidInput { .. } => ErrorKind::InvalidInput,
             Error::Core(_) => ErrorKind::Precondition,
             Error::Lens { kind, .. } => match kind {
                 LensErrorKind::Timeout => ErrorKind::DeviceTimeout,
@@ -134,6 +181,88 @@ impl Error {
                 LensErrorKind::InvalidInput => ErrorKind::InvalidInput,
                 _ => ErrorKind::Device,
             },
+        }
+    }
+
+    /// Bad input about `what` (a flag, a key path, an argument: see the fields of
+    /// [`Error::InvalidInput`]) with no single offending value, e.g. a missing key or two flags that
+    /// exclude each other: `Error::invalid("--port", "pass --port PATH or --virtual, not
+    /// both")`. `message` is the whole line after `invalid input: `.
+    pub fn invalid(what: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidInput { what: what.into(), value: None, message: message.into() }
+    }
+
+    /// Bad input: `value` of `what` is refused; `value` is kept as text the way messages
+    /// print it (numbers through [`crate::compact`], see [`InputValue`]):
+    /// `Error::invalid_value("--trials", n, format!("--trials {n} must lie in 1..=100000"))`.
+    pub fn invalid_value(what: impl Into<String>, value: impl InputValue, message: impl Into<String>) -> Self {
+        Error::InvalidInput { what: what.into(), value: Some(value.to_input_value()), message: message.into() }
+    }
+
+    /// This error as bad input of a larger whole (a file being written, the board of a
+    /// view): invalid input whose message is `"{context}: {self}"` (this error's whole
+    /// line, its own `invalid input: ` included), whose value is this error's
+    /// ([`Error::input_value`]) and whose `what` is this error's under `what_prefix`
+    /// ([`Error::input_what`], joined as [`Error::under`] does; `None` keeps it), or
+    /// `what_prefix` (else `"input"`) for an error that names no input.
+    pub fn within(self, context: impl std::fmt::Display, what_prefix: Option<&str>) -> Self {
+        let message = format!("{context}: {self}");
+        let what = match (self.input_what(), what_prefix) {
+            (Some(inner), Some(prefix)) => join_what(prefix, inner),
+            (Some(inner), None) => inner.to_owned(),
+            (None, prefix) => prefix.unwrap_or("input").to_owned(),
+        };
+        Error::InvalidInput { what, value: self.input_value(), message }
+    }
+
+    /// This error with the `what` of an [`Error::InvalidInput`] placed under `prefix`,
+    /// its message and value unchanged: a board's `"square_mm"` becomes
+    /// `"board.square_mm"`, a view's `"[3]"` `"views[3]"`. Other errors are returned as
+    /// they are (their kind and message are contracts).
+    pub fn under(self, prefix: &str) -> Self {
+        self.map_what(|what| join_what(prefix, &what))
+    }
+
+    /// This error with the `what` of an [`Error::InvalidInput`] rewritten by `rename`
+    /// (a solver's `"views[2].pixels"` as the caller's `"offstate_views[2].pixels"`), its
+    /// message and value unchanged; other errors are returned as they are.
+    pub fn map_what(self, rename: impl FnOnce(String) -> String) -> Self {
+        match self {
+            Error::InvalidInput { what, value, message } => Error::InvalidInput { what: rename(what), value, message },
+            other => other,
+        }
+    }
+
+    /// What the user must change, for bad input that names it: [`Error::InvalidInput`]'s
+    /// `what`, or the input an etl-core range or finiteness check refused
+    /// ([`Error::core_input`]).
+    pub fn input_what(&self) -> Option<&str> {
+        match self {
+            Error::InvalidInput { what, .. } => Some(what),
+            Error::Core(c) => Error::core_input(c).0,
+            _ => None,
+        }
+    }
+
+    /// The offending value of bad input, as text ([`Error::input_what`]'s value): an
+    /// [`Error::InvalidInput`]'s `value`, or the value of an etl-core range check.
+    pub fn input_value(&self) -> Option<String> {
+        match self {
+            Error::InvalidInput { value, .. } => value.clone(),
+            Error::Core(c) => Error::core_input(c).1,
+            _ => None,
+        }
+    }
+
+    /// The input an etl-core range or finiteness check refused
+    /// ([`etl_core::Error::OutOfRange`], [`etl_core::Error::NotFinite`]) and the value a
+    /// range check saw (compact); `(None, None)` for the core's other errors, whose `what`
+    /// names a condition or a count rather than an input.
+    pub fn core_input(e: &etl_core::Error) -> (Option<&'static str>, Option<String>) {
+        match *e {
+            etl_core::Error::OutOfRange { what, value, .. } => (Some(what), Some(value.to_input_value())),
+            etl_core::Error::NotFinite { what } => (Some(what), None),
+            _ => (None, None),
         }
     }
 

@@ -41,7 +41,7 @@ impl FromStr for ExportFormat {
             "opencv" => Ok(ExportFormat::OpenCv),
             "ros" => Ok(ExportFormat::Ros),
             "mrcal" => Ok(ExportFormat::Mrcal),
-            _ => Err(Error::InvalidInput(format!("format {s:?} is not one of opencv, ros, mrcal"))),
+            _ => Err(Error::invalid_value("format", s, format!("format {s:?} is not one of opencv, ros, mrcal"))),
         }
     }
 }

@@ -50,11 +50,13 @@ pub mod calibration;
 pub mod dataset;
 mod error;
 pub mod export;
+mod input_value;
 pub mod observations;
 pub mod output;
 pub mod thermal;
 
 pub use error::{Error, ErrorKind, Result};
+pub use input_value::InputValue;
 
 pub use a0::A0File;
 pub use board::{Board, Checkerboard};
@@ -76,15 +78,23 @@ pub fn compact(x: f64) -> String {
     }
 }
 
-/// `value` if it is in `range` (inclusive; NaN never is), else an error naming `what`
-/// (a flag or a key), the value (compact) and the range: `--aperture-mm NaN mm is outside
-/// [0, 50] mm`.
+/// `value` if it is in `range` (inclusive; NaN never is), else [`Error::InvalidInput`]
+/// about `what` (a flag or a key) with the value (compact), whose message names both and
+/// the range: `--aperture-mm NaN mm is outside [0, 50] mm`.
 pub fn check_range(what: &str, value: f64, range: [f64; 2], unit: &str) -> Result<f64> {
     if (range[0]..=range[1]).contains(&value) {
         return Ok(value);
     }
     let [lo, hi] = range.map(compact);
-    Err(Error::InvalidInput(format!("{what} {} {unit} is outside [{lo}, {hi}] {unit}", compact(value))))
+    Err(Error::invalid_value(what, value, format!("{what} {} {unit} is outside [{lo}, {hi}] {unit}", compact(value))))
+}
+
+/// The first `(key, value)` whose value is given and not finite (NaN or infinite), so that
+/// a validator's error names it ([`Error::invalid_value`]).
+pub(crate) fn first_not_finite<'a>(
+    numbers: impl IntoIterator<Item = (&'a str, Option<f64>)>,
+) -> Option<(&'a str, f64)> {
+    numbers.into_iter().find_map(|(key, x)| x.filter(|x| !x.is_finite()).map(|x| (key, x)))
 }
 
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).

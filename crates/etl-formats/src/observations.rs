@@ -70,54 +70,102 @@ pub const WORLD_RANGE_MM: [f64; 2] = [-10_000.0, 10_000.0];
 pub const PIXEL_MARGIN_IMAGES: f64 = 1.0;
 
 /// Checks `image_size` against [`MAX_IMAGE_SIDE_PX`] and [`MAX_IMAGE_PIXELS`] (`what`
-/// names it in the message).
+/// names it: the error's `what` and the message's first word).
 pub fn check_image_size(image_size: [u32; 2], what: &str) -> Result<()> {
     let [w, h] = image_size;
     if !(1..=MAX_IMAGE_SIDE_PX).contains(&w) || !(1..=MAX_IMAGE_SIDE_PX).contains(&h) {
-        return Err(Error::InvalidInput(format!(
-            "{what} [{w}, {h}] px: each side must be in [1, {MAX_IMAGE_SIDE_PX}] px"
-        )));
+        return Err(Error::invalid_value(
+            what,
+            image_size,
+            format!("{what} [{w}, {h}] px: each side must be in [1, {MAX_IMAGE_SIDE_PX}] px"),
+        ));
     }
     if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
-        return Err(Error::InvalidInput(format!(
-            "{what} [{w}, {h}] px: more than {MAX_IMAGE_PIXELS} pixels (the documented limit)"
-        )));
+        return Err(Error::invalid_value(
+            what,
+            image_size,
+            format!("{what} [{w}, {h}] px: more than {MAX_IMAGE_PIXELS} pixels (the documented limit)"),
+        ));
     }
     Ok(())
+}
+
+/// One view of a list of the file, as messages and errors name it: `"view 3"` in words,
+/// `"views[3]"` as the key path of a field.
+#[derive(Clone, Copy)]
+struct ViewRef<'a> {
+    /// The view in words: "view", "setting view", "lens-off view".
+    name: &'a str,
+    /// The file's key of its list: "views", "setting_views", "offstate_views".
+    key: &'a str,
+    /// Its index in the list.
+    i: usize,
+}
+
+impl ViewRef<'_> {
+    /// The key path of `field` of this view: `views[3].points`.
+    fn field(&self, field: &str) -> String {
+        format!("{}[{}].{field}", self.key, self.i)
+    }
+}
+
+impl std::fmt::Display for ViewRef<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {}", self.name, self.i)
+    }
 }
 
 /// Checks the points of view `i` (`name`: "view", "lens-off view", ...): at least one,
 /// world coordinates in [`WORLD_RANGE_MM`], pixels within [`PIXEL_MARGIN_IMAGES`] of the
 /// image, and with `planar` every Z = 0. The message names the view and the point.
-fn check_points(points: &[PointObs], name: &str, i: usize, image_size: [u32; 2], planar: bool) -> Result<()> {
+fn check_points(points: &[PointObs], view: ViewRef<'_>, image_size: [u32; 2], planar: bool) -> Result<()> {
     if points.is_empty() {
-        return Err(Error::InvalidInput(format!("{name} {i} has no points")));
+        return Err(Error::invalid(view.field("points"), format!("{view} has no points")));
     }
-    if points.iter().any(|p| p.world_mm.iter().chain(&p.pixel).any(|x| !x.is_finite())) {
-        return Err(Error::InvalidInput(format!("{name} {i}: a point is not finite")));
+    let coordinates = |p: &PointObs| {
+        let world = p.world_mm.into_iter().map(|x| ("world_mm", x));
+        world.chain(p.pixel.into_iter().map(|x| ("pixel", x))).collect::<Vec<_>>()
+    };
+    for (j, p) in points.iter().enumerate() {
+        if let Some((field, x)) = coordinates(p).into_iter().find(|(_, x)| !x.is_finite()) {
+            let what = view.field(&format!("points[{j}].{field}"));
+            return Err(Error::invalid_value(what, x, format!("{view}: a point is not finite")));
+        }
     }
     let [wr0, wr1] = WORLD_RANGE_MM;
     for (j, p) in points.iter().enumerate() {
-        let bad = |what: String| Error::InvalidInput(format!("{name} {i} point {j}: {what}"));
-        if let Some(x) = p.world_mm.iter().find(|x| !(wr0..=wr1).contains(*x)) {
-            return Err(bad(format!("world coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(*x))));
+        let bad = |field: &str, x: f64, what: String| {
+            Error::invalid_value(view.field(&format!("points[{j}].{field}")), x, format!("{view} point {j}: {what}"))
+        };
+        if let Some(&x) = p.world_mm.iter().find(|x| !(wr0..=wr1).contains(*x)) {
+            return Err(bad(
+                "world_mm",
+                x,
+                format!("world coordinate {} mm is outside [{wr0}, {wr1}] mm", crate::compact(x)),
+            ));
         }
-        for (x, side) in p.pixel.iter().zip(image_size) {
+        for (&x, side) in p.pixel.iter().zip(image_size) {
             let margin = PIXEL_MARGIN_IMAGES * f64::from(side);
-            if !(-margin..=f64::from(side) + margin).contains(x) {
-                return Err(bad(format!(
-                    "pixel coordinate {} px is outside [{}, {}] px (the image and one image size around it)",
-                    crate::compact(*x),
-                    -margin,
-                    f64::from(side) + margin
-                )));
+            if !(-margin..=f64::from(side) + margin).contains(&x) {
+                return Err(bad(
+                    "pixel",
+                    x,
+                    format!(
+                        "pixel coordinate {} px is outside [{}, {}] px (the image and one image size around it)",
+                        crate::compact(x),
+                        -margin,
+                        f64::from(side) + margin
+                    ),
+                ));
             }
         }
         if planar && p.world_mm[2] != 0.0 {
-            return Err(bad(format!(
-                "Z = {} mm, but this board is planar: its points must have Z = 0",
-                crate::compact(p.world_mm[2])
-            )));
+            let z = p.world_mm[2];
+            return Err(bad(
+                "world_mm",
+                z,
+                format!("Z = {} mm, but this board is planar: its points must have Z = 0", crate::compact(z)),
+            ));
         }
     }
     Ok(())
@@ -161,7 +209,7 @@ impl Observations {
 
     /// Checks and writes the file atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
-        self.validate().map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
+        self.validate().map_err(|e| e.within(path.display(), None))?;
         write_json(path, self)
     }
 
@@ -171,29 +219,39 @@ impl Observations {
     /// [`T_DOMAIN_C`]; points as `check_points` (lens-off and setting boards planar).
     pub fn validate(&self) -> Result<()> {
         if self.views.is_empty() && self.setting_views.is_empty() {
-            return Err(Error::InvalidInput("observations hold no views".into()));
+            return Err(Error::invalid("views", "observations hold no views"));
         }
         check_image_size(self.image_size, "image_size")?;
-        for (list, name, planar) in [(&self.views, "view", false), (&self.setting_views, "setting view", true)] {
+        for (list, name, key, planar) in
+            [(&self.views, "view", "views", false), (&self.setting_views, "setting view", "setting_views", true)]
+        {
             for (i, v) in list.iter().enumerate() {
-                check_view_setting(v, name, i)?;
-                check_points(&v.points, name, i, self.image_size, planar)?;
+                let view = ViewRef { name, key, i };
+                check_view_setting(v, view)?;
+                check_points(&v.points, view, self.image_size, planar)?;
             }
         }
         for (i, v) in self.offstate_views.iter().enumerate() {
-            check_points(&v.points, "lens-off view", i, self.image_size, true)?;
+            check_points(
+                &v.points,
+                ViewRef { name: "lens-off view", key: "offstate_views", i },
+                self.image_size,
+                true,
+            )?;
         }
         Ok(())
     }
 
     /// E_com of every setting view: as recorded, or compensated ([`view_e_com_ma`]).
     pub fn setting_e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
-        self.setting_views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, "setting view", i, thermal)).collect()
+        let view = |i| ViewRef { name: "setting view", key: "setting_views", i };
+        self.setting_views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, view(i), thermal)).collect()
     }
 
     /// E_com of every view: as recorded, or compensated ([`view_e_com_ma`]).
     pub fn e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
-        self.views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, "view", i, thermal)).collect()
+        let view = |i| ViewRef { name: "view", key: "views", i };
+        self.views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, view(i), thermal)).collect()
     }
 
     /// Whether some ETL or setting view has no recorded E_com (so a thermal calibration
@@ -212,28 +270,31 @@ impl Observations {
 }
 
 /// Checks a view's currents and temperature against the lens driver's domain.
-fn check_view_setting(v: &ViewObs, name: &str, i: usize) -> Result<()> {
-    if !(v.e_in_ma.is_finite() && v.temperature_c.is_finite() && v.e_com_ma.is_none_or(f64::is_finite)) {
-        return Err(Error::InvalidInput(format!("{name} {i}: current or temperature is not finite")));
+fn check_view_setting(v: &ViewObs, view: ViewRef<'_>) -> Result<()> {
+    let setting = [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
+    if let Some((key, x)) = crate::first_not_finite(setting) {
+        return Err(Error::invalid_value(view.field(key), x, format!("{view}: current or temperature is not finite")));
     }
     let [e0, e1] = E_IN_DOMAIN_MA;
     let [t0, t1] = T_DOMAIN_C;
     for (value, key) in [(Some(v.e_in_ma), "e_in_ma"), (v.e_com_ma, "e_com_ma")] {
         match value {
             Some(e) if !(e0..=e1).contains(&e) => {
-                return Err(Error::InvalidInput(format!(
-                    "{name} {i}: {key} {} mA is outside the lens driver's [{e0}, {e1}] mA",
-                    crate::compact(e)
-                )));
+                return Err(Error::invalid_value(
+                    view.field(key),
+                    e,
+                    format!("{view}: {key} {} mA is outside the lens driver's [{e0}, {e1}] mA", crate::compact(e)),
+                ));
             }
             _ => {}
         }
     }
     if !(t0..=t1).contains(&v.temperature_c) {
-        return Err(Error::InvalidInput(format!(
-            "{name} {i}: temperature_c {} degC is outside [{t0}, {t1}] degC",
-            crate::compact(v.temperature_c)
-        )));
+        return Err(Error::invalid_value(
+            view.field("temperature_c"),
+            v.temperature_c,
+            format!("{view}: temperature_c {} degC is outside [{t0}, {t1}] degC", crate::compact(v.temperature_c)),
+        ));
     }
     Ok(())
 }
@@ -241,15 +302,20 @@ fn check_view_setting(v: &ViewObs, name: &str, i: usize) -> Result<()> {
 /// E_com of one view: its recorded `e_com_ma`, or E_in - E_T(T, E_in) through `thermal`,
 /// refused outside the thermal calibration's ranges. No surface is assumed: a view without
 /// E_com and no thermal calibration chosen is an error naming the view.
-fn view_e_com_ma(v: &ViewObs, name: &str, i: usize, thermal: Option<&ThermalRef>) -> Result<f64> {
+fn view_e_com_ma(v: &ViewObs, view: ViewRef<'_>, thermal: Option<&ThermalRef>) -> Result<f64> {
     if let Some(e) = v.e_com_ma {
         return Ok(e);
     }
     let Some(t) = thermal else {
-        return Err(Error::InvalidInput(format!(
-            "{name} {i} has no e_com_ma and no thermal calibration was chosen: give one (--thermal FILE, or \
-             --thermal paper for the paper's surface)"
-        )));
+        return Err(Error::invalid(
+            view.field("e_com_ma"),
+            format!(
+                "{view} has no e_com_ma and no thermal calibration was chosen: give one (--thermal FILE, or \
+                 --thermal paper for the paper's surface)"
+            ),
+        ));
     };
-    t.e_com_ma(v.e_in_ma, v.temperature_c).map_err(|e| Error::InvalidInput(format!("{name} {i}: {e}")))
+    // The thermal calibration refuses the view's own current or temperature: name it.
+    let prefix = format!("{}[{}]", view.key, view.i);
+    t.e_com_ma(v.e_in_ma, v.temperature_c).map_err(|e| e.within(view, Some(&prefix)))
 }

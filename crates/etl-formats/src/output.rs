@@ -9,31 +9,55 @@
 //!   the link kept; a dangling symlink is refused.
 //! - A replaced file keeps its permission bits; a read-only file is refused.
 //! - One file is written atomically by [`crate::write_atomic`] (a temporary sibling, then a
-//!   rename); a set of files in one directory by [`write_dir_set`] (a temporary sibling
-//!   directory, then an atomic exchange), so a kill leaves the earlier set or the new one.
+//!   rename); files of one run in several places by [`write_file_set`] (renamed last). A
+//!   set of files in one directory swapped in whole is the `etlcal` binary's (its
+//!   `output::write_dir_set`, built on [`resolve_output`], [`temp_sibling`],
+//!   [`remove_stale_temps`] and [`kept_permissions`]): the atomic exchange of two
+//!   directories is a Linux system call, and this crate builds wherever `std` does.
 //! - Temporaries are named `.NAME.tmpPID`; one whose process is gone is removed by the next
 //!   run writing NAME.
+//!
+//! Portability: the policy is written for Unix and holds there whole. Elsewhere it falls
+//! back on what `std` offers, and says so: an output is the same file as an input when
+//! their canonical paths are equal (symlinks resolved; a hard link is not recognised, as
+//! it is on Unix by device and inode); a replaced file keeps its read-only flag (on Unix
+//! its permission bits); a temporary of another process is never taken for stale (Linux
+//! asks `/proc`), so it is left in place.
 
-use std::os::unix::fs::{MetadataExt, PermissionsExt};
 use std::path::{Path, PathBuf};
 
 use crate::{Error, Result};
-
-/// The file listing a set directory's top-level entries (one per line), written last into
-/// every set; entries it names may be replaced by the next set.
-pub const SET_MANIFEST: &str = ".etlcal-set";
 
 /// An output of a verb, as [`check_paths`] checks it.
 #[derive(Clone, Copy, Debug)]
 pub enum Output<'a> {
     /// A file, replaced whole.
     File(&'a Path),
-    /// A directory holding a set of files, replaced whole ([`write_dir_set`]).
+    /// A directory holding a set of files, replaced whole (the `etlcal` binary's
+    /// `output::write_dir_set`).
     Dir(&'a Path),
 }
 
-fn refused(path: &Path, why: &str) -> Error {
+/// An output the policy refuses: an [`Error::Output`] on `path` whose OS error (of kind
+/// `InvalidInput`) says `why`, e.g. `"is read-only: refused as an output"`.
+pub fn refused(path: &Path, why: &str) -> Error {
     Error::Output { path: path.to_owned(), source: std::io::Error::new(std::io::ErrorKind::InvalidInput, why) }
+}
+
+/// What makes two existing paths one file: device and inode on Unix (hard links and
+/// symlinks included); elsewhere `None`, and [`check_paths`] compares canonical paths only
+/// (module doc, "Portability").
+fn file_id(m: &std::fs::Metadata) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = m;
+        None
+    }
 }
 
 /// Refuses, before anything is read, inputs that are not regular files and outputs that
@@ -43,10 +67,11 @@ pub fn check_paths(inputs: &[&Path], outputs: &[Output<'_>]) -> Result<()> {
     let mut ins = Vec::with_capacity(inputs.len());
     for &p in inputs {
         if let Some(m) = check_input(p)? {
-            ins.push((p, m.dev(), m.ino(), p.canonicalize().unwrap_or_else(|_| p.to_owned())));
+            ins.push((p, file_id(&m), p.canonicalize().unwrap_or_else(|_| p.to_owned())));
         }
     }
-    let mut seen: Vec<(u64, u64, PathBuf)> = Vec::new();
+    // Each output seen: its file identity (None if it does not exist yet) and its path.
+    let mut seen: Vec<(Option<(u64, u64)>, PathBuf)> = Vec::new();
     for out in outputs {
         let (path, is_dir) = match *out {
             Output::File(p) => (p, false),
@@ -54,10 +79,10 @@ pub fn check_paths(inputs: &[&Path], outputs: &[Output<'_>]) -> Result<()> {
         };
         let Some(m) = existing(path)? else {
             let lexical = absolute(path);
-            if seen.iter().any(|(_, _, s)| *s == lexical) {
+            if seen.iter().any(|(_, s)| *s == lexical) {
                 return Err(refused(path, "is given as two outputs"));
             }
-            seen.push((0, 0, lexical));
+            seen.push((None, lexical));
             continue;
         };
         if is_dir && !m.is_dir() {
@@ -70,17 +95,18 @@ pub fn check_paths(inputs: &[&Path], outputs: &[Output<'_>]) -> Result<()> {
             return Err(refused(path, "is read-only: refused as an output"));
         }
         let canonical = path.canonicalize().map_err(|source| Error::Output { path: path.to_owned(), source })?;
-        for (input, dev, ino, input_canonical) in &ins {
-            let same = (*dev, *ino) == (m.dev(), m.ino());
+        let id = file_id(&m);
+        for (input, input_id, input_canonical) in &ins {
+            let same = (id.is_some() && *input_id == id) || *input_canonical == canonical;
             if same || (is_dir && input_canonical.starts_with(&canonical)) {
                 let what = if same { "is" } else { "holds" };
                 return Err(refused(path, &format!("{what} the input {}: refused as an output", input.display())));
             }
         }
-        if seen.iter().any(|(d, i, s)| (*d, *i) == (m.dev(), m.ino()) || *s == canonical) {
+        if seen.iter().any(|(i, s)| (id.is_some() && *i == id) || *s == canonical) {
             return Err(refused(path, "is given as two outputs"));
         }
-        seen.push((m.dev(), m.ino(), canonical));
+        seen.push((id, canonical));
     }
     Ok(())
 }
@@ -105,7 +131,8 @@ fn absolute(path: &Path) -> PathBuf {
 /// On an error before the renames nothing is replaced and every temporary is removed.
 /// The outputs are checked as [`check_paths`] does (policy of the module doc) first.
 /// Not atomic as a set under a kill between the renames (a window of a few system
-/// calls); sets in one directory use [`write_dir_set`], which is.
+/// calls); sets in one directory use the `etlcal` binary's `output::write_dir_set`, which
+/// is.
 pub fn write_file_set<T>(outputs: &[&Path], write: impl FnOnce(&[PathBuf]) -> Result<T>) -> Result<T> {
     let files: Vec<Output<'_>> = outputs.iter().map(|p| Output::File(p)).collect();
     check_paths(&[], &files)?;
@@ -162,9 +189,10 @@ fn existing(path: &Path) -> Result<Option<std::fs::Metadata>> {
     }
 }
 
-/// The path a write to `path` replaces: the target of a symlink (policy: written through),
-/// else `path`; with its directory (`.` for a bare name) and file name.
-pub(crate) fn resolve_output(path: &Path) -> Result<(PathBuf, PathBuf, std::ffi::OsString)> {
+/// The path a write to `path` replaces: the target of a symlink (policy: written through;
+/// a dangling one is refused), else `path`; with its directory (`.` for a bare name) and
+/// file name. Errors: a path with no file name (`/`, `..`).
+pub fn resolve_output(path: &Path) -> Result<(PathBuf, PathBuf, std::ffi::OsString)> {
     let target = match std::fs::symlink_metadata(path) {
         Ok(m) if m.file_type().is_symlink() => {
             existing(path)?;
@@ -174,7 +202,7 @@ pub(crate) fn resolve_output(path: &Path) -> Result<(PathBuf, PathBuf, std::ffi:
     };
     let name = target
         .file_name()
-        .ok_or_else(|| Error::InvalidInput(format!("{}: not a file path", path.display())))?
+        .ok_or_else(|| Error::invalid_value("output", path, format!("{}: not a file path", path.display())))?
         .to_owned();
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
@@ -184,14 +212,14 @@ pub(crate) fn resolve_output(path: &Path) -> Result<(PathBuf, PathBuf, std::ffi:
 }
 
 /// The temporary sibling of `name` in `dir` for this process: `.NAME.tmpPID`.
-pub(crate) fn temp_sibling(dir: &Path, name: &std::ffi::OsStr) -> PathBuf {
+pub fn temp_sibling(dir: &Path, name: &std::ffi::OsStr) -> PathBuf {
     dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()))
 }
 
 /// Removes the temporaries `.NAME.tmpPID` (files or directories) in `dir` left by
 /// processes that no longer run (a killed run); best effort, errors ignored. Another
 /// running process's temporary is left alone.
-pub(crate) fn remove_stale_temps(dir: &Path, name: &std::ffi::OsStr) {
+pub fn remove_stale_temps(dir: &Path, name: &std::ffi::OsStr) {
     let prefix = format!(".{}.tmp", name.to_string_lossy());
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
@@ -208,8 +236,8 @@ pub(crate) fn remove_stale_temps(dir: &Path, name: &std::ffi::OsStr) {
     }
 }
 
-/// Whether the process `pid` (decimal) runs: `/proc/PID` exists (Linux); elsewhere every
-/// process but this one is taken as gone only if it is not this one.
+/// Whether the process `pid` (decimal) runs: this one does; another one when `/proc/PID`
+/// exists (Linux); elsewhere every process is taken as running (its temporary is kept).
 fn process_runs(pid: &str) -> bool {
     if pid == std::process::id().to_string() {
         return true;
@@ -223,102 +251,24 @@ fn process_runs(pid: &str) -> bool {
 
 /// The permission bits of the regular file the write to `target` replaces, if any.
 pub(crate) fn kept_mode(target: &Path) -> Option<std::fs::Permissions> {
-    std::fs::metadata(target).ok().filter(|m| m.is_file()).map(|m| std::fs::Permissions::from_mode(m.mode() & 0o7777))
+    std::fs::metadata(target).ok().filter(|m| m.is_file()).map(|m| kept_permissions(&m))
 }
 
-/// Writes a set of files into the directory `dir` as one: `write` fills a fresh temporary
-/// sibling directory (`.NAME.tmpPID`), which then takes `dir`'s place in one atomic
-/// exchange (Linux `renameat2(RENAME_EXCHANGE)`), and the earlier set is removed. A kill
-/// or an error at any moment leaves `dir` with the whole earlier set or the whole new one;
-/// on error the temporary directory is removed.
-///
-/// Preconditions (refused before `write` runs): `dir`, if it exists, is a directory whose
-/// entries all belong to etlcal's sets (named in its [`SET_MANIFEST`] or in `set_names`,
-/// the top-level names this set writes): a file of the user's is never thrown away.
-/// `write` gets the temporary directory and returns its value; paths it reports under the
-/// temporary directory are the caller's to map onto `dir`.
-pub fn write_dir_set<T>(dir: &Path, set_names: &[&str], write: impl FnOnce(&Path) -> Result<T>) -> Result<T> {
-    let (target, parent, name) = resolve_output(dir)?;
-    if target.parent().is_none() || name == "." || name == ".." {
-        return Err(refused(dir, "cannot be replaced as a set (a root or relative directory name)"));
-    }
-    std::fs::create_dir_all(&parent).map_err(|source| Error::Output { path: parent.clone(), source })?;
-    let old = existing(&target)?;
-    if let Some(m) = &old {
-        if !m.is_dir() {
-            return Err(refused(dir, "exists and is not a directory (a directory output)"));
-        }
-        refuse_foreign_entries(dir, &target, set_names)?;
-    }
-    remove_stale_temps(&parent, &name);
-    let staging = temp_sibling(&parent, &name);
-    let _ = std::fs::remove_dir_all(&staging);
-    let io = |source| Error::Output { path: dir.to_owned(), source };
-    std::fs::create_dir(&staging).map_err(io)?;
-    let result = write(&staging).and_then(|value| {
-        let entries = top_level_names(&staging).map_err(io)?;
-        crate::write_atomic(&staging.join(SET_MANIFEST), (entries.join("\n") + "\n").as_bytes())?;
-        if let Some(m) = &old {
-            let mode = std::fs::Permissions::from_mode(m.mode() & 0o7777);
-            std::fs::set_permissions(&staging, mode).map_err(io)?;
-        }
-        std::fs::File::open(&staging).and_then(|f| f.sync_all()).map_err(io)?;
-        swap_in(&staging, &target, old.is_some()).map_err(io)?;
-        Ok(value)
-    });
-    // After a swap the earlier set is at the temporary name; on error the partial new one.
-    let _ = std::fs::remove_dir_all(&staging);
-    result
-}
-
-/// Puts `staging` in the place of `target`: an atomic exchange when `target` exists.
-fn swap_in(staging: &Path, target: &Path, exists: bool) -> std::io::Result<()> {
-    if !exists {
-        return std::fs::rename(staging, target);
-    }
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+/// The permissions a replacement of the file or directory of metadata `m` gets: on Unix
+/// its permission bits (set-id and sticky bits included, the file type left out);
+/// elsewhere its read-only flag (module doc, "Portability").
+pub fn kept_permissions(m: &std::fs::Metadata) -> std::fs::Permissions {
+    #[cfg(unix)]
     {
-        let cwd = std::fs::File::open(".")?;
-        nix::fcntl::renameat2(&cwd, staging, &cwd, target, nix::fcntl::RenameFlags::RENAME_EXCHANGE)
-            .map_err(std::io::Error::from)
+        use std::os::unix::fs::{MetadataExt, PermissionsExt};
+        std::fs::Permissions::from_mode(m.mode() & 0o7777)
     }
-    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    #[cfg(not(unix))]
     {
-        // No atomic exchange here: the earlier set is moved aside first (a kill between the
-        // two renames leaves it at `.NAME.old`, whole).
-        let aside = staging.with_extension("old");
-        std::fs::rename(target, &aside)?;
-        std::fs::rename(staging, target)?;
-        std::fs::rename(&aside, staging)
+        m.permissions()
     }
 }
 
-/// The sorted top-level entry names of `dir`.
-fn top_level_names(dir: &Path) -> std::io::Result<Vec<String>> {
-    let mut names = Vec::new();
-    for entry in std::fs::read_dir(dir)? {
-        names.push(entry?.file_name().to_string_lossy().into_owned());
-    }
-    names.sort();
-    Ok(names)
-}
-
-/// Refuses a set directory holding an entry that is neither in its manifest nor in
-/// `set_names` (nor a manifest): the user's file, which a swap would throw away.
-fn refuse_foreign_entries(dir: &Path, target: &Path, set_names: &[&str]) -> Result<()> {
-    let manifest = std::fs::read_to_string(target.join(SET_MANIFEST)).unwrap_or_default();
-    let known = |n: &str| n == SET_MANIFEST || set_names.contains(&n) || manifest.lines().any(|l| l == n);
-    let names = top_level_names(target).map_err(|source| Error::Output { path: dir.to_owned(), source })?;
-    match names.iter().find(|n| !known(n)) {
-        Some(n) => Err(refused(
-            dir,
-            &format!(
-                "holds {n}, which is not an etlcal output: the set is replaced whole; pass a new or empty directory"
-            ),
-        )),
-        None => Ok(()),
-    }
-}
-
-#[cfg(test)]
+// The policy's tests make symlinks, hard links, FIFOs and modes: Unix only.
+#[cfg(all(test, unix))]
 mod tests;

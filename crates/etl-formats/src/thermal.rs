@@ -163,9 +163,12 @@ pub fn read_thermal_table(path: &Path) -> Result<Vec<ThermalSample>> {
 pub fn write_thermal_table(path: &Path, rows: &[ThermalSample]) -> Result<()> {
     let mut text = String::from(THERMAL_TABLE_HEADER);
     text.push('\n');
-    for r in rows {
-        if !(r.temperature_c.is_finite() && r.e_in_ma.is_finite() && r.e_t_ma.is_finite()) {
-            return Err(Error::InvalidInput(format!("{}: thermal table rows must be finite", path.display())));
+    for (i, r) in rows.iter().enumerate() {
+        let numbers =
+            [("temperature_c", Some(r.temperature_c)), ("e_in_ma", Some(r.e_in_ma)), ("e_t_ma", Some(r.e_t_ma))];
+        if let Some((key, x)) = crate::first_not_finite(numbers) {
+            let message = format!("{}: thermal table rows must be finite", path.display());
+            return Err(Error::invalid_value(format!("rows[{i}].{key}"), x, message));
         }
         // `{}` on f64 prints the shortest string that parses back to the same number.
         let _ = writeln!(text, "{},{},{}", r.temperature_c, r.e_in_ma, r.e_t_ma);

@@ -400,7 +400,11 @@ fn patterns_parse_and_bad_ones_are_refused() {
     assert_eq!(pat(" 9X6 "), Pattern { cols: 9, rows: 6 });
     for bad in ["", "14", "14x", "x12", "14x12x3", "-3x5", "ax5", "2x5", "5x2", "0x0", "5x100000"] {
         match bad.parse::<Pattern>() {
-            Err(Error::InvalidInput(m)) => assert!(m.contains("pattern"), "{bad}: {m}"),
+            Err(Error::InvalidInput { what, value, message }) => {
+                assert!(message.contains("pattern"), "{bad}: {message}");
+                assert_eq!(what, "pattern", "{bad}");
+                assert!(value.is_some_and(|v| !v.is_empty() || bad.is_empty()), "{bad}");
+            }
             other => panic!("{bad}: {other:?}"),
         }
     }

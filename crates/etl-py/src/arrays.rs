@@ -5,7 +5,7 @@ use numpy::{AllowTypeChange, IntoPyArray, PyArrayDyn, PyArrayLikeDyn, PyArrayMet
 use pyo3::prelude::*;
 use pyo3::types::PyFloat;
 
-use crate::errors::input_error;
+use crate::errors::{input_error, invalid};
 
 /// Points of dimension `K` read from an array-like of shape (N, K) or (K,).
 pub struct Points<const K: usize> {
@@ -18,13 +18,14 @@ pub struct Points<const K: usize> {
 /// Reads (N, K) or (K,) floats (any numeric dtype, any layout; lists too). `what` and
 /// `unit` name the argument in the error message.
 pub fn points<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Points<K>> {
-    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
-        obj.extract().map_err(|e| input_error(format!("{what} must be an array of numbers of shape (N, {K}): {e}")))?;
+    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj
+        .extract()
+        .map_err(|e| invalid(what, format!("{what} must be an array of numbers of shape (N, {K}): {e}")))?;
     let shape = arr.shape().to_vec();
     let single = match shape.as_slice() {
         [k] if *k == K => true,
         [_, k] if *k == K => false,
-        _ => return Err(input_error(format!("{what} must have shape (N, {K}) or ({K},), got {shape:?}"))),
+        _ => return Err(invalid(what, format!("{what} must have shape (N, {K}) or ({K},), got {shape:?}"))),
     };
     // `as_slice` also accepts Fortran-ordered memory: only a C-ordered slice is row-major.
     let c_slice = if arr.is_c_contiguous() { arr.as_slice().ok() } else { None };
@@ -33,7 +34,7 @@ pub fn points<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Po
         None => {
             let view = arr.as_array();
             let n = if single { 1 } else { shape[0] };
-            let view = view.to_shape((n, K)).map_err(|e| input_error(format!("{what}: {e}")))?;
+            let view = view.to_shape((n, K)).map_err(|e| invalid(what, format!("{what}: {e}")))?;
             view.rows().into_iter().map(|r| core::array::from_fn(|i| r[i])).collect()
         }
     };
@@ -84,9 +85,9 @@ pub fn vec_out<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
 /// Reads exactly `N` numbers (a sequence or 1-D array).
 pub fn fixed<const N: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; N]> {
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
-        obj.extract().map_err(|e| input_error(format!("{what} must be {N} numbers: {e}")))?;
+        obj.extract().map_err(|e| invalid(what, format!("{what} must be {N} numbers: {e}")))?;
     if arr.len() != N || arr.ndim() != 1 {
-        return Err(input_error(format!("{what} must be {N} numbers, got shape {:?}", arr.shape())));
+        return Err(invalid(what, format!("{what} must be {N} numbers, got shape {:?}", arr.shape())));
     }
     let v = arr.as_array();
     let mut out = [0.0; N];
@@ -104,11 +105,11 @@ pub fn map1<'py>(x: &Bound<'py, PyAny>, what: &str, f: impl Fn(f64) -> PyResult<
         return Ok(PyFloat::new(py, f(v.value())?).into_any());
     }
     if !x.hasattr("__len__")? && !x.hasattr("__array__")? {
-        let v: f64 = x.extract().map_err(|e| input_error(format!("{what} must be a number or an array: {e}")))?;
+        let v: f64 = x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
         return Ok(PyFloat::new(py, f(v)?).into_any());
     }
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
-        x.extract().map_err(|e| input_error(format!("{what} must be a number or an array: {e}")))?;
+        x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
     if arr.ndim() == 0 {
         let v = *arr.as_array().iter().next().unwrap_or(&f64::NAN);
         return Ok(PyFloat::new(py, f(v)?).into_any());
@@ -121,8 +122,59 @@ pub fn map1<'py>(x: &Bound<'py, PyAny>, what: &str, f: impl Fn(f64) -> PyResult<
     Ok(out.into_pyarray(py).into_any())
 }
 
+/// Two arguments read as numbers, or as float64 arrays broadcast against each other
+/// (numpy's rules).
+pub enum Broadcast2 {
+    /// Both were numbers (floats, integers; not 0-d arrays or sequences).
+    Scalar(f64, f64),
+    /// At least one was an array-like: the broadcast shape and both operands in
+    /// row-major order over it.
+    Array {
+        /// The broadcast shape (empty for two 0-d arrays).
+        shape: Vec<usize>,
+        /// The first operand, broadcast.
+        x: Vec<f64>,
+        /// The second operand, broadcast.
+        y: Vec<f64>,
+    },
+}
+
+/// Reads two number-or-array arguments (`what` names them in errors) and broadcasts them.
+pub fn broadcast2<'py>(a: &Bound<'py, PyAny>, b: &Bound<'py, PyAny>, what: (&str, &str)) -> PyResult<Broadcast2> {
+    let py = a.py();
+    let scalar = |x: &Bound<'py, PyAny>| -> PyResult<bool> {
+        Ok(x.cast::<PyFloat>().is_ok() || (!x.hasattr("__len__")? && !x.hasattr("__array__")?))
+    };
+    if scalar(a)? && scalar(b)? {
+        let x: f64 =
+            a.extract().map_err(|e| invalid(what.0, format!("{} must be a number or an array: {e}", what.0)))?;
+        let y: f64 =
+            b.extract().map_err(|e| invalid(what.1, format!("{} must be a number or an array: {e}", what.1)))?;
+        return Ok(Broadcast2::Scalar(x, y));
+    }
+    let np = py.import("numpy")?;
+    let asf = |x: &Bound<'py, PyAny>, name: &str| -> PyResult<Bound<'py, PyAny>> {
+        np.call_method1("asarray", (x, "float64"))
+            .map_err(|e| invalid(name, format!("{name} must be a number or an array: {e}")))
+    };
+    let (a, b) = (asf(a, what.0)?, asf(b, what.1)?);
+    let pair = np
+        .call_method1("broadcast_arrays", (a, b))
+        .map_err(|e| invalid(what.1, format!("{} and {} do not broadcast together: {e}", what.0, what.1)))?;
+    let x: Bound<'py, PyArrayDyn<f64>> = pair.get_item(0)?.cast_into()?;
+    let y: Bound<'py, PyArrayDyn<f64>> = pair.get_item(1)?.cast_into()?;
+    let (x, y) = (x.readonly(), y.readonly());
+    let shape = x.shape().to_vec();
+    Ok(Broadcast2::Array {
+        shape,
+        x: x.as_array().iter().copied().collect(),
+        y: y.as_array().iter().copied().collect(),
+    })
+}
+
 /// Applies `f` to two floats, or elementwise to two array-likes broadcast against each
-/// other (numpy's rules).
+/// other (numpy's rules): a float for two numbers or two 0-d arrays, else a float64 array
+/// of the broadcast shape. Stops at the first error.
 pub fn map2<'py>(
     a: &Bound<'py, PyAny>,
     b: &Bound<'py, PyAny>,
@@ -130,35 +182,16 @@ pub fn map2<'py>(
     f: impl Fn(f64, f64) -> PyResult<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let py = a.py();
-    let scalar = |x: &Bound<'py, PyAny>| -> PyResult<bool> {
-        Ok(x.cast::<PyFloat>().is_ok() || (!x.hasattr("__len__")? && !x.hasattr("__array__")?))
-    };
-    if scalar(a)? && scalar(b)? {
-        let x: f64 = a.extract().map_err(|e| input_error(format!("{} must be a number or an array: {e}", what.0)))?;
-        let y: f64 = b.extract().map_err(|e| input_error(format!("{} must be a number or an array: {e}", what.1)))?;
-        return Ok(PyFloat::new(py, f(x, y)?).into_any());
+    match broadcast2(a, b, what)? {
+        Broadcast2::Scalar(x, y) => Ok(PyFloat::new(py, f(x, y)?).into_any()),
+        Broadcast2::Array { shape, x, y } => {
+            let out = x.iter().zip(&y).map(|(u, v)| f(*u, *v)).collect::<PyResult<Vec<f64>>>()?;
+            if shape.is_empty() {
+                return Ok(PyFloat::new(py, out.first().copied().unwrap_or(f64::NAN)).into_any());
+            }
+            stacked(py, &shape, &[], out)
+        }
     }
-    let np = py.import("numpy")?;
-    let asf = |x: &Bound<'py, PyAny>, name: &str| -> PyResult<Bound<'py, PyAny>> {
-        np.call_method1("asarray", (x, "float64"))
-            .map_err(|e| input_error(format!("{name} must be a number or an array: {e}")))
-    };
-    let (a, b) = (asf(a, what.0)?, asf(b, what.1)?);
-    let pair = np
-        .call_method1("broadcast_arrays", (a, b))
-        .map_err(|e| input_error(format!("{} and {} do not broadcast together: {e}", what.0, what.1)))?;
-    let x: Bound<'py, PyArrayDyn<f64>> = pair.get_item(0)?.cast_into()?;
-    let y: Bound<'py, PyArrayDyn<f64>> = pair.get_item(1)?.cast_into()?;
-    let (x, y) = (x.readonly(), y.readonly());
-    let mut out = x.as_array().mapv(|_| 0.0);
-    for ((o, u), v) in out.iter_mut().zip(x.as_array().iter()).zip(y.as_array().iter()) {
-        *o = f(*u, *v)?;
-    }
-    if out.ndim() == 0 {
-        let v = out.iter().next().copied().unwrap_or(f64::NAN);
-        return Ok(PyFloat::new(py, v).into_any());
-    }
-    Ok(out.into_pyarray(py).into_any())
 }
 
 /// Currents given to a per-current model function: a number (the function's scalar
@@ -181,11 +214,11 @@ pub fn currents(x: &Bound<'_, PyAny>, what: &str) -> PyResult<Currents> {
         return Ok(Currents::Scalar(v.value()));
     }
     if !x.hasattr("__len__")? && !x.hasattr("__array__")? {
-        let v: f64 = x.extract().map_err(|e| input_error(format!("{what} must be a number or an array: {e}")))?;
+        let v: f64 = x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
         return Ok(Currents::Scalar(v));
     }
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
-        x.extract().map_err(|e| input_error(format!("{what} must be a number or an array of numbers: {e}")))?;
+        x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array of numbers: {e}")))?;
     let values: Vec<f64> = arr.as_array().iter().copied().collect();
     if arr.ndim() == 0 {
         return Ok(Currents::Scalar(values.first().copied().unwrap_or(f64::NAN)));

@@ -15,7 +15,7 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::arrays::{mat3_out, matrix_out, points, points_out, vec_out};
 use crate::camera::{trust, CameraAt};
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::pose::BoardPose;
 use crate::thermal::{ThermalCalibration, ThermalSurface};
 
@@ -899,7 +899,9 @@ pub(crate) fn thermal_ref(t: &Bound<'_, PyAny>) -> PyResult<ThermalRef> {
     if let Ok(word) = t.extract::<String>() {
         return match word.as_str() {
             etl_formats::calibration::PAPER_THERMAL => Ok(ThermalRef::paper()),
-            _ => Err(input_error(format!("thermal = {word:?}: the only word accepted is \"paper\""))),
+            _ => {
+                Err(invalid_value("thermal", &word, format!("thermal = {word:?}: the only word accepted is \"paper\"")))
+            }
         };
     }
     if let Ok(c) = t.extract::<ThermalCalibration>() {
@@ -908,7 +910,7 @@ pub(crate) fn thermal_ref(t: &Bound<'_, PyAny>) -> PyResult<ThermalRef> {
     }
     let s: ThermalSurface = t
         .extract()
-        .map_err(|_| input_error("thermal must be a ThermalCalibration, \"paper\", a ThermalSurface or None"))?;
+        .map_err(|_| invalid("thermal", "thermal must be a ThermalCalibration, \"paper\", a ThermalSurface or None"))?;
     Ok(ThermalRef {
         coefficients: s.inner.coefficients,
         t_range_c: None,

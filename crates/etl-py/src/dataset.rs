@@ -8,7 +8,7 @@ use etl_formats::dataset::{Board, Dataset as DatasetFile, DatasetView, OffstateI
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::observations::Observations;
 
 /// The images of a calibration and what was recorded with each (the README's "File formats":
@@ -28,7 +28,7 @@ fn finite(v: f64, what: &str) -> PyResult<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(input_error(format!("{what} must be finite, got {v}")))
+        Err(invalid_value(what, v, format!("{what} must be finite, got {v}")))
     }
 }
 
@@ -69,12 +69,12 @@ impl Dataset {
         board: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         if image_size.0 == 0 || image_size.1 == 0 {
-            return Err(input_error("image_size must be positive"));
+            return Err(invalid_value("image_size", [image_size.0, image_size.1], "image_size must be positive"));
         }
         let board = match (board, inner_corners, square_mm) {
             (Some(b), None, None) => board_of(&b, "board")?,
             (None, Some((c, r)), Some(s)) => Board::checkerboard([c, r], s).py()?,
-            _ => return Err(input_error("give board=etlcal.Board(...), or inner_corners with square_mm")),
+            _ => return Err(invalid("board", "give board=etlcal.Board(...), or inner_corners with square_mm")),
         };
         let mut file = DatasetFile::new([image_size.0, image_size.1], board);
         file.offstate_board = offstate_board.map(|b| board_of(&b, "offstate_board")).transpose()?;

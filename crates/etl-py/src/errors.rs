@@ -15,6 +15,12 @@
 //!
 //! The classes are made with `type(name, bases, namespace)` because two of them have two
 //! bases (pyo3's `create_exception!` takes one).
+//!
+//! `InputError` has two attributes, `None` when absent: `what`, the flag, key, field or
+//! argument to change (`"views[3].points"`, `"square_mm"`, `"search_ma"`), and `value`,
+//! the offending value as text, numbers printed compactly (`"1e308"`, `"NaN"`). They come
+//! from `etl_formats::Error::InvalidInput`'s fields and from etl-core's range and
+//! finiteness checks (`OutOfRange`, `NotFinite`).
 
 use etl_core::lens::LensErrorKind;
 use pyo3::prelude::*;
@@ -41,10 +47,21 @@ pub struct Exceptions {
 
 static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
 
-fn make_type(py: Python<'_>, name: &str, bases: &[&Bound<'_, PyAny>], doc: &str) -> PyResult<Py<PyType>> {
+/// A class `name` of module `etlcal` with `bases`, `doc` and class attributes `attrs`
+/// (their default for every instance).
+fn make_type(
+    py: Python<'_>,
+    name: &str,
+    bases: &[&Bound<'_, PyAny>],
+    doc: &str,
+    attrs: &[(&str, Py<PyAny>)],
+) -> PyResult<Py<PyType>> {
     let ns = PyDict::new(py);
     ns.set_item("__module__", "etlcal")?;
     ns.set_item("__doc__", doc)?;
+    for (key, value) in attrs {
+        ns.set_item(key, value)?;
+    }
     let bases = PyTuple::new(py, bases)?;
     let ty = py.get_type::<PyType>().call1((name, bases, ns))?;
     Ok(ty.cast_into::<PyType>()?.unbind())
@@ -56,14 +73,18 @@ fn build(py: Python<'_>) -> PyResult<Exceptions> {
     let value_error = builtins.getattr("ValueError")?;
     let os_error = builtins.getattr("OSError")?;
     let timeout_error = builtins.getattr("TimeoutError")?;
-    let base = make_type(py, "Error", &[&exception], "Base class of every exception raised by etlcal.")?;
+    let base = make_type(py, "Error", &[&exception], "Base class of every exception raised by etlcal.", &[])?;
     let b = base.bind(py).as_any().clone();
     let input = make_type(
         py,
         "InputError",
         &[&b, &value_error],
         "Bad input: a NaN, a value out of range, too few points/views/currents, data that \
-         do not determine the unknowns, a malformed file. Also a ValueError.",
+         do not determine the unknowns, a malformed file. Also a ValueError.\n\n\
+         Attributes (None when the error names none): what -- the flag, file key, field or \
+         argument to change (e.g. \"views[3].points\", \"square_mm\", \"search_ma\"); \
+         value -- the offending value as text, numbers printed compactly (e.g. \"1e308\", \"NaN\").",
+        &[("what", py.None()), ("value", py.None())],
     )?;
     let not_converged = make_type(
         py,
@@ -71,15 +92,17 @@ fn build(py: Python<'_>) -> PyResult<Exceptions> {
         &[&b],
         "An iterative method (undistortion, Levenberg-Marquardt, autofocus, ...) did not \
          reach its tolerance.",
+        &[],
     )?;
     let board_not_found =
-        make_type(py, "BoardNotFoundError", &[&b], "No checkerboard (or only part of it) was found in an image.")?;
-    let file = make_type(py, "FileError", &[&b, &os_error], "Reading or writing a file failed. Also an OSError.")?;
+        make_type(py, "BoardNotFoundError", &[&b], "No checkerboard (or only part of it) was found in an image.", &[])?;
+    let file = make_type(py, "FileError", &[&b, &os_error], "Reading or writing a file failed. Also an OSError.", &[])?;
     let device = make_type(
         py,
         "DeviceError",
         &[&b],
         "The lens driver (a serial port or the virtual lens) failed or answered wrongly.",
+        &[],
     )?;
     let d = device.bind(py).as_any().clone();
     let device_timeout = make_type(
@@ -87,6 +110,7 @@ fn build(py: Python<'_>) -> PyResult<Exceptions> {
         "DeviceTimeoutError",
         &[&d, &timeout_error],
         "The lens driver did not answer in time. Also a TimeoutError.",
+        &[],
     )?;
     Ok(Exceptions { base, input, not_converged, board_not_found, file, device, device_timeout })
 }
@@ -133,9 +157,37 @@ pub fn raise(kind: Kind, msg: impl Into<String>) -> PyErr {
 }
 
 /// Bad input (an `InputError`, also a `ValueError`) raised by the bindings themselves,
-/// e.g. an array of the wrong shape.
+/// e.g. an array of the wrong shape; `what` and `value` are `None`.
 pub fn input_error(msg: impl Into<String>) -> PyErr {
     raise(Kind::Input, msg)
+}
+
+/// An `InputError` with message `msg` whose attributes `what` and `value` are set (`None`
+/// for `None`): see the module doc.
+pub fn input_error_about(msg: impl Into<String>, what: Option<&str>, value: Option<&str>) -> PyErr {
+    let msg: String = msg.into();
+    Python::attach(|py| {
+        let make = || -> PyResult<PyErr> {
+            let instance = exceptions(py)?.input.bind(py).call1((msg,))?;
+            instance.setattr("what", what)?;
+            instance.setattr("value", value)?;
+            Ok(PyErr::from_value(instance))
+        };
+        make().unwrap_or_else(|e| e)
+    })
+}
+
+/// An `InputError` about the argument or key `what` (its `what`), with no single
+/// offending value (`value` None): a missing key, a wrong type, arguments that exclude
+/// each other.
+pub fn invalid(what: &str, msg: impl Into<String>) -> PyErr {
+    input_error_about(msg, Some(what), None)
+}
+
+/// An `InputError` about the argument or key `what` whose offending `value` is kept as
+/// text the way messages print it (`etl_formats::InputValue`: numbers compact).
+pub fn invalid_value(what: &str, value: impl etl_formats::InputValue, msg: impl Into<String>) -> PyErr {
+    input_error_about(msg, Some(what), Some(&value.to_input_value()))
 }
 
 /// The class of an etl-core error.
@@ -146,9 +198,16 @@ pub fn core_kind(e: &etl_core::Error) -> Kind {
     }
 }
 
-/// An etl-core error as a Python exception (same message).
+/// An etl-core error as a Python exception (same message); a range or finiteness check
+/// names its input and value (`etl_formats::Error::core_input`).
 pub fn core_err(e: etl_core::Error) -> PyErr {
-    raise(core_kind(&e), e.to_string())
+    match core_kind(&e) {
+        Kind::Input => {
+            let (what, value) = etl_formats::Error::core_input(&e);
+            input_error_about(e.to_string(), what, value.as_deref())
+        }
+        kind => raise(kind, e.to_string()),
+    }
 }
 
 /// The class of a lens error, from its kind: one mapping for every lens failure, whether
@@ -172,7 +231,10 @@ pub fn calib_err(e: etl_formats::Error) -> PyErr {
         (_, K::BoardNotFound) => Kind::BoardNotFound,
         _ => Kind::Input,
     };
-    raise(kind, e.to_string())
+    match kind {
+        Kind::Input => input_error_about(e.to_string(), e.input_what(), e.input_value().as_deref()),
+        _ => raise(kind, e.to_string()),
+    }
 }
 
 /// `Result<T, etl_core::Error>` -> `PyResult<T>`.
@@ -214,7 +276,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// `kind` names the variant: `core:NotFinite`, `core:OutOfRange`, `core:TooFew`,
 /// `core:Degenerate`, `core:BehindCamera`, `core:NotConverged`, `core:BufferTooSmall`,
 /// `core:InvalidArgument`, `calib:Io`, `calib:Parse`, `calib:Format`, `calib:Image`,
-/// `calib:BoardNotFound`, `calib:InvalidInput`, `calib:Core`, `calib:LensTimeout`.
+/// `calib:BoardNotFound`, `calib:InvalidInput`, `calib:InvalidInputNoValue`, `calib:Core`,
+/// `calib:LensTimeout`.
 /// Returns the message the Rust side formats, after raising it.
 #[pyfunction]
 pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
@@ -239,7 +302,8 @@ pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
         "calib:Format" => calib(etl_calib::Error::Format { path: p, found: "a/1".into(), expected: "b/1".into() }),
         "calib:Image" => calib(etl_calib::Error::Image { path: p, message: "truncated".into() }),
         "calib:BoardNotFound" => calib(etl_calib::Error::BoardNotFound("img.png".into())),
-        "calib:InvalidInput" => calib(etl_calib::Error::InvalidInput("negative".into())),
+        "calib:InvalidInput" => calib(etl_calib::Error::invalid_value("square_mm", -1.5, "negative")),
+        "calib:InvalidInputNoValue" => calib(etl_calib::Error::invalid("views", "observations hold no views")),
         "calib:Core" => calib(etl_calib::Error::Core(C::NotConverged { what: "ba", iterations: 3 })),
         "calib:LensTimeout" => calib(etl_calib::Error::Lens {
             kind: LensErrorKind::Timeout,

@@ -18,7 +18,7 @@ use pyo3::types::PyDict;
 
 use crate::arrays::points_out;
 use crate::board::board_arg;
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::results;
 
 /// A grey image read from numpy: 8- or 16-bit samples, row-major.
@@ -50,7 +50,7 @@ fn with_image<R>(obj: &Bound<'_, PyAny>, f: impl FnOnce(usize, usize, ImageRef<'
             }
         };
     }
-    Err(input_error("image must be a 2-D numpy array of dtype uint8 or uint16 (rows x columns)"))
+    Err(invalid("image", "image must be a 2-D numpy array of dtype uint8 or uint16 (rows x columns)"))
 }
 
 fn call_owned<R>(
@@ -77,7 +77,7 @@ fn pattern_of(obj: &Bound<'_, PyAny>) -> PyResult<Pattern> {
         return s.parse::<Pattern>().py();
     }
     let (c, r): (usize, usize) =
-        obj.extract().map_err(|_| input_error("pattern must be \"CxR\" (e.g. \"14x12\") or (cols, rows)"))?;
+        obj.extract().map_err(|_| invalid("pattern", "pattern must be \"CxR\" (e.g. \"14x12\") or (cols, rows)"))?;
     Pattern::new(c, r).py()
 }
 
@@ -111,15 +111,15 @@ pub fn detect_corners<'py>(
     pattern: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let target = match (board, pattern) {
-        (Some(_), Some(_)) => return Err(input_error("give the board once: board or pattern, not both")),
-        (None, None) => return Err(input_error("give the board: an etlcal.Board, or a pattern \"CxR\"")),
+        (Some(_), Some(_)) => return Err(invalid("board", "give the board once: board or pattern, not both")),
+        (None, None) => return Err(invalid("board", "give the board: an etlcal.Board, or a pattern \"CxR\"")),
         (Some(b), None) if b.extract::<String>().is_err() && b.extract::<(usize, usize)>().is_err() => {
             Some(board_arg(b, "board")?)
         }
         _ => None,
     };
     let Some(target) = target else {
-        let pattern = pattern_of(board.or(pattern).ok_or_else(|| input_error("no pattern"))?)?;
+        let pattern = pattern_of(board.or(pattern).ok_or_else(|| invalid("pattern", "no pattern"))?)?;
         let corners = with_view(py, image, |v| detect_view(v, pattern), |v| detect_view(v, pattern))?;
         return points_out(py, corners.corners_px, false);
     };
@@ -142,7 +142,7 @@ fn with_view<'py, R: Send>(
     at16: impl FnOnce(GrayView<'_, u16>) -> etl_formats::Result<R> + Send,
 ) -> PyResult<R> {
     with_image(image, |w, h, px| {
-        let bad = || input_error(format!("image of {w} x {h} px has an inconsistent buffer"));
+        let bad = || invalid("image", format!("image of {w} x {h} px has an inconsistent buffer"));
         py.detach(|| match px {
             ImageRef::U8(s) => GrayView::new(w, h, s).map(at8),
             ImageRef::U16(s) => GrayView::new(w, h, s).map(at16),
@@ -176,7 +176,7 @@ pub fn sharpness(py: Python<'_>, image: &Bound<'_, PyAny>, metric: &str) -> PyRe
         ImageRef::U16(s) if metric == Metric::Cpbd => {
             // CPBD reads 8-bit levels: etl-calib converts (a copy it makes anyway).
             let img = Gray16Image::from_raw(w as u32, h as u32, s.to_vec())
-                .ok_or_else(|| input_error(format!("image of {w} x {h} px has an inconsistent buffer")))?;
+                .ok_or_else(|| invalid("image", format!("image of {w} x {h} px has an inconsistent buffer")))?;
             py.detach(|| sharpness_u16(&img, metric)).py()
         }
         ImageRef::U16(s) => py.detach(|| gradient_measure(s, w, h, metric)).py(),
@@ -192,7 +192,9 @@ fn gradient_measure<T: Pixel>(data: &[T], w: usize, h: usize, metric: Metric) ->
         Metric::Laplacian => laplacian_variance(&view)?,
         Metric::Brenner => brenner(&view)?,
         Metric::Normvar => normalised_variance(&view)?,
-        Metric::Cpbd => return Err(etl_calib::Error::InvalidInput("CPBD is not a gradient measure".into())),
+        Metric::Cpbd => {
+            return Err(etl_calib::Error::invalid_value("metric", "cpbd", "CPBD is not a gradient measure"))
+        }
     })
 }
 
@@ -235,7 +237,7 @@ pub fn render<'py>(
     let depth = match bit_depth {
         8 => BitDepth::Eight,
         16 => BitDepth::Sixteen,
-        b => return Err(input_error(format!("bit_depth must be 8 or 16, got {b}"))),
+        b => return Err(invalid_value("bit_depth", b, format!("bit_depth must be 8 or 16, got {b}"))),
     };
     let truth = CameraModel::paper_rig();
     let z = z_mm.unwrap_or_else(|| etl_sim::simulate::focused_z_mm(e_com_ma));

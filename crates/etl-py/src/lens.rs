@@ -16,7 +16,7 @@ use pyo3::types::PyDict;
 use etl_core::lens::LensError as _;
 use etl_formats::compact;
 
-use crate::errors::{lens_kind, raise, Kind};
+use crate::errors::{invalid, invalid_value, lens_kind, raise, Kind};
 use crate::thermal::ThermalCalibration;
 
 /// `t_c` if the lens temperature sensor can read it (-40..=125 degC), else InputError
@@ -26,12 +26,19 @@ fn sensor_range(what: &str, t_c: f64) -> PyResult<f64> {
     if (lo..=hi).contains(&t_c) {
         Ok(t_c)
     } else {
-        Err(raise(Kind::Input, format!("{what} must lie in -40..=125 degC, got {}", compact(t_c))))
+        Err(invalid_value(what, t_c, format!("{what} must lie in -40..=125 degC, got {}", compact(t_c))))
     }
 }
 
 fn hw_err(e: HwError) -> PyErr {
-    raise(lens_kind(e.kind()), e.to_string())
+    match &e {
+        // Refused input (its class, InputError, from the lens's kind): name it.
+        HwError::Core(c) => {
+            let (what, value) = etl_formats::Error::core_input(c);
+            crate::errors::input_error_about(e.to_string(), what, value.as_deref())
+        }
+        _ => raise(lens_kind(e.kind()), e.to_string()),
+    }
 }
 
 /// A lens on an Optotune Lens Driver 4 (USB serial port), or on a `VirtualLens`'s port.
@@ -68,15 +75,19 @@ impl Lens {
 /// The hold's error with its own message ("lens: ..." / "compensation: ..."), the class
 /// from what failed.
 fn hold_err(e: HoldError<HwError>) -> PyErr {
-    let kind = match &e {
-        HoldError::Lens(l) => lens_kind(l.kind()),
+    match &e {
+        HoldError::Lens(l) => raise(lens_kind(l.kind()), e.to_string()),
+        HoldError::Core(c) => {
+            let (what, value) = etl_formats::Error::core_input(c);
+            crate::errors::input_error_about(e.to_string(), what, value.as_deref())
+        }
         // The wanted E_com is beyond what the driver's limits give: the caller's input.
-        HoldError::Core(_) | HoldError::Unreachable { .. } => Kind::Input,
-    };
-    raise(kind, e.to_string())
+        HoldError::Unreachable { e_com_ma, .. } => invalid_value("e_com_ma", *e_com_ma, e.to_string()),
+    }
 }
 
-fn step_dict<'py>(py: Python<'py>, s: &HoldStep) -> PyResult<Bound<'py, PyDict>> {
+/// One step of a hold as an `etlcal.results.HoldStep`.
+fn step_object<'py>(py: Python<'py>, s: &HoldStep) -> PyResult<Bound<'py, PyAny>> {
     let d = PyDict::new(py);
     d.set_item("index", s.index)?;
     d.set_item("temperature_c", s.temperature_c)?;
@@ -84,7 +95,7 @@ fn step_dict<'py>(py: Python<'py>, s: &HoldStep) -> PyResult<Bound<'py, PyDict>>
     d.set_item("e_com_ma", s.e_com_ma)?;
     d.set_item("error_ma", s.error_ma)?;
     d.set_item("extrapolated", s.extrapolated)?;
-    Ok(d)
+    crate::results::make(py, "HoldStep", &d)
 }
 
 #[pymethods]
@@ -97,10 +108,11 @@ impl Lens {
         Ok(Lens { client: Some(client) })
     }
 
-    /// Firmware, lens serial, limits and temperature: dict with "firmware_type",
-    /// "firmware_version", "lens_serial", "max_current_ma", "upper_limit_ma",
-    /// "lower_limit_ma", "temperature_c" (None without a sensor).
-    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    /// Firmware, lens serial, limits and temperature: a LensInfo (attributes, also dict
+    /// keys) with `firmware_type`, `firmware_version`, `lens_serial`, `max_current_ma`,
+    /// `upper_limit_ma`, `lower_limit_ma` (mA) and `temperature_c` (degC, None without a
+    /// sensor).
+    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let c = self.client()?;
         let info = py.detach(|| c.identify()).map_err(hw_err)?;
         let t = py.detach(|| c.temperature_c()).ok();
@@ -112,7 +124,7 @@ impl Lens {
         d.set_item("upper_limit_ma", info.upper_limit_ma)?;
         d.set_item("lower_limit_ma", info.lower_limit_ma)?;
         d.set_item("temperature_c", t)?;
-        Ok(d)
+        crate::results::make(py, "LensInfo", &d)
     }
 
     /// Commands the driver current, mA (clamped to the limits); returns the current
@@ -166,13 +178,14 @@ impl Lens {
     ///     duration_s: stop after this long, 0..=1e7 s (None: by `steps` or `on_step`).
     ///     rate_hz: steps per second, Hz: 0 for as fast as the link allows, else
     ///         0.001..=10000.
-    ///     on_step: callable(dict) -> bool | None, given "index", "temperature_c",
-    ///         "e_in_ma", "e_com_ma" (the surface's E_com at the commanded current), "error_ma"
-    ///         (quantisation and clamping), "extrapolated"; returning False stops the loop.
+    ///     on_step: callable(HoldStep) -> bool | None, given each step (attributes, also
+    ///         dict keys): `index`, `temperature_c`, `e_in_ma`, `e_com_ma` (the surface's
+    ///         E_com at the commanded current), `error_ma` (quantisation and clamping),
+    ///         `extrapolated`; returning False stops the loop.
     ///
-    /// Returns: dict with "commands_sent", "elapsed_s", "achieved_rate_hz",
-    /// "worst_e_com_error_ma", "temperature_range_c" (min, max), "extrapolated_steps",
-    /// "last" (the last step's dict or None).
+    /// Returns: a HoldReport (attributes, also dict keys): `commands_sent`, `elapsed_s`,
+    /// `achieved_rate_hz`, `worst_e_com_error_ma`, `temperature_range_c` (min, max),
+    /// `extrapolated_steps`, `last` (the last HoldStep or None).
     ///
     /// Raises: InputError for a non-finite E_com, a rate or duration outside its range, no
     /// stopping rule, an E_com the surface cannot reach at the temperature read, or one
@@ -190,17 +203,21 @@ impl Lens {
         duration_s: Option<f64>,
         rate_hz: f64,
         on_step: Option<Py<PyAny>>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         if steps.is_none() && duration_s.is_none() && on_step.is_none() {
-            return Err(raise(Kind::Input, "hold needs steps, duration_s or on_step to stop"));
+            return Err(invalid("steps", "hold needs steps, duration_s or on_step to stop"));
         }
         if steps == Some(0) {
-            return Err(raise(Kind::Input, "hold steps must be >= 1"));
+            return Err(invalid_value("steps", 0_u64, "hold steps must be >= 1"));
         }
         let duration = match duration_s.map(|d| (d, duration_from_s(d))) {
             Some((_, Ok(d))) => Some(d),
             Some((d, Err(_))) => {
-                return Err(raise(Kind::Input, format!("duration_s must lie in 0..=1e7 s, got {}", compact(d))))
+                return Err(invalid_value(
+                    "duration_s",
+                    d,
+                    format!("duration_s must lie in 0..=1e7 s, got {}", compact(d)),
+                ))
             }
             None => None,
         };
@@ -216,7 +233,7 @@ impl Lens {
                 let Some(f) = &on_step else { return true };
                 Python::attach(|py| {
                     let go = py.check_signals().and_then(|_| {
-                        let r = f.call1(py, (step_dict(py, s)?,))?;
+                        let r = f.call1(py, (step_object(py, s)?,))?;
                         Ok(r.is_none(py) || r.is_truthy(py)?)
                     });
                     go.unwrap_or_else(|e| {
@@ -238,10 +255,10 @@ impl Lens {
         d.set_item("temperature_range_c", (r.temperature_range_c[0], r.temperature_range_c[1]))?;
         d.set_item("extrapolated_steps", r.extrapolated_steps)?;
         match &r.last {
-            Some(s) => d.set_item("last", step_dict(py, s)?)?,
+            Some(s) => d.set_item("last", step_object(py, s)?)?,
             None => d.set_item("last", py.None())?,
         }
-        Ok(d)
+        crate::results::make(py, "HoldReport", &d)
     }
 
     /// Closes the port (the lens keeps its current).
@@ -283,9 +300,11 @@ impl VirtualLens {
         self.device.path().display().to_string()
     }
 
-    /// The true state: dict with "e_in_ma", "temperature_c", "e_t_ma", "e_com_ma",
-    /// "f_com_mm" (mm, mA, degC).
-    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    /// The true state: a LensState (attributes, also dict keys) with `e_in_ma` (the
+    /// current the driver outputs), `temperature_c` (the true lens temperature, degC),
+    /// `e_t_ma`, `e_com_ma` (mA) and `f_com_mm` (the ETL group's focal length f_com(E_com),
+    /// Eq. 10, mm).
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let s = self.device.state();
         let d = PyDict::new(py);
         d.set_item("e_in_ma", s.e_in_ma)?;
@@ -293,7 +312,7 @@ impl VirtualLens {
         d.set_item("e_t_ma", s.e_t_ma)?;
         d.set_item("e_com_ma", s.e_com_ma)?;
         d.set_item("f_com_mm", s.f_com_mm)?;
-        Ok(d)
+        crate::results::make(py, "LensState", &d)
     }
 
     /// Heats the mount so that the lens settles at `t_c` degC, and jumps to equilibrium.
@@ -330,7 +349,7 @@ impl VirtualLens {
     /// longest hold; InputError otherwise).
     fn advance_s(&self, dt_s: f64) -> PyResult<()> {
         if !(0.0..=etl_hw::hold::MAX_DURATION_S).contains(&dt_s) {
-            return Err(raise(Kind::Input, format!("dt_s must lie in 0..=1e7 s, got {}", compact(dt_s))));
+            return Err(invalid_value("dt_s", dt_s, format!("dt_s must lie in 0..=1e7 s, got {}", compact(dt_s))));
         }
         self.device.advance_s(dt_s);
         Ok(())
@@ -364,7 +383,8 @@ impl VirtualLens {
         garbage_before_next: Vec<u8>,
     ) -> PyResult<()> {
         let reply_delay = Faults::reply_delay_from_ms(reply_delay_ms).map_err(|_| {
-            raise(Kind::Input, format!("reply_delay_ms must lie in 0..=60000 ms, got {}", compact(reply_delay_ms)))
+            let message = format!("reply_delay_ms must lie in 0..=60000 ms, got {}", compact(reply_delay_ms));
+            invalid_value("reply_delay_ms", reply_delay_ms, message)
         })?;
         self.device.set_faults(Faults {
             reply_delay,

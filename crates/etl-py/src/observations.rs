@@ -10,21 +10,23 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::arrays::{points, points_out};
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 
 /// Points of one view from (N, 3) world points and (N, 2) pixels.
 fn view_points(world_mm: &Bound<'_, PyAny>, pixels: &Bound<'_, PyAny>) -> PyResult<Vec<PointObs>> {
     let w = points::<3>(world_mm, "world_mm")?;
     let p = points::<2>(pixels, "pixels")?;
     if w.single || p.single {
-        return Err(input_error("world_mm and pixels must be (N, 3) and (N, 2) arrays"));
+        return Err(invalid(
+            if w.single { "world_mm" } else { "pixels" },
+            "world_mm and pixels must be (N, 3) and (N, 2) arrays",
+        ));
     }
     if w.points.len() != p.points.len() {
-        return Err(input_error(format!(
-            "world_mm and pixels differ in length: {} vs {}",
-            w.points.len(),
-            p.points.len()
-        )));
+        return Err(invalid(
+            "pixels",
+            format!("world_mm and pixels differ in length: {} vs {}", w.points.len(), p.points.len()),
+        ));
     }
     Ok(w.points.into_iter().zip(p.points).map(|(world_mm, pixel)| PointObs { world_mm, pixel }).collect())
 }
@@ -67,7 +69,11 @@ impl Observations {
     #[new]
     fn new(image_size: (u32, u32)) -> PyResult<Self> {
         if image_size.0 == 0 || image_size.1 == 0 {
-            return Err(input_error(format!("image_size {image_size:?} must be positive")));
+            return Err(invalid_value(
+                "image_size",
+                [image_size.0, image_size.1],
+                format!("image_size {image_size:?} must be positive"),
+            ));
         }
         Ok(Observations { file: ObsFile::new([image_size.0, image_size.1]) })
     }
@@ -182,8 +188,11 @@ impl Observations {
     ///     pixels: (N, 2) observed pixels, px.
     fn add_offstate_view(&mut self, world_mm: &Bound<'_, PyAny>, pixels: &Bound<'_, PyAny>) -> PyResult<()> {
         let pts = view_points(world_mm, pixels)?;
-        if pts.iter().any(|p| p.world_mm.iter().chain(&p.pixel).any(|x| !x.is_finite())) {
-            return Err(input_error("offstate view: a point is not finite"));
+        let world = pts.iter().flat_map(|p| p.world_mm).map(|x| ("world_mm", x));
+        if let Some((what, x)) =
+            world.chain(pts.iter().flat_map(|p| p.pixel).map(|x| ("pixels", x))).find(|(_, x)| !x.is_finite())
+        {
+            return Err(invalid_value(what, x, "offstate view: a point is not finite"));
         }
         self.file.offstate_views.push(OffstateView { points: pts });
         Ok(())
@@ -340,8 +349,10 @@ pub struct A0 {
 
 fn check_a0(a: &CoreA0) -> PyResult<()> {
     let r = A0File::new(a);
-    if !([r.kf0x, r.kf0y, r.u0, r.v0].iter().all(|x| x.is_finite()) && r.kf0x > 0.0 && r.kf0y > 0.0) {
-        return Err(input_error("kf0x, kf0y must be positive and u0, v0 finite"));
+    let numbers = [("kf0x", r.kf0x, true), ("kf0y", r.kf0y, true), ("u0", r.u0, false), ("v0", r.v0, false)];
+    if let Some((what, x, _)) = numbers.into_iter().find(|&(_, x, positive)| !(x.is_finite() && (!positive || x > 0.0)))
+    {
+        return Err(invalid_value(what, x, "kf0x, kf0y must be positive and u0, v0 finite"));
     }
     Ok(())
 }

@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::arrays::map1;
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{invalid_value, CoreResultExt};
 
 /// Parameters of the physical lens model (Eq. 1-10). Every argument defaults to the
 /// paper's section 5.1.1 value, so `LensPhysics()` is the paper's lens.
@@ -245,13 +245,20 @@ impl LensPhysics {
             && e_from_ma.is_finite()
             && e_to_ma.is_finite())
         {
-            return Err(input_error(format!(
-                "need finite e_from_ma < e_to_ma and step_ma > 0, got {e_from_ma}, {e_to_ma}, {step_ma}"
-            )));
+            let message =
+                format!("need finite e_from_ma < e_to_ma and step_ma > 0, got {e_from_ma}, {e_to_ma}, {step_ma}");
+            let (what, value) = if !e_from_ma.is_finite() {
+                ("e_from_ma", e_from_ma)
+            } else if !(e_to_ma.is_finite() && e_to_ma > e_from_ma) {
+                ("e_to_ma", e_to_ma)
+            } else {
+                ("step_ma", step_ma)
+            };
+            return Err(invalid_value(what, value, message));
         }
         let n = ((e_to_ma - e_from_ma) / step_ma + 1e-9).floor() as usize;
         if n > 10_000_000 {
-            return Err(input_error(format!("{} samples are too many: raise step_ma", n + 1)));
+            return Err(invalid_value("step_ma", step_ma, format!("{} samples are too many: raise step_ma", n + 1)));
         }
         let l = self.inner;
         py.detach(|| {

@@ -6,7 +6,7 @@ use etl_core::calib::{Estimator, RobustLoss};
 use pyo3::prelude::*;
 
 use crate::calibration::Calibration;
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::observations::{Observations, A0};
 
 /// Calibrates an ETL camera from observations (paper section 4): E_com of each view
@@ -86,18 +86,36 @@ pub fn calibrate(
             let result = py.detach(|| etl_calib::baseline::per_setting(&obs, thermal.as_ref())).py()?;
             return Ok(Calibration::from_file(result.calibration));
         }
-        other => return Err(input_error(format!("method must be \"proposed\" or \"per-setting\", got {other:?}"))),
+        other => {
+            return Err(invalid_value(
+                "method",
+                other,
+                format!("method must be \"proposed\" or \"per-setting\", got {other:?}"),
+            ))
+        }
     }
     let estimator = match estimator.unwrap_or("eiv") {
         "paper" => Estimator::Paper,
         "eiv" => Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px },
-        other => return Err(input_error(format!("estimator must be \"paper\" or \"eiv\", got {other:?}"))),
+        other => {
+            return Err(invalid_value(
+                "estimator",
+                other,
+                format!("estimator must be \"paper\" or \"eiv\", got {other:?}"),
+            ))
+        }
     };
     let robust = match robust {
         None => None,
         Some("huber") => Some(RobustLoss::Huber { k_px: robust_k_px }),
         Some("cauchy") => Some(RobustLoss::Cauchy { k_px: robust_k_px }),
-        Some(other) => return Err(input_error(format!("robust must be None, \"huber\" or \"cauchy\", got {other:?}"))),
+        Some(other) => {
+            return Err(invalid_value(
+                "robust",
+                other,
+                format!("robust must be None, \"huber\" or \"cauchy\", got {other:?}"),
+            ))
+        }
     };
     let options = CalibrateOptions { estimator, hold_a0, robust };
     let obs = observations.file.clone();
@@ -152,10 +170,11 @@ pub fn cramer_rao_std<'py>(
     let priors = match (sigma_z_mm, sigma_e_ma) {
         (None, None) => None,
         (Some(z), Some(e)) => Some((z, e)),
-        _ => return Err(input_error("give both sigma_z_mm and sigma_e_ma, or neither")),
+        (None, _) => return Err(invalid("sigma_z_mm", "give both sigma_z_mm and sigma_e_ma, or neither")),
+        (_, None) => return Err(invalid("sigma_e_ma", "give both sigma_z_mm and sigma_e_ma, or neither")),
     };
     if !(sigma_px > 0.0 && sigma_px.is_finite()) {
-        return Err(input_error(format!("sigma_px = {sigma_px} must be a finite number > 0")));
+        return Err(invalid_value("sigma_px", sigma_px, format!("sigma_px = {sigma_px} must be a finite number > 0")));
     }
     let thermal = thermal.map(crate::calibration::thermal_ref).transpose()?;
     let obs = &observations.file;

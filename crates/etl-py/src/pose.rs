@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use crate::arrays::{mat3_out, matrix_out, vec_out};
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, CoreResultExt};
 
 /// A calibration's covariance, shared by the poses solved with it.
 pub(crate) type CalCovariance = Arc<[[f64; PARAMS]; PARAMS]>;
@@ -85,7 +85,7 @@ impl BoardPose {
         let mut pose = BoardPose::new(rotation_rodrigues, translation_mm, rms_px, iterations);
         if let Some(v) = state {
             if v.len() != STATE {
-                return Err(input_error(format!("a pose's state has {STATE} numbers, got {}", v.len())));
+                return Err(invalid("state", format!("a pose's state has {STATE} numbers, got {}", v.len())));
             }
             let at = |k: usize| v.get(k).copied().unwrap_or(f64::NAN);
             pose.uncertainty = Some(PoseUncertainty {
@@ -96,7 +96,10 @@ impl BoardPose {
         }
         if let Some(c) = calibration_covariance {
             if c.len() != PARAMS * PARAMS {
-                return Err(input_error(format!("a covariance has {} numbers, got {}", PARAMS * PARAMS, c.len())));
+                return Err(invalid(
+                    "calibration_covariance",
+                    format!("a covariance has {} numbers, got {}", PARAMS * PARAMS, c.len()),
+                ));
             }
             let at = |k: usize| c.get(k).copied().unwrap_or(f64::NAN);
             pose.calibration_covariance =
@@ -148,11 +151,12 @@ impl BoardPose {
     ) -> PyResult<Bound<'py, PyAny>> {
         let (ua, ub) = (self.require_uncertainty("this")?, other.require_uncertainty("the other")?);
         if self.calibration_covariance != other.calibration_covariance {
-            return Err(input_error("the two poses were solved with different calibrations' covariances"));
+            return Err(invalid("other", "the two poses were solved with different calibrations' covariances"));
         }
         let c = self.calibration_covariance.as_deref();
         if c.is_none() && !pixel_noise_only {
-            return Err(input_error(
+            return Err(invalid(
+                "pixel_noise_only",
                 "the calibration has no covariance: pass pixel_noise_only=True for the pixel noise's part alone",
             ));
         }

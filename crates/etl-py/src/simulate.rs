@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::calibration::Calibration;
-use crate::errors::input_error;
+use crate::errors::{invalid, invalid_value};
 use crate::observations::{Observations, A0};
 
 /// A simulated data set and the truth behind it.
@@ -99,16 +99,20 @@ fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {
         return match s.as_str() {
             "paper" => Ok(NoiseModel::PAPER),
             "none" => Ok(NoiseModel::NONE),
-            _ => Err(input_error(format!("noise must be \"paper\", \"none\" or a dict, got {s:?}"))),
+            _ => Err(invalid_value("noise", &s, format!("noise must be \"paper\", \"none\" or a dict, got {s:?}"))),
         };
     }
-    let d = n.cast::<PyDict>().map_err(|_| input_error("noise must be \"paper\", \"none\" or a dict"))?;
+    let d = n.cast::<PyDict>().map_err(|_| invalid("noise", "noise must be \"paper\", \"none\" or a dict"))?;
     let mut m = NoiseModel::PAPER;
     for (k, v) in d.iter() {
         let key: String = k.extract()?;
         let val: f64 = v.extract()?;
         if !(val.is_finite() && val >= 0.0) {
-            return Err(input_error(format!("noise {key} = {val} must be a finite number >= 0")));
+            return Err(invalid_value(
+                &format!("noise.{key}"),
+                val,
+                format!("noise {key} = {val} must be a finite number >= 0"),
+            ));
         }
         match key.as_str() {
             "xy_mm" => m.xy_mm = val,
@@ -118,9 +122,11 @@ fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {
             "kf0_rel" => m.kf0_rel = val,
             "pp_px" => m.pp_px = val,
             _ => {
-                return Err(input_error(format!(
-                    "unknown noise key {key:?} (known: xy_mm, z_mm, e_ma, px, kf0_rel, pp_px)"
-                )))
+                return Err(invalid_value(
+                    "noise",
+                    &key,
+                    format!("unknown noise key {key:?} (known: xy_mm, z_mm, e_ma, px, kf0_rel, pp_px)"),
+                ))
             }
         }
     }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use etl_studies::{Study, StudyOptions};
 use pyo3::prelude::*;
 
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{invalid_value, CoreResultExt};
 
 /// Runs one of the paper's studies and returns its table as the command line's `--json`
 /// object (a dict), optionally writing its JSON, markdown summary and plots into `out`.
@@ -36,7 +36,7 @@ pub fn study<'py>(
     let which = Study::from_name(name).py()?;
     if let Some(dir) = &out {
         if !dir.is_dir() {
-            return Err(input_error(format!("{}: output directory does not exist", dir.display())));
+            return Err(invalid_value("out", dir, format!("{}: output directory does not exist", dir.display())));
         }
     }
     let opts = StudyOptions { trials, seed, ..Default::default() };

@@ -6,13 +6,17 @@
 
 use std::path::PathBuf;
 
-use etl_core::thermal::{ThermalCalibration as CoreThermalCal, ThermalFit, ThermalSurface as CoreSurface};
+use etl_core::thermal::{
+    Compensation, ThermalCalibration as CoreThermalCal, ThermalFit, ThermalSurface as CoreSurface,
+};
 use etl_formats::thermal::ThermalFile;
+use numpy::ndarray::{ArrayD, IxDyn};
+use numpy::IntoPyArray;
 use pyo3::prelude::*;
-use pyo3::types::{PyTuple, PyType};
+use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::arrays::{map2, vec_out};
-use crate::errors::{input_error, CoreResultExt};
+use crate::arrays::{broadcast2, map2, stacked, vec_out, Broadcast2};
+use crate::errors::{input_error, invalid, CoreResultExt};
 
 /// The cubic surface E_T(T, E_in) of the paper (section 5.2.2), in mA.
 ///
@@ -157,10 +161,10 @@ impl ThermalSurface {
 /// A 1-D float column of an array-like.
 pub(crate) fn column(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
     let arr: numpy::PyArrayLikeDyn<'_, f64, numpy::AllowTypeChange> =
-        obj.extract().map_err(|e| input_error(format!("{what} must be a 1-D array of numbers: {e}")))?;
+        obj.extract().map_err(|e| invalid(what, format!("{what} must be a 1-D array of numbers: {e}")))?;
     use numpy::PyUntypedArrayMethods;
     if arr.ndim() != 1 {
-        return Err(input_error(format!("{what} must be a 1-D array, got shape {:?}", arr.shape())));
+        return Err(invalid(what, format!("{what} must be a 1-D array, got shape {:?}", arr.shape())));
     }
     Ok(arr.as_array().iter().copied().collect())
 }
@@ -168,8 +172,9 @@ pub(crate) fn column(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
 /// A fitted `ThermalSurface` with the ranges it was fitted over and the RMS of its fit:
 /// the content of an `etlcal.thermal/1` file.
 ///
-/// Outside the calibrated ranges (but inside the lens's domain) `compensate` still
-/// answers and flags the result as extrapolated.
+/// Outside the calibrated ranges (but inside the lens's domain) `compensate` and
+/// `e_in_for_e_com` still answer and flag the result as extrapolated (so a controller
+/// keeps running and can warn); outside the domain they raise InputError.
 ///
 /// Args:
 ///     surface: the surface.
@@ -274,30 +279,49 @@ impl ThermalCalibration {
         self.rms_ma
     }
 
-    /// Compensates one reading.
+    /// Compensates readings: E_T and E_com at driver current `e_in_ma` and temperature
+    /// `temperature_c`.
+    ///
+    /// Out-of-range policy (per reading, as for one): outside the calibrated ranges but
+    /// inside the lens's operating domain the result is returned with `extrapolated` True;
+    /// outside the operating domain (T in [-40, 125] degC, E_in within the driver's
+    /// +-292.84 mA) InputError, for the whole call when one reading of an array is.
     ///
     /// Args:
-    ///     e_in_ma: driver current, mA.
-    ///     temperature_c: lens temperature, degC.
+    ///     e_in_ma: driver current, mA (a float or an array).
+    ///     temperature_c: lens temperature, degC (a float or an array; broadcast with e_in_ma).
     ///
-    /// Returns: a Compensation (attributes, also dict keys): `e_in_ma`, `e_t_ma`, `e_com_ma` (mA) and `extrapolated` (True
-    /// when outside the calibrated ranges).
-    fn compensate<'py>(&self, py: Python<'py>, e_in_ma: f64, temperature_c: f64) -> PyResult<Bound<'py, PyAny>> {
-        let c = self.inner.compensate(e_in_ma, temperature_c).py()?;
-        compensation_dict(py, &c)
+    /// Returns: for two numbers a Compensation (attributes, also dict keys): `e_in_ma`,
+    /// `e_t_ma`, `e_com_ma` (mA) and `extrapolated` (True when outside the calibrated
+    /// ranges); when either is an array a CompensationArray: the same fields as arrays of
+    /// the broadcast shape (float64, `extrapolated` bool).
+    fn compensate<'py>(
+        &self,
+        e_in_ma: &Bound<'py, PyAny>,
+        temperature_c: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let cal = self.inner;
+        compensations(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, t| cal.compensate(e, t).py())
     }
 
-    /// The driver current that gives `e_com_ma` at `temperature_c`, flagged when outside
-    /// the calibrated ranges.
+    /// The driver current that gives `e_com_ma` at `temperature_c` (the surface's inverse,
+    /// to 1e-9 mA), flagged when outside the calibrated ranges.
+    ///
+    /// Out-of-range policy as `compensate` (the E_in found is checked against the
+    /// calibrated E_in range).
     ///
     /// Args:
-    ///     e_com_ma: wanted compensated current, mA.
-    ///     temperature_c: lens temperature, degC.
+    ///     e_com_ma: wanted compensated current, mA (a float or an array).
+    ///     temperature_c: lens temperature, degC (a float or an array; broadcast with e_com_ma).
     ///
-    /// Returns: a Compensation, as `compensate`.
-    fn e_in_for_e_com<'py>(&self, py: Python<'py>, e_com_ma: f64, temperature_c: f64) -> PyResult<Bound<'py, PyAny>> {
-        let c = self.inner.e_in_for_e_com(e_com_ma, temperature_c).py()?;
-        compensation_dict(py, &c)
+    /// Returns: a Compensation or a CompensationArray, as `compensate`.
+    fn e_in_for_e_com<'py>(
+        &self,
+        e_com_ma: &Bound<'py, PyAny>,
+        temperature_c: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let cal = self.inner;
+        compensations(e_com_ma, temperature_c, ("e_com_ma", "temperature_c"), |e, t| cal.e_in_for_e_com(e, t).py())
     }
 
     /// Whether (E_in, T) lies inside the calibrated ranges.
@@ -324,8 +348,37 @@ impl ThermalCalibration {
     }
 }
 
-fn compensation_dict<'py>(py: Python<'py>, c: &etl_core::thermal::Compensation) -> PyResult<Bound<'py, PyAny>> {
-    let d = pyo3::types::PyDict::new(py);
+/// `f` on two numbers (a `Compensation`) or elementwise over two broadcast arrays (a
+/// `CompensationArray`; two 0-d arrays give a `Compensation`). Stops at the first error.
+fn compensations<'py>(
+    a: &Bound<'py, PyAny>,
+    b: &Bound<'py, PyAny>,
+    what: (&str, &str),
+    f: impl Fn(f64, f64) -> PyResult<Compensation>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let py = a.py();
+    let (shape, x, y) = match broadcast2(a, b, what)? {
+        Broadcast2::Scalar(x, y) => return compensation_object(py, &f(x, y)?),
+        Broadcast2::Array { shape, x, y } if shape.is_empty() => {
+            return compensation_object(py, &f(x[0], y[0])?);
+        }
+        Broadcast2::Array { shape, x, y } => (shape, x, y),
+    };
+    let all = x.iter().zip(&y).map(|(u, v)| f(*u, *v)).collect::<PyResult<Vec<Compensation>>>()?;
+    let column = |g: fn(&Compensation) -> f64| stacked(py, &shape, &[], all.iter().map(g).collect());
+    let flags = ArrayD::from_shape_vec(IxDyn(&shape), all.iter().map(|c| c.extrapolated).collect())
+        .map_err(|e| input_error(e.to_string()))?;
+    let d = PyDict::new(py);
+    d.set_item("e_in_ma", column(|c| c.e_in_ma)?)?;
+    d.set_item("e_t_ma", column(|c| c.e_t_ma)?)?;
+    d.set_item("e_com_ma", column(|c| c.e_com_ma)?)?;
+    d.set_item("extrapolated", flags.into_pyarray(py))?;
+    crate::results::make(py, "CompensationArray", &d)
+}
+
+/// One compensation as an `etlcal.results.Compensation`.
+fn compensation_object<'py>(py: Python<'py>, c: &Compensation) -> PyResult<Bound<'py, PyAny>> {
+    let d = PyDict::new(py);
     d.set_item("e_in_ma", c.e_in_ma)?;
     d.set_item("e_t_ma", c.e_t_ma)?;
     d.set_item("e_com_ma", c.e_com_ma)?;

@@ -9,10 +9,11 @@ use crate::lens::Lens;
 
 /// Keeps the first Python exception of a callable (re-raised as it is after the run) and
 /// gives the procedure an error that stops it.
-fn keep(raised: &mut Option<PyErr>, e: PyErr) -> etl_calib::Error {
+/// `callable` names the argument (`capture`, `place_board`, `set_temperature`).
+fn keep(raised: &mut Option<PyErr>, callable: &str, e: PyErr) -> etl_calib::Error {
     let msg = e.to_string();
     raised.get_or_insert(e);
-    etl_calib::Error::InvalidInput(format!("a Python callable raised: {msg}"))
+    etl_calib::Error::invalid(callable, format!("a Python callable raised: {msg}"))
 }
 
 /// The procedure's camera as Python callables.
@@ -24,22 +25,22 @@ struct PyCamera<'py> {
 
 impl etl_calib::thermal_calibration::Camera for PyCamera<'_> {
     fn capture(&mut self) -> etl_calib::Result<image::GrayImage> {
-        let frame = self.capture.call0().map_err(|e| keep(&mut self.raised, e))?;
+        let frame = self.capture.call0().map_err(|e| keep(&mut self.raised, "capture", e))?;
         let arr = frame
             .extract::<numpy::PyReadonlyArray2<'_, u8>>()
-            .map_err(|_| etl_calib::Error::InvalidInput("capture() must return a 2-D uint8 numpy array".into()))?;
+            .map_err(|_| etl_calib::Error::invalid("capture", "capture() must return a 2-D uint8 numpy array"))?;
         let (h, w) = {
             use numpy::PyUntypedArrayMethods;
             (arr.shape()[0], arr.shape()[1])
         };
         let data: Vec<u8> = arr.as_array().iter().copied().collect();
         image::GrayImage::from_raw(w as u32, h as u32, data)
-            .ok_or_else(|| etl_calib::Error::InvalidInput("capture() returned an inconsistent array".into()))
+            .ok_or_else(|| etl_calib::Error::invalid("capture", "capture() returned an inconsistent array"))
     }
 
     fn place_board_in_focus(&mut self) -> etl_calib::Result<()> {
         if let Some(f) = &self.place_board {
-            f.call0().map_err(|e| keep(&mut self.raised, e))?;
+            f.call0().map_err(|e| keep(&mut self.raised, "place_board", e))?;
         }
         Ok(())
     }
@@ -53,7 +54,7 @@ struct PyClimate<'py> {
 
 impl etl_calib::thermal_calibration::Climate for PyClimate<'_> {
     fn set_temperature_c(&mut self, t_c: f64) -> etl_calib::Result<()> {
-        self.set_temperature.call1((t_c,)).map_err(|e| keep(&mut self.raised, e))?;
+        self.set_temperature.call1((t_c,)).map_err(|e| keep(&mut self.raised, "set_temperature", e))?;
         Ok(())
     }
 }
@@ -116,6 +117,8 @@ pub fn thermal_calibration<'py>(
     if let Some(e) = camera.raised.take().or(climate.raised.take()) {
         return Err(e);
     }
+    // The option the user sets is the argument `search_ma`.
+    let result = result.map_err(|e| e.map_what(|w| if w == "search_half_width_ma" { "search_ma".into() } else { w }));
     let r = result.py()?;
     let samples: Vec<[f64; 3]> = r.samples.iter().map(|s| [s.temperature_c, s.e_in_ma, s.e_t_ma]).collect();
     let d = PyDict::new(py);

@@ -7,7 +7,7 @@ use numpy::ndarray::{Array2, ArrayD, IxDyn};
 use numpy::{Element, IntoPyArray, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 
 /// What `image` must be, said once for every refusal.
 const IMAGE_KINDS: &str = "image must be a numpy array of dtype uint8, uint16 or float32 of shape (h, w) or (h, w, 3)";
@@ -29,9 +29,9 @@ pub(crate) fn output_camera(
         None => (default_size[0] as usize, default_size[1] as usize),
         Some(s) => {
             let (w, h): (i64, i64) =
-                s.extract().map_err(|_| input_error("size must be (width, height) in px, two integers"))?;
+                s.extract().map_err(|_| invalid("size", "size must be (width, height) in px, two integers"))?;
             if w < 0 || h < 0 {
-                return Err(input_error(format!("size ({w}, {h}) px must not be negative")));
+                return Err(invalid_value("size", [w, h], format!("size ({w}, {h}) px must not be negative")));
             }
             (w as usize, h as usize)
         }
@@ -40,9 +40,10 @@ pub(crate) fn output_camera(
     let m: [[f64; 3]; 3] = m
         .extract::<[[f64; 3]; 3]>()
         .or_else(|_| m.call_method0("tolist").and_then(|l| l.extract()))
-        .map_err(|_| input_error("new_camera_matrix must be a 3 x 3 array of numbers"))?;
+        .map_err(|_| invalid("new_camera_matrix", "new_camera_matrix must be a 3 x 3 array of numbers"))?;
     if m[0][1] != 0.0 || m[1][0] != 0.0 || m[2] != [0.0, 0.0, 1.0] {
-        return Err(input_error(
+        return Err(invalid(
+            "new_camera_matrix",
             "new_camera_matrix must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew); got another matrix",
         ));
     }
@@ -76,13 +77,14 @@ fn try_dtype<'py, T: Sample + Element + Send + Sync>(
     let (h, w, c) = match shape.as_slice() {
         [h, w] => (*h, *w, 1),
         [h, w, 3] => (*h, *w, 3),
-        _ => return Err(input_error(format!("{IMAGE_KINDS}; got shape {shape:?}"))),
+        _ => return Err(invalid_value("image", shape.as_slice(), format!("{IMAGE_KINDS}; got shape {shape:?}"))),
     };
     if [w as u64, h as u64] != [image_size[0] as u64, image_size[1] as u64] {
-        return Err(input_error(format!(
-            "image is {w} x {h} px, the calibration is for {} x {} px",
-            image_size[0], image_size[1]
-        )));
+        return Err(invalid_value(
+            "image",
+            [w, h],
+            format!("image is {w} x {h} px, the calibration is for {} x {} px", image_size[0], image_size[1]),
+        ));
     }
     let (k, d) = model_at(model, e_com_ma)?;
     let out = OutputCamera::of_intrinsics(&k, w, h).py()?;
@@ -127,5 +129,5 @@ pub(crate) fn image_out<'py>(
         Ok(dt) => format!("dtype {dt}"),
         Err(_) => format!("a {}", image.get_type().name().map_or_else(|_| "?".to_owned(), |n| n.to_string())),
     };
-    Err(input_error(format!("{IMAGE_KINDS}; got {what}")))
+    Err(invalid_value("image", &what, format!("{IMAGE_KINDS}; got {what}")))
 }

@@ -4,7 +4,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::{input_error, CoreResultExt};
+use crate::errors::{invalid, CoreResultExt};
 
 /// Zhang's monofocal calibration of a fixed-focus camera from views of a planar board:
 /// homographies, the closed form, then Levenberg-Marquardt over the intrinsics, the paper's
@@ -39,11 +39,10 @@ pub fn zhang<'py>(
         };
         let pixels = crate::arrays::points::<2>(pixels, &format!("views[{k}] pixels"))?.points;
         if board_mm.len() != pixels.len() {
-            return Err(input_error(format!(
-                "views[{k}]: {} board points but {} pixels",
-                board_mm.len(),
-                pixels.len()
-            )));
+            return Err(invalid(
+                &format!("views[{k}]"),
+                format!("views[{k}]: {} board points but {} pixels", board_mm.len(), pixels.len()),
+            ));
         }
         planar.push(etl_calib::zhang::PlanarView { board_mm, pixels });
     }

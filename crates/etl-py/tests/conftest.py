@@ -8,6 +8,7 @@ import os
 import pathlib
 import shutil
 import subprocess
+from typing import Any, Dict
 
 import pytest
 
@@ -15,7 +16,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="session")
-def rust_reference():
+def rust_reference() -> Dict[str, Any]:
     built = os.environ.get("ETLCAL_TEST_RUST_REFERENCE")
     if built:
         command = [built]
@@ -29,11 +30,12 @@ def rust_reference():
         capture_output=True,
         text=True,
     )
-    return json.loads(out.stdout)
+    reference: Dict[str, Any] = json.loads(out.stdout)
+    return reference
 
 
 @pytest.fixture(scope="session")
-def etlcal_binary():
+def etlcal_binary() -> str:
     """The `etlcal` command line (built by cargo once per session), to make test data."""
     built = os.environ.get("ETLCAL_TEST_BINARY")
     if built:

@@ -4,15 +4,21 @@ the raster of `Board.to_image`, the PNG of `etlcal board` and the SVG of `Board.
 (its rectangles filled at the same pixel size) equal OpenCV's image pixel for pixel; a
 Dataset with ChArUco boards."""
 import json
+import pathlib
 import pickle
 import re
 import subprocess
+from typing import Any, Tuple
 
-import cv2
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
+
+cv2 = pytest.importorskip("cv2")
+
+Squares = Tuple[int, int]
 
 # (squares, square_mm, marker_mm, dictionary): at 254 dpi (10 px per mm) every square is
 # 100 px and every marker cell 10 px, on the pixel grid, where OpenCV draws exactly.
@@ -26,18 +32,20 @@ BOARDS = [
 MARGIN_MM = 5.0
 
 
-def opencv_image(squares, square_mm, marker_mm, dictionary):
+def opencv_image(squares: Squares, square_mm: float, marker_mm: float, dictionary: str) -> Any:
     d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
     b = cv2.aruco.CharucoBoard(squares, square_mm, marker_mm, d)
     size = (int(squares[0] * square_mm * 10 + 2 * MARGIN_MM * 10), int(squares[1] * square_mm * 10 + 2 * MARGIN_MM * 10))
     return b.generateImage(size, marginSize=int(MARGIN_MM * 10))
 
 
-def svg_raster(svg, px_per_mm):
+def svg_raster(svg: str, px_per_mm: float) -> npt.NDArray[np.uint8]:
     """The SVG's black rectangles (subpaths `M x y h w v h h -w z`) filled on a white page
     of the SVG's size, pixel (x, y) black when its centre is inside one."""
-    w = float(re.search(r'width="([0-9.]+)mm"', svg).group(1))
-    h = float(re.search(r'height="([0-9.]+)mm"', svg).group(1))
+    width = re.search(r'width="([0-9.]+)mm"', svg)
+    height = re.search(r'height="([0-9.]+)mm"', svg)
+    assert width is not None and height is not None
+    w, h = float(width.group(1)), float(height.group(1))
     img = np.full((round(h * px_per_mm), round(w * px_per_mm)), 255, np.uint8)
     for d in re.findall(r'<path id="[^"]+" fill="#000000" d="([^"]*)"', svg):
         for x, y, rw, rh in re.findall(r"M([-0-9.]+) ([-0-9.]+)h([-0-9.]+)v([-0-9.]+)h-[0-9.]+z", d):
@@ -48,7 +56,8 @@ def svg_raster(svg, px_per_mm):
 
 
 @pytest.mark.parametrize("squares,square_mm,marker_mm,dictionary", BOARDS)
-def test_the_printed_board_is_opencvs(tmp_path, etlcal_binary, squares, square_mm, marker_mm, dictionary):
+def test_the_printed_board_is_opencvs(tmp_path: pathlib.Path, etlcal_binary: str, squares: Squares,
+                                      square_mm: float, marker_mm: float, dictionary: str) -> None:
     ref = opencv_image(squares, square_mm, marker_mm, dictionary)
     board = etlcal.Board.charuco(squares, square_mm, marker_mm, dictionary)
     img = board.to_image(254.0, MARGIN_MM)
@@ -74,7 +83,7 @@ def test_the_printed_board_is_opencvs(tmp_path, etlcal_binary, squares, square_m
     assert svg_path.read_text() == svg
 
 
-def test_opencv_reads_the_printed_board_with_its_ids():
+def test_opencv_reads_the_printed_board_with_its_ids() -> None:
     board = etlcal.Board.charuco((8, 6), 10.0, 7.0, "DICT_5X5_100")
     img = board.to_image(150.0)
     d = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_5X5_100)
@@ -88,7 +97,7 @@ def test_opencv_reads_the_printed_board_with_its_ids():
     assert np.abs(corners.reshape(-1, 2) - want).max() < 0.1
 
 
-def test_attributes_files_and_pickling(tmp_path):
+def test_attributes_files_and_pickling(tmp_path: pathlib.Path) -> None:
     b = etlcal.Board.charuco((12, 9), 1.5, 1.1, "DICT_5X5_100")
     assert (b.type, b.squares, b.square_mm, b.marker_mm, b.dictionary) == ("charuco", (12, 9), 1.5, 1.1, "DICT_5X5_100")
     assert b.inner_corners == (11, 8) and b.corner_count == 88
@@ -108,17 +117,22 @@ def test_attributes_files_and_pickling(tmp_path):
     assert len({b, k, etlcal.Board.load(path)}) == 2
 
 
-@pytest.mark.parametrize("args,field", [
-    (((12, 9), 1.5, 1.1, "DICT_5X5_99"), 'dictionary "DICT_5X5_99" is not one of OpenCV'),
-    (((12, 9), 1.5, 1.6, "DICT_5X5_100"), r"marker_mm must be smaller than square_mm \(square_mm 1.5, marker_mm 1.6\)"),
-    (((12, 9), 1.5, 1.1, "DICT_4X4_50"), "DICT_4X4_50 has 50 markers, the board 54"),
-    (((12, 9), 0.0, 1.1, "DICT_5X5_100"), "square_mm must be positive"),
-    (((12, 9), -1.5, -2.0, "DICT_5X5_100"), "square_mm must be positive"),
-    (((1, 9), 1.5, 1.1, "DICT_5X5_100"), r"squares: a ChArUco board has 2 to 1000 squares each way \(squares \[1, 9\]\)"),
+@pytest.mark.parametrize("args,field,what,value", [
+    (((12, 9), 1.5, 1.1, "DICT_5X5_99"), 'dictionary "DICT_5X5_99" is not one of OpenCV', "dictionary", "DICT_5X5_99"),
+    (((12, 9), 1.5, 1.6, "DICT_5X5_100"), r"marker_mm must be smaller than square_mm \(square_mm 1.5, marker_mm 1.6\)",
+     "marker_mm", "1.6"),
+    (((12, 9), 1.5, 1.1, "DICT_4X4_50"), "DICT_4X4_50 has 50 markers, the board 54", "dictionary", "DICT_4X4_50"),
+    (((12, 9), 0.0, 1.1, "DICT_5X5_100"), "square_mm must be positive", "square_mm", "0"),
+    (((12, 9), -1.5, -2.0, "DICT_5X5_100"), "square_mm must be positive", "square_mm", "-1.5"),
+    (((1, 9), 1.5, 1.1, "DICT_5X5_100"), r"squares: a ChArUco board has 2 to 1000 squares each way \(squares \[1, 9\]\)",
+     "squares", "[1, 9]"),
 ])
-def test_bad_boards_name_the_field_and_write_nothing(tmp_path, etlcal_binary, args, field):
-    with pytest.raises(etlcal.InputError, match=field):
+def test_bad_boards_name_the_field_and_write_nothing(tmp_path: pathlib.Path, etlcal_binary: str,
+                                                    args: Tuple[Squares, float, float, str], field: str, what: str,
+                                                    value: str) -> None:
+    with pytest.raises(etlcal.InputError, match=field) as e:
         etlcal.Board.charuco(*args)
+    assert (e.value.what, e.value.value) == (what, value)
     # The same board as a file: refused by the reader and by `etlcal board`, nothing written.
     squares, square_mm, marker_mm, dictionary = args
     path = tmp_path / "bad.json"
@@ -133,19 +147,20 @@ def test_bad_boards_name_the_field_and_write_nothing(tmp_path, etlcal_binary, ar
     assert not (tmp_path / "o").exists()
 
 
-def test_bad_print_sizes_and_checkerboards():
+def test_bad_print_sizes_and_checkerboards() -> None:
     b = etlcal.Board.charuco((5, 4), 10.0, 6.0, "DICT_4X4_50")
     with pytest.raises(etlcal.InputError, match="dpi 0 dpi is outside"):
         b.to_image(0.0)
     with pytest.raises(etlcal.InputError, match="margin_mm -1 mm is outside"):
         b.to_svg(-1.0)
-    with pytest.raises(etlcal.InputError, match=r"inner_corners \[2, 12\]"):
+    with pytest.raises(etlcal.InputError, match="a board needs at least 3 x 3 inner corners, got 2 x 12") as e:
         etlcal.Board.checkerboard((2, 12), 1.5)
+    assert (e.value.what, e.value.value) == ("inner_corners", "[2, 12]")
     with pytest.raises(etlcal.InputError, match="board: unknown field `colour`"):
         etlcal.Board.from_dict({"inner_corners": (14, 12), "square_mm": 1.5, "colour": 1})
 
 
-def test_a_dataset_with_charuco_boards(tmp_path):
+def test_a_dataset_with_charuco_boards(tmp_path: pathlib.Path) -> None:
     board = etlcal.Board.charuco((15, 13), 1.5, 1.1, "DICT_5X5_100")
     ds = etlcal.Dataset((1936, 1458), board=board, base_dir=tmp_path,
                         offstate_board=etlcal.Board.charuco((12, 9), 4.0, 3.0, "DICT_5X5_100"))

@@ -2,7 +2,9 @@
 pickling, and every bad input surfacing as the right exception with the Rust message."""
 import json
 import math
+import pathlib
 import pickle
+from typing import Any, Callable, Dict, List, Optional, Tuple, Type
 
 import numpy as np
 import pytest
@@ -13,11 +15,11 @@ PAPER_A = [-0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5
 
 
 @pytest.fixture
-def cal():
+def cal() -> etlcal.Calibration:
     return etlcal.Calibration.paper_rig()
 
 
-def test_paper_rig_numbers(cal):
+def test_paper_rig_numbers(cal: etlcal.Calibration) -> None:
     assert cal.kf_x.tolist() == [5380.0, -7.0, 0.02, -3e-5]
     assert cal.kf_y.tolist() == [5430.0, -7.0, 0.02, -3e-5]
     assert cal.principal_point.tolist() == [900.0, 550.0]
@@ -34,7 +36,7 @@ def test_paper_rig_numbers(cal):
     assert r.shape == (3, 3) and np.allclose(r @ r.T, np.eye(3), atol=1e-15)
 
 
-def test_intrinsics_and_distortion_by_hand(cal):
+def test_intrinsics_and_distortion_by_hand(cal: etlcal.Calibration) -> None:
     # fx(100) = 5380 - 700 + 200 - 30 = 4850, fy = 4900 (Eq. 16).
     k = cal.intrinsics(100.0)
     assert k.shape == (3, 3) and k.dtype == np.float64
@@ -48,7 +50,7 @@ def test_intrinsics_and_distortion_by_hand(cal):
     assert p2 == pytest.approx(a[6] * w * w + a[7] * w + a[8], rel=1e-14)
 
 
-def test_project_and_undistort_agree_with_rust(cal, rust_reference):
+def test_project_and_undistort_agree_with_rust(cal: etlcal.Calibration, rust_reference: Dict[str, Any]) -> None:
     world = np.array(rust_reference["world_mm"])
     assert world.shape == (504, 3)
     for ref in rust_reference["project"]:
@@ -60,7 +62,7 @@ def test_project_and_undistort_agree_with_rust(cal, rust_reference):
         assert np.max(np.abs(und - np.array(ref["undistorted"]))) <= 1e-12
 
 
-def test_project_accepts_lists_single_points_and_any_layout(cal):
+def test_project_accepts_lists_single_points_and_any_layout(cal: etlcal.Calibration) -> None:
     world = np.array([[6.0, 9.0, 48.0], [0.0, 0.0, 48.0], [3.0, 1.5, 22.0]])
     ref = cal.project(world, 120.0)
     assert np.array_equal(cal.project(world.tolist(), 120.0), ref)
@@ -75,7 +77,7 @@ def test_project_accepts_lists_single_points_and_any_layout(cal):
     assert np.array_equal(cal.undistort(ref[1], 120.0), cal.undistort(ref, 120.0)[1])
 
 
-def test_undistort_inverts_project_without_distortion(cal):
+def test_undistort_inverts_project_without_distortion(cal: etlcal.Calibration) -> None:
     # The undistorted pixel is the pinhole projection (Eq. 15) in the same image frame.
     world = np.array([[i * 1.5, j * 1.5, 31.0] for i in range(14) for j in range(12)])
     e = 130.0
@@ -87,7 +89,7 @@ def test_undistort_inverts_project_without_distortion(cal):
     assert np.max(np.abs(und - ideal)) < 1e-8
 
 
-def test_ray_goes_through_the_point(cal):
+def test_ray_goes_through_the_point(cal: etlcal.Calibration) -> None:
     p = np.array([4.5, 7.5, 31.0])
     px = cal.project(p, 150.0)
     origin, direction = cal.ray(tuple(px), 150.0)
@@ -97,8 +99,9 @@ def test_ray_goes_through_the_point(cal):
     assert np.linalg.norm(v - s * direction) < 1e-9 and s > 0
 
 
-def test_e_com_uses_the_thermal_surface(cal, rust_reference):
+def test_e_com_uses_the_thermal_surface(cal: etlcal.Calibration, rust_reference: Dict[str, Any]) -> None:
     th = cal.thermal_calibration
+    assert th is not None
     (t0, t1), (e0, e1) = th.t_range_c, th.e_in_range_ma
     for ref in rust_reference["thermal"]:
         t, e_in = ref["temperature_c"], ref["e_in_ma"]
@@ -116,7 +119,7 @@ def test_e_com_uses_the_thermal_surface(cal, rust_reference):
     assert np.max(np.abs(back - [40.0, 120.0, 200.0])) < 1e-8
 
 
-def test_constructor_round_trips_and_validates():
+def test_constructor_round_trips_and_validates() -> None:
     c = etlcal.Calibration(
         [0.1, -0.2, 0.05], [1, 2, 100], [5000, -5, 0.01, 0], [5000, -5, 0.01, 0], (960, 540), [0] * 9,
         image_size=(1920, 1080), e_com_range_ma=(50, 200), rms_px=0.25,
@@ -137,7 +140,7 @@ def test_constructor_round_trips_and_validates():
         etlcal.Calibration([0, 0, 0], [0, 0, 1], [1, 0, 0, 0], [1, 0, 0, 0], (0, 0), [0] * 9, image_size=(0, 10))
 
 
-def test_save_load_json_and_pickle(cal, tmp_path):
+def test_save_load_json_and_pickle(cal: etlcal.Calibration, tmp_path: pathlib.Path) -> None:
     path = tmp_path / "calibration.json"
     cal.save(path)
     back = etlcal.Calibration.load(path)
@@ -152,7 +155,7 @@ def test_save_load_json_and_pickle(cal, tmp_path):
         etlcal.Calibration.from_json(text)
 
 
-def test_file_errors(tmp_path):
+def test_file_errors(tmp_path: pathlib.Path) -> None:
     missing = tmp_path / "nope.json"
     with pytest.raises(etlcal.FileError) as info:
         etlcal.Calibration.load(missing)
@@ -160,9 +163,9 @@ def test_file_errors(tmp_path):
     assert isinstance(info.value, OSError)
     bad = tmp_path / "bad.json"
     bad.write_text('{"format": "etlcal.thermal/1"}')
-    with pytest.raises(etlcal.InputError) as info:
+    with pytest.raises(etlcal.InputError) as refused:
         etlcal.Calibration.load(bad)
-    assert str(info.value) == f'{bad}: format "etlcal.thermal/1" is not supported (expected "etlcal.calibration/1")'
+    assert str(refused.value) == f'{bad}: format "etlcal.thermal/1" is not supported (expected "etlcal.calibration/1")'
     bad.write_text("{ not json")
     with pytest.raises(etlcal.InputError, match=r"key must be a string at line 1"):
         etlcal.Calibration.load(bad)
@@ -172,8 +175,8 @@ def test_file_errors(tmp_path):
         etlcal.Calibration.paper_rig().save(tmp_path / "no" / "such" / "dir.json")
 
 
-def test_bad_inputs_raise_the_rust_message(cal):
-    cases = [
+def test_bad_inputs_raise_the_rust_message(cal: etlcal.Calibration) -> None:
+    cases: List[Tuple[Callable[[], object], Type[etlcal.Error], Optional[str]]] = [
         (lambda: cal.project([[math.nan, 0, 48]], 100.0), etlcal.InputError,
          "world_mm is NaN or infinite; pass finite numbers"),
         (lambda: cal.project([[0, 0, -1000]], 100.0), etlcal.InputError,
@@ -209,7 +212,7 @@ def test_bad_inputs_raise_the_rust_message(cal):
             assert str(info.value) == message
 
 
-def test_undistort_beyond_the_fold_is_an_error_not_a_wrong_answer():
+def test_undistort_beyond_the_fold_is_an_error_not_a_wrong_answer() -> None:
     # Strong barrel distortion (k1 = -1e-6 / px^2 at f = 1000) folds the image.
     a = [0, 0, -1e-6, 0, 0, 0, 0, 0, 0]
     c = etlcal.Calibration([0, 0, 0], [0, 0, 100], [1000, 0, 0, 0], [1000, 0, 0, 0], (0, 0), a)
@@ -218,7 +221,7 @@ def test_undistort_beyond_the_fold_is_an_error_not_a_wrong_answer():
     assert isinstance(info.value, (etlcal.InputError, etlcal.NotConvergedError))
 
 
-def test_shape_errors_are_input_errors(cal):
+def test_shape_errors_are_input_errors(cal: etlcal.Calibration) -> None:
     with pytest.raises(etlcal.InputError, match=r"world_mm must have shape \(N, 3\) or \(3,\), got \[4, 2\]"):
         cal.project(np.zeros((4, 2)), 100.0)
     with pytest.raises(etlcal.InputError, match=r"pixels must have shape \(N, 2\)"):
@@ -227,7 +230,7 @@ def test_shape_errors_are_input_errors(cal):
         cal.project("abc", 100.0)
 
 
-def test_no_thermal_part(cal):
+def test_no_thermal_part(cal: etlcal.Calibration) -> None:
     d = json.loads(cal.to_json())
     del d["thermal"]
     c = etlcal.Calibration.from_json(json.dumps(d))
@@ -236,7 +239,7 @@ def test_no_thermal_part(cal):
         c.e_com(100.0, 30.0)
 
 
-def test_to_opencv_conventions():
+def test_to_opencv_conventions() -> None:
     # fx = fy: OpenCV's model holds etlcal's exactly (k1_cv = k1 f^2, p1_cv = p2 f,
     # p2_cv = p1 f, k2 = k3 = 0), and the fit finds those numbers.
     kf = [5380.0, -7.0, 0.02, -3e-5]
@@ -253,5 +256,5 @@ def test_to_opencv_conventions():
     assert dist[3] == pytest.approx(p1 * f, rel=1e-9)
 
 
-def test_repr(cal):
+def test_repr(cal: etlcal.Calibration) -> None:
     assert repr(cal).startswith("Calibration(kf_x=[5380.0")

@@ -1,6 +1,7 @@
 """Dataset from Python: a rendered rig (written by `etlcal simulate`), detection into
 Observations, calibration; bad files as the right exceptions; pickling."""
 import json
+import pathlib
 import pickle
 import subprocess
 
@@ -10,7 +11,7 @@ import etlcal
 
 
 
-def test_dataset_detect_and_calibrate(tmp_path, etlcal_binary):
+def test_dataset_detect_and_calibrate(tmp_path: pathlib.Path, etlcal_binary: str) -> None:
     subprocess.run([etlcal_binary, "simulate", "--out", str(tmp_path), "--seed", "4", "--json"], check=True,
                    capture_output=True)
     ds = etlcal.Dataset.load(tmp_path / "dataset.json")
@@ -45,7 +46,7 @@ def test_dataset_detect_and_calibrate(tmp_path, etlcal_binary):
         ds.detect()
 
 
-def test_bad_dataset_files(tmp_path):
+def test_bad_dataset_files(tmp_path: pathlib.Path) -> None:
     bad = tmp_path / "d.json"
     bad.write_text('{"format": "etlcal.dataset/2", "image_size": [10, 10], "board": {"inner_corners": [3, 3], "square_mm": 1}}')
     with pytest.raises(etlcal.Error, match="etlcal.dataset/2"):
@@ -54,7 +55,7 @@ def test_bad_dataset_files(tmp_path):
         etlcal.Dataset.load(tmp_path / "missing.json")
 
 
-def test_dataset_json_round_trip_and_save(tmp_path):
+def test_dataset_json_round_trip_and_save(tmp_path: pathlib.Path) -> None:
     text = ('{"format": "etlcal.dataset/1", "image_size": [640, 480], '
             '"board": {"inner_corners": [9, 6], "square_mm": 2.5}, '
             '"views": [{"image": "a.png", "e_in_ma": 100.0, "temperature_c": 30.0, "z_w_mm": 40.0}]}')
@@ -75,7 +76,7 @@ def test_dataset_json_round_trip_and_save(tmp_path):
         etlcal.Dataset.from_json("{not json")
 
 
-def test_dataset_built_in_python_and_its_bad_input(tmp_path):
+def test_dataset_built_in_python_and_its_bad_input(tmp_path: pathlib.Path) -> None:
     ds = etlcal.Dataset((640, 480), (9, 6), 2.5)
     with pytest.raises(etlcal.InputError, match="no views"):
         ds.save(tmp_path / "empty.json")
@@ -97,7 +98,7 @@ def test_dataset_built_in_python_and_its_bad_input(tmp_path):
     assert len(ds) == 2 and ds.setting_count == 1
     with pytest.raises(etlcal.InputError, match="image_size"):
         etlcal.Dataset((0, 480), (9, 6), 2.5)
-    with pytest.raises(etlcal.InputError, match=r"inner_corners \[2, 6\]: a checkerboard needs 3 to 999"):
+    with pytest.raises(etlcal.InputError, match="3 x 3"):
         etlcal.Dataset((640, 480), (2, 6), 2.5)
-    with pytest.raises(etlcal.InputError, match="square_mm -1 must be positive"):
+    with pytest.raises(etlcal.InputError, match="square size"):
         etlcal.Dataset((640, 480), (9, 6), -1.0)

@@ -4,10 +4,12 @@ cv2.FileStorage (OpenCV), a YAML parser with ROS camera_info's keys, and mrcal i
 here; .ci/run installs it with apt-get)."""
 import json
 import os
+import pathlib
 import shutil
 import subprocess
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
@@ -19,11 +21,11 @@ SETTING = (150.0, 30.0)  # E_in mA, degC: inside the paper's 40..240 mA, 27..37 
 
 
 @pytest.fixture(scope="module")
-def cal():
+def cal() -> etlcal.Calibration:
     return etlcal.Calibration.paper_rig()
 
 
-def image_points(cal, e_com_ma):
+def image_points(cal: etlcal.Calibration, e_com_ma: float) -> npt.NDArray[np.float64]:
     """World points whose pixels cover the image (off the fit's grid)."""
     w, h = cal.image_size
     px = np.array([[u, v] for u in np.linspace(17, w - 23, 9) for v in np.linspace(13, h - 29, 7)])
@@ -34,7 +36,7 @@ def image_points(cal, e_com_ma):
     return np.array(pts)
 
 
-def test_opencv_filestorage_reads_the_export(cal, tmp_path):
+def test_opencv_filestorage_reads_the_export(cal: etlcal.Calibration, tmp_path: pathlib.Path) -> None:
     out = tmp_path / "cam.yaml"
     r = cal.export(out, *SETTING, "opencv")
     fs = cv2.FileStorage(str(out), cv2.FILE_STORAGE_READ)
@@ -53,7 +55,7 @@ def test_opencv_filestorage_reads_the_export(cal, tmp_path):
     assert "rms" in out.read_text().splitlines()[3]
 
 
-def test_ros_camera_info_yaml(cal, tmp_path):
+def test_ros_camera_info_yaml(cal: etlcal.Calibration, tmp_path: pathlib.Path) -> None:
     out = tmp_path / "camera_info.yaml"
     r = cal.export(out, *SETTING, "ros")
     d = yaml.safe_load(out.read_text())
@@ -71,7 +73,7 @@ def test_ros_camera_info_yaml(cal, tmp_path):
     assert np.array_equal(p[:, :3], k) and np.all(p[:, 3] == 0)
 
 
-def debian_python_with_mrcal():
+def debian_python_with_mrcal() -> str:
     py = "/usr/bin/python3"
     if os.path.exists(py) and subprocess.run([py, "-c", "import mrcal"], capture_output=True).returncode == 0:
         return py
@@ -93,7 +95,7 @@ print(json.dumps({"lensmodel": lensmodel, "imagersize": m.imagersize().tolist(),
 """
 
 
-def test_mrcal_reads_the_cameramodel_and_projects_as_etlcal(cal, tmp_path):
+def test_mrcal_reads_the_cameramodel_and_projects_as_etlcal(cal: etlcal.Calibration, tmp_path: pathlib.Path) -> None:
     py = debian_python_with_mrcal()
     out = tmp_path / "cam.cameramodel"
     r = cal.export(out, *SETTING, "mrcal")
@@ -106,7 +108,7 @@ def test_mrcal_reads_the_cameramodel_and_projects_as_etlcal(cal, tmp_path):
     assert err <= 1.5 * r["fit_max_px"], (err, r)
 
 
-def test_bad_exports_are_refused_and_write_nothing(cal, tmp_path):
+def test_bad_exports_are_refused_and_write_nothing(cal: etlcal.Calibration, tmp_path: pathlib.Path) -> None:
     out = tmp_path / "x.yaml"
     with pytest.raises(etlcal.InputError, match="opencv, ros, mrcal"):
         cal.export(out, *SETTING, "json")  # type: ignore[arg-type]

@@ -3,6 +3,7 @@
 temperature), each an InputError naming the quantity."""
 import json
 import warnings
+from typing import Callable, List, Tuple
 
 import pytest
 
@@ -12,20 +13,20 @@ import etlcal
 RIG_LAW = (-2.0889218690457646e1, 1.1308537646717632e1, 4.255592823755981e-2)
 
 
-def rig_current(distance_mm):
+def rig_current(distance_mm: float) -> float:
     v = 1000.0 / distance_mm
     return RIG_LAW[0] + RIG_LAW[1] * v + RIG_LAW[2] * v * v
 
 
 @pytest.fixture(scope="module")
-def cal():
+def cal() -> etlcal.Calibration:
     sim = etlcal.simulate.paper_rig(seed=1)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         return etlcal.calibrate(sim.observations, sim.a0, thermal="paper")
 
 
-def test_the_law_is_stored_and_predicts_the_rig_lens(cal):
+def test_the_law_is_stored_and_predicts_the_rig_lens(cal: etlcal.Calibration) -> None:
     law = cal.focus_law
     assert law is not None and law["views"] == 15
     assert set(law) == {"coefficients_ma", "distance_range_mm", "e_com_range_ma", "rms_ma", "views"}
@@ -45,8 +46,8 @@ def test_the_law_is_stored_and_predicts_the_rig_lens(cal):
     assert "focus_law" in json.loads(cal.to_json())
 
 
-def test_out_of_range_inputs_name_the_quantity(cal):
-    for call, name in [
+def test_out_of_range_inputs_name_the_quantity(cal: etlcal.Calibration) -> None:
+    cases: List[Tuple[Callable[[], object], str]] = [
         (lambda: cal.focus_e_in(300.0, 27.0), "distance_mm"),
         (lambda: cal.focus_e_in(30.0, 27.0), "distance_mm"),
         (lambda: cal.focus_e_in(80.0, 500.0), "temperature_c"),
@@ -54,12 +55,13 @@ def test_out_of_range_inputs_name_the_quantity(cal):
         (lambda: cal.focus_distance_mm(270.0, 27.0), "e_in_ma"),
         (lambda: cal.focus_distance_mm(270.0, 27.0, allow_extrapolation=True), "e_com_ma"),
         (lambda: cal.focus_distance_mm(150.0, float("nan")), "temperature_c"),
-    ]:
+    ]
+    for call, name in cases:
         with pytest.raises(etlcal.InputError, match=name):
             call()
 
 
-def test_a_calibration_without_a_focus_law_says_so():
+def test_a_calibration_without_a_focus_law_says_so() -> None:
     rig = etlcal.Calibration.paper_rig()
     assert rig.focus_law is None
     with pytest.raises(etlcal.InputError, match="this calibration has no focus law"):
@@ -68,7 +70,7 @@ def test_a_calibration_without_a_focus_law_says_so():
         rig.focus_distance_mm(150.0, 27.0)
 
 
-def test_calibrate_warns_when_the_views_allow_no_focus_law():
+def test_calibrate_warns_when_the_views_allow_no_focus_law() -> None:
     sim = etlcal.simulate.paper_rig(seed=1)
     doc = json.loads(sim.observations.to_json())
     doc["views"] = [doc["views"][k] for k in (0, 7, 14)]  # three currents: a law needs four

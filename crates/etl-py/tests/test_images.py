@@ -2,19 +2,25 @@
 the Rust side, and each bad input as the right exception class."""
 import json
 import pathlib
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
+from etlcal.options import SharpnessMetric
+
+# A rendered image and its true corners (N, 2) px.
+Board = Tuple[npt.NDArray[Any], npt.NDArray[Any]]
 
 
 @pytest.fixture(scope="module")
-def board():
+def board() -> Board:
     return etlcal.render(e_com_ma=150.0, seed=5)
 
 
-def test_render_gives_an_image_and_its_true_corners(board):
+def test_render_gives_an_image_and_its_true_corners(board: Board) -> None:
     image, corners = board
     assert image.shape == (1458, 1936) and image.dtype == np.uint8
     assert corners.shape == (168, 2)
@@ -25,7 +31,7 @@ def test_render_gives_an_image_and_its_true_corners(board):
     assert np.allclose(corners[[0, 2 * 14 + 3]], want, atol=1e-9)
 
 
-def test_detect_corners_finds_the_true_corners_to_hundredths_of_a_pixel(board):
+def test_detect_corners_finds_the_true_corners_to_hundredths_of_a_pixel(board: Board) -> None:
     image, corners = board
     found = etlcal.detect_corners(image, "14x12")
     assert found.shape == (168, 2)
@@ -39,7 +45,7 @@ def test_detect_corners_finds_the_true_corners_to_hundredths_of_a_pixel(board):
     assert np.allclose(etlcal.detect_corners(np.asfortranarray(image), "14x12"), found)
 
 
-def test_detect_corners_bad_input(board):
+def test_detect_corners_bad_input(board: Board) -> None:
     image, _ = board
     with pytest.raises(etlcal.BoardNotFoundError):
         etlcal.detect_corners(image, "15x12")
@@ -53,33 +59,34 @@ def test_detect_corners_bad_input(board):
         etlcal.detect_corners(image[None], "14x12")
 
 
-def test_sharpness_measures_and_bad_input(board):
+def test_sharpness_measures_and_bad_input(board: Board) -> None:
     image, _ = board
     blurred, _ = etlcal.render(e_com_ma=150.0, blur_px=2.0, seed=5)
-    for metric in ["cpbd", "tenengrad", "laplacian", "brenner", "normvar"]:
+    metrics: List[SharpnessMetric] = ["cpbd", "tenengrad", "laplacian", "brenner", "normvar"]
+    for metric in metrics:
         v = etlcal.sharpness(image, metric)
         assert np.isfinite(v)
         if metric != "cpbd":
             assert v > etlcal.sharpness(blurred, metric), metric
     assert 0.0 <= etlcal.sharpness(image) <= 1.0
     with pytest.raises(etlcal.InputError):
-        etlcal.sharpness(image, "sharpest")
+        etlcal.sharpness(image, "sharpest")  # type: ignore[arg-type]  # the run-time check under test
     with pytest.raises(etlcal.InputError):
         etlcal.sharpness(np.zeros((10, 10), np.uint8), "cpbd")
 
 
-def test_autofocus_on_a_python_callable():
-    calls = []
+def test_autofocus_on_a_python_callable() -> None:
+    calls: List[float] = []
 
-    def peak(e):
+    def peak(e: float) -> float:
         calls.append(e)
-        return 1.0 / np.sqrt(1.0 + ((e - 151.3) / 4.0) ** 2)
+        return float(1.0 / np.sqrt(1.0 + ((e - 151.3) / 4.0) ** 2))
 
     r = etlcal.autofocus(peak)
     assert abs(r["best_ma"] - 151.3) < 0.5 and r["evaluations"] == len(calls) <= 15
     assert all(75.0 <= e <= 240.0 for e in calls)
 
-    def broken(e):
+    def broken(e: float) -> float:
         raise RuntimeError("camera unplugged")
 
     with pytest.raises(RuntimeError, match="camera unplugged"):
@@ -90,10 +97,10 @@ def test_autofocus_on_a_python_callable():
         etlcal.autofocus(lambda e: float("nan"))
 
 
-def test_zhang_on_rendered_lens_off_views_and_bad_input():
+def test_zhang_on_rendered_lens_off_views_and_bad_input() -> None:
     sim = etlcal.simulate.paper_rig(1)
     obs = sim.observations
-    views = []
+    views: List[Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]] = []
     for k in range(obs.offstate_count):
         v = obs.offstate_view(k)
         views.append((v["world_mm"][:, :2], v["pixels"]))
@@ -108,7 +115,7 @@ def test_zhang_on_rendered_lens_off_views_and_bad_input():
         etlcal.zhang([(views[0][0], views[0][1][:-1])] * 3, (1936, 1458))
 
 
-def test_render_16_bit_and_bad_input(board):
+def test_render_16_bit_and_bad_input(board: Board) -> None:
     image, corners = board
     wide, same = etlcal.render(e_com_ma=150.0, seed=5, bit_depth=16)
     assert wide.dtype == np.uint16 and wide.shape == image.shape and np.array_equal(same, corners)
@@ -123,10 +130,10 @@ def test_render_16_bit_and_bad_input(board):
     with pytest.raises(etlcal.InputError):
         etlcal.render(pattern="0x3")
     with pytest.raises(etlcal.InputError):
-        etlcal.render(pattern=3.5)
+        etlcal.render(pattern=3.5)  # type: ignore[arg-type]  # the run-time check under test
 
 
-def test_sharpness_of_16_bit_images(board):
+def test_sharpness_of_16_bit_images(board: Board) -> None:
     image, _ = board
     wide = image.astype(np.uint16) * 257
     # CPBD reads 16-bit images on the 8-bit scale (divided by 257): the same value.
@@ -136,8 +143,8 @@ def test_sharpness_of_16_bit_images(board):
         etlcal.sharpness(image.astype(np.int32), "tenengrad")
 
 
-def test_autofocus_bad_options():
-    def f(e):
+def test_autofocus_bad_options() -> None:
+    def f(e: float) -> float:
         return -abs(e - 150.0)
 
     with pytest.raises(etlcal.InputError):
@@ -148,24 +155,27 @@ def test_autofocus_bad_options():
         etlcal.autofocus(f, tolerance_ma=-1.0)
     # A callable that does not return a number: Python's own TypeError, as for float("x").
     with pytest.raises(TypeError):
-        etlcal.autofocus(lambda e: "sharp")
+        etlcal.autofocus(lambda e: "sharp")  # type: ignore[arg-type, return-value]  # the refusal under test
 
 
 CHARUCO = pathlib.Path(__file__).resolve().parents[3] / "fixtures" / "charuco"
 
+# An image drawn by OpenCV and its entry in fixtures/charuco/opencv.json.
+Drawn = Tuple[npt.NDArray[np.uint8], Dict[str, Any]]
+
 
 @pytest.fixture(scope="module")
-def drawn_board():
+def drawn_board() -> Drawn:
     """A board drawn by OpenCV (fixtures/charuco/SOURCE.md) and what OpenCV 5's
     CharucoDetector finds on it, with the true corners (fixtures/charuco/opencv.json)."""
-    cv2 = pytest.importorskip("cv2")
+    cv2: Any = pytest.importorskip("cv2")
     reference = json.loads((CHARUCO / "opencv.json").read_text())
-    entry = next(e for e in reference["images"] if e["file"] == "opencv_DICT_5X5_100.png")
-    image = cv2.imread(str(CHARUCO / entry["file"]), cv2.IMREAD_GRAYSCALE)
+    entry: Dict[str, Any] = next(e for e in reference["images"] if e["file"] == "opencv_DICT_5X5_100.png")
+    image: npt.NDArray[np.uint8] = cv2.imread(str(CHARUCO / entry["file"]), cv2.IMREAD_GRAYSCALE)
     return image, entry
 
 
-def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
+def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board: Drawn) -> None:
     image, entry = drawn_board
     b = entry["board"]
     board = etlcal.Board.charuco(tuple(b["squares"]), b["square_mm"], b["marker_mm"], b["dictionary"])
@@ -176,7 +186,7 @@ def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
     assert np.allclose(found.board_mm, entry["board_mm"], atol=1e-6)
     assert found.image_size == (640, 480)
     truth = np.array(entry["truth_px"])[found.ids]
-    rms = np.sqrt(np.mean(np.sum((found.corners_px - truth) ** 2, axis=1)))
+    rms = float(np.sqrt(np.mean(np.sum((found.corners_px - truth) ** 2, axis=1))))
     assert rms < 0.015, rms
     # The board as a dict of its fields, and a 16-bit image: the same corners.
     as_dict = dict(b, type="charuco")
@@ -185,7 +195,7 @@ def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
     assert np.allclose(again.corners_px, found.corners_px, atol=1e-3)
 
 
-def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board):
+def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board: Board) -> None:
     image, _ = board
     found = etlcal.detect_corners(image, etlcal.Board.checkerboard((14, 12), 1.5))
     assert found.ids.tolist() == list(range(168))
@@ -194,7 +204,7 @@ def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board):
     assert np.allclose(found.board_mm[15], [1.5, 1.5])
 
 
-def test_detect_corners_of_a_charuco_board_bad_input(drawn_board):
+def test_detect_corners_of_a_charuco_board_bad_input(drawn_board: Drawn) -> None:
     image, entry = drawn_board
     b = entry["board"]
     other = etlcal.Board.charuco(tuple(b["squares"]), b["square_mm"], b["marker_mm"], "DICT_APRILTAG_36h11")
@@ -205,9 +215,10 @@ def test_detect_corners_of_a_charuco_board_bad_input(drawn_board):
     with pytest.raises(etlcal.InputError, match="dictionary"):
         etlcal.detect_corners(image, {"type": "charuco", "squares": [8, 6], "square_mm": 25, "marker_mm": 18,
                                       "dictionary": "DICT_5X5_99"})
-    with pytest.raises(etlcal.InputError, match="not both"):
-        etlcal.detect_corners(image, etlcal.Board.checkerboard((9, 6), 1.0), pattern="9x6")
+    with pytest.raises(etlcal.InputError, match="not both") as e:
+        etlcal.detect_corners(image, etlcal.Board.checkerboard((9, 6), 1.0), pattern="9x6")  # type: ignore[call-overload]
+    assert e.value.what == "board"
     with pytest.raises(etlcal.InputError):
-        etlcal.detect_corners(image)
+        etlcal.detect_corners(image)  # type: ignore[call-overload]
     with pytest.raises(etlcal.InputError):
-        etlcal.detect_corners(image, 42)
+        etlcal.detect_corners(image, 42)  # type: ignore[call-overload]

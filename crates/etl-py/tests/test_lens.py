@@ -1,30 +1,47 @@
 """`Lens` against `VirtualLens` through a pseudo-terminal, from Python."""
 import math
 import time
+from typing import List, Optional
 
+import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
 
 
-def test_lens_talks_to_the_virtual_lens():
+def test_lens_talks_to_the_virtual_lens() -> None:
     device = etlcal.VirtualLens()
     with etlcal.Lens(device.port) as lens:
         info = lens.info()
-        assert info["lens_serial"] == "ETLV0001" and info["firmware_type"] == "C"
-        assert info["upper_limit_ma"] == pytest.approx(292.84)
+        assert isinstance(info, etlcal.LensInfo)
+        assert info.lens_serial == "ETLV0001" and info.firmware_type == "C"
+        assert info.firmware_version == "3.8.1.5"  # the virtual driver's (etl-hw VirtualLensConfig)
+        assert info.upper_limit_ma == pytest.approx(292.84) and info.lower_limit_ma == pytest.approx(-292.84)
+        assert info.max_current_ma == pytest.approx(292.84)
+        assert info.temperature_c is not None and abs(info.temperature_c - device.state().temperature_c) < 0.2
+        # Dict access, as when info() returned a dict.
+        assert info["lens_serial"] == "ETLV0001" and info["upper_limit_ma"] == info.upper_limit_ma
+        assert set(info) == {"firmware_type", "firmware_version", "lens_serial", "max_current_ma",
+                             "upper_limit_ma", "lower_limit_ma", "temperature_c"}
+        assert repr(info).startswith("LensInfo(firmware_type='C', firmware_version='3.8.1.5'")
         got = lens.set_current_ma(150.0)
         assert abs(got - 150.0) < 0.04  # 12-bit quantisation
         assert lens.current_ma() == pytest.approx(got)
-        assert device.state()["e_in_ma"] == pytest.approx(got)
+        assert device.state().e_in_ma == pytest.approx(got)
         device.set_temperature_c(32.0)
         assert abs(lens.temperature_c() - 32.0) < 0.1
         # E_com = E_in - E_T(T, E_in) inside the device follows the paper's surface.
         s = device.state()
-        assert s["e_com_ma"] == pytest.approx(s["e_in_ma"] - s["e_t_ma"])
+        assert isinstance(s, etlcal.LensState)
+        assert s.e_com_ma == pytest.approx(s.e_in_ma - s.e_t_ma)
+        assert s.e_t_ma == pytest.approx(etlcal.ThermalSurface.paper().e_t(s.e_in_ma, s.temperature_c), abs=1e-9)
+        # f_com at E_com (Eq. 10) of the paper's lens, which the device simulates.
+        assert s.f_com_mm == pytest.approx(etlcal.physics.f_com_mm(s.e_com_ma), rel=1e-12)
+        assert s["e_com_ma"] == s.e_com_ma and dict(s) == s.to_dict()
 
 
-def test_no_current_outside_the_limits_reaches_the_wire():
+def test_no_current_outside_the_limits_reaches_the_wire() -> None:
     device = etlcal.VirtualLens()
     lo, hi = device.limits_ma
     with etlcal.Lens(device.port) as lens:
@@ -36,7 +53,7 @@ def test_no_current_outside_the_limits_reaches_the_wire():
     assert all(-4095 <= c <= 4095 for c in device.received_current_codes())
 
 
-def test_errors_are_device_errors():
+def test_errors_are_device_errors() -> None:
     with pytest.raises(etlcal.DeviceError):
         etlcal.Lens("/dev/no-such-port")
     device = etlcal.VirtualLens()
@@ -46,32 +63,31 @@ def test_errors_are_device_errors():
         lens.current_ma()
 
 
-def test_thermal_calibration_with_a_python_camera():
+def test_thermal_calibration_with_a_python_camera() -> None:
     """The section 4.1 procedure with the camera and the climate as Python callables: a
     numpy camera whose blur grows with the distance of the lens's true E_com from the one
     the board was placed at, looking through the virtual lens."""
-    import numpy as np
-
     device = etlcal.VirtualLens()
     yy, xx = np.mgrid[0:96, 0:96]
     board = np.where(((xx // 12) + (yy // 12)) % 2 == 0, 200.0, 40.0)
     f = np.fft.fft2(board)
     k2 = (2 * np.pi * np.fft.fftfreq(96))[None, :] ** 2 + (2 * np.pi * np.fft.fftfreq(96))[:, None] ** 2
-    state = {"focus": None}
-    calls = {"capture": 0, "place": 0, "temps": []}
+    focus_ma: List[float] = []  # E_com at each placement of the board
+    captures: List[int] = []
+    temps: List[float] = []
 
-    def capture():
-        calls["capture"] += 1
-        sigma = 0.5 + 0.3 * abs(device.state()["e_com_ma"] - state["focus"])
+    def capture() -> npt.NDArray[np.uint8]:
+        captures.append(1)
+        sigma = 0.5 + 0.3 * abs(device.state().e_com_ma - focus_ma[-1])
         img = np.real(np.fft.ifft2(f * np.exp(-0.5 * sigma**2 * k2)))
-        return np.clip(np.round(img), 0, 255).astype(np.uint8)
+        frame: npt.NDArray[np.uint8] = np.clip(np.round(img), 0, 255).astype(np.uint8)
+        return frame
 
-    def place_board():
-        calls["place"] += 1
-        state["focus"] = device.state()["e_com_ma"]
+    def place_board() -> None:
+        focus_ma.append(device.state().e_com_ma)
 
-    def set_temperature(t):
-        calls["temps"].append(t)
+    def set_temperature(t: float) -> None:
+        temps.append(t)
         device.set_temperature_c(t)
 
     with etlcal.Lens(device.port) as lens:
@@ -79,7 +95,7 @@ def test_thermal_calibration_with_a_python_camera():
             lens, capture, set_temperature, place_board,
             e_in_grid_ma=[60.0, 110.0, 160.0, 210.0], temperatures_c=[27.0, 30.5, 34.0, 37.0], search_ma=15.0,
         )
-    assert calls["place"] == 4 and calls["capture"] == r["frames"]
+    assert len(focus_ma) == 4 and len(captures) == r["frames"]
     samples = r["samples"]
     assert samples.shape == (16, 3)
     truth = etlcal.ThermalSurface.paper()
@@ -91,7 +107,7 @@ def test_thermal_calibration_with_a_python_camera():
             assert abs(et - want) < 0.3, (t, e, et, want)
     assert isinstance(r["calibration"], etlcal.ThermalCalibration)
 
-    def broken():
+    def broken() -> npt.NDArray[np.uint8]:
         raise RuntimeError("camera unplugged")
 
     with etlcal.Lens(device.port) as lens:
@@ -101,15 +117,13 @@ def test_thermal_calibration_with_a_python_camera():
             etlcal.thermal_calibration(lens, capture, set_temperature, temperatures_c=[27.0])
 
 
-def test_a_lens_timeout_inside_the_temperature_procedure_is_a_device_timeout():
+def test_a_lens_timeout_inside_the_temperature_procedure_is_a_device_timeout() -> None:
     """The procedure is library code between Python and the lens: the failure keeps its
     kind on the way, so it is DeviceTimeoutError, not InputError."""
-    import numpy as np
-
     device = etlcal.VirtualLens()
     frame = np.full((64, 64), 128, dtype=np.uint8)
 
-    def set_temperature(t):
+    def set_temperature(t: float) -> None:
         # The lens stops answering once the climate moves: the next lens call times out.
         device.set_temperature_c(t)
         device.inject_faults(silence_next=1000)
@@ -122,14 +136,14 @@ def test_a_lens_timeout_inside_the_temperature_procedure_is_a_device_timeout():
     device.inject_faults()
 
 
-def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
+def test_link_faults_surface_as_device_exceptions_with_the_rust_message() -> None:
     device = etlcal.VirtualLens()
     with etlcal.Lens(device.port, timeout_ms=150) as lens:
         assert lens.port == device.port and lens.limits_ma == device.limits_ma
         device.inject_faults(silence_next=1)
-        with pytest.raises(etlcal.DeviceTimeoutError, match=r"^no reply to \w+ within 150ms$") as e:
+        with pytest.raises(etlcal.DeviceTimeoutError, match=r"^no reply to \w+ within 150ms$") as timeout:
             lens.current_ma()
-        assert isinstance(e.value, TimeoutError) and isinstance(e.value, etlcal.DeviceError)
+        assert isinstance(timeout.value, TimeoutError) and isinstance(timeout.value, etlcal.DeviceError)
         # The next call resynchronises first (a probe takes the next reply, faults included).
         lens.current_ma()
         device.inject_faults(error_frame_next=3)
@@ -148,7 +162,7 @@ def test_link_faults_surface_as_device_exceptions_with_the_rust_message():
             device.inject_faults(reply_delay_ms=-1.0)
 
 
-def test_a_pulled_cable_is_a_device_error_and_reconnect_keeps_the_current():
+def test_a_pulled_cable_is_a_device_error_and_reconnect_keeps_the_current() -> None:
     device = etlcal.VirtualLens()
     # A generous timeout: with 200 ms a reply delayed by a stalled machine timed out during
     # the reconnection's own queries (a late reply is now discarded by the resynchronisation,
@@ -161,10 +175,10 @@ def test_a_pulled_cable_is_a_device_error_and_reconnect_keeps_the_current():
         device.reconnect()
         lens.reconnect()
         assert lens.current_ma() == pytest.approx(got)
-        assert device.state()["e_in_ma"] == pytest.approx(got)
+        assert device.state().e_in_ma == pytest.approx(got)
 
 
-def test_hold_keeps_the_true_e_com_while_the_lens_warms():
+def test_hold_keeps_the_true_e_com_while_the_lens_warms() -> None:
     # The virtual lens's true surface is the paper's, so holding with the paper's
     # calibration must keep its true E_com at the wanted value to the DAC's resolution
     # (292.84 / 4095 = 0.0715 mA per code: half a code), at any temperature.
@@ -172,41 +186,53 @@ def test_hold_keeps_the_true_e_com_while_the_lens_warms():
     cal = etlcal.ThermalCalibration.paper()
     with etlcal.Lens(device.port) as lens:
         lens.set_current_ma(120.0)
-        e_in = []
+        e_in: List[float] = []
         for t in [27.0, 32.0, 36.5]:
             device.set_temperature_c(t)
             r = lens.hold(cal, 120.0, steps=3)
-            assert r["commands_sent"] == 3 and r["worst_e_com_error_ma"] < 0.036
-            assert r["last"]["index"] == 2 and not r["last"]["extrapolated"]
+            assert isinstance(r, etlcal.HoldReport) and r.last is not None
+            assert r.commands_sent == 3 and r.worst_e_com_error_ma < 0.036 and r.extrapolated_steps == 0
+            assert r.last.index == 2 and not r.last.extrapolated
+            # The step's E_com is the calibration's at its temperature and commanded current.
+            assert r.last.e_com_ma == pytest.approx(cal.compensate(r.last.e_in_ma, r.last.temperature_c).e_com_ma)
+            assert r.last.error_ma == pytest.approx(abs(r.last.e_com_ma - 120.0))
+            lo_c, hi_c = r.temperature_range_c
+            assert lo_c <= r.last.temperature_c <= hi_c
+            # Dict access, as when hold() returned a dict.
+            assert r["commands_sent"] == 3 and r["last"]["index"] == 2
             s = device.state()
-            assert abs(s["e_com_ma"] - 120.0) < 0.036
+            assert abs(s.e_com_ma - 120.0) < 0.036
             # The lens self-heats from t (time constant tau_s), faster in wall time on a
             # loaded machine: the hold must have compensated at the temperature the lens
             # had, whatever that was by then.
-            assert abs(s["temperature_c"] - r["last"]["temperature_c"]) < 0.2
-            assert t - 0.2 < s["temperature_c"] < t + 3.0
-            e_in.append(s["e_in_ma"])
+            assert abs(s.temperature_c - r.last.temperature_c) < 0.2
+            assert t - 0.2 < s.temperature_c < t + 3.0
+            e_in.append(s.e_in_ma)
         # E_T grows with temperature: the held E_in rises with it.
         assert e_in[0] < e_in[1] < e_in[2]
 
 
-def test_hold_observer_and_bad_input():
+def test_hold_observer_and_bad_input() -> None:
     device = etlcal.VirtualLens()
     cal = etlcal.ThermalCalibration.paper()
-    seen = []
+    seen: List[etlcal.HoldStep] = []
 
-    def stop_after_five(step):
+    def stop_after_five(step: etlcal.HoldStep) -> bool:
         seen.append(step)
-        return step["index"] < 4
+        return step.index < 4
 
     with etlcal.Lens(device.port) as lens:
         r = lens.hold(cal, 100.0, on_step=stop_after_five)
-        assert r["commands_sent"] == 5 and [s["index"] for s in seen] == [0, 1, 2, 3, 4]
+        assert r.commands_sent == 5 and [s.index for s in seen] == [0, 1, 2, 3, 4]
+        assert all(isinstance(s, etlcal.HoldStep) for s in seen) and r.last == seen[-1]
+        # Dict access to a step, as when on_step was given a dict.
         assert set(seen[0]) == {"index", "temperature_c", "e_in_ma", "e_com_ma", "error_ma", "extrapolated"}
+        assert seen[0]["index"] == 0 and repr(seen[0]).startswith("HoldStep(index=0, temperature_c=")
         r = lens.hold(cal, 100.0, duration_s=0.05, rate_hz=100.0)
-        assert 1 <= r["commands_sent"] <= 7 and r["elapsed_s"] >= 0.05
+        assert 1 <= r.commands_sent <= 7 and r.elapsed_s >= 0.05
+        assert r.achieved_rate_hz == pytest.approx(r.commands_sent / r.elapsed_s, rel=1e-9)
 
-        def broken(step):
+        def broken(step: etlcal.HoldStep) -> bool:
             raise RuntimeError("observer failed")
 
         with pytest.raises(RuntimeError, match="observer failed"):
@@ -225,9 +251,7 @@ def test_hold_observer_and_bad_input():
         lens.hold(cal, 100.0, steps=1)
 
 
-def test_thermal_calibration_bad_input():
-    import numpy as np
-
+def test_thermal_calibration_bad_input() -> None:
     device = etlcal.VirtualLens()
     frame = np.zeros((96, 96), np.uint8)
     with etlcal.Lens(device.port) as lens:
@@ -235,12 +259,13 @@ def test_thermal_calibration_bad_input():
             etlcal.thermal_calibration(lens, lambda: frame.astype(np.float32), lambda t: None,
                                        e_in_grid_ma=[100.0], temperatures_c=[27.0, 30.0])
         with pytest.raises(etlcal.InputError, match="sharpest"):
-            etlcal.thermal_calibration(lens, lambda: frame, lambda t: None, metric="sharpest")
+            etlcal.thermal_calibration(lens, lambda: frame, lambda t: None,
+                                       metric="sharpest")  # type: ignore[arg-type]  # the run-time check under test
     with pytest.raises(etlcal.DeviceError, match="closed"):
         etlcal.thermal_calibration(lens, lambda: frame, lambda t: None)
 
 
-def test_after_a_timeout_a_late_reply_never_answers_a_later_query():
+def test_after_a_timeout_a_late_reply_never_answers_a_later_query() -> None:
     """Issue 19: the reply to a timed-out query (the lens at 50 mA) must not be taken for
     the answer to a later one (the lens at 150 mA)."""
     device = etlcal.VirtualLens()
@@ -252,18 +277,19 @@ def test_after_a_timeout_a_late_reply_never_answers_a_later_query():
         device.inject_faults()
         # The next call resynchronises first; on a stalled machine the late reply may come
         # after the probe's wait, which is a timeout again, never a wrong answer.
+        got: Optional[float] = None
         for _ in range(5):
             try:
                 got = lens.set_current_ma(150.0)
                 break
             except etlcal.DeviceTimeoutError:
                 time.sleep(0.2)
-        assert got == pytest.approx(150.0, abs=0.04)
+        assert got is not None and got == pytest.approx(150.0, abs=0.04)
         assert lens.current_ma() == pytest.approx(got)
-        assert device.state()["e_in_ma"] == pytest.approx(got)
+        assert device.state().e_in_ma == pytest.approx(got)
 
 
-def test_a_current_the_driver_rejects_is_an_error_not_applied():
+def test_a_current_the_driver_rejects_is_an_error_not_applied() -> None:
     device = etlcal.VirtualLens()
     with etlcal.Lens(device.port, timeout_ms=1000) as lens:
         before = lens.set_current_ma(80.0)
@@ -272,10 +298,10 @@ def test_a_current_the_driver_rejects_is_an_error_not_applied():
             lens.set_current_ma(120.0)
         assert not isinstance(e.value, etlcal.DeviceTimeoutError)
         assert lens.current_ma() == pytest.approx(before)
-        assert device.state()["e_in_ma"] == pytest.approx(before)
+        assert device.state().e_in_ma == pytest.approx(before)
 
 
-def test_huge_durations_rates_delays_and_timeouts_are_input_errors_not_panics():
+def test_huge_durations_rates_delays_and_timeouts_are_input_errors_not_panics() -> None:
     device = etlcal.VirtualLens()
     cal = etlcal.ThermalCalibration.paper()
     with pytest.raises(etlcal.InputError, match=r"^reply_delay_ms must lie in 0\.\.=60000 ms, got 1e30$"):
@@ -290,9 +316,9 @@ def test_huge_durations_rates_delays_and_timeouts_are_input_errors_not_panics():
     assert device.received_current_codes() == []
 
 
-def test_virtual_lens_temperatures_and_time_steps_are_range_checked():
+def test_virtual_lens_temperatures_and_time_steps_are_range_checked() -> None:
     device = etlcal.VirtualLens()
-    before = device.state()["temperature_c"]
+    before = device.state().temperature_c
     for bad in (1e308, float("nan"), -41.0, 126.0):
         with pytest.raises(etlcal.InputError, match=r"^t_c must lie in -40\.\.=125 degC, got "):
             device.set_temperature_c(bad)
@@ -301,6 +327,6 @@ def test_virtual_lens_temperatures_and_time_steps_are_range_checked():
     for bad in (-1.0, 1e30, float("inf"), float("nan")):
         with pytest.raises(etlcal.InputError, match=r"^dt_s must lie in 0\.\.=1e7 s, got "):
             device.advance_s(bad)
-    assert device.state()["temperature_c"] == before
+    assert device.state().temperature_c == before
     device.set_temperature_c(40.0)
-    assert device.state()["temperature_c"] == pytest.approx(40.0, abs=0.05)
+    assert device.state().temperature_c == pytest.approx(40.0, abs=0.05)

@@ -12,7 +12,7 @@ A = [-0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6]
 
 
 @pytest.mark.parametrize("e_com_ma", [80.0, 150.0, 225.0])
-def test_cv2_project_points_agrees(e_com_ma):
+def test_cv2_project_points_agrees(e_com_ma: float) -> None:
     kf = [5380.0, -7.0, 0.02, -3e-5]
     cal = etlcal.Calibration([0.2, 0.2, 0.2], [-11.0, -4.0, 48.0], kf, kf, (900.0, 550.0), A)
     world = np.array([[1.5 * i, 1.5 * j, z] for z in (75.0, 31.0, 10.0) for j in range(12) for i in range(14)])

@@ -9,7 +9,7 @@ import etlcal
 from etlcal import physics
 
 
-def test_paper_lens_focal_lengths():
+def test_paper_lens_focal_lengths() -> None:
     assert physics.f_liq_mm(0.0) == pytest.approx(120.5, abs=0.1)
     assert physics.f_liq_mm(250.0) == pytest.approx(50.5, abs=0.1)
     f = physics.f_liq_mm(np.array([0.0, 100.0, 250.0]))
@@ -19,7 +19,7 @@ def test_paper_lens_focal_lengths():
     assert etlcal.LensPhysics().f_com_for_f_liq_mm(fl) == physics.f_com_mm(0.0)
 
 
-def test_pressures_deflection_curvature_by_hand():
+def test_pressures_deflection_curvature_by_hand() -> None:
     lens = physics.paper_lens()
     e = 120.0
     pa = -0.004 * e * e + 7.8 * e + 2.061e-13
@@ -34,7 +34,7 @@ def test_pressures_deflection_curvature_by_hand():
     assert lens.hemisphere_pressure_pa() == pytest.approx(4 * 3e6 * 0.05 * 0.1 / (0.52 * 5.0), rel=1e-12)
 
 
-def test_gravity():
+def test_gravity() -> None:
     dp = 900.0 * 9.80665 * 5e-3
     g0 = physics.gravity_error_mm(0.0, dp)
     diff = etlcal.LensPhysics(p0_pa=1200.0 + dp).f_liq_mm(0.0) - physics.f_liq_mm(0.0)
@@ -47,7 +47,7 @@ def test_gravity():
     assert str(info.value) == "degenerate input: liquid and surrounding densities are equal"
 
 
-def test_fig5_cubic_rmse_matches_the_paper():
+def test_fig5_cubic_rmse_matches_the_paper() -> None:
     rmse = physics.polynomial_fit_rmse_mm(0.0, 260.0, 0.1)
     assert len(rmse) == 6
     assert rmse[2] == pytest.approx(1.10e-3, rel=0.1)
@@ -56,7 +56,7 @@ def test_fig5_cubic_rmse_matches_the_paper():
         physics.polynomial_fit_rmse_mm(0.0, 260.0, 0.0)
 
 
-def test_bad_inputs():
+def test_bad_inputs() -> None:
     with pytest.raises(etlcal.InputError) as info:
         physics.f_liq_mm(math.nan)
     assert str(info.value) == "e_ma is NaN or infinite; pass finite numbers"
@@ -78,7 +78,7 @@ def test_bad_inputs():
     assert str(info.value) == "degenerate input: f_liq + f_pri - d_lens = 0 (afocal lens group)"
 
 
-def test_lens_object():
+def test_lens_object() -> None:
     lens = etlcal.LensPhysics(f_pri_mm=25.0)
     assert lens.to_dict()["f_pri_mm"] == 25.0
     assert etlcal.LensPhysics(**lens.to_dict()) == lens

@@ -1,20 +1,23 @@
 """Observations, A0, simulate.paper_rig, calibrate and solve_pnp."""
 import json
 import math
+import pathlib
 import pickle
+from typing import List, Optional, Tuple
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
 
 
 @pytest.fixture(scope="module")
-def sim():
+def sim() -> etlcal.Simulation:
     return etlcal.simulate.paper_rig(seed=1)
 
 
-def test_simulation_matches_the_paper_rig(sim):
+def test_simulation_matches_the_paper_rig(sim: etlcal.Simulation) -> None:
     obs = sim.observations
     assert len(obs) == 15 and obs.point_count == 2311
     assert obs.image_size == (1936, 1458)
@@ -37,11 +40,11 @@ def test_simulation_matches_the_paper_rig(sim):
     with pytest.raises(etlcal.InputError, match="must be a finite number >= 0"):
         etlcal.simulate.paper_rig(0, noise={"px": -1.0})
     with pytest.raises(etlcal.InputError, match='noise must be "paper"'):
-        etlcal.simulate.paper_rig(0, noise="loud")
+        etlcal.simulate.paper_rig(0, noise="loud")  # type: ignore[arg-type]  # the run-time check under test
     assert repr(sim) == "Simulation(views=15, points=2311)"
 
 
-def test_calibrate_recovers_the_rig(sim):
+def test_calibrate_recovers_the_rig(sim: etlcal.Simulation) -> None:
     cal = etlcal.calibrate(sim.observations, sim.a0, estimator="paper")
     assert cal.estimator == "paper" and cal.iterations > 0
     assert 0.25 < cal.rms_px < 0.5 and cal.initial_rms_px > cal.rms_px
@@ -66,7 +69,7 @@ def test_calibrate_recovers_the_rig(sim):
     assert etlcal.Calibration.from_json(cal.to_json()) == cal
 
 
-def test_the_default_estimator_is_errors_in_variables(sim):
+def test_the_default_estimator_is_errors_in_variables(sim: etlcal.Simulation) -> None:
     # No estimator: errors-in-variables with the paper's priors (10 um, 0.4 mA), the same
     # calibration as asking for it; "paper" (Eq. 24) stays available and differs.
     default = etlcal.calibrate(sim.observations, sim.a0)
@@ -78,12 +81,12 @@ def test_the_default_estimator_is_errors_in_variables(sim):
     assert all(v["dz_mm"] == 0.0 for v in paper.views)
 
 
-def test_calibrate_bad_inputs(sim):
+def test_calibrate_bad_inputs(sim: etlcal.Simulation) -> None:
     obs = sim.observations
     with pytest.raises(etlcal.InputError, match='estimator must be "paper" or "eiv"'):
-        etlcal.calibrate(obs, sim.a0, estimator="best")
+        etlcal.calibrate(obs, sim.a0, estimator="best")  # type: ignore[arg-type]  # the run-time check under test
     with pytest.raises(etlcal.InputError, match="robust must be"):
-        etlcal.calibrate(obs, sim.a0, robust="l1")
+        etlcal.calibrate(obs, sim.a0, robust="l1")  # type: ignore[arg-type]  # the run-time check under test
     two = etlcal.Observations((1936, 1458))
     for i in (0, 1):
         v = obs.view(i)
@@ -96,7 +99,7 @@ def test_calibrate_bad_inputs(sim):
     assert str(info.value) == "invalid input: observations hold no views"
 
 
-def test_observations_build_save_load(sim, tmp_path):
+def test_observations_build_save_load(sim: etlcal.Simulation, tmp_path: pathlib.Path) -> None:
     obs = sim.observations
     views = [obs.view(i) for i in range(len(obs))]
     again = etlcal.Observations.from_arrays(
@@ -139,7 +142,7 @@ def test_observations_build_save_load(sim, tmp_path):
     assert "offstate_views=1" in repr(o)
 
 
-def test_observations_bad_inputs():
+def test_observations_bad_inputs() -> None:
     o = etlcal.Observations((100, 100))
     with pytest.raises(etlcal.InputError) as info:
         o.add_view([[0, 0, 10]], [[1, 2]], e_in_ma=math.nan, temperature_c=30.0)
@@ -164,7 +167,7 @@ def test_observations_bad_inputs():
         etlcal.Observations.from_json('{"format": "etlcal.dataset/1"}')
 
 
-def test_a0(tmp_path):
+def test_a0(tmp_path: pathlib.Path) -> None:
     a = etlcal.A0(5380.0, 5430.0, 900.0, 550.0)
     assert (a.kf0x, a.kf0y, a.u0, a.v0) == (5380.0, 5430.0, 900.0, 550.0)
     a.save(tmp_path / "a0.json")
@@ -180,7 +183,7 @@ def test_a0(tmp_path):
     assert str(info.value) == f"{tmp_path / 'bad.json'}: kf0x, kf0y must be positive and u0, v0 finite"
 
 
-def test_solve_pnp_measures_a_stage_move():
+def test_solve_pnp_measures_a_stage_move() -> None:
     cal = etlcal.Calibration.paper_rig()
     board = np.array([[1.5 * i, 1.5 * j, 0.0] for j in range(12) for i in range(14)])
     e = 140.0
@@ -200,11 +203,11 @@ def test_solve_pnp_measures_a_stage_move():
     assert repr(poses[0]).startswith("BoardPose(")
 
 
-def test_solve_pnp_bad_inputs():
+def test_solve_pnp_bad_inputs() -> None:
     cal = etlcal.Calibration.paper_rig()
     board = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
     px = cal.project(board + [0, 0, 40.0], 120.0)
-    cases = [
+    cases: List[Tuple[Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]], Optional[str]]] = [
         ((board[:3], px[:3]), "too few points for PnP: the method needs at least 4, got 3"),
         ((board, px[:3]), "invalid argument: board points and pixels differ in number"),
         ((board + [0, 0, 1.0], px), "invalid argument: board points must lie on Z = 0 of the board frame"),
@@ -220,7 +223,7 @@ def test_solve_pnp_bad_inputs():
             assert str(info.value).startswith("degenerate input:")
 
 
-def test_cramer_rao_bound_of_the_paper_rig():
+def test_cramer_rao_bound_of_the_paper_rig() -> None:
     sim = etlcal.simulate.paper_rig(0, noise="none")
     plain = etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2)
     # docs/METHOD.md: with 0.2 px of pixel noise alone the bound of kf3 is about 3 %.
@@ -237,7 +240,7 @@ def test_cramer_rao_bound_of_the_paper_rig():
         etlcal.cramer_rao_std(sim.observations, sim.truth, 0.0)
 
 
-def test_a0_from_the_lens_off_views_when_not_given(sim):
+def test_a0_from_the_lens_off_views_when_not_given(sim: etlcal.Simulation) -> None:
     # Without a0, Zhang's method on the simulation's 10 lens-off views gives A0 (as
     # `etlcal calibrate` without --a0): the fx(E) curve stays within the demo's tolerance.
     cal = etlcal.calibrate(sim.observations)
@@ -253,7 +256,7 @@ def test_a0_from_the_lens_off_views_when_not_given(sim):
         etlcal.calibrate(no_offstate)
 
 
-def test_per_setting_baseline_from_python():
+def test_per_setting_baseline_from_python() -> None:
     sim = etlcal.simulate.paper_rig(seed=3, setting_views=True)
     obs = sim.observations
     assert obs.setting_count == 7 * 15 and len(obs) == 15
@@ -277,7 +280,7 @@ def test_per_setting_baseline_from_python():
             etlcal.calibrate(obs, estimator=est, method="per-setting")
     assert etlcal.calibrate(obs, estimator=None, method="per-setting") == base
     with pytest.raises(etlcal.InputError, match='method must be "proposed" or "per-setting"'):
-        etlcal.calibrate(obs, method="zhang")
+        etlcal.calibrate(obs, method="zhang")  # type: ignore[arg-type]  # the run-time check under test
     # Too few settings: the Rust message, unchanged.
     few = etlcal.Observations((1936, 1458))
     for i in range(obs.setting_count):
@@ -293,12 +296,14 @@ def test_per_setting_baseline_from_python():
     assert few.setting_count == 2 * 15
 
 
-def _board_pixels(cal, z_mm, e_com_ma):
+def _board_pixels(
+    cal: etlcal.Calibration, z_mm: float, e_com_ma: float
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     board = np.array([[1.5 * i, 1.5 * j, 0.0] for j in range(12) for i in range(14)])
     return board, cal.project(board + [0, 0, z_mm], e_com_ma)
 
 
-def test_solve_pnp_pixel_noise_covariance_matches_monte_carlo():
+def test_solve_pnp_pixel_noise_covariance_matches_monte_carlo() -> None:
     """sigma^2 (J^T J)^-1 against the spread of 300 PnPs of noisy pixels (0.2 px), and the
     displacement's std of two poses against that of their differences."""
     cal = etlcal.Calibration.paper_rig()
@@ -307,7 +312,7 @@ def test_solve_pnp_pixel_noise_covariance_matches_monte_carlo():
     _, px_b = _board_pixels(cal, 30.0, e)
     a = cal.solve_pnp(board, px_a, e, sigma_px=0.2)
     b = cal.solve_pnp(board, px_b, e, sigma_px=0.2)
-    assert a.sigma_px == 0.2 and a.covariance.shape == (6, 6)
+    assert a.sigma_px == 0.2 and a.covariance is not None and a.covariance.shape == (6, 6)
     assert np.allclose(a.covariance, a.covariance.T, rtol=0, atol=1e-18)
     predicted = np.sqrt(np.diag(a.covariance))
     d_std = a.displacement_std_mm(b, pixel_noise_only=True)
@@ -325,14 +330,17 @@ def test_solve_pnp_pixel_noise_covariance_matches_monte_carlo():
     assert np.all(np.abs(observed_move / d_std - 1) < 0.15), (observed_move, d_std)
     # The residual estimate of sigma: ~0.2 px on noisy pixels, ~0 on exact ones.
     noisy = cal.solve_pnp(board, px_a + rng.normal(0, 0.2, px_a.shape), e)
+    exact = cal.solve_pnp(board, px_a, e)
+    assert noisy.sigma_px is not None and exact.sigma_px is not None
     assert abs(noisy.sigma_px / 0.2 - 1) < 0.15
-    assert cal.solve_pnp(board, px_a, e).sigma_px < 1e-6
+    assert exact.sigma_px < 1e-6
     # Pickling keeps the uncertainty.
     back = pickle.loads(pickle.dumps(a))
+    assert back.covariance is not None
     assert back == a and back.sigma_px == 0.2 and np.array_equal(back.covariance, a.covariance)
 
 
-def test_displacement_std_refuses_what_it_cannot_know():
+def test_displacement_std_refuses_what_it_cannot_know() -> None:
     cal = etlcal.Calibration.paper_rig()
     board, px = _board_pixels(cal, 28.0, 140.0)
     a = cal.solve_pnp(board, px, 140.0, sigma_px=0.2)
@@ -350,7 +358,9 @@ def test_displacement_std_refuses_what_it_cannot_know():
         cal.projection_std(board, 140.0)
 
 
-def _with_covariance(cal, cov, std):
+def _with_covariance(
+    cal: etlcal.Calibration, cov: npt.NDArray[np.float64], std: npt.NDArray[np.float64]
+) -> etlcal.Calibration:
     """The calibration with a covariance and the matching std written into its file."""
     d = json.loads(cal.to_json())
     names = [("rotation_rodrigues", 3), ("translation_mm", 3), ("kf_x", 4), ("kf_y", 4), ("principal_point", 2),
@@ -363,12 +373,12 @@ def _with_covariance(cal, cov, std):
     return etlcal.Calibration.from_json(json.dumps(d))
 
 
-def test_projection_std_is_the_principal_points_for_its_covariance():
+def test_projection_std_is_the_principal_points_for_its_covariance() -> None:
     """A covariance on (u0, v0) alone passes to every pixel as is: std (2, 0.5) px."""
     cov = np.zeros((25, 25))
     cov[14, 14], cov[15, 15], cov[14, 15], cov[15, 14] = 4.0, 0.25, 0.3, 0.3
     cal = _with_covariance(etlcal.Calibration.paper_rig(), cov, np.sqrt(np.diag(cov)))
-    assert np.array_equal(cal.covariance, cov)
+    assert cal.covariance is not None and np.array_equal(cal.covariance, cov)
     pts = np.array([[5.0, 4.0, 40.0], [20.0, 15.0, 10.0]])
     assert np.array_equal(cal.projection_std(pts, 150.0), [[2.0, 0.5], [2.0, 0.5]])
     assert cal.projection_std(pts[0], 150.0).shape == (2,)
@@ -378,10 +388,10 @@ def test_projection_std_is_the_principal_points_for_its_covariance():
         _with_covariance(etlcal.Calibration.paper_rig(), bad, np.sqrt(np.diag(cov)))
 
 
-def test_calibrate_records_the_covariance_and_measures_with_it(sim):
+def test_calibrate_records_the_covariance_and_measures_with_it(sim: etlcal.Simulation) -> None:
     cal = etlcal.calibrate(sim.observations, sim.a0)
     c = cal.covariance
-    assert c.shape == (25, 25) and np.array_equal(c, c.T)
+    assert c is not None and c.shape == (25, 25) and np.array_equal(c, c.T)
     std = np.concatenate([cal.std[k] for k in ("rotation_rodrigues", "translation_mm", "kf_x", "kf_y",
                                                "principal_point", "distortion_a")])
     assert np.array_equal(np.sqrt(np.diag(c)), std)
@@ -416,7 +426,7 @@ def test_calibrate_records_the_covariance_and_measures_with_it(sim):
     assert np.all(np.abs(a.displacement_mm(b) - truth) < 4 * s), (a.displacement_mm(b) - truth, s)
 
 
-def test_calibrate_reports_outliers_and_warns(sim):
+def test_calibrate_reports_outliers_and_warns(sim: etlcal.Simulation) -> None:
     # Issue 19: two corners moved far off are left out, listed as (view, point,
     # residual_px), and said as a UserWarning; a clean calibration has neither.
     clean = etlcal.calibrate(sim.observations, sim.a0)

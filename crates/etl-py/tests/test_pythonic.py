@@ -1,7 +1,7 @@
 """The Pythonic surface: vectorised per-current functions against the scalar
 ones, typed result objects (attributes and dict access), Observations as a sequence of
-views, option checking, and the stubs under mypy --strict (this file is fully typed and
-is the file mypy checks)."""
+views, option checking, and the stubs under mypy --strict (the whole test suite, fully
+typed, and the package's own sources)."""
 from __future__ import annotations
 
 import json
@@ -19,6 +19,7 @@ from etlcal.options import ExportFormat, NoisePreset, SharpnessMetric, StudyName
 from etlcal.results import (
     AutofocusResult,
     Compensation,
+    CompensationArray,
     ExportResult,
     ModelStd,
     OffstateView,
@@ -182,6 +183,73 @@ def test_compensation_results() -> None:
     assert c == {"e_in_ma": 150.0, "e_t_ma": e_t, "e_com_ma": c.e_com_ma, "extrapolated": False}
 
 
+# The paper's surface E_T(T, E) (section 5.2.2) written out: the ground truth of E_T.
+PAPER_E_T = [-348.1, 36.03, -0.414, -1.266, 0.02957, 1.176e-4, 0.01514, -5.276e-4, -4.632e-6, 2.761e-8]
+
+
+def e_t_by_hand(e: npt.NDArray[np.float64], t: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    c = PAPER_E_T
+    return (c[0] + c[1] * t + c[2] * e + c[3] * t * t + c[4] * t * e + c[5] * e * e + c[6] * t**3
+            + c[7] * t * t * e + c[8] * t * e * e + c[9] * e**3)
+
+
+def test_compensate_over_arrays_is_the_scalar_one_broadcast() -> None:
+    tc = etlcal.ThermalCalibration.paper()  # calibrated over 40..240 mA, 27..37 degC
+    # A column of currents against a row of temperatures: shape (4, 3); 20 mA and 40 degC
+    # lie outside the calibrated ranges (inside the lens's domain): flagged, not refused.
+    e_in = np.array([[20.0], [100.0], [150.0], [230.0]])
+    t = np.array([27.5, 33.0, 40.0])
+    c = tc.compensate(e_in, t)
+    assert isinstance(c, CompensationArray)
+    assert c.e_in_ma.shape == c.e_t_ma.shape == c.e_com_ma.shape == c.extrapolated.shape == (4, 3)
+    assert c.e_t_ma.dtype == np.float64 and c.extrapolated.dtype == np.bool_
+    e_b, t_b = np.broadcast_arrays(e_in, t)
+    np.testing.assert_array_equal(c.e_in_ma, e_b)
+    np.testing.assert_allclose(c.e_t_ma, e_t_by_hand(e_b, t_b), rtol=0, atol=1e-10)
+    np.testing.assert_array_equal(c.e_com_ma, c.e_in_ma - c.e_t_ma)
+    for i in np.ndindex(c.e_com_ma.shape):
+        one = tc.compensate(float(e_b[i]), float(t_b[i]))
+        assert (one.e_in_ma, one.e_t_ma, one.e_com_ma, one.extrapolated) == (
+            float(c.e_in_ma[i]), float(c.e_t_ma[i]), float(c.e_com_ma[i]), bool(c.extrapolated[i]))
+    assert c.extrapolated.tolist() == [[True, True, True], [False, False, True], [False, False, True],
+                                       [False, False, True]]
+    # Dict access and the repr, as the other results.
+    assert c["e_com_ma"] is c.e_com_ma and set(c) == {"e_in_ma", "e_t_ma", "e_com_ma", "extrapolated"}
+    assert repr(c).startswith("CompensationArray(e_in_ma=<array (4, 3)>")
+    # A list is an array; two numbers (or 0-d arrays) give today's Compensation.
+    assert isinstance(tc.compensate([100.0, 150.0], 30.0), CompensationArray)
+    assert isinstance(tc.compensate(np.array(100.0), np.array(30.0)), Compensation)
+
+
+def test_e_in_for_e_com_over_arrays_inverts_compensate() -> None:
+    tc = etlcal.ThermalCalibration.paper()
+    e_com = np.array([60.0, 120.0, 180.0])
+    t = np.array([[28.0], [36.0]])
+    back = tc.e_in_for_e_com(e_com, t)
+    assert isinstance(back, CompensationArray) and back.e_in_ma.shape == (2, 3)
+    np.testing.assert_array_equal(back.e_com_ma, np.broadcast_to(e_com, (2, 3)))
+    # E_in - E_T(T, E_in) = E_com, with E_T written out (the inverse's tolerance 1e-9 mA).
+    e_com_b, t_b = np.broadcast_arrays(e_com, t)
+    np.testing.assert_allclose(back.e_in_ma - e_t_by_hand(back.e_in_ma, t_b), e_com_b, rtol=0, atol=1e-8)
+    for i in np.ndindex(back.e_in_ma.shape):
+        one = tc.e_in_for_e_com(float(e_com_b[i]), float(t_b[i]))
+        assert (one.e_in_ma, one.e_t_ma, one.extrapolated) == (
+            float(back.e_in_ma[i]), float(back.e_t_ma[i]), bool(back.extrapolated[i]))
+
+
+def test_one_reading_outside_the_lens_domain_refuses_the_whole_array() -> None:
+    tc = etlcal.ThermalCalibration.paper()
+    with pytest.raises(etlcal.InputError) as scalar:
+        tc.compensate(400.0, 30.0)
+    with pytest.raises(etlcal.InputError) as vector:
+        tc.compensate(np.array([100.0, 400.0]), 30.0)
+    assert str(vector.value) == str(scalar.value) == "e_in_ma = 400 is outside [-292.84, 292.84]"
+    with pytest.raises(etlcal.InputError, match=r"t_c = 200 is outside \[-40, 125\]"):
+        tc.e_in_for_e_com([100.0, 120.0], np.array([30.0, 200.0]))
+    with pytest.raises(etlcal.InputError, match="do not broadcast"):
+        tc.compensate(np.zeros(3), np.zeros(4))
+
+
 def test_calibration_results(sim: etlcal.Simulation, tmp_path: pathlib.Path) -> None:
     cal = etlcal.Calibration.load(ROOT / "fixtures" / "golden" / "calibrate-eiv.json")
     views = cal.views
@@ -258,8 +326,13 @@ def test_nothing_private_is_exported() -> None:
     assert "_raise_rust_error" not in native_all
 
 
-def test_the_stubs_type_check_this_file_under_mypy_strict() -> None:
+def test_the_stubs_type_check_the_test_suite_and_the_package_under_mypy_strict() -> None:
+    """Every test file is typed and checked against the installed stubs, as a user's strict
+    code would be; the installed package's own Python sources (results, options, physics,
+    ...) and its stub are checked too."""
     pytest.importorskip("mypy")
-    out = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--no-error-summary", __file__],
-                         capture_output=True, text=True, timeout=300)
+    tests = pathlib.Path(__file__).resolve().parent
+    package = pathlib.Path(etlcal.__file__).resolve().parent
+    out = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--no-error-summary", str(tests), str(package)],
+                         cwd=tests, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stdout + out.stderr

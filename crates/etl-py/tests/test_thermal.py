@@ -1,9 +1,12 @@
 """ThermalSurface and ThermalCalibration: evaluation against Rust, the fit, files, and
 bad inputs."""
 import math
+import pathlib
 import pickle
+from typing import Any, Dict, Tuple
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
@@ -11,12 +14,12 @@ import etlcal
 PAPER = [-348.1, 36.03, -0.414, -1.266, 0.02957, 1.176e-4, 0.01514, -5.276e-4, -4.632e-6, 2.761e-8]
 
 
-def paper_grid():
+def paper_grid() -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     t, e = np.meshgrid(np.arange(27.0, 38.0), np.arange(40.0, 241.0, 20.0))
     return e.ravel(), t.ravel()
 
 
-def test_eval_agrees_with_rust(rust_reference):
+def test_eval_agrees_with_rust(rust_reference: Dict[str, Any]) -> None:
     s = etlcal.ThermalSurface.paper()
     assert s.coefficients.tolist() == PAPER
     for ref in rust_reference["thermal"]:
@@ -24,7 +27,7 @@ def test_eval_agrees_with_rust(rust_reference):
         assert abs(s.e_com(ref["e_in_ma"], ref["temperature_c"]) - ref["e_com_ma"]) <= 1e-12
 
 
-def test_eval_by_hand_and_broadcast():
+def test_eval_by_hand_and_broadcast() -> None:
     s = etlcal.ThermalSurface(PAPER)
     t, e = 31.5, 187.0
     c = PAPER
@@ -40,7 +43,7 @@ def test_eval_by_hand_and_broadcast():
     assert s.e_in_for_e_com([e_com, e_com], 33.0).shape == (2,)
 
 
-def test_fit_recovers_the_paper_surface():
+def test_fit_recovers_the_paper_surface() -> None:
     s = etlcal.ThermalSurface.paper()
     e, t = paper_grid()
     y = s.e_t(e, t)
@@ -53,7 +56,7 @@ def test_fit_recovers_the_paper_surface():
     assert np.allclose(weighted.surface.coefficients, PAPER, rtol=1e-8, atol=0)
 
 
-def test_fit_with_noise_reports_the_noise():
+def test_fit_with_noise_reports_the_noise() -> None:
     rng = np.random.default_rng(3)
     s = etlcal.ThermalSurface.paper()
     e, t = paper_grid()
@@ -61,7 +64,7 @@ def test_fit_with_noise_reports_the_noise():
     assert 0.15 < cal.rms_ma < 0.25
 
 
-def test_fit_bad_inputs():
+def test_fit_bad_inputs() -> None:
     e, t = paper_grid()
     y = np.zeros_like(e)
     with pytest.raises(etlcal.InputError) as info:
@@ -87,7 +90,7 @@ def test_fit_bad_inputs():
     assert "weight" in str(info.value)
 
 
-def test_surface_bad_inputs():
+def test_surface_bad_inputs() -> None:
     s = etlcal.ThermalSurface.paper()
     with pytest.raises(etlcal.InputError) as info:
         s.e_t(100.0, math.nan)
@@ -110,7 +113,7 @@ def test_surface_bad_inputs():
         s.e_t(np.zeros(3), np.zeros(4))
 
 
-def test_thermal_calibration_compensate_and_files(tmp_path):
+def test_thermal_calibration_compensate_and_files(tmp_path: pathlib.Path) -> None:
     cal = etlcal.ThermalCalibration.paper()
     assert cal.rms_ma == 0.2106 and cal.t_range_c == (27.0, 37.0)
     inside = cal.compensate(100.0, 30.0)
@@ -135,7 +138,7 @@ def test_thermal_calibration_compensate_and_files(tmp_path):
     assert made.e_in_range_ma == (40.0, 240.0) and made.t_range_c == (27.0, 37.0)
     # The ranges are keyword-only: a call in the old positional order fails, never swaps.
     with pytest.raises(TypeError):
-        etlcal.ThermalCalibration(s, (27, 37), (40, 240))
+        etlcal.ThermalCalibration(s, (27, 37), (40, 240))  # type: ignore[call-arg]  # the refusal under test
     with pytest.raises(etlcal.InputError, match="min <= max"):
         etlcal.ThermalCalibration(s, e_in_range_ma=(40, 240), t_range_c=(37, 27))
     with pytest.raises(etlcal.InputError, match="rms_ma"):

@@ -1,16 +1,21 @@
 """Calibration.undistort_maps / undistort_image against the model's own projection and
 against OpenCV's cv2.remap through the same maps (opencv-python-headless)."""
+from typing import Any, Callable, List, Tuple, Type
+
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
+
+_F64 = npt.NDArray[np.float64]
 
 cv2 = pytest.importorskip("cv2")
 
 W, H = 1936, 1458
 
 
-def _rays_to_world(cal, xs, ys, k_out):
+def _rays_to_world(cal: etlcal.Calibration, xs: _F64, ys: _F64, k_out: _F64) -> _F64:
     """World points on the rays of output pixels (x, y) of the camera k_out, 300 mm deep."""
     fx, fy, cx, cy = k_out[0, 0], k_out[1, 1], k_out[0, 2], k_out[1, 2]
     z = 300.0
@@ -20,7 +25,7 @@ def _rays_to_world(cal, xs, ys, k_out):
 
 
 @pytest.mark.parametrize("e_com_ma", [80.0, 150.0, 225.0])
-def test_maps_are_the_projection_of_each_output_ray(e_com_ma):
+def test_maps_are_the_projection_of_each_output_ray(e_com_ma: float) -> None:
     cal = etlcal.Calibration.paper_rig()
     map_x, map_y = cal.undistort_maps(e_com_ma)
     assert map_x.dtype == np.float32 and map_y.dtype == np.float32
@@ -33,7 +38,7 @@ def test_maps_are_the_projection_of_each_output_ray(e_com_ma):
     assert err < 1e-3, err
 
 
-def test_a_new_camera_matrix_and_size():
+def test_a_new_camera_matrix_and_size() -> None:
     cal = etlcal.Calibration.paper_rig()
     k_new = np.array([[3900.0, 0.0, 500.0], [0.0, 3950.0, 400.0], [0.0, 0.0, 1.0]])
     map_x, map_y = cal.undistort_maps(120.0, new_camera_matrix=k_new, size=(1000, 800))
@@ -48,13 +53,14 @@ def test_a_new_camera_matrix_and_size():
     assert np.array_equal(lx, map_x)
 
 
-def _smooth_u8():
+def _smooth_u8() -> npt.NDArray[np.uint8]:
     y, x = np.mgrid[0:H, 0:W]
-    return (127.5 + 127.0 * np.sin(x / 13.0) * np.cos(y / 17.0)).astype(np.uint8)
+    image: npt.NDArray[np.uint8] = (127.5 + 127.0 * np.sin(x / 13.0) * np.cos(y / 17.0)).astype(np.uint8)
+    return image
 
 
 @pytest.mark.parametrize("channels", [1, 3])
-def test_cv2_remap_with_our_maps_is_our_undistort_image_u8(channels):
+def test_cv2_remap_with_our_maps_is_our_undistort_image_u8(channels: int) -> None:
     cal = etlcal.Calibration.paper_rig()
     img = _smooth_u8()
     if channels == 3:
@@ -67,7 +73,7 @@ def test_cv2_remap_with_our_maps_is_our_undistort_image_u8(channels):
     assert np.abs(ours.astype(int) - theirs.astype(int)).max() <= 1
 
 
-def test_cv2_remap_with_our_maps_is_our_undistort_image_u16_f32():
+def test_cv2_remap_with_our_maps_is_our_undistort_image_u16_f32() -> None:
     cal = etlcal.Calibration.paper_rig()
     y, x = np.mgrid[0:H, 0:W]
     ramp = (3.0 * x + 5.0 * y).astype(np.float32)
@@ -87,21 +93,23 @@ def test_cv2_remap_with_our_maps_is_our_undistort_image_u16_f32():
     assert np.abs(o16.astype(int) - cv2.remap(img16, map_x, map_y, cv2.INTER_LINEAR).astype(int)).max() <= 257
 
 
-def test_bad_inputs_raise_one_line_errors():
+def test_bad_inputs_raise_one_line_errors() -> None:
     cal = etlcal.Calibration.paper_rig()
-    cases = [
+    cases: List[Tuple[Callable[[], object], Type[etlcal.Error], str]] = [
         (lambda: cal.undistort_maps(150.0, size=(0, 10)), etlcal.InputError, "output width_px"),
         (lambda: cal.undistort_maps(150.0, size=(10, 0)), etlcal.InputError, "output height_px"),
         (lambda: cal.undistort_maps(150.0, size=(-1, 10)), etlcal.InputError, "negative"),
-        (lambda: cal.undistort_maps(150.0, size="big"), etlcal.InputError, "size must be"),
+        (lambda: cal.undistort_maps(150.0, size="big"), etlcal.InputError, "size must be"),  # type: ignore[arg-type]
         (lambda: cal.undistort_maps(150.0, np.eye(2)), etlcal.InputError, "3 x 3"),
         (lambda: cal.undistort_maps(150.0, [[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), etlcal.InputError,
          "no skew"),
         (lambda: cal.undistort_maps(150.0, [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), etlcal.InputError,
          "camera matrix"),
         (lambda: cal.undistort_maps(400.0), etlcal.InputError, "e_com_ma = 400 is outside [75, 230]"),
-        (lambda: cal.undistort_image(np.zeros((H, W), np.float64), 150.0), etlcal.InputError, "dtype float64"),
-        (lambda: cal.undistort_image([[1, 2], [3, 4]], 150.0), etlcal.InputError, "numpy array"),
+        # The run-time checks of what the types already refuse.
+        (lambda: cal.undistort_image(np.zeros((H, W), np.float64), 150.0), etlcal.InputError,  # type: ignore[arg-type]
+         "dtype float64"),
+        (lambda: cal.undistort_image([[1, 2], [3, 4]], 150.0), etlcal.InputError, "numpy array"),  # type: ignore[arg-type]
         (lambda: cal.undistort_image(np.zeros((H, W, 4), np.uint8), 150.0), etlcal.InputError, "shape"),
         (lambda: cal.undistort_image(np.zeros((10, 10), np.uint8), 150.0), etlcal.InputError, "10 x 10 px"),
         (lambda: cal.undistort_image(np.zeros((H, W), np.uint8), 70.0), etlcal.InputError, "e_com_ma = 70 is outside [75, 230]"),

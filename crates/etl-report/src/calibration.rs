@@ -307,7 +307,8 @@ type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 macro_rules! plot {
     ($dir:expr, $name:expr, $size:expr, $d:expr, $text:expr, $draw:path, $files:expr) => {{
         let (name, size): (&str, (u32, u32)) = ($name, $size);
-        let fail = |e: Box<dyn std::error::Error>| Error::InvalidInput(format!("plot {name}: {e}"));
+        // No input of the user's is at fault when a plot fails: `what` names the plot.
+        let fail = |e: Box<dyn std::error::Error>| Error::invalid(format!("plot {name}"), format!("plot {name}: {e}"));
         let mut s = String::new();
         {
             let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
@@ -333,10 +334,10 @@ fn finish_plot(
     files: &mut Vec<PathBuf>,
 ) -> Result<()> {
     let img = image::RgbImage::from_raw(size.0, size.1, buf)
-        .ok_or_else(|| Error::InvalidInput(format!("plot {name}: bitmap size mismatch")))?;
+        .ok_or_else(|| Error::invalid(format!("plot {name}"), format!("plot {name}: bitmap size mismatch")))?;
     let mut bytes = std::io::Cursor::new(vec![]);
     img.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| Error::InvalidInput(format!("plot {name}: PNG encoding: {e}")))?;
+        .map_err(|e| Error::invalid(format!("plot {name}"), format!("plot {name}: PNG encoding: {e}")))?;
     let (p, q) = (dir.join(format!("{name}.png")), dir.join(format!("{name}.svg")));
     write_atomic(&p, bytes.get_ref())?;
     write_atomic(&q, svg.as_bytes())?;

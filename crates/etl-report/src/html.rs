@@ -305,6 +305,9 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
          <ul><li><a href=\"#parameters\">Parameters</a></li>{toc}<li><a href=\"#views\">Views</a></li>\
          <li><a href=\"#provenance\">Provenance</a></li></ul>\n\
          <h2 id=\"parameters\">Parameters (value and one standard deviation)</h2>\n\
+         <p>The model (the paper's Eq. 16-18): fx(E) = kf0x + kf1x E + kf2x E² + kf3x E³ with E = E_com in mA (fy(E) \
+         likewise); the distortion coefficients of Eq. 17 are k1 = a1 w² + a2 w + a3, p1 = a4 w² + a5 w + a6, \
+         p2 = a7 w² + a8 w + a9 with w = 2 / (fx(E) + fy(E)) in 1/px (Eq. 18).</p>\n\
          <p>Std from the covariance of the bundle adjustment (first order). Rows flagged ⚠ have |value| &lt; 2 std: \
          the views do not determine that number (it is consistent with zero). That alone is no fault when the \
          curves below are well determined (a flagged number is usually strongly correlated with another); if a \

@@ -4,6 +4,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::calibration::Data;
+use crate::figure::tick;
 use crate::uncertainty::{correlation, curve_std, curve_values};
 use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 
@@ -88,6 +89,8 @@ where
             .y_desc(p.y_label.as_str())
             .x_labels(6)
             .y_labels(6)
+            .x_label_formatter(&|v| tick(*v, e1 - e0 + 10.0))
+            .y_label_formatter(&|v| tick(*v, hi - lo))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
             .draw()?;
@@ -210,6 +213,7 @@ where
             .disable_x_axis()
             .y_desc(label)
             .y_labels(8)
+            .y_label_formatter(&|v| tick(*v, hi - lo))
             .label_style(("sans-serif", 13))
             .axis_desc_style(("sans-serif", 14))
             .draw()?;

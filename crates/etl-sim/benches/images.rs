@@ -1,4 +1,4 @@
-//! Rendering a 1936 x 1458 board with defocus (target: < 100 ms) and the sharpness
+//! Rendering a 1936 x 1458 board (checkerboard, ChArUco) with defocus (target: < 100 ms) and the sharpness
 //! measures on it (CPBD: < 20 ms; the reference package takes seconds).
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::model::CameraModel;
@@ -12,6 +12,14 @@ fn bench(c: &mut Criterion) {
     let scene = Scene::paper_view(&truth, 150.0, 23.0);
     let opts = RenderOptions { optics: Optics::paper_focus(&truth, 150.0, 2.5), ..RenderOptions::default() };
     c.bench_function("render_1936x1458_defocus", |b| b.iter(|| render(black_box(&scene), &opts).unwrap()));
+    // The same view with the rig's ChArUco board where the checkerboard is (the markers'
+    // cells add edges, and slabs to every square).
+    let charuco = Scene {
+        model: etl_sim::rig::charuco_frame(&truth, 1.5),
+        board: etl_sim::rig::PAPER_CHARUCO.board().unwrap(),
+        ..scene.clone()
+    };
+    c.bench_function("render_1936x1458_charuco_defocus", |b| b.iter(|| render(black_box(&charuco), &opts).unwrap()));
     let img = render(&scene, &opts).unwrap().image.to_dynamic().to_luma8();
     for (name, m) in [("cpbd", Metric::Cpbd), ("tenengrad", Metric::Tenengrad), ("laplacian", Metric::Laplacian)] {
         c.bench_function(&format!("sharpness_{name}_1936x1458"), |b| b.iter(|| sharpness(black_box(&img), m).unwrap()));

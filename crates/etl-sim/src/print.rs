@@ -161,12 +161,13 @@ pub fn raster(board: &Board, dpi: f64, margin_mm: f64) -> Result<Image> {
     let [w_mm, h_mm] = page_mm(board, margin);
     let [w, h] = [w_mm, h_mm].map(|v| (v / pixel_mm).round());
     if !(1.0..=f64::from(MAX_IMAGE_SIDE_PX)).contains(&w) || !(1.0..=f64::from(MAX_IMAGE_SIDE_PX)).contains(&h) {
-        return Err(Error::InvalidInput(format!(
+        let message = format!(
             "a page of {} x {} mm at {} dpi is {w} x {h} px: at most {MAX_IMAGE_SIDE_PX} px a side",
             num(w_mm),
             num(h_mm),
             compact(dpi)
-        )));
+        );
+        return Err(Error::invalid_value("dpi", dpi, message));
     }
     let (w, h) = (w as usize, h as usize);
     // White paper beyond the margin too (the page may end inside the last pixel).
@@ -193,7 +194,7 @@ pub fn encode_png(image: &Image, dpi: f64) -> Result<Vec<u8>> {
     let dpi = etl_formats::check_range("dpi", dpi, DPI_RANGE, "dpi")?;
     let bytes: Vec<u8> = image.data.iter().map(|&v| v.min(255) as u8).collect();
     let mut out = Vec::new();
-    let fail = |e: png::EncodingError| Error::InvalidInput(format!("cannot encode PNG: {e}"));
+    let fail = |e: png::EncodingError| Error::invalid("image", format!("cannot encode PNG: {e}"));
     let mut enc = png::Encoder::new(&mut out, image.width, image.height);
     enc.set_color(png::ColorType::Grayscale);
     enc.set_depth(png::BitDepth::Eight);

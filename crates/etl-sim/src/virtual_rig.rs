@@ -63,9 +63,13 @@ impl<'a> VirtualCamera<'a> {
         let f = self.physics.f_com_mm(e_com_ma)?;
         let inv = 1.0 / f - 1.0 / IMAGE_DISTANCE_MM;
         if !(inv > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "at E_com {e_com_ma} mA the lens (f = {f} mm) cannot focus with the sensor at {IMAGE_DISTANCE_MM} mm"
-            )));
+            return Err(Error::invalid_value(
+                "e_com_ma",
+                e_com_ma,
+                format!(
+                    "at E_com {e_com_ma} mA the lens (f = {f} mm) cannot focus with the sensor at {IMAGE_DISTANCE_MM} mm"
+                ),
+            ));
         }
         Ok(1.0 / inv)
     }
@@ -110,7 +114,7 @@ pub struct VirtualClimate<'a>(pub &'a VirtualLens);
 impl Climate for VirtualClimate<'_> {
     fn set_temperature_c(&mut self, t_c: f64) -> Result<()> {
         if !t_c.is_finite() {
-            return Err(Error::InvalidInput(format!("temperature {t_c} degC is not finite")));
+            return Err(Error::invalid_value("temperature_c", t_c, format!("temperature {t_c} degC is not finite")));
         }
         self.0.set_target_temperature_c(t_c);
         self.0.settle();

@@ -393,7 +393,7 @@ fn bad_input_is_refused() {
                 ..good.clone()
             },
             opts,
-            "inner_corners [2, 5]",
+            "3 x 3",
         ),
         (
             Scene {

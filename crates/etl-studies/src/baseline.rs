@@ -4,8 +4,9 @@
 //! [`etl_calib::baseline::per_setting`] on [`SettingRig::default`]) against the proposed method
 //! (the paper's BA, and errors-in-variables) on the paper rig with the paper's noise model.
 //!
-//! Reported: (a) the calibrated focal length against current (relative error of fx(E) of
-//! each method's curve and of each setting's own Zhang estimate); (b) the PnP error of a
+//! Reported: (a) the calibrated focal length against current (the mean |relative error| of
+//! fx(E) of each method's curve, with its standard error over the trials, and each
+//! setting's own Zhang estimate); (b) the PnP error of a
 //! 2 mm stage move at 100..250 mA by 30 (fresh views at the in-focus stage position, the
 //! same views for every method; 250 mA lies beyond the calibrated 80..225 mA, as in the
 //! paper's experiment).
@@ -16,7 +17,7 @@ use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
 use super::common::{
-    calibrate_pair, md_table, move_observations, pnp_move_error_um, run_jobs, stat, Chart, Figure, Series,
+    calibrate_pair, md_table, move_observations, pct_se, pnp_move_error_um, run_jobs, stat, Chart, Figure, Series,
     StudyOptions, StudyOutput,
 };
 use etl_formats::Result;
@@ -28,6 +29,23 @@ pub const DEFAULT_TRIALS: usize = 200;
 pub const PNP_E_MA: [f64; 6] = [100.0, 130.0, 160.0, 190.0, 220.0, 250.0];
 /// Methods, in column order.
 pub const METHODS: [&str; 3] = ["proposed (paper BA)", "proposed (eiv BA)", "baseline (per-setting Zhang)"];
+
+/// The baseline's Zhang estimate of fx at one of its settings, over the trials.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SettingRow {
+    /// The setting's current, mA.
+    e_com_ma: f64,
+    /// The largest board tilt the depth of field allows there, degrees.
+    tilt_deg: f64,
+    /// Std of the relative error of Zhang's fx.
+    std: f64,
+    /// Largest |relative error|.
+    max: f64,
+    /// Mean |relative error|.
+    mean_abs: f64,
+    /// Standard error of `mean_abs`.
+    mean_abs_se: f64,
+}
 
 /// One trial.
 #[derive(Debug, Clone, PartialEq)]
@@ -106,6 +124,11 @@ impl Baseline {
         (s.mean, s.std)
     }
 
+    /// Standard error of the mean PnP error of method `m` at [`PNP_E_MA`]`[k]`, um.
+    pub fn pnp_se(&self, m: usize, k: usize) -> f64 {
+        stat(&self.trials.iter().map(|t| t.pnp_um[m][k]).collect::<Vec<_>>()).mean_se
+    }
+
     /// Baseline's mean PnP error over the proposed one's at the highest current: with the
     /// paper's BA (`eiv` false) or errors-in-variables.
     pub fn ratio_at_highest(&self, eiv: bool) -> f64 {
@@ -133,22 +156,50 @@ impl Baseline {
         (r, r * rel_var.max(0.0).sqrt())
     }
 
+    /// Per method, at each of [`curve_currents`]: the mean over the trials of |relative
+    /// error of fx(E)| and its standard error (std / sqrt(trials)).
+    pub fn fx_curves(&self) -> Vec<Vec<(f64, f64)>> {
+        let es = curve_currents();
+        (0..3)
+            .map(|m| {
+                (0..es.len())
+                    .map(|i| {
+                        let s = stat(&self.trials.iter().map(|t| t.fx_rel[m][i].abs()).collect::<Vec<_>>());
+                        (s.mean, s.mean_se)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Per method, the mean over the trials of the largest |relative error of fx(E)| over
+    /// [`curve_currents`], and its standard error.
+    pub fn fx_max(&self, m: usize) -> (f64, f64) {
+        let s = stat(
+            &self.trials.iter().map(|t| t.fx_rel[m].iter().fold(0.0f64, |a, v| a.max(v.abs()))).collect::<Vec<_>>(),
+        );
+        (s.mean, s.mean_se)
+    }
+
     /// JSON, markdown and plots.
     pub fn output(&self) -> StudyOutput {
         let es = curve_currents();
-        let mean_abs = |m: usize| -> Vec<f64> {
-            (0..es.len())
-                .map(|i| stat(&self.trials.iter().map(|t| t.fx_rel[m][i].abs()).collect::<Vec<_>>()).mean)
-                .collect()
-        };
-        let curves: Vec<Vec<f64>> = (0..3).map(mean_abs).collect();
+        let curves = self.fx_curves();
         let settings: Vec<(f64, f64)> = self.trials.iter().flat_map(|t| t.setting_fx_rel.iter().copied()).collect();
         let mut setting_rows = vec![];
         for &(e, tilt) in &self.tilt_limit_deg {
             let at: Vec<f64> = settings.iter().filter(|s| (s.0 - e).abs() < 1.0).map(|s| s.1).collect();
             let s = stat(&at);
+            let abs = stat(&at.iter().map(|v| v.abs()).collect::<Vec<_>>());
             let max = at.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            setting_rows.push((e, tilt, s.std, max));
+            setting_rows.push(SettingRow {
+                e_com_ma: e,
+                tilt_deg: tilt,
+                std: s.std,
+                max,
+                mean_abs: abs.mean,
+                mean_abs_se: abs.mean_se,
+            });
         }
         let pnp_rows: Vec<Vec<String>> = PNP_E_MA
             .iter()
@@ -168,11 +219,15 @@ impl Baseline {
         let j = json!({
             "trials": self.trials.len(),
             "failures": self.failures,
-            "settings": setting_rows.iter().map(|r| json!({"e_com_ma": r.0, "tilt_limit_deg": r.1,
-                "zhang_fx_rel_std": r.2, "zhang_fx_max_abs_rel_err": r.3})).collect::<Vec<_>>(),
+            "settings": setting_rows.iter().map(|r| json!({"e_com_ma": r.e_com_ma, "tilt_limit_deg": r.tilt_deg,
+                "zhang_fx_rel_std": r.std, "zhang_fx_max_abs_rel_err": r.max,
+                "zhang_fx_mean_abs_rel_err": r.mean_abs, "zhang_fx_mean_abs_rel_err_se": r.mean_abs_se}))
+                .collect::<Vec<_>>(),
             "fx_curve": es.iter().enumerate().map(|(i, e)| json!({"e_com_ma": e,
-                "paper_ba_mean_abs_rel_err": curves[0][i], "eiv_ba_mean_abs_rel_err": curves[1][i],
-                "baseline_mean_abs_rel_err": curves[2][i]})).collect::<Vec<_>>(),
+                "paper_ba_mean_abs_rel_err": curves[0][i].0, "eiv_ba_mean_abs_rel_err": curves[1][i].0,
+                "baseline_mean_abs_rel_err": curves[2][i].0,
+                "paper_ba_mean_abs_rel_err_se": curves[0][i].1, "eiv_ba_mean_abs_rel_err_se": curves[1][i].1,
+                "baseline_mean_abs_rel_err_se": curves[2][i].1})).collect::<Vec<_>>(),
             "pnp": PNP_E_MA.iter().enumerate().map(|(k, e)| json!({"e_com_ma": e,
                 "paper_ba_um": self.pnp(0, k).0, "paper_ba_std_um": self.pnp(0, k).1,
                 "eiv_ba_um": self.pnp(1, k).0, "eiv_ba_std_um": self.pnp(1, k).1,
@@ -185,14 +240,13 @@ impl Baseline {
             "checks": {"proposed_3x_better_at_250ma": ratio >= 3.0, "eiv_3x_better_at_250ma": ratio_eiv >= 3.0,
                 "default_3x_better_at_250ma": ratio_eiv >= 3.0},
         });
-        let fig = self.figure(&es, &curves, &settings);
+        let fig = self.figure(&es, &curves, &setting_rows);
         StudyOutput { name: "baseline".into(), json: j, markdown: md, figures: vec![fig] }
     }
 
-    /// The markdown summary: the settings' Zhang errors (rows `(E, tilt limit, rel. std,
-    /// max |rel. err|)`), the curves' errors, the PnP table and the ratios at 250 mA
-    /// (`[paper, its se, eiv, its se]`).
-    fn markdown(&self, setting_rows: &[(f64, f64, f64, f64)], pnp_rows: &[Vec<String>], ratios: [f64; 4]) -> String {
+    /// The markdown summary: the settings' Zhang errors, the curves' errors, the PnP table
+    /// and the ratios at 250 mA (`[paper, its se, eiv, its se]`).
+    fn markdown(&self, setting_rows: &[SettingRow], pnp_rows: &[Vec<String>], ratios: [f64; 4]) -> String {
         let [ratio, ratio_se, ratio_eiv, ratio_eiv_se] = ratios;
         format!(
             "# Fig. 12: the baseline (per-setting Zhang + cubic) against the proposed method\n\n\
@@ -204,30 +258,26 @@ impl Baseline {
             self.trials.len(),
             self.failures.len(),
             md_table(
-                &["E (mA)", "tilt limit (deg)", "Zhang fx rel. std", "Zhang fx max |rel. err|"],
+                &["E (mA)", "tilt limit (deg)", "Zhang fx rel. std", "Zhang fx max |rel. err|", "Zhang fx mean |rel. err|"],
                 &setting_rows
                     .iter()
                     .map(|r| {
                         vec![
-                            format!("{}", r.0),
-                            format!("{:.1}", r.1),
-                            format!("{:.3} %", 100.0 * r.2),
-                            format!("{:.3} %", 100.0 * r.3),
+                            format!("{}", r.e_com_ma),
+                            format!("{:.1}", r.tilt_deg),
+                            format!("{:.3} %", 100.0 * r.std),
+                            format!("{:.3} %", 100.0 * r.max),
+                            pct_se(r.mean_abs, r.mean_abs_se),
                         ]
                     })
                     .collect::<Vec<_>>()
             ),
             md_table(
-                &["curve", "mean max over 80..250 mA of |rel. err fx(E)|"],
+                &["curve", "max over 80..250 mA of |rel. err fx(E)|, mean ± s.e. over trials"],
                 &(0..3)
                     .map(|m| {
-                        let max = self
-                            .trials
-                            .iter()
-                            .map(|t| t.fx_rel[m].iter().fold(0.0f64, |a, v| a.max(v.abs())))
-                            .sum::<f64>()
-                            / self.trials.len().max(1) as f64;
-                        vec![METHODS[m].to_string(), format!("{:.3} %", 100.0 * max)]
+                        let (max, se) = self.fx_max(m);
+                        vec![METHODS[m].to_string(), pct_se(max, se)]
                     })
                     .collect::<Vec<_>>()
             ),
@@ -240,15 +290,15 @@ impl Baseline {
     }
 
     /// Fig. 12: (a) the mean |relative error| of fx(E) per method at the currents `es`
-    /// (`curves[m]`) with each setting's Zhang fx (`settings`: `(E, rel. err)`), (b) the PnP
-    /// error of a 2 mm move per method.
-    fn figure(&self, es: &[f64], curves: &[Vec<f64>], settings: &[(f64, f64)]) -> Figure {
+    /// (`curves[m]`: (mean, standard error)) with each setting's own Zhang fx (its mean
+    /// |relative error| and standard error), (b) the PnP error of a 2 mm move per method.
+    fn figure(&self, es: &[f64], curves: &[Vec<(f64, f64)>], settings: &[SettingRow]) -> Figure {
         Figure {
             name: "baseline".into(),
             grid: (1, 2),
             panels: vec![
                 Chart {
-                    title: "(a) |relative error of fx(E)|, mean".into(),
+                    title: "(a) |relative error of fx(E)|, mean ± 1 s.e.".into(),
                     x_label: "E_com (mA)".into(),
                     y_label: "|rel. error| (%)".into(),
                     log_y: false,
@@ -257,15 +307,18 @@ impl Baseline {
                             Series::line(
                                 METHODS[m],
                                 m,
-                                es.iter().zip(&curves[m]).map(|(e, v)| (*e, 100.0 * v)).collect(),
+                                es.iter().zip(&curves[m]).map(|(e, v)| (*e, 100.0 * v.0)).collect(),
                             )
+                            .with_se(curves[m].iter().map(|v| 100.0 * v.1).collect())
                         })
                         .chain([Series::scatter(
-                            "each setting's Zhang fx",
+                            "each setting's own Zhang fx",
                             3,
-                            settings.iter().map(|s| (s.0, 100.0 * s.1.abs())).collect(),
-                        )])
+                            settings.iter().map(|s| (s.e_com_ma, 100.0 * s.mean_abs)).collect(),
+                        )
+                        .with_se(settings.iter().map(|s| 100.0 * s.mean_abs_se).collect())])
                         .collect(),
+                    x_names: vec![],
                 },
                 Chart {
                     title: "(b) PnP error of a 2 mm move, mean ± 1 s.e.".into(),
@@ -280,13 +333,10 @@ impl Baseline {
                                 PNP_E_MA.iter().enumerate().map(|(k, e)| (*e, self.pnp(m, k).0)).collect(),
                             )
                             // One standard error of the mean: the trials' std / sqrt(trials).
-                            .with_se(
-                                (0..PNP_E_MA.len())
-                                    .map(|k| self.pnp(m, k).1 / (self.trials.len().max(1) as f64).sqrt())
-                                    .collect(),
-                            )
+                            .with_se((0..PNP_E_MA.len()).map(|k| self.pnp_se(m, k)).collect())
                         })
                         .collect(),
+                    x_names: vec![],
                 },
             ],
         }

@@ -13,7 +13,9 @@
 //!
 //! Every trial is a full calibration from the linear initialisation, with the A0 error of the
 //! noise model (it moves the start, not the optimum). The observed std is uncertain by
-//! about 1 / sqrt(2 (trials - 1)) relative (4 % at 300 trials).
+//! about 1 / sqrt(2 (trials - 1)) relative (4 % at 300 trials) for Gaussian estimates; each
+//! is given with its own standard error ([`Stat::std_se`], from the estimates' fourth
+//! moment), and each efficiency with the one that implies.
 
 use etl_core::calib::crlb::{crlb_covariance, crlb_covariance_eiv};
 use etl_core::calib::jacobian::to_params;
@@ -54,16 +56,24 @@ pub struct ParamRow {
     pub crlb_std: f64,
     /// Observed std of the paper's BA, pixel noise alone.
     pub mc_std: f64,
+    /// Standard error of `mc_std` (over the trials).
+    pub mc_std_se: f64,
     /// crlb_std / mc_std.
     pub efficiency: f64,
+    /// Standard error of `efficiency`: efficiency x mc_std_se / mc_std.
+    pub efficiency_se: f64,
     /// Mean error of the paper's BA (bias), pixel noise alone.
     pub mc_bias: f64,
     /// CRLB std with the per-view unknowns.
     pub eiv_crlb_std: f64,
     /// Observed std of the errors-in-variables BA under the per-view errors.
     pub eiv_mc_std: f64,
+    /// Standard error of `eiv_mc_std`.
+    pub eiv_mc_std_se: f64,
     /// eiv_crlb_std / eiv_mc_std.
     pub eiv_efficiency: f64,
+    /// Standard error of `eiv_efficiency`.
+    pub eiv_efficiency_se: f64,
 }
 
 /// fx(E) at one current.
@@ -77,10 +87,14 @@ pub struct CurveRow {
     pub crlb_std_px: f64,
     /// Observed std, px.
     pub mc_std_px: f64,
+    /// Standard error of `mc_std_px`, px.
+    pub mc_std_se_px: f64,
     /// With the per-view unknowns: bound, px.
     pub eiv_crlb_std_px: f64,
     /// With the per-view unknowns: observed std of the errors-in-variables BA, px.
     pub eiv_mc_std_px: f64,
+    /// Standard error of `eiv_mc_std_px`, px.
+    pub eiv_mc_std_se_px: f64,
 }
 
 /// The result of `etlcal study crlb`.
@@ -128,7 +142,7 @@ pub fn crlb(opts: &StudyOptions) -> Result<Crlb> {
         }
     }
     if est.iter().any(|e| e.len() < 2) {
-        return Err(Error::InvalidInput("the CRLB study needs at least 2 trials that calibrate".into()));
+        return Err(Error::invalid("trials", "the CRLB study needs at least 2 trials that calibrate"));
     }
     let x = truth_params();
     let p: [Vec<[f64; PARAMS]>; 2] = [est[0].iter().map(to_params).collect(), est[1].iter().map(to_params).collect()];
@@ -142,23 +156,33 @@ pub fn crlb(opts: &StudyOptions) -> Result<Crlb> {
                 truth: x[i],
                 crlb_std: cs[i],
                 mc_std: s0.std,
+                mc_std_se: s0.std_se,
                 efficiency: cs[i] / s0.std,
+                efficiency_se: cs[i] / s0.std * s0.std_se / s0.std,
                 mc_bias: s0.mean - x[i],
                 eiv_crlb_std: fs[i],
                 eiv_mc_std: s1.std,
+                eiv_mc_std_se: s1.std_se,
                 eiv_efficiency: fs[i] / s1.std,
+                eiv_efficiency_se: fs[i] / s1.std * s1.std_se / s1.std,
             }
         })
         .collect();
     let curve = CURVE_E_MA
         .iter()
-        .map(|&e| CurveRow {
-            e_com_ma: e,
-            fx_px: truth.focal_lengths(e).0,
-            crlb_std_px: fx_std_px(&plain, e),
-            mc_std_px: stat(&est[0].iter().map(|m| m.focal_lengths(e).0).collect::<Vec<_>>()).std,
-            eiv_crlb_std_px: fx_std_px(&full, e),
-            eiv_mc_std_px: stat(&est[1].iter().map(|m| m.focal_lengths(e).0).collect::<Vec<_>>()).std,
+        .map(|&e| {
+            let fx = |k: usize| stat(&est[k].iter().map(|m| m.focal_lengths(e).0).collect::<Vec<_>>());
+            let (s0, s1) = (fx(0), fx(1));
+            CurveRow {
+                e_com_ma: e,
+                fx_px: truth.focal_lengths(e).0,
+                crlb_std_px: fx_std_px(&plain, e),
+                mc_std_px: s0.std,
+                mc_std_se_px: s0.std_se,
+                eiv_crlb_std_px: fx_std_px(&full, e),
+                eiv_mc_std_px: s1.std,
+                eiv_mc_std_se_px: s1.std_se,
+            }
         })
         .collect();
     Ok(Crlb { trials: [est[0].len(), est[1].len()], failures, points, parameters, curve })
@@ -200,10 +224,10 @@ impl Crlb {
                     format!("{:+.4e}", p.truth),
                     sci(p.crlb_std),
                     sci(p.mc_std),
-                    format!("{:.3}", p.efficiency),
+                    format!("{:.3} ± {:.3}", p.efficiency, p.efficiency_se),
                     sci(p.eiv_crlb_std),
                     sci(p.eiv_mc_std),
-                    format!("{:.3}", p.eiv_efficiency),
+                    format!("{:.3} ± {:.3}", p.eiv_efficiency, p.eiv_efficiency_se),
                 ]
             })
             .collect();
@@ -214,10 +238,10 @@ impl Crlb {
                 vec![
                     format!("{}", c.e_com_ma),
                     format!("{:.3}", c.crlb_std_px),
-                    format!("{:.3}", c.mc_std_px),
+                    format!("{:.3} ± {:.3}", c.mc_std_px, c.mc_std_se_px),
                     format!("{:.3}", c.crlb_std_px / c.mc_std_px),
                     format!("{:.3}", c.eiv_crlb_std_px),
-                    format!("{:.3}", c.eiv_mc_std_px),
+                    format!("{:.3} ± {:.3}", c.eiv_mc_std_px, c.eiv_mc_std_se_px),
                     format!("{:.3}", c.eiv_crlb_std_px / c.eiv_mc_std_px),
                 ]
             })
@@ -226,7 +250,8 @@ impl Crlb {
             "# Cramer-Rao bound and statistical efficiency at the paper rig\n\n{} points, all 25 numbers refined, \
              {} + {} trials ({} failed). Pixel only: 0.2 px, the paper's BA. Per-view errors: 10 um on Z_W and 0.4 mA \
              on E per view with 0.2 px, the errors-in-variables BA and the bound with dZ_j, dE_j unknown under their \
-             priors. Efficiency = bound / observed std (the observed std is uncertain by about {:.0} %).\n\n{}\n\
+             priors. Efficiency = bound / observed std, ± one standard error from the trials (the observed std is \
+             uncertain by about {:.0} % for Gaussian estimates).\n\n{}\n\
              Smallest efficiency (pixel only): {:.3} (the acceptance asks at least 0.9: {}).\n\n## fx(E) (px)\n\n{}",
             self.points,
             self.trials[0],
@@ -255,8 +280,9 @@ impl Crlb {
         )
     }
 
-    /// The figure: (a) the efficiency of every parameter, (b) the std of fx(E), bound and
-    /// Monte Carlo, both estimators.
+    /// The figure: (a) the efficiency of every parameter (named on the x axis), (b) the std of fx(E), bound and
+    /// Monte Carlo, both estimators; the Monte Carlo numbers with error bars of one
+    /// standard error.
     fn figure(&self) -> Figure {
         let idx: Vec<f64> = (0..PARAMS).map(|i| i as f64).collect();
         Figure {
@@ -264,27 +290,32 @@ impl Crlb {
             grid: (1, 2),
             panels: vec![
                 Chart {
-                    title: "efficiency = CRLB std / MC std (x: om1..a9)".into(),
-                    x_label: "parameter index".into(),
+                    title: "efficiency = CRLB std / MC std, ± 1 s.e.".into(),
+                    x_label: "parameter".into(),
                     y_label: "efficiency".into(),
                     log_y: false,
                     series: vec![
-                        Series::line(
+                        // Markers only (the parameters are categories), the two estimators
+                        // side by side at each.
+                        Series::scatter(
                             "paper BA, pixel noise",
                             0,
-                            idx.iter().zip(&self.parameters).map(|(i, p)| (*i, p.efficiency)).collect(),
-                        ),
-                        Series::line(
+                            idx.iter().zip(&self.parameters).map(|(i, p)| (*i - 0.15, p.efficiency)).collect(),
+                        )
+                        .with_se(self.parameters.iter().map(|p| p.efficiency_se).collect()),
+                        Series::scatter(
                             "eiv BA, per-view errors",
                             1,
-                            idx.iter().zip(&self.parameters).map(|(i, p)| (*i, p.eiv_efficiency)).collect(),
-                        ),
-                        Series::reference("1", 7, vec![(0.0, 1.0), (24.0, 1.0)]),
-                        Series::reference("0.9", 2, vec![(0.0, 0.9), (24.0, 0.9)]),
+                            idx.iter().zip(&self.parameters).map(|(i, p)| (*i + 0.15, p.eiv_efficiency)).collect(),
+                        )
+                        .with_se(self.parameters.iter().map(|p| p.eiv_efficiency_se).collect()),
+                        Series::reference("1: efficient", 7, vec![(0.0, 1.0), (24.0, 1.0)]),
+                        Series::reference("0.9: the acceptance", 2, vec![(0.0, 0.9), (24.0, 0.9)]),
                     ],
+                    x_names: PARAM_NAMES.iter().map(|n| n.to_string()).collect(),
                 },
                 Chart {
-                    title: "std of fx(E): bound and Monte Carlo".into(),
+                    title: "std of fx(E): bound and Monte Carlo ± 1 s.e.".into(),
                     x_label: "E_com (mA)".into(),
                     y_label: "std (px)".into(),
                     log_y: false,
@@ -294,14 +325,17 @@ impl Crlb {
                             0,
                             self.curve.iter().map(|c| (c.e_com_ma, c.crlb_std_px)).collect(),
                         ),
-                        Series::line("paper BA", 0, self.curve.iter().map(|c| (c.e_com_ma, c.mc_std_px)).collect()),
+                        Series::line("paper BA", 0, self.curve.iter().map(|c| (c.e_com_ma, c.mc_std_px)).collect())
+                            .with_se(self.curve.iter().map(|c| c.mc_std_se_px).collect()),
                         Series::reference(
                             "CRLB, per-view errors",
                             1,
                             self.curve.iter().map(|c| (c.e_com_ma, c.eiv_crlb_std_px)).collect(),
                         ),
-                        Series::line("eiv BA", 1, self.curve.iter().map(|c| (c.e_com_ma, c.eiv_mc_std_px)).collect()),
+                        Series::line("eiv BA", 1, self.curve.iter().map(|c| (c.e_com_ma, c.eiv_mc_std_px)).collect())
+                            .with_se(self.curve.iter().map(|c| c.eiv_mc_std_se_px).collect()),
                     ],
+                    x_names: vec![],
                 },
             ],
         }

@@ -259,7 +259,8 @@ type BoardPixelPairs = Vec<([f64; 2], [f64; 2])>;
 fn rendered_move(truth: &CameraModel, e_ma: f64, z_mm: f64, seed: u64) -> Result<(BoardPixelPairs, BoardPixelPairs)> {
     use etl_sim::render::{render, Optics, RenderOptions, Scene};
     let board = etl_sim::rig::PAPER_CHARUCO.board()?;
-    let charuco = board.as_charuco().ok_or_else(|| Error::InvalidInput("the rig's board is not ChArUco".into()))?;
+    // The demo's fixed validation rig, not an input of the user's: `what` names it.
+    let charuco = board.as_charuco().ok_or_else(|| Error::invalid("validation", "the rig's board is not ChArUco"))?;
     let options = ImageOptions::default();
     let mut out = vec![];
     for (n, z) in [z_mm, z_mm + 2.0].into_iter().enumerate() {

@@ -43,7 +43,7 @@ pub fn fig5() -> Result<Fig5> {
     let mut fit = PolyFit::new(3, RANGE_MA)?;
     let mut f = Vec::with_capacity(es.len());
     for &e in &es {
-        let v = lens.f_com_mm(e).map_err(|err| Error::InvalidInput(format!("at E = {e} mA: {err}")))?;
+        let v = lens.f_com_mm(e).map_err(|err| Error::invalid_value("e_ma", e, format!("at E = {e} mA: {err}")))?;
         fit.add(e, v)?;
         f.push((e, v));
     }
@@ -96,6 +96,7 @@ impl Fig5 {
                         ),
                         Series::scatter("paper (cubic)", 1, vec![(3.0, PAPER_CUBIC_RMSE_MM)]),
                     ],
+                    x_names: vec![],
                 },
                 Chart {
                     title: "(b) residual of the cubic".into(),
@@ -107,6 +108,7 @@ impl Fig5 {
                         0,
                         self.cubic_residual_mm.iter().map(|&(e, r)| (e, 1000.0 * r)).collect(),
                     )],
+                    x_names: vec![],
                 },
             ],
         };

@@ -301,7 +301,7 @@ pub fn fig6_of(studies: &[Fig6Study], opts: &StudyOptions) -> Result<Fig6> {
                 level,
                 paper: summarise(&at, |o| (o.paper, o.pnp_um[0], o.iterations[0])),
                 eiv: summarise(&at, |o| (o.eiv, o.pnp_um[1], o.iterations[1])),
-                bound: bounds.next().ok_or_else(|| etl_formats::Error::InvalidInput("fig6: missing bound".into()))?,
+                bound: bounds.next().ok_or_else(|| etl_formats::Error::invalid("fig6", "fig6: missing bound"))?,
             });
         }
         result.push((*study, levels));
@@ -474,6 +474,7 @@ impl Fig6 {
                 y_label: "mean relative error".into(),
                 log_y: true,
                 series,
+                x_names: vec![],
             }
         };
         let curve = Chart {
@@ -497,6 +498,7 @@ impl Fig6 {
                     levels.iter().map(|l| (l.level, l.bound.fx_curve_rel_pixel_only)).collect(),
                 ),
             ],
+            x_names: vec![],
         };
         let pnp = Chart {
             title: "PnP error of a 2 mm move at 225 mA, mean ± 1 s.e.".into(),
@@ -509,6 +511,7 @@ impl Fig6 {
                 Series::line("eiv BA", 1, levels.iter().map(|l| (l.level, l.eiv.pnp_um)).collect())
                     .with_se(levels.iter().map(|l| l.eiv.pnp_um_se).collect()),
             ],
+            x_names: vec![],
         };
         Figure {
             name: format!("fig6_{}", study.key()),

@@ -36,26 +36,30 @@ pub struct ModelRow {
 pub fn currents(from: f64, to: f64, step: f64) -> Result<Vec<f64>> {
     for (name, v) in [("--from", from), ("--to", to), ("--step", step)] {
         if !v.is_finite() {
-            return Err(Error::InvalidInput(format!("{name} = {v} is not a finite number of mA")));
+            return Err(Error::invalid_value(name, v, format!("{name} = {v} is not a finite number of mA")));
         }
     }
     if step <= 0.0 {
-        return Err(Error::InvalidInput(format!("--step = {step} must be positive")));
+        return Err(Error::invalid_value("--step", step, format!("--step = {step} must be positive")));
     }
     if from > to {
-        return Err(Error::InvalidInput(format!("--from = {from} is above --to = {to}")));
+        return Err(Error::invalid_value("--from", from, format!("--from = {from} is above --to = {to}")));
     }
     // A hair of slack so that 0..260 by 0.1 includes 260.
     let n = ((to - from) / step * (1.0 + 1e-12)).floor();
     if n >= MAX_ROWS as f64 {
-        return Err(Error::InvalidInput(format!("[--from, --to] / --step gives more than {MAX_ROWS} currents")));
+        return Err(Error::invalid_value(
+            "--step",
+            step,
+            format!("[--from, --to] / --step gives more than {MAX_ROWS} currents"),
+        ));
     }
     Ok((0..=n as usize).map(|i| (from + i as f64 * step).min(to)).collect())
 }
 
 /// The table row at current `e_ma` for the paper rig and the paper's lens physics.
 pub fn model_row(cam: &CameraModel, lens: &LensPhysics, e_ma: f64) -> Result<ModelRow> {
-    let at = |e: etl_core::Error| Error::InvalidInput(format!("at E = {e_ma} mA: {e}"));
+    let at = |e: etl_core::Error| Error::invalid_value("e_ma", e_ma, format!("at E = {e_ma} mA: {e}"));
     let k = cam.intrinsics(e_ma).map_err(at)?;
     let d = cam.distortion(e_ma).map_err(at)?;
     Ok(ModelRow {
@@ -74,11 +78,11 @@ pub fn model_row(cam: &CameraModel, lens: &LensPhysics, e_ma: f64) -> Result<Mod
 /// `currents` (Fig. 5). Needs at least two distinct currents, and 7 for degree 6.
 pub fn fit_rmse_mm(lens: &LensPhysics, currents: &[f64]) -> Result<[f64; 6]> {
     let (Some(&lo), Some(&hi)) = (currents.first(), currents.last()) else {
-        return Err(Error::InvalidInput("no currents to fit".into()));
+        return Err(Error::invalid("currents", "no currents to fit"));
     };
     let mut values = Vec::with_capacity(currents.len());
     for &e in currents {
-        let f = lens.f_com_mm(e).map_err(|err| Error::InvalidInput(format!("at E = {e} mA: {err}")))?;
+        let f = lens.f_com_mm(e).map_err(|err| Error::invalid_value("currents", e, format!("at E = {e} mA: {err}")))?;
         values.push((e, f));
     }
     let mut out = [0.0; 6];

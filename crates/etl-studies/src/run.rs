@@ -38,7 +38,7 @@ impl Study {
     pub fn from_name(name: &str) -> Result<Study> {
         Study::ALL.into_iter().find(|s| s.name() == name).ok_or_else(|| {
             let names: Vec<&str> = Study::ALL.iter().map(|s| s.name()).collect();
-            Error::InvalidInput(format!("no study named {name:?} (one of {})", names.join(", ")))
+            Error::invalid_value("study", name, format!("no study named {name:?} (one of {})", names.join(", ")))
         })
     }
 

@@ -11,6 +11,11 @@
 //! paper's BA stopped after 5 LM iterations is within 0.05 standard deviations (its own
 //! formal std) of its minimum in every parameter, and its RMS within 1e-4 relative.
 //!
+//! The figure shows k1, p1, p2 against the current: the truth, the first 6..9 views of the
+//! first data set and, over every data set, the mean of the 84 six-view subsets with its
+//! standard error over the data sets (error bars) and the subsets' spread (± 1 std within a
+//! data set, root mean square over the data sets: a band).
+//!
 //! Reprojection error is given per point (sqrt(mean |e|^2), what `etlcal calibrate`
 //! reports) and per coordinate (that divided by sqrt 2: the estimate of the pixel noise's
 //! standard deviation, comparable to the noise level).
@@ -218,7 +223,11 @@ impl Subsets {
              it is within {:.2e} formal std of its minimum in every parameter and {:.1e} of its RMS (converged within 5 \
              iterations by the criterion above, as the acceptance asks: {}). Per-coordinate RMS after BA: paper's BA {:.4} .. {:.4} \
              px (the per-view Z_W and E errors stay in its residuals), errors-in-variables {:.4} .. {:.4} px, against \
-             the pixel noise {} px (within 10 %: {}). The paper: 2-3 iterations (its Table 1 shows 5), 0.4 px -> 0.23 px.\n",
+             the pixel noise {} px (within 10 %: {}). The paper: 2-3 iterations (its Table 1 shows 5), 0.4 px -> 0.23 px.\n\n\
+             Figure `subsets_distortion` (the paper's Fig. 11): k1, p1, p2 against E_com; the truth, the first 6..9 views \
+             of data set 1, and over the {} data sets the mean of the 84 six-view subsets ± one standard error over the \
+             data sets (bars) with the subsets' spread, ± 1 std within a data set (band; `distortion_band` in \
+             subsets.json).\n",
             NINE_VIEWS.iter().map(|i| (i + 1).to_string()).collect::<Vec<_>>().join(", "),
             self.trials,
             n_all + self.failures.len(),
@@ -235,6 +244,7 @@ impl Subsets {
             ehi,
             self.noise_px,
             if rms_ok { "yes" } else { "**no**" },
+            self.fits.iter().filter(|f| f.len() > 4).count(),
         );
         let param_obj = |p: &[f64; PARAMS]| -> Value {
             Value::Object(PARAM_NAMES.iter().zip(p).map(|(n, v)| (n.to_string(), json!(v))).collect())
@@ -258,46 +268,101 @@ impl Subsets {
                 "rms_per_coordinate_px_min": lo, "rms_per_coordinate_px_max": hi,
                 "eiv_rms_per_coordinate_px_min": elo, "eiv_rms_per_coordinate_px_max": ehi, "noise_px": self.noise_px},
             "checks": {"converged_within_5_iterations": iters_ok, "eiv_rms_within_10_percent_of_noise": rms_ok},
+            "distortion_band": self.band_json(),
         });
-        StudyOutput { name: "subsets".into(), json: j, markdown: md, figures: vec![self.figure(&numbers, &six)] }
+        StudyOutput { name: "subsets".into(), json: j, markdown: md, figures: vec![self.figure(&numbers)] }
     }
 
-    fn figure(&self, numbers: &[&SubsetFit], six: &[&SubsetFit]) -> Figure {
-        let es: Vec<f64> = (0..=29).map(|k| PAPER_E_COM_MA[0] + 5.0 * k as f64).collect();
-        let coef = |p: &[f64; PARAMS], e: f64, k: usize| -> f64 {
-            let m: CameraModel = etl_core::calib::jacobian::from_params(p);
-            m.distortion(e).map_or(f64::NAN, |d| [d.k1, d.p1, d.p2][k])
-        };
-        let names = ["k1 (1/px^2) x 1e9", "p1 (1/px) x 1e6", "p2 (1/px) x 1e6"];
-        let scale = [1e9, 1e6, 1e6];
+    /// The distortion coefficient `k` (0: k1, 1: p1, 2: p2, in the figure's units: x 1e9,
+    /// x 1e6, x 1e6) of a parameter vector at `e_ma` (NaN where the model cannot say).
+    fn coefficient(p: &[f64; PARAMS], e_ma: f64, k: usize) -> f64 {
+        let m: CameraModel = etl_core::calib::jacobian::from_params(p);
+        m.distortion(e_ma).map_or(f64::NAN, |d| [d.k1, d.p1, d.p2][k]) * BAND_SCALE[k]
+    }
+
+    /// The six-view subsets' band of coefficient `k` ([`Self::coefficient`]) at each of
+    /// [`band_currents`]: (mean over the data sets of each data set's subset mean, its
+    /// standard error over the data sets (NaN below 2 data sets), the root mean square over
+    /// the data sets of the std over a data set's subsets).
+    pub fn band(&self, k: usize) -> Vec<(f64, f64, f64)> {
+        band_currents()
+            .iter()
+            .map(|&e| {
+                let per_set: Vec<(f64, f64)> = self
+                    .fits
+                    .iter()
+                    .map(|fits| {
+                        let s =
+                            stat(&fits.iter().skip(4).map(|f| Self::coefficient(&f.params, e, k)).collect::<Vec<_>>());
+                        (s.mean, s.std)
+                    })
+                    .filter(|(m, _)| m.is_finite())
+                    .collect();
+                let means = stat(&per_set.iter().map(|p| p.0).collect::<Vec<_>>());
+                let spread = (per_set.iter().map(|p| p.1 * p.1).sum::<f64>() / per_set.len().max(1) as f64).sqrt();
+                (means.mean, means.mean_se, spread)
+            })
+            .collect()
+    }
+
+    /// The figure's band ([`Self::band`]) of k1, p1, p2 as JSON: per coefficient its name,
+    /// unit, the currents and the means, their standard errors and the spreads.
+    fn band_json(&self) -> Value {
+        let bands = (0..3).map(|k| {
+            let band = self.band(k);
+            json!({"coefficient": BAND_NAMES[k], "unit": BAND_UNITS[k], "e_com_ma": band_currents(),
+                "mean": band.iter().map(|b| b.0).collect::<Vec<_>>(),
+                "mean_se": band.iter().map(|b| b.1).collect::<Vec<_>>(),
+                "spread_std": band.iter().map(|b| b.2).collect::<Vec<_>>()})
+        });
+        Value::Array(bands.collect())
+    }
+
+    /// The paper's Fig. 11: k1, p1, p2 against the current, one panel each (the module
+    /// doc says what is drawn); `numbers`: the first 6..9 views of data set 1.
+    fn figure(&self, numbers: &[&SubsetFit]) -> Figure {
+        let es = band_currents();
         let truth = truth_params();
+        let sets = self.fits.iter().filter(|f| f.len() > 4).count();
         let panels = (0..3)
             .map(|k| {
-                let mut series = vec![Series::reference(
-                    "truth",
-                    7,
-                    es.iter().map(|&e| (e, scale[k] * coef(&truth, e, k))).collect(),
-                )];
+                let band = self.band(k);
+                let mean: Vec<(f64, f64)> = es.iter().zip(&band).map(|(e, b)| (*e, b.0)).collect();
+                let mut series = vec![
+                    Series::band("subsets: ± 1 std (spread)", 4, mean.clone(), band.iter().map(|b| b.2).collect()),
+                    Series::reference("truth", 7, es.iter().map(|&e| (e, Self::coefficient(&truth, e, k))).collect()),
+                ];
                 for (f, n) in numbers.iter().zip(6..) {
                     series.push(Series::reference(
-                        format!("first {n}"),
+                        format!("first {n} views (set 1)"),
                         n - 6,
-                        es.iter().map(|&e| (e, scale[k] * coef(&f.params, e, k))).collect(),
+                        es.iter().map(|&e| (e, Self::coefficient(&f.params, e, k))).collect(),
                     ));
                 }
-                let band: Vec<(f64, f64, f64)> = es
-                    .iter()
-                    .map(|&e| {
-                        let s = stat(&six.iter().map(|f| scale[k] * coef(&f.params, e, k)).collect::<Vec<_>>());
-                        (e, s.mean, s.std)
-                    })
-                    .collect();
-                series.push(Series::line("84 subsets: mean", 4, band.iter().map(|b| (b.0, b.1)).collect()));
-                series.push(Series::reference("mean + std", 4, band.iter().map(|b| (b.0, b.1 + b.2)).collect()));
-                series.push(Series::reference("mean - std", 4, band.iter().map(|b| (b.0, b.1 - b.2)).collect()));
-                Chart { title: names[k].into(), x_label: "E_com (mA)".into(), y_label: "".into(), log_y: false, series }
+                series.push(
+                    Series::line(format!("subsets: mean ± 1 s.e. ({sets} sets)"), 4, mean)
+                        .with_se(band.iter().map(|b| b.1).collect()),
+                );
+                Chart {
+                    title: format!("{}(E): 84 six-view subsets of 9 views, the first 6..9, the truth", BAND_NAMES[k]),
+                    x_label: "E_com (mA)".into(),
+                    y_label: BAND_UNITS[k].into(),
+                    log_y: false,
+                    series,
+                    x_names: vec![],
+                }
             })
             .collect();
-        Figure { name: "subsets_distortion".into(), grid: (1, 3), panels }
+        Figure { name: "subsets_distortion".into(), grid: (3, 1), panels }
     }
 }
+
+/// The currents of the figure and of the JSON's band, mA: the rig's 80..225 by 5.
+pub fn band_currents() -> Vec<f64> {
+    (0..=29).map(|k| PAPER_E_COM_MA[0] + 5.0 * k as f64).collect()
+}
+
+/// The band's coefficients: names, units (as scaled) and scales.
+const BAND_NAMES: [&str; 3] = ["k1", "p1", "p2"];
+const BAND_UNITS: [&str; 3] = ["k1 (1e-9 / px^2)", "p1 (1e-6 / px)", "p2 (1e-6 / px)"];
+const BAND_SCALE: [f64; 3] = [1e9, 1e6, 1e6];

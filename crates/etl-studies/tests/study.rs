@@ -70,7 +70,7 @@ use etl_studies::fig6;
 
 #[test]
 fn subsets_eiv_reprojection_is_the_noise_and_every_subset_converges_in_5() {
-    let s = subsets::subsets(&opts(1)).unwrap();
+    let s = subsets::subsets(&opts(2)).unwrap();
     assert!(s.failures.is_empty(), "{:?}", s.failures);
     assert_eq!(s.fits[0].len(), 88);
     let [(_, plain_hi), (lo, hi)] = s.per_coordinate_rms_range_px();
@@ -86,6 +86,50 @@ fn subsets_eiv_reprojection_is_the_noise_and_every_subset_converges_in_5() {
     let stats = s.six_view_stats(0);
     // kf0x over the 84 subsets: within 1 % of the truth, spread below 1 %.
     assert!((stats[6].0 / 5380.0 - 1.0).abs() < 0.01 && stats[6].1 > 0.1 && stats[6].1 < 54.0, "{:?}", stats[6]);
+    subsets_band_is_the_subsets_mean_with_its_standard_error(&s);
+}
+
+/// The figure's band (k1, p1, p2 against the current): by hand from the fits at one current,
+/// around the truth, with a standard error over the 2 data sets and in the JSON.
+fn subsets_band_is_the_subsets_mean_with_its_standard_error(s: &subsets::Subsets) {
+    let truth = etl_core::model::CameraModel::paper_rig();
+    let es = subsets::band_currents();
+    let j = s.output().json;
+    for (k, scale) in [1e9, 1e6, 1e6].into_iter().enumerate() {
+        let band = s.band(k);
+        assert_eq!(band.len(), es.len());
+        // At 150 mA, by hand: each data set's mean and std over its 84 six-view subsets.
+        let i = es.iter().position(|&e| e == 150.0).unwrap();
+        let per_set: Vec<(f64, f64)> = s
+            .fits
+            .iter()
+            .map(|fits| {
+                let v: Vec<f64> = fits[4..]
+                    .iter()
+                    .map(|f| {
+                        let d = etl_core::calib::jacobian::from_params(&f.params).distortion(150.0).unwrap();
+                        scale * [d.k1, d.p1, d.p2][k]
+                    })
+                    .collect();
+                (stat(&v).mean, stat(&v).std)
+            })
+            .collect();
+        let (m0, m1) = (per_set[0].0, per_set[1].0);
+        assert!((band[i].0 - (m0 + m1) / 2.0).abs() <= 1e-12 * band[i].0.abs(), "{k}: {:?}", band[i]);
+        // Two data sets: the standard error of their mean is |m0 - m1| / 2.
+        assert!((band[i].1 - (m0 - m1).abs() / 2.0).abs() <= 1e-9 * band[i].1, "{k}: {:?}", band[i]);
+        let rms = ((per_set[0].1.powi(2) + per_set[1].1.powi(2)) / 2.0).sqrt();
+        assert!((band[i].2 - rms).abs() <= 1e-12 * rms, "{k}: {:?}", band[i]);
+        // The truth lies within the subsets' spread of their mean at every current.
+        for (e, b) in es.iter().zip(&band) {
+            let d = truth.distortion(*e).unwrap();
+            let t = scale * [d.k1, d.p1, d.p2][k];
+            assert!(b.1 > 0.0 && b.2 > 0.0 && (b.0 - t).abs() < 3.0 * b.2, "{k} at {e} mA: {b:?}, truth {t}");
+        }
+        let jb = &j["distortion_band"][k];
+        assert_eq!(jb["mean_se"][i].as_f64(), Some(band[i].1));
+        assert_eq!(jb["spread_std"].as_array().unwrap().len(), es.len());
+    }
 }
 
 #[test]
@@ -106,6 +150,20 @@ fn baseline_is_worse_at_high_current() {
     assert_eq!(j["pnp"].as_array().unwrap().len(), 6);
     assert_eq!(j["baseline_over_eiv_at_250ma_se"].as_f64(), Some(se));
     assert_eq!(j["default_estimator"], "eiv");
+    // The fx(E) curves carry the standard error of their mean over the trials (the
+    // figure's error bars): std / sqrt(4) of the trials' |relative errors|, by hand.
+    let curves = b.fx_curves();
+    let i = baseline::curve_currents().iter().position(|&e| e == 250.0).unwrap();
+    for m in 0..3 {
+        let errs: Vec<f64> = b.trials.iter().map(|t| t.fx_rel[m][i].abs()).collect();
+        let s = stat(&errs);
+        assert_eq!(curves[m][i], (s.mean, s.std / 2.0));
+        assert!(curves[m][i].1 > 0.0 && curves[m][i].1 < curves[m][i].0, "{m}: {:?}", curves[m][i]);
+    }
+    let row = &j["fx_curve"][i];
+    assert_eq!(row["e_com_ma"].as_f64(), Some(250.0));
+    assert_eq!(row["baseline_mean_abs_rel_err_se"].as_f64(), Some(curves[2][i].1));
+    assert_eq!(row["eiv_ba_mean_abs_rel_err_se"].as_f64(), Some(curves[1][i].1));
 }
 
 #[test]
@@ -121,10 +179,32 @@ fn crlb_efficiency_on_a_modest_trial_count() {
         let mean = stat(e).mean;
         assert!((0.9..1.12).contains(&mean), "{name}: mean efficiency {mean}");
     }
+    // Each observed std with its standard error: near-Gaussian estimates, so about
+    // std / sqrt(2 x 149) (8 % of it; the median over the parameters within 15 % of that,
+    // each within its own sampling noise), and the efficiency's in proportion.
+    let mut rel = vec![];
+    for p in &c.parameters {
+        for (std, se, eff, eff_se) in [
+            (p.mc_std, p.mc_std_se, p.efficiency, p.efficiency_se),
+            (p.eiv_mc_std, p.eiv_mc_std_se, p.eiv_efficiency, p.eiv_efficiency_se),
+        ] {
+            rel.push(se / std * (2.0 * 149.0f64).sqrt());
+            assert!((0.6..1.8).contains(rel.last().unwrap()), "{}: se/std x sqrt(298) = {:?}", p.name, rel.last());
+            assert!((eff_se / eff - se / std).abs() < 1e-12, "{}", p.name);
+        }
+    }
+    rel.sort_by(f64::total_cmp);
+    let median = rel[rel.len() / 2];
+    assert!((0.85..1.15).contains(&median), "median se/std x sqrt(298) = {median}");
+    for row in &c.curve {
+        assert!(row.mc_std_se_px > 0.0 && row.mc_std_se_px < 0.2 * row.mc_std_px, "{row:?}");
+        assert!(row.eiv_mc_std_se_px > 0.0 && row.eiv_mc_std_se_px < 0.2 * row.eiv_mc_std_px, "{row:?}");
+    }
     let j = c.output().json;
     let p = &j["parameters"][9];
     assert_eq!(p["name"], "kf3x");
-    for key in ["truth", "crlb_std", "mc_std", "efficiency"] {
+    for key in ["truth", "crlb_std", "mc_std", "mc_std_se", "efficiency", "efficiency_se", "eiv_efficiency_se"] {
         assert!(p[key].is_f64(), "{key}");
     }
+    assert_eq!(j["fx_curve"][0]["mc_std_se_px"].as_f64(), Some(c.curve[0].mc_std_se_px));
 }

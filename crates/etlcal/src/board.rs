@@ -48,13 +48,12 @@ impl BoardArgs {
             return Board::load(path);
         }
         let (Some(pattern), Some(square)) = (self.pattern, self.square) else {
-            return Err(Error::InvalidInput("give --board FILE, or --pattern CxR with --square MM".into()));
+            return Err(Error::invalid("--board", "give --board FILE, or --pattern CxR with --square MM"));
         };
         let [c, r] = pattern;
         Board::checkerboard(pattern, square).map_err(|e| {
-            let e = e.to_string();
-            let e = e.strip_prefix("invalid input: ").unwrap_or(&e);
-            Error::InvalidInput(format!("--pattern {c}x{r} --square {square}: {e}"))
+            let flag = if e.input_what() == Some("square_mm") { "--square" } else { "--pattern" };
+            e.within(format!("--pattern {c}x{r} --square {square}"), None).map_what(|_| flag.to_owned())
         })
     }
 
@@ -95,17 +94,16 @@ pub fn run(args: Args) -> Result<()> {
         "svg" => false,
         "png" => true,
         _ => {
-            return Err(Error::InvalidInput(format!(
+            let message = format!(
                 "{}: unsupported extension \"{ext}\": use .svg (true size in mm) or .png (at --dpi)",
                 args.out.display()
-            )))
+            );
+            return Err(Error::invalid_value("--out", args.out.as_path(), message));
         }
     };
     if let (false, Some(d)) = (png, args.dpi) {
-        return Err(Error::InvalidInput(format!(
-            "--dpi {} applies to a .png only (an SVG is sized in mm)",
-            compact(d)
-        )));
+        let message = format!("--dpi {} applies to a .png only (an SVG is sized in mm)", compact(d));
+        return Err(Error::invalid_value("--dpi", d, message));
     }
     let dpi = check_range("--dpi", args.dpi.unwrap_or(DEFAULT_DPI), print::DPI_RANGE, "dpi")?;
     if let Some(m) = args.margin_mm {

@@ -118,8 +118,9 @@ pub fn load_input(
             }
             Ok(obs)
         }
-        _ => Err(Error::InvalidInput(
-            "pass --observations FILE (etlcal.observations/1) or --dataset FILE (etlcal.dataset/1)".into(),
+        _ => Err(Error::invalid(
+            "--observations",
+            "pass --observations FILE (etlcal.observations/1) or --dataset FILE (etlcal.dataset/1)",
         )),
     }
 }
@@ -135,8 +136,9 @@ pub fn run(args: Args) -> Result<()> {
         [args.observations.as_deref(), args.dataset.as_deref(), args.a0.as_deref(), thermal_file],
         &outputs,
     )?;
-    if !(args.sigma_z_um > 0.0 && args.sigma_e_ma > 0.0) {
-        return Err(Error::InvalidInput("--sigma-z-um and --sigma-e-ma must be positive".into()));
+    let sigmas = [("--sigma-z-um", args.sigma_z_um), ("--sigma-e-ma", args.sigma_e_ma)];
+    if let Some((flag, x)) = sigmas.into_iter().find(|(_, x)| !(*x > 0.0)) {
+        return Err(Error::invalid_value(flag, x, "--sigma-z-um and --sigma-e-ma must be positive"));
     }
     if args.method == MethodArg::PerSetting {
         refuse_bundle_adjust_options(
@@ -165,7 +167,7 @@ pub fn run(args: Args) -> Result<()> {
         tmp.get(1).map_or(Ok(()), |p| obs.save(p))
     })?;
     if args.json {
-        print_json(&serde_json::to_value(&calibration).map_err(|e| Error::InvalidInput(e.to_string()))?);
+        print_json(&serde_json::to_value(&calibration).map_err(|e| Error::invalid("--json", e.to_string()))?);
     } else {
         let c = &calibration;
         outln!(
@@ -191,7 +193,7 @@ fn calibrate_proposed(args: &Args, obs: &Observations, thermal: Option<&ThermalR
     };
     let robust = match args.huber_px {
         Some(k) if k > 0.0 => Some(RobustLoss::Huber { k_px: k }),
-        Some(_) => return Err(Error::InvalidInput("--huber-px must be positive".into())),
+        Some(k) => return Err(Error::invalid_value("--huber-px", k, "--huber-px must be positive")),
         None => None,
     };
     let estimator = match args.estimator.unwrap_or(EstimatorArg::Eiv) {

@@ -20,8 +20,9 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
+use crate::output::write_dir_set;
 use etl_core::calib::Estimator;
-use etl_formats::output::{write_dir_set, Output};
+use etl_formats::output::Output;
 use etl_formats::write_atomic;
 
 /// The names `demo` writes into its directory.
@@ -105,7 +106,7 @@ pub fn run(args: Args) -> Result<()> {
         Ok(demo)
     })?;
     if args.json {
-        let to_json = |v| serde_json::to_value(v).map_err(|e| Error::InvalidInput(e.to_string()));
+        let to_json = |v| serde_json::to_value(v).map_err(|e| Error::invalid("--json", e.to_string()));
         let mut j = to_json(&demo.paper_validation)?;
         j["views_detected"] = json!(demo.views_detected);
         j["seconds"] = json!(demo.seconds);

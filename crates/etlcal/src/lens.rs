@@ -109,7 +109,11 @@ pub struct HoldArgs {
 /// Runs `etlcal lens`.
 pub fn run(args: Args) -> Result<()> {
     if !(1..=60_000).contains(&args.timeout_ms) {
-        return Err(Error::InvalidInput(format!("--timeout-ms {} must lie in 1..=60000 ms", args.timeout_ms)));
+        return Err(Error::invalid_value(
+            "--timeout-ms",
+            args.timeout_ms,
+            format!("--timeout-ms {} must lie in 1..=60000 ms", args.timeout_ms),
+        ));
     }
     if let LensCommand::Hold(h) = &args.command {
         check_hold_args(h)?;
@@ -194,8 +198,8 @@ pub fn run(args: Args) -> Result<()> {
 /// The lens to talk to: the `--port` path, or a fresh virtual lens and its pseudo-terminal.
 fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
     let target = match (&args.target.port, args.target.virtual_lens) {
-        (Some(_), true) => return Err(Error::InvalidInput("pass --port PATH or --virtual, not both".into())),
-        (None, false) => return Err(Error::InvalidInput("pass --port PATH (a Lens Driver 4) or --virtual".into())),
+        (Some(_), true) => return Err(Error::invalid("--port", "pass --port PATH or --virtual, not both")),
+        (None, false) => return Err(Error::invalid("--port", "pass --port PATH (a Lens Driver 4) or --virtual")),
         (Some(p), false) => (None, p.clone()),
         (None, true) => {
             let time_scale = match &args.command {
@@ -222,15 +226,19 @@ fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json
     if let (Some(d), Some(w)) = (device, h.warm) {
         let target_c = d.state().temperature_c + w;
         if !(SENSOR_RANGE_C[0]..=SENSOR_RANGE_C[1]).contains(&target_c) {
-            return Err(Error::InvalidInput(format!(
-                "--warm {} degC takes the lens to {} degC, outside the sensor's -40..=125 degC",
-                compact(w),
-                compact(target_c)
-            )));
+            return Err(Error::invalid_value(
+                "--warm",
+                w,
+                format!(
+                    "--warm {} degC takes the lens to {} degC, outside the sensor's -40..=125 degC",
+                    compact(w),
+                    compact(target_c)
+                ),
+            ));
         }
         d.set_target_temperature_c(target_c);
     } else if h.warm.is_some() {
-        return Err(Error::InvalidInput("--warm only applies to --virtual".into()));
+        return Err(Error::invalid("--warm", "--warm only applies to --virtual"));
     }
     let cfg = HoldConfig { e_com_ma: h.e_com_ma, rate_hz: h.rate, duration };
     let mut last_print = std::time::Instant::now();
@@ -250,7 +258,7 @@ fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json
     .map_err(|e| match e {
         HoldError::Lens(e) => Error::lens(e),
         HoldError::Core(e) => Error::Core(e),
-        e @ HoldError::Unreachable { .. } => Error::InvalidInput(e.to_string()),
+        e @ HoldError::Unreachable { e_com_ma, .. } => Error::invalid_value("--e-com", e_com_ma, e.to_string()),
     })?;
     let unsolicited = client.take_unsolicited().len();
     if json_out {
@@ -286,16 +294,25 @@ fn run_hold(client: &LensClient, device: Option<&VirtualLens>, h: HoldArgs, json
 /// ((0, [`MAX_TIME_SCALE`]]).
 fn check_hold_args(h: &HoldArgs) -> Result<()> {
     if h.rate != 0.0 && !(RATE_RANGE_HZ[0]..=RATE_RANGE_HZ[1]).contains(&h.rate) {
-        return Err(Error::InvalidInput(format!(
-            "--rate {} Hz must be 0 (as fast as possible) or lie in 0.001..=10000 Hz",
-            compact(h.rate)
-        )));
+        return Err(Error::invalid_value(
+            "--rate",
+            h.rate,
+            format!("--rate {} Hz must be 0 (as fast as possible) or lie in 0.001..=10000 Hz", compact(h.rate)),
+        ));
     }
     if let Some(s) = h.duration.filter(|&s| duration_from_s(s).is_err()) {
-        return Err(Error::InvalidInput(format!("--duration {} s must lie in 0..=1e7 s", compact(s))));
+        return Err(Error::invalid_value(
+            "--duration",
+            s,
+            format!("--duration {} s must lie in 0..=1e7 s", compact(s)),
+        ));
     }
     if !(h.time_scale > 0.0 && h.time_scale <= MAX_TIME_SCALE) {
-        return Err(Error::InvalidInput(format!("--time-scale {} must lie in (0, 1e6]", compact(h.time_scale))));
+        return Err(Error::invalid_value(
+            "--time-scale",
+            h.time_scale,
+            format!("--time-scale {} must lie in (0, 1e6]", compact(h.time_scale)),
+        ));
     }
     Ok(())
 }

@@ -37,20 +37,26 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let [lo, hi] = [args.lower_limit, args.upper_limit];
     if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= -292.84 && hi <= 292.84) {
-        return Err(Error::InvalidInput(format!(
-            "limits [{}, {}] mA must satisfy -292.84 <= lower <= upper <= 292.84",
-            compact(lo),
-            compact(hi)
-        )));
+        let message =
+            format!("limits [{}, {}] mA must satisfy -292.84 <= lower <= upper <= 292.84", compact(lo), compact(hi));
+        // The lower limit is blamed unless it alone is fine.
+        let (what, value) =
+            if (-292.84..=hi.min(292.84)).contains(&lo) { ("--upper-limit", hi) } else { ("--lower-limit", lo) };
+        return Err(Error::invalid_value(what, value, message));
     }
     if !(SENSOR_RANGE_C[0]..=SENSOR_RANGE_C[1]).contains(&args.ambient) {
-        return Err(Error::InvalidInput(format!(
-            "--ambient {} degC must lie in -40..=125 degC",
-            compact(args.ambient)
-        )));
+        return Err(Error::invalid_value(
+            "--ambient",
+            args.ambient,
+            format!("--ambient {} degC must lie in -40..=125 degC", compact(args.ambient)),
+        ));
     }
     if !(args.time_scale > 0.0 && args.time_scale <= MAX_TIME_SCALE) {
-        return Err(Error::InvalidInput(format!("--time-scale {} must lie in (0, 1e6]", compact(args.time_scale))));
+        return Err(Error::invalid_value(
+            "--time-scale",
+            args.time_scale,
+            format!("--time-scale {} must lie in (0, 1e6]", compact(args.time_scale)),
+        ));
     }
     let config = VirtualLensConfig {
         time_scale: args.time_scale,

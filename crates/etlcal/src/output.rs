@@ -2,10 +2,15 @@
 //! missing parents, as `mkdir -p`), and so is the missing parent directory of an output
 //! file. Before reading anything a verb checks its inputs and outputs with [`check`]
 //! (etl_formats::output's policy: an output that is an input, or exists and is not a
-//! regular file, is refused); several outputs are written as one set
-//! ([`etl_formats::output::write_dir_set`], [`etl_formats::output::write_file_set`]).
+//! regular file, is refused); several outputs are written as one set ([`write_dir_set`]
+//! for a set in one directory, [`etl_formats::output::write_file_set`] for files in
+//! several places).
 
 use std::path::{Path, PathBuf};
+
+mod dir_set;
+
+pub use dir_set::write_dir_set;
 
 use etl_formats::output::{check_paths, Output};
 use etl_formats::{Error, Result};

@@ -79,7 +79,7 @@ pub fn run(args: Args) -> Result<()> {
     let bit_depth = match args.bit_depth {
         8 => BitDepth::Eight,
         16 => BitDepth::Sixteen,
-        b => return Err(Error::InvalidInput(format!("--bit-depth must be 8 or 16, got {b}"))),
+        b => return Err(Error::invalid_value("--bit-depth", b, format!("--bit-depth must be 8 or 16, got {b}"))),
     };
     let format = image_format(&args.out, bit_depth)?;
     let mut corners_path = args.out.clone().into_os_string();
@@ -159,13 +159,15 @@ fn image_format(path: &Path, bit_depth: BitDepth) -> Result<image::ImageFormat> 
         ("png", _) => Ok(image::ImageFormat::Png),
         ("tif" | "tiff", _) => Ok(image::ImageFormat::Tiff),
         ("jpg" | "jpeg", BitDepth::Eight) => Ok(image::ImageFormat::Jpeg),
-        ("jpg" | "jpeg", BitDepth::Sixteen) => Err(Error::InvalidInput(format!(
-            "{}: JPEG is 8-bit only: pass --bit-depth 8 or write .png, .tif or .tiff",
-            path.display()
-        ))),
-        _ => Err(Error::InvalidInput(format!(
-            "{}: unsupported image extension \"{ext}\": use .png, .tif, .tiff, .jpg or .jpeg",
-            path.display()
-        ))),
+        ("jpg" | "jpeg", BitDepth::Sixteen) => Err(Error::invalid_value(
+            "--bit-depth",
+            16_u8,
+            format!("{}: JPEG is 8-bit only: pass --bit-depth 8 or write .png, .tif or .tiff", path.display()),
+        )),
+        _ => Err(Error::invalid_value(
+            "--out",
+            path,
+            format!("{}: unsupported image extension \"{ext}\": use .png, .tif, .tiff, .jpg or .jpeg", path.display()),
+        )),
     }
 }

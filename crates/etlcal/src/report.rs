@@ -12,9 +12,10 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
+use crate::output::write_dir_set;
 use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::observations::Observations;
-use etl_formats::output::{write_dir_set, Output};
+use etl_formats::output::Output;
 use etl_formats::Result;
 use etl_report::{write_report, Provenance, REPORT_FIGURES};
 

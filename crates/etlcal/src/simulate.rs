@@ -18,7 +18,8 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::output::{write_dir_set, Output};
+use crate::output::write_dir_set;
+use etl_formats::output::Output;
 use etl_formats::{Error, Result};
 
 /// The names `simulate` writes into its directory.
@@ -98,9 +99,9 @@ pub fn run(args: Args) -> Result<()> {
     crate::output::check([args.config.as_deref()], &[Output::Dir(&args.out)])?;
     let config = config_from(&args)?;
     if !args.observations_only && config.setting_rig.is_some() {
-        return Err(Error::InvalidInput(
-            "rendering the per-setting baseline's views is not supported: pass --observations-only with --setting-views"
-                .into(),
+        return Err(Error::invalid(
+            "--observations-only",
+            "rendering the per-setting baseline's views is not supported: pass --observations-only with --setting-views",
         ));
     }
     let sim = simulate(&config);

@@ -57,7 +57,7 @@ pub struct Args {
 /// Runs `etlcal study`.
 pub fn run(args: Args) -> Result<()> {
     if let Some(n) = args.trials.filter(|n| !(1..=MAX_TRIALS).contains(n)) {
-        return Err(Error::InvalidInput(format!("--trials {n} must lie in 1..={MAX_TRIALS}")));
+        return Err(Error::invalid_value("--trials", n, format!("--trials {n} must lie in 1..={MAX_TRIALS}")));
     }
     crate::output::create_dir(&args.out)?;
     let bar = Bar::new(true);

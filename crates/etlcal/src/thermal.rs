@@ -24,7 +24,7 @@ use super::print_json;
 use etl_formats::calibration::ThermalRef;
 use etl_formats::output::Output;
 use etl_formats::thermal::{read_thermal_table, ThermalFile};
-use etl_formats::{Error, Result};
+use etl_formats::Result;
 
 /// Arguments of `etlcal thermal`.
 #[derive(clap::Args, Debug)]
@@ -132,7 +132,9 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
         options.e_in_grid_ma = vec![40.0, 90.0, 140.0, 190.0, 240.0];
         options.temperatures_c = vec![27.0, 29.5, 32.0, 34.5, 37.0];
     }
-    let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &crate::progress::Bar::new(!args.json))?;
+    let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &crate::progress::Bar::new(!args.json))
+        // The option the user sets is the flag.
+        .map_err(|e| e.map_what(|w| if w == "search_half_width_ma" { "--search-ma".into() } else { w }))?;
     let (r, t0) = (&v.result, v.t_ref_c);
     let (referenced, absolute) = (v.surface_error_ma, v.surface_error_absolute_ma);
     let file = ThermalFile::new(&r.calibration, r.rms_ma);
@@ -204,8 +206,8 @@ pub fn run_eval(args: EvalArgs) -> Result<()> {
 pub fn run_fit(args: FitArgs) -> Result<()> {
     crate::output::check([Some(args.table.as_path())], &[Output::File(&args.out)])?;
     let rows = read_thermal_table(&args.table)?;
-    let (cal, rms_ma) = etl_calib::thermal_calibration::fit_samples(&rows)
-        .map_err(|err| Error::InvalidInput(format!("{}: {err}", args.table.display())))?;
+    let (cal, rms_ma) =
+        etl_calib::thermal_calibration::fit_samples(&rows).map_err(|err| err.within(args.table.display(), None))?;
     let file = ThermalFile::new(&cal, rms_ma);
     crate::output::create_parent(&args.out)?;
     file.save(&args.out)?;

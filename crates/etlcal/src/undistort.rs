@@ -86,7 +86,7 @@ fn undistort_buffer<P: Pixel<Subpixel = T>, T: Sample + Send + Sync + image::Pri
     let src = SourceImage::new(img.as_raw(), w, h, P::CHANNEL_COUNT as usize)?;
     let pixels = undistort_image(&k, &d, &out, &src, T::from_f32(0.0))?;
     ImageBuffer::from_raw(img.width(), img.height(), pixels)
-        .ok_or_else(|| Error::InvalidInput("undistorted image has an inconsistent size".into()))
+        .ok_or_else(|| Error::invalid("image", "undistorted image has an inconsistent size"))
 }
 
 /// Reads, undistorts, encodes and writes one image.
@@ -122,10 +122,11 @@ pub fn run(args: Args) -> Result<()> {
     for input in &args.images {
         let job = check_input(input, &args.out, cal.image_size)?;
         if !names.insert(job.output.clone()) {
-            return Err(Error::InvalidInput(format!(
-                "two images would be written to {}; give images of distinct file names",
-                job.output.display()
-            )));
+            return Err(Error::invalid_value(
+                "IMAGE",
+                input,
+                format!("two images would be written to {}; give images of distinct file names", job.output.display()),
+            ));
         }
         jobs.push(job);
     }

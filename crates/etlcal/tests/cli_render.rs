@@ -104,12 +104,9 @@ fn writes_the_format_its_extension_names_and_creates_the_directory() {
 #[test]
 fn renders_a_charuco_board_from_its_file_with_the_visible_ids() {
     let dir = tempfile::tempdir().unwrap();
+    let charuco = r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#;
     let board = dir.path().join("board.json");
-    std::fs::write(
-        &board,
-        r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#,
-    )
-    .unwrap();
+    std::fs::write(&board, charuco).unwrap();
     let img = dir.path().join("c.png");
     let (b, i) = (board.to_str().unwrap(), img.to_str().unwrap());
     let out = etlcal(&["render", "--out", i, "--board", b, "--e-com", "225", "--z-mm", "2", "--json"]);
@@ -132,11 +129,7 @@ fn renders_a_charuco_board_from_its_file_with_the_visible_ids() {
     }
     // Bad boards and flag conflicts: one line, nothing written.
     let bad = dir.path().join("bad.json");
-    std::fs::write(
-        &bad,
-        r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_10"}"#,
-    )
-    .unwrap();
+    std::fs::write(&bad, charuco.replace("DICT_5X5_100", "DICT_5X5_10")).unwrap();
     let x = dir.path().join("x.png");
     for (args, needle, code) in [
         (vec!["--board", bad.to_str().unwrap()], "dictionary \"DICT_5X5_10\" is not one of OpenCV's", 1),

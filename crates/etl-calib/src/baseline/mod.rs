@@ -118,11 +118,15 @@ pub fn refuse_bundle_adjust_options(method: &str, given: BundleAdjustOptionsGive
     if !given.iter().any(|&(_, g)| g) {
         return Ok(());
     }
+    let first_given = given.iter().find(|&&(_, g)| g).map_or("", |&(name, _)| name);
     let [a, b, c, d] = given.map(|(name, _)| name);
-    Err(Error::InvalidInput(format!(
-        "{method} takes no {a}, {b}, {c} or {d}: the baseline is Zhang at each current, with no bundle \
-         adjustment; drop them or use the proposed method"
-    )))
+    Err(Error::invalid(
+        first_given,
+        format!(
+            "{method} takes no {a}, {b}, {c} or {d}: the baseline is Zhang at each current, with no bundle \
+             adjustment; drop them or use the proposed method"
+        ),
+    ))
 }
 
 /// Runs the baseline on `obs.setting_views` (see the module docs).
@@ -140,8 +144,9 @@ pub fn per_setting(obs: &Observations, thermal: Option<&ThermalRef>) -> Result<B
 fn setting_estimates(obs: &Observations, thermal: Option<&ThermalRef>) -> Result<Vec<SettingEstimate>> {
     obs.validate()?;
     if obs.setting_views.is_empty() {
-        return Err(Error::InvalidInput(
-            "--method per-setting needs setting_views (several board views at each current)".into(),
+        return Err(Error::invalid(
+            "setting_views",
+            "--method per-setting needs setting_views (several board views at each current)",
         ));
     }
     let e_com = obs.setting_e_com_ma(thermal)?;
@@ -155,19 +160,19 @@ fn setting_estimates(obs: &Observations, thermal: Option<&ThermalRef>) -> Result
         }
     }
     if groups.len() < 3 {
-        return Err(Error::InvalidInput(format!(
-            "the per-setting baseline needs views at >= 3 distinct currents, got {}",
-            groups.len()
-        )));
+        return Err(Error::invalid(
+            "setting_views",
+            format!("the per-setting baseline needs views at >= 3 distinct currents, got {}", groups.len()),
+        ));
     }
     let mut settings = vec![];
     for g in &groups {
         let e = g.iter().map(|&i| e_com[i]).sum::<f64>() / g.len() as f64;
         if g.len() < 3 {
-            return Err(Error::InvalidInput(format!(
-                "the setting at {e:.1} mA has {} views; Zhang's method needs at least 3",
-                g.len()
-            )));
+            return Err(Error::invalid(
+                "setting_views",
+                format!("the setting at {e:.1} mA has {} views; Zhang's method needs at least 3", g.len()),
+            ));
         }
         let views: Vec<PlanarView> = g
             .iter()
@@ -176,9 +181,13 @@ fn setting_estimates(obs: &Observations, thermal: Option<&ThermalRef>) -> Result
                 pixels: obs.setting_views[i].points.iter().map(|p| p.pixel).collect(),
             })
             .collect();
-        let z = zhang(&views, obs.image_size).map_err(|err| match err {
-            Error::InvalidInput(m) => Error::InvalidInput(format!("setting at {e:.1} mA: {m}")),
-            other => other,
+        let z = zhang(&views, obs.image_size).map_err(|err| {
+            match crate::zhang::in_list(err, "setting_views", Some(g)) {
+                Error::InvalidInput { what, value, message } => {
+                    Error::InvalidInput { what, value, message: format!("setting at {e:.1} mA: {message}") }
+                }
+                other => other,
+            }
         })?;
         let points = views.iter().map(|v| v.pixels.len()).sum();
         settings.push(SettingEstimate { e_com_ma: e, views: g.len(), points, zhang: z });

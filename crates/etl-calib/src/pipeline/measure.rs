@@ -78,10 +78,9 @@ pub fn measure_displacement(
         uncertainty.push(u);
         poses.push(pose);
     }
-    let [a, b]: [BoardPose; 2] =
-        poses.try_into().map_err(|_| Error::InvalidInput("a measurement needs two images".into()))?;
-    let [ua, ub]: [PoseUncertainty; 2] =
-        uncertainty.try_into().map_err(|_| Error::InvalidInput("a measurement needs two images".into()))?;
+    let two_images = || Error::invalid("images", "a measurement needs two images");
+    let [a, b]: [BoardPose; 2] = poses.try_into().map_err(|_| two_images())?;
+    let [ua, ub]: [PoseUncertainty; 2] = uncertainty.try_into().map_err(|_| two_images())?;
     let d = displacement_mm(&a, &b);
     let distance_mm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     let calibration_covariance = cal.covariance_matrix();

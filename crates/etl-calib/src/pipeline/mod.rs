@@ -77,8 +77,9 @@ pub(crate) fn check_image_size(path: &std::path::Path, got: [u32; 2], expected: 
 /// Errors: no lens-off views (pass an A0 file instead), or those of [`crate::zhang::zhang`].
 pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult> {
     if obs.offstate_views.is_empty() {
-        return Err(etl_formats::Error::InvalidInput(
-            "no lens-off views (offstate_views) in the observations: pass --a0 A0.json".into(),
+        return Err(etl_formats::Error::invalid(
+            "offstate_views",
+            "no lens-off views (offstate_views) in the observations: pass --a0 A0.json",
         ));
     }
     let views: Vec<crate::zhang::PlanarView> = obs
@@ -89,7 +90,7 @@ pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult>
             pixels: v.points.iter().map(|p| p.pixel).collect(),
         })
         .collect();
-    crate::zhang::zhang(&views, obs.image_size)
+    crate::zhang::zhang(&views, obs.image_size).map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
 }
 
 /// Calibrates from observations with a given A0.
@@ -125,9 +126,9 @@ pub fn calibrate(
 ) -> Result<CalibrationResult> {
     obs.validate()?;
     if obs.views.is_empty() {
-        return Err(etl_formats::Error::InvalidInput(
-            "no ETL views (views) in the observations: the proposed method needs the board on the stage at >= 3 currents"
-                .into(),
+        return Err(etl_formats::Error::invalid(
+            "views",
+            "no ETL views (views) in the observations: the proposed method needs the board on the stage at >= 3 currents",
         ));
     }
     let e_com = obs.e_com_ma(thermal)?;

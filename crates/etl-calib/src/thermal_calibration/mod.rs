@@ -108,9 +108,9 @@ pub fn fit_samples(samples: &[ThermalSample]) -> Result<(ThermalCalibration, f64
     let mut fit = ThermalFit::with_ranges(e, t).unwrap_or_default();
     for (i, r) in samples.iter().enumerate() {
         fit.add(r.e_in_ma, r.temperature_c, r.e_t_ma)
-            .map_err(|err| Error::InvalidInput(format!("data row {}: {err}", i + 1)))?;
+            .map_err(|err| Error::Core(err).within(format_args!("data row {}", i + 1), Some(&format!("rows[{i}]"))))?;
     }
-    fit.solve_calibration().map_err(|err| Error::InvalidInput(format!("cannot fit the surface: {err}")))
+    fit.solve_calibration().map_err(|err| Error::Core(err).within("cannot fit the surface", Some("rows")))
 }
 
 /// Runs the procedure (see the module documentation); `progress` draws a bar.
@@ -126,10 +126,12 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
     progress: &dyn Progress,
 ) -> Result<ProcedureResult> {
     if options.e_in_grid_ma.is_empty() || options.temperatures_c.len() < 2 {
-        return Err(Error::InvalidInput("the procedure needs at least one current and two temperatures".into()));
+        let what = if options.e_in_grid_ma.is_empty() { "e_in_grid_ma" } else { "temperatures_c" };
+        return Err(Error::invalid(what, "the procedure needs at least one current and two temperatures"));
     }
-    if !(options.search_half_width_ma > 0.0 && options.tolerance_ma > 0.0) {
-        return Err(Error::InvalidInput("search half width and tolerance must be positive".into()));
+    let widths = [("search_half_width_ma", options.search_half_width_ma), ("tolerance_ma", options.tolerance_ma)];
+    if let Some((what, x)) = widths.into_iter().find(|(_, x)| !(*x > 0.0)) {
+        return Err(Error::invalid_value(what, x, "search half width and tolerance must be positive"));
     }
     let steps = options.e_in_grid_ma.len() * options.temperatures_c.len();
     progress.start(steps, "thermal");
@@ -178,10 +180,14 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
             frames += found.evaluations;
             let edge = 0.02 * options.search_half_width_ma;
             if (found.best_ma - window[0]).abs() < edge || (window[1] - found.best_ma).abs() < edge {
-                return Err(Error::InvalidInput(format!(
-                    "refocus at {t} degC for E_in {e0} mA ended at the edge of its window {window:?} mA: \
-                     widen the search (--search-ma)"
-                )));
+                return Err(Error::invalid_value(
+                    "search_half_width_ma",
+                    options.search_half_width_ma,
+                    format!(
+                        "refocus at {t} degC for E_in {e0} mA ended at the edge of its window {window:?} mA: \
+                         widen the search (--search-ma)"
+                    ),
+                ));
             }
             // The current the driver actually holds (clamped and quantised) is the one recorded.
             let e_set = lens.set_current_ma(found.best_ma).map_err(Error::lens)?;

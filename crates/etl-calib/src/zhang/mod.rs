@@ -259,18 +259,22 @@ fn distances(views: &[PlanarView], x: &[f64; 7], poses: &[[f64; 6]]) -> Vec<Vec<
 /// repeated without the outliers until their set no longer changes (at most 4 times).
 ///
 /// `image_size` sets the conditioning frame. Errors: fewer than 3 views or a view with
-/// fewer than 4 points ([`Error::InvalidInput`]); degenerate geometry (all views parallel)
-/// or a failed solve ([`Error::Core`]).
+/// fewer than 4 points ([`Error::InvalidInput`] about `"views"` or `"views[k].pixels"`,
+/// which a caller holding the views under another key renames, [`in_list`]); degenerate
+/// geometry (all views parallel) or a failed solve ([`Error::Core`]).
 pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> {
     if views.len() < 3 {
-        return Err(Error::InvalidInput(format!(
-            "Zhang's method needs at least 3 views of the board, got {}",
-            views.len()
-        )));
+        return Err(Error::invalid(
+            "views",
+            format!("Zhang's method needs at least 3 views of the board, got {}", views.len()),
+        ));
     }
     for (k, v) in views.iter().enumerate() {
         if v.board_mm.len() != v.pixels.len() || v.board_mm.len() < 4 {
-            return Err(Error::InvalidInput(format!("view {k}: needs at least 4 points with their pixels")));
+            return Err(Error::invalid(
+                format!("views[{k}].pixels"),
+                format!("view {k}: needs at least 4 points with their pixels"),
+            ));
         }
     }
     let mut used: Vec<Vec<bool>> = views.iter().map(|v| homography_inliers(&v.board_mm, &v.pixels)).collect();
@@ -319,5 +323,23 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
         iterations: r.iterations,
         views_used: views.len(),
         outliers,
+    })
+}
+
+/// A [`zhang`] error about its `views` argument as the bad input of the list the views
+/// came from: `"views"` and `"views[k]..."` become `"{key}"` and `"{key}[indices[k]]..."`
+/// (`indices[k]`: the list's index of the k-th view given to Zhang, `None` for the same
+/// index), e.g. `offstate_views[2].pixels`; message and value unchanged.
+pub fn in_list(err: Error, key: &str, indices: Option<&[usize]>) -> Error {
+    err.map_what(|what| {
+        let Some(rest) = what.strip_prefix("views") else { return what };
+        let index = rest.strip_prefix('[').and_then(|r| r.split_once(']'));
+        match index.and_then(|(k, tail)| Some((k.parse::<usize>().ok()?, tail))) {
+            Some((k, tail)) => {
+                let i = indices.and_then(|ix| ix.get(k).copied()).unwrap_or(k);
+                format!("{key}[{i}]{tail}")
+            }
+            None => format!("{key}{rest}"),
+        }
     })
 }

@@ -1,8 +1,14 @@
+use std::os::unix::fs::{MetadataExt, PermissionsExt};
+
 use super::*;
 use crate::write_atomic;
 
+/// The sorted entry names of `dir`.
 fn names(dir: &Path) -> Vec<String> {
-    top_level_names(dir).unwrap()
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
 }
 
 #[test]
@@ -91,43 +97,14 @@ fn temporaries_of_dead_processes_are_removed_by_the_next_write() {
     let other = d.path().join(".b.json.tmp99999999");
     std::fs::write(&other, "another output's").unwrap();
     write_atomic(&d.path().join("a.json"), b"{}").unwrap();
-    write_dir_set(&d.path().join("set"), &["x"], |s| write_atomic(&s.join("x"), b"x")).unwrap();
-    assert_eq!(names(d.path()), [".b.json.tmp99999999", "a.json", "set"]);
-}
-
-#[test]
-fn a_set_replaces_the_earlier_set_whole_or_not_at_all() {
-    let d = tempfile::tempdir().unwrap();
-    let set = d.path().join("out");
-    let write = |tag: &'static str, fail: bool| {
-        write_dir_set(&set, &["a", "sub"], move |s| {
-            write_atomic(&s.join("a"), tag.as_bytes())?;
-            std::fs::create_dir(s.join("sub")).unwrap();
-            if fail {
-                return Err(Error::InvalidInput("failed half-way".into()));
-            }
-            write_atomic(&s.join("sub").join("b"), tag.as_bytes())
-        })
-    };
-    write("one", false).unwrap();
-    std::fs::set_permissions(&set, std::fs::Permissions::from_mode(0o750)).unwrap();
-    assert!(write("two", true).is_err());
-    assert_eq!(std::fs::read_to_string(set.join("sub/b")).unwrap(), "one");
-    write("three", false).unwrap();
-    assert_eq!(std::fs::read_to_string(set.join("a")).unwrap(), "three");
-    assert_eq!(std::fs::read_to_string(set.join("sub/b")).unwrap(), "three");
-    assert_eq!(std::fs::metadata(&set).unwrap().mode() & 0o777, 0o750);
-    assert_eq!(names(&set), [SET_MANIFEST, "a", "sub"]);
-    assert_eq!(names(d.path()), ["out"]);
-    // A file of the user's in the directory is never thrown away; a trailing slash is fine.
-    std::fs::write(set.join("notes.txt"), "mine").unwrap();
-    let slash = PathBuf::from(format!("{}/", set.display()));
-    let e = write_dir_set(&slash, &["a"], |_| Ok(())).unwrap_err().to_string();
-    assert!(e.contains("holds notes.txt") && e.contains("new or empty directory"), "{e}");
-    std::fs::remove_file(set.join("notes.txt")).unwrap();
-    // Names of the earlier set (its manifest) may go: "sub" is not in this set.
-    write_dir_set(&slash, &["a"], |s| write_atomic(&s.join("a"), b"four")).unwrap();
-    assert_eq!(names(&set), [SET_MANIFEST, "a"]);
+    // A set directory's writer (the etlcal binary's) removes its stale directories so.
+    remove_stale_temps(d.path(), std::ffi::OsStr::new("set"));
+    assert_eq!(names(d.path()), [".b.json.tmp99999999", "a.json"]);
+    // This process's own temporary is never taken for stale.
+    let own = temp_sibling(d.path(), std::ffi::OsStr::new("c.json"));
+    std::fs::write(&own, "mine").unwrap();
+    remove_stale_temps(d.path(), std::ffi::OsStr::new("c.json"));
+    assert!(own.exists());
 }
 
 #[test]

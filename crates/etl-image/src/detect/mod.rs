@@ -68,9 +68,11 @@ impl Pattern {
     /// A pattern; `InvalidInput` unless both counts are in 3..=1000.
     pub fn new(cols: usize, rows: usize) -> Result<Self> {
         if !(3..=1000).contains(&cols) || !(3..=1000).contains(&rows) {
-            return Err(Error::InvalidInput(format!(
-                "pattern {cols}x{rows}: a board needs 3 to 1000 inner corners each way"
-            )));
+            return Err(Error::invalid_value(
+                "pattern",
+                format!("{cols}x{rows}"),
+                format!("pattern {cols}x{rows}: a board needs 3 to 1000 inner corners each way"),
+            ));
         }
         Ok(Self { cols, rows })
     }
@@ -89,7 +91,8 @@ impl Pattern {
 impl FromStr for Pattern {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        let bad = || Error::InvalidInput(format!("pattern \"{s}\" is not CxR inner corners (e.g. 14x12)"));
+        let bad =
+            || Error::invalid_value("pattern", s, format!("pattern \"{s}\" is not CxR inner corners (e.g. 14x12)"));
         let (c, r) = s.trim().split_once(['x', 'X']).ok_or_else(bad)?;
         let c = c.trim().parse::<usize>().map_err(|_| bad())?;
         let r = r.trim().parse::<usize>().map_err(|_| bad())?;
@@ -171,7 +174,7 @@ pub fn detect_dynamic(image: &DynamicImage, pattern: Pattern) -> Result<Detectio
 /// The grey view of an image buffer; `InvalidInput` when the buffer is shorter than its size.
 pub(crate) fn view_of<T: Sample + image::Primitive>(image: &ImageBuffer<Luma<T>, Vec<T>>) -> Result<GrayView<'_, T>> {
     GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
-        .ok_or_else(|| Error::InvalidInput("image buffer shorter than its size".into()))
+        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))
 }
 
 /// Calls `at8` on the 8-bit grey view of a decoded image, or `at16` on its 16-bit one when

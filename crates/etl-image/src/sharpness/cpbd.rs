@@ -73,15 +73,18 @@ const SHARP_BINS_JNB5: [(u8, usize); 4] = [(2, 4), (3, 15), (4, 36), (5, 63)];
 /// ```
 pub fn cpbd(data: &[u8], width: usize, height: usize) -> Result<f64> {
     if width.checked_mul(height) != Some(data.len()) {
-        return Err(Error::InvalidInput(format!(
-            "image data holds {} values, not width {width} x height {height}",
-            data.len()
-        )));
+        return Err(Error::invalid_value(
+            "data",
+            data.len(),
+            format!("image data holds {} values, not width {width} x height {height}", data.len()),
+        ));
     }
     if width < BLOCK_PX || height < BLOCK_PX {
-        return Err(Error::InvalidInput(format!(
-            "CPBD needs at least one 64 x 64 block; the image is {width} x {height} px"
-        )));
+        return Err(Error::invalid_value(
+            "image",
+            [width, height],
+            format!("CPBD needs at least one 64 x 64 block; the image is {width} x {height} px"),
+        ));
     }
     if !any_nonzero_angle(data, width, height) {
         // The package measures no width at all (compute.py L88): CPBD 0.

@@ -61,9 +61,13 @@ impl FromStr for Metric {
 
     fn from_str(s: &str) -> Result<Self> {
         Metric::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "unknown sharpness metric \"{s}\" (expected one of cpbd, tenengrad, laplacian, brenner, normvar)"
-            ))
+            Error::invalid_value(
+                "metric",
+                s,
+                format!(
+                    "unknown sharpness metric \"{s}\" (expected one of cpbd, tenengrad, laplacian, brenner, normvar)"
+                ),
+            )
         })
     }
 }
@@ -81,7 +85,7 @@ fn simple<T: Pixel>(data: &[T], w: u32, h: u32, metric: Metric) -> Result<f64> {
         Metric::Laplacian => laplacian_variance(&view)?,
         Metric::Brenner => brenner(&view)?,
         Metric::Normvar => normalised_variance(&view)?,
-        Metric::Cpbd => return Err(Error::InvalidInput("CPBD is not a simple measure".into())),
+        Metric::Cpbd => return Err(Error::invalid_value("metric", "cpbd", "CPBD is not a simple measure")),
     })
 }
 

@@ -65,7 +65,11 @@ impl FocusMaps {
         model.validate()?;
         let [lo, hi] = e_com_range_ma;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(Error::InvalidInput(format!("e_com_range_ma {e_com_range_ma:?} must be a finite [min, max]")));
+            return Err(Error::invalid_value(
+                "e_com_range_ma",
+                e_com_range_ma,
+                format!("e_com_range_ma {e_com_range_ma:?} must be a finite [min, max]"),
+            ));
         }
         for e in [lo, hi] {
             output.at(&model.intrinsics(e)?)?;

@@ -29,16 +29,20 @@ Main nouns:
   (also `study(name)`): the paper's simulation studies.
 
 Results are typed objects (`etlcal.results`: `ZhangResult`, `AutofocusResult`,
-`Compensation`, `ModelStd`, `View`, `StudyResult`, ...): attributes with a short repr,
-and read-only mappings too (`r["key"]`, `"key" in r`, `r.keys()`), as the dicts they
-replace. `etlcal.options` names the words each option accepts (`typing.Literal`).
+`Compensation`, `ModelStd`, `View`, `StudyResult`, `LensInfo`, `HoldReport`, ...):
+attributes with a short repr, and read-only mappings too (`r["key"]`, `"key" in r`,
+`r.keys()`), as the dicts they replace. `etlcal.options` names the words each option accepts (`typing.Literal`).
 `Observations` is a sequence of `View`s (`obs[i]`, `obs[-1]`, `for v in obs`).
 The per-current model functions (`focal_lengths`, `intrinsics`, `distortion`,
-`to_opencv`) take a number or an array of currents (results stacked on leading axes).
+`to_opencv`) take a number or an array of currents (results stacked on leading axes);
+`ThermalCalibration.compensate` and `.e_in_for_e_com` take numbers or arrays (broadcast;
+a `CompensationArray` for arrays).
 
 Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 `NotConvergedError`, `BoardNotFoundError`, `FileError` (also an OSError), `DeviceError`,
-`DeviceTimeoutError` (also a TimeoutError).
+`DeviceTimeoutError` (also a TimeoutError). An `InputError` names what to change in `what`
+(a file key, field or argument: `"views[3].points"`, `"square_mm"`) and the offending
+value in `value` (text, numbers compact), each None when the error names none.
 """
 from ._etlcal import (
     __version__,
@@ -76,9 +80,14 @@ from .results import (
     AutofocusResult,
     BoardDetection,
     Compensation,
+    CompensationArray,
     DetectionSummary,
     ExportResult,
     FocusLaw,
+    HoldReport,
+    HoldStep,
+    LensInfo,
+    LensState,
     ModelStd,
     OffstateView,
     StudyResult,
@@ -123,9 +132,14 @@ __all__ = [
     "AutofocusResult",
     "BoardDetection",
     "Compensation",
+    "CompensationArray",
     "DetectionSummary",
     "ExportResult",
     "FocusLaw",
+    "HoldReport",
+    "HoldStep",
+    "LensInfo",
+    "LensState",
     "ModelStd",
     "OffstateView",
     "StudyResult",

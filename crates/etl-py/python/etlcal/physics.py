@@ -3,7 +3,10 @@
 Each function takes the (compensated) lens current `e_ma` in mA, as a float or an array,
 and an optional `lens` (a `LensPhysics`; the paper's section 5.1.1 lens by default).
 """
-from typing import Optional
+from typing import Any, List, Optional, Sequence, Union, overload
+
+import numpy as np
+import numpy.typing as npt
 
 from ._etlcal import LensPhysics
 
@@ -22,6 +25,12 @@ __all__ = [
 ]
 
 
+_F64 = npt.NDArray[np.float64]
+# Currents as an array or a list: the functions return an array for them (a number for a
+# number).
+_Numbers = Union[npt.NDArray[Any], Sequence[float]]
+
+
 def paper_lens() -> LensPhysics:
     """The lens of the paper's section 5.1.1."""
     return LensPhysics.paper()
@@ -31,7 +40,13 @@ def _lens(lens: Optional[LensPhysics]) -> LensPhysics:
     return LensPhysics.paper() if lens is None else lens
 
 
-def applied_pressure_pa(e_ma, lens: Optional[LensPhysics] = None):
+@overload
+def applied_pressure_pa(e_ma: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def applied_pressure_pa(e_ma: _Numbers, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def applied_pressure_pa(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def applied_pressure_pa(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Applied pressure p_a(E) (Eq. 1), Pa.
 
     Args:
@@ -41,7 +56,13 @@ def applied_pressure_pa(e_ma, lens: Optional[LensPhysics] = None):
     return _lens(lens).applied_pressure_pa(e_ma)
 
 
-def membrane_pressure_pa(e_ma, lens: Optional[LensPhysics] = None):
+@overload
+def membrane_pressure_pa(e_ma: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def membrane_pressure_pa(e_ma: _Numbers, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def membrane_pressure_pa(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def membrane_pressure_pa(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Total pressure on the membrane p_0 + p_a(E), Pa.
 
     Args:
@@ -51,7 +72,13 @@ def membrane_pressure_pa(e_ma, lens: Optional[LensPhysics] = None):
     return _lens(lens).membrane_pressure_pa(e_ma)
 
 
-def peak_deflection_mm(e_ma, lens: Optional[LensPhysics] = None):
+@overload
+def peak_deflection_mm(e_ma: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def peak_deflection_mm(e_ma: _Numbers, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def peak_deflection_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def peak_deflection_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Peak deflection of the membrane (Eq. 2), mm.
 
     Args:
@@ -61,7 +88,13 @@ def peak_deflection_mm(e_ma, lens: Optional[LensPhysics] = None):
     return _lens(lens).peak_deflection_mm(e_ma)
 
 
-def radius_of_curvature_mm(e_ma, lens: Optional[LensPhysics] = None):
+@overload
+def radius_of_curvature_mm(e_ma: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def radius_of_curvature_mm(e_ma: _Numbers, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def radius_of_curvature_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def radius_of_curvature_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Radius of curvature of the membrane (Eq. 3), mm.
 
     Args:
@@ -71,7 +104,13 @@ def radius_of_curvature_mm(e_ma, lens: Optional[LensPhysics] = None):
     return _lens(lens).radius_of_curvature_mm(e_ma)
 
 
-def f_liq_mm(e_ma, lens: Optional[LensPhysics] = None):
+@overload
+def f_liq_mm(e_ma: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def f_liq_mm(e_ma: _Numbers, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def f_liq_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def f_liq_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Focal length of the liquid lens (Eq. 5), mm: 120.5 mm at 0 mA to 50.5 mm at 250 mA
     for the paper's lens.
 
@@ -82,7 +121,13 @@ def f_liq_mm(e_ma, lens: Optional[LensPhysics] = None):
     return _lens(lens).f_liq_mm(e_ma)
 
 
-def f_com_mm(e_ma, lens: Optional[LensPhysics] = None):
+@overload
+def f_com_mm(e_ma: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def f_com_mm(e_ma: _Numbers, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def f_com_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def f_com_mm(e_ma: npt.ArrayLike, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Compound focal length of the ETL behind the prime lens (Eq. 10), mm.
 
     Args:
@@ -92,7 +137,13 @@ def f_com_mm(e_ma, lens: Optional[LensPhysics] = None):
     return _lens(lens).f_com_mm(e_ma)
 
 
-def gravity_error_mm(e_ma, dp_gravity_pa: float, lens: Optional[LensPhysics] = None):
+@overload
+def gravity_error_mm(e_ma: float, dp_gravity_pa: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def gravity_error_mm(e_ma: _Numbers, dp_gravity_pa: float, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def gravity_error_mm(e_ma: npt.ArrayLike, dp_gravity_pa: float, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def gravity_error_mm(e_ma: npt.ArrayLike, dp_gravity_pa: float, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Focal-length error of a vertical lens from the liquid's weight (Eq. 6), mm.
 
     Args:
@@ -103,7 +154,13 @@ def gravity_error_mm(e_ma, dp_gravity_pa: float, lens: Optional[LensPhysics] = N
     return _lens(lens).gravity_error_mm(e_ma, dp_gravity_pa)
 
 
-def gravity_coefficient(e_ma, rho_liq_kg_m3: float, rho_sur_kg_m3: float, lens: Optional[LensPhysics] = None):
+@overload
+def gravity_coefficient(e_ma: float, rho_liq_kg_m3: float, rho_sur_kg_m3: float, lens: Optional[LensPhysics] = None) -> float: ...
+@overload
+def gravity_coefficient(e_ma: _Numbers, rho_liq_kg_m3: float, rho_sur_kg_m3: float, lens: Optional[LensPhysics] = None) -> _F64: ...
+@overload
+def gravity_coefficient(e_ma: npt.ArrayLike, rho_liq_kg_m3: float, rho_sur_kg_m3: float, lens: Optional[LensPhysics] = None) -> Union[float, _F64]: ...
+def gravity_coefficient(e_ma: npt.ArrayLike, rho_liq_kg_m3: float, rho_sur_kg_m3: float, lens: Optional[LensPhysics] = None) -> Union[float, _F64]:
     """Gravity coefficient of a horizontal lens (Eq. 9), dimensionless.
 
     Args:
@@ -117,7 +174,7 @@ def gravity_coefficient(e_ma, rho_liq_kg_m3: float, rho_sur_kg_m3: float, lens: 
 
 def polynomial_fit_rmse_mm(
     e_from_ma: float = 0.0, e_to_ma: float = 260.0, step_ma: float = 0.1, lens: Optional[LensPhysics] = None
-):
+) -> List[float]:
     """RMS error (mm) of polynomials of degree 1..6 fitted to f_com(E) (paper Fig. 5).
 
     Args:

@@ -16,14 +16,20 @@ import numpy as np
 import numpy.typing as npt
 
 _F64 = npt.NDArray[np.float64]
+_Bool = npt.NDArray[np.bool_]
 
 __all__ = [
     "AutofocusResult",
     "BoardDetection",
     "Compensation",
+    "CompensationArray",
     "DetectionSummary",
     "ExportResult",
     "FocusLaw",
+    "HoldReport",
+    "HoldStep",
+    "LensInfo",
+    "LensState",
     "ModelStd",
     "OffstateView",
     "StudyResult",
@@ -132,6 +138,78 @@ class Compensation(_Result):
     e_t_ma: float
     e_com_ma: float
     extrapolated: bool
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class CompensationArray(_Result):
+    """`ThermalCalibration.compensate` / `.e_in_for_e_com` over arrays: the fields of a
+    `Compensation` as arrays of the arguments' broadcast shape: `e_in_ma`, `e_t_ma`,
+    `e_com_ma` (float64, mA) and `extrapolated` (bool, per reading)."""
+
+    e_in_ma: _F64
+    e_t_ma: _F64
+    e_com_ma: _F64
+    extrapolated: _Bool
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class LensInfo(_Result):
+    """`Lens.info()`: `firmware_type` (the letter of the `H` reply), `firmware_version`
+    ("major.minor.build.revision"), `lens_serial`, the driver's `max_current_ma` and its
+    software limits `upper_limit_ma`, `lower_limit_ma` (mA), and `temperature_c` (degC, None
+    when the lens has no temperature sensor)."""
+
+    firmware_type: str
+    firmware_version: str
+    lens_serial: str
+    max_current_ma: float
+    upper_limit_ma: float
+    lower_limit_ma: float
+    temperature_c: Optional[float]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class HoldStep(_Result):
+    """One step of `Lens.hold` (given to `on_step`, and the report's `last`): `index` (from
+    0), `temperature_c` (degC, read), `e_in_ma` (mA, commanded after clamping and
+    quantisation), `e_com_ma` (mA, the surface's E_com at that current), `error_ma`
+    (|E_com - wanted|, mA) and `extrapolated` (outside the calibrated ranges)."""
+
+    index: int
+    temperature_c: float
+    e_in_ma: float
+    e_com_ma: float
+    error_ma: float
+    extrapolated: bool
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class HoldReport(_Result):
+    """`Lens.hold(...)`: `commands_sent`, `elapsed_s` (s), `achieved_rate_hz` (Hz),
+    `worst_e_com_error_ma` (mA), `temperature_range_c` ((min, max) read, degC),
+    `extrapolated_steps` and `last` (the last HoldStep, None when no step ran)."""
+
+    commands_sent: int
+    elapsed_s: float
+    achieved_rate_hz: float
+    worst_e_com_error_ma: float
+    temperature_range_c: Tuple[float, float]
+    extrapolated_steps: int
+    last: Optional[HoldStep]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class LensState(_Result):
+    """`VirtualLens.state()`, the simulated lens's truth: `e_in_ma` (the current the driver
+    outputs, mA), `temperature_c` (the true lens temperature, degC), `e_t_ma`, `e_com_ma`
+    (E_T(T, E_in) and E_com = E_in - E_T, mA) and `f_com_mm` (the ETL group's focal length
+    f_com(E_com), mm)."""
+
+    e_in_ma: float
+    temperature_c: float
+    e_t_ma: float
+    e_com_ma: float
+    f_com_mm: float
 
 
 @dataclass(frozen=True, eq=False, repr=False)

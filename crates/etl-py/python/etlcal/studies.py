@@ -41,13 +41,15 @@ def subsets(trials: Optional[int] = None, seed: int = 1, out: _Out = None) -> St
 def baseline(trials: Optional[int] = None, seed: int = 1, out: _Out = None) -> StudyResult:
     """The paper's Fig. 12: the existing method (Zhang at each of 7 currents, a cubic through
     fx(E), fy(E)) against the proposed one (paper BA and errors-in-variables): relative error
-    of fx(E) ("fx_curve") and the PnP error of a 2 mm stage move at 100..250 mA, um ("pnp",
-    "baseline_over_proposed_at_250ma"), over `trials` data sets."""
+    of fx(E) ("fx_curve", means with their standard errors `*_se`) and the PnP error of a
+    2 mm stage move at 100..250 mA, um ("pnp", "baseline_over_proposed_at_250ma"), over
+    `trials` data sets."""
     return study("baseline", trials or 0, seed, out)
 
 
 def crlb(trials: Optional[int] = None, seed: int = 1, out: _Out = None) -> StudyResult:
     """Cramer-Rao bound of every parameter against the Monte Carlo spread of the estimates
     over `trials` data sets: {"parameters": [{"name", "truth", "crlb_std", "mc_std",
-    "efficiency"}, ...]}."""
+    "mc_std_se", "efficiency", "efficiency_se", ...}, ...], "fx_curve": [...]} (each
+    observed std and efficiency with its standard error over the trials)."""
     return study("crlb", trials or 0, seed, out)

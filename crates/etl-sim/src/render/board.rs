@@ -260,8 +260,9 @@ impl BoardLayout {
 
     /// The grey level over the rectangle [lo[0], hi[0]] x [lo[1], hi[1]] (mm) when it is
     /// the same all over it: the rectangle lies in one slab rectangle (a checkerboard's
-    /// square, a marker's cell), or in the background, or in the white margin's frame; `None` otherwise (it may still be uniform, e.g. when the
-    /// background is as light as the margin).
+    /// square, a marker's cell), or in the background, or in the white margin's frame, or
+    /// across at most 16 slab rectangles of one grey level; `None` otherwise (it may still
+    /// be uniform, e.g. when the background is as light as the margin over many slabs).
     pub fn level_over(&self, lo: [f64; 2], hi: [f64; 2]) -> Option<f64> {
         let (sx0, sy0) = self.region(lo[0], lo[1]);
         let (sx1, sy1) = self.region(hi[0], hi[1]);
@@ -279,6 +280,15 @@ impl BoardLayout {
             || (margin_strip(&self.y, sy0, sy1) && inside(&self.x, sx0, sx1))
         {
             return Some(self.levels.light);
+        }
+        // A few slab rectangles of one colour (a tile across a marker's border cells, or
+        // across equal cells and the white gap): uniform too. Every slab rectangle the
+        // rectangle meets lies in the ranges, so this is exact.
+        let (nx, ny) = (i64::from(sx1) - i64::from(sx0) + 1, i64::from(sy1) - i64::from(sy0) + 1);
+        if nx * ny <= 16 {
+            let first = self.level((sx0, sy0));
+            let same = (sx0..=sx1).all(|sx| (sy0..=sy1).all(|sy| self.level((sx, sy)) == first));
+            return same.then_some(first);
         }
         None
     }
@@ -352,7 +362,9 @@ mod tests {
         assert_eq!(b.level_over([-1.9, 6.1], [7.9, 6.4]), Some(210.0)); // top margin strip
         assert_eq!(b.level_over([-1.9, 6.1], [7.9, 6.6]), None); // into the background
         assert_eq!(b.level_over([-1.9, 5.9], [-1.6, 6.4]), Some(210.0)); // a margin corner
-        assert_eq!(b.level_over([-1.9, 0.0], [-1.4, 0.2]), None); // margin and a square
+                                                                         // The margin and the white square (-1, 0): light; with the black (-1, -1): mixed.
+        assert_eq!(b.level_over([-1.9, 0.0], [-1.4, 0.2]), Some(210.0));
+        assert_eq!(b.level_over([-1.9, -0.2], [-1.4, 0.2]), None);
     }
 
     #[test]

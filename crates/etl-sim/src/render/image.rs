@@ -82,7 +82,7 @@ impl Image {
         let mut bytes = std::io::Cursor::new(Vec::new());
         self.to_dynamic()
             .write_to(&mut bytes, image::ImageFormat::Png)
-            .map_err(|e| Error::InvalidInput(format!("cannot encode PNG: {e}")))?;
+            .map_err(|e| Error::invalid("image", format!("cannot encode PNG: {e}")))?;
         Ok(bytes.into_inner())
     }
 

@@ -75,7 +75,11 @@ impl PixelToBoard {
             [r[2][0], r[2][1], r[2][2] * board_z_mm + t[2]],
         ];
         let hinv = inverse3(&h).ok_or_else(|| {
-            Error::InvalidInput("the camera centre lies in the board plane (board seen edge-on)".into())
+            Error::invalid_value(
+                "board_z_mm",
+                board_z_mm,
+                "the camera centre lies in the board plane (board seen edge-on)",
+            )
         })?;
         let mut m = hinv;
         for row in m.iter_mut() {

@@ -114,23 +114,30 @@ impl Scene {
     /// length positive at the current, a margin not negative, image sides in
     /// 1..=[`MAX_IMAGE_SIDE_PX`].
     pub fn validate(&self) -> Result<()> {
-        self.board.validate()?;
+        self.board.validate().map_err(|e| e.under("board"))?;
         self.model.validate()?;
         self.model.intrinsics(self.e_com_ma)?;
         if !self.board_z_mm.is_finite() {
-            return Err(Error::InvalidInput(format!("board plane Z must be finite, got {}", self.board_z_mm)));
+            return Err(Error::invalid_value(
+                "board_z_mm",
+                self.board_z_mm,
+                format!("board plane Z must be finite, got {}", self.board_z_mm),
+            ));
         }
         if !(self.margin_mm.is_finite() && self.margin_mm >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "margin must be finite and not negative, got {} mm",
-                self.margin_mm
-            )));
+            return Err(Error::invalid_value(
+                "margin_mm",
+                self.margin_mm,
+                format!("margin must be finite and not negative, got {} mm", self.margin_mm),
+            ));
         }
         let [w, h] = self.image_size;
         if !(1..=MAX_IMAGE_SIDE_PX).contains(&w) || !(1..=MAX_IMAGE_SIDE_PX).contains(&h) {
-            return Err(Error::InvalidInput(format!(
-                "image size must be 1..={MAX_IMAGE_SIDE_PX} px per side, got {w} x {h}"
-            )));
+            return Err(Error::invalid_value(
+                "image_size",
+                self.image_size,
+                format!("image size must be 1..={MAX_IMAGE_SIDE_PX} px per side, got {w} x {h}"),
+            ));
         }
         Ok(())
     }
@@ -228,20 +235,26 @@ impl Optics {
     pub fn validate(&self) -> Result<()> {
         if let Some(z) = self.focus_depth_mm {
             if !(z.is_finite() && z > 0.0) {
-                return Err(Error::InvalidInput(format!("focus depth must be positive and finite, got {z} mm")));
+                return Err(Error::invalid_value(
+                    "focus_depth_mm",
+                    z,
+                    format!("focus depth must be positive and finite, got {z} mm"),
+                ));
             }
         }
         if !(self.aperture_mm.is_finite() && self.aperture_mm >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "aperture must be finite and not negative, got {} mm",
-                self.aperture_mm
-            )));
+            return Err(Error::invalid_value(
+                "aperture_mm",
+                self.aperture_mm,
+                format!("aperture must be finite and not negative, got {} mm", self.aperture_mm),
+            ));
         }
         if !(self.base_sigma_px.is_finite() && (0.0..=MAX_SIGMA_PX).contains(&self.base_sigma_px)) {
-            return Err(Error::InvalidInput(format!(
-                "blur sigma must be within 0..={MAX_SIGMA_PX} px, got {}",
-                self.base_sigma_px
-            )));
+            return Err(Error::invalid_value(
+                "base_sigma_px",
+                self.base_sigma_px,
+                format!("blur sigma must be within 0..={MAX_SIGMA_PX} px, got {}", self.base_sigma_px),
+            ));
         }
         Ok(())
     }
@@ -349,7 +362,10 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Rendered> {
             .corner_world_mm(id)
             .ok_or(etl_core::Error::BehindCamera)
             .and_then(|w| scene.model.project(w, scene.e_com_ma))
-            .map_err(|e| Error::InvalidInput(format!("corner {id} ({i}, {j}) cannot be projected: {e}")))?;
+            .map_err(|e| {
+                let message = format!("corner {id} ({i}, {j}) cannot be projected: {e}");
+                Error::invalid_value("board_z_mm", scene.board_z_mm, message)
+            })?;
         corners_px.push(p);
     }
     let corners_in_image = corners_px

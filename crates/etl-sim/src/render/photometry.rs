@@ -58,29 +58,40 @@ impl Photometry {
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [("dark", self.dark), ("light", self.light), ("background", self.background)] {
             if !(0.0..=255.0).contains(&v) {
-                return Err(Error::InvalidInput(format!("{name} grey level must be within 0..=255, got {v}")));
+                return Err(Error::invalid_value(
+                    name,
+                    v,
+                    format!("{name} grey level must be within 0..=255, got {v}"),
+                ));
             }
         }
         if !(0.0..1.0).contains(&self.vignetting) {
-            return Err(Error::InvalidInput(format!("vignetting must be in [0, 1), got {}", self.vignetting)));
+            return Err(Error::invalid_value(
+                "vignetting",
+                self.vignetting,
+                format!("vignetting must be in [0, 1), got {}", self.vignetting),
+            ));
         }
         if !self.gradient.iter().all(|g| g.is_finite() && g.abs() < 2.0) {
-            return Err(Error::InvalidInput(format!(
-                "illumination gradient must be finite and below 2 in magnitude, got {:?}",
-                self.gradient
-            )));
+            return Err(Error::invalid_value(
+                "gradient",
+                self.gradient,
+                format!("illumination gradient must be finite and below 2 in magnitude, got {:?}", self.gradient),
+            ));
         }
         if !(self.read_noise.is_finite() && self.read_noise >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "read noise must be finite and not negative, got {}",
-                self.read_noise
-            )));
+            return Err(Error::invalid_value(
+                "read_noise",
+                self.read_noise,
+                format!("read noise must be finite and not negative, got {}", self.read_noise),
+            ));
         }
         if !(self.photon_gain.is_finite() && self.photon_gain >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "photon gain must be finite and not negative, got {}",
-                self.photon_gain
-            )));
+            return Err(Error::invalid_value(
+                "photon_gain",
+                self.photon_gain,
+                format!("photon gain must be finite and not negative, got {}", self.photon_gain),
+            ));
         }
         Ok(())
     }

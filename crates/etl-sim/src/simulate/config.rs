@@ -82,26 +82,35 @@ impl SimConfig {
             etl_formats::check_range(key, value, [0.0, hi], unit)?;
         }
         if let Some(r) = &self.setting_rig {
-            if r.e_com_ma.is_empty() || r.views_per_setting == 0 {
-                return Err(Error::InvalidInput("setting_rig needs at least one current and one view".into()));
+            let message = "setting_rig needs at least one current and one view";
+            if r.e_com_ma.is_empty() {
+                return Err(Error::invalid("setting_rig.e_com_ma", message));
+            }
+            if r.views_per_setting == 0 {
+                return Err(Error::invalid_value("setting_rig.views_per_setting", 0_usize, message));
             }
             if r.views_per_setting > MAX_VIEWS_PER_SETTING || r.e_com_ma.len() > MAX_SETTINGS {
-                return Err(Error::InvalidInput(format!(
+                let message = format!(
                     "setting_rig: {} currents x {} views_per_setting: at most {MAX_SETTINGS} currents and \
                      {MAX_VIEWS_PER_SETTING} views per setting",
                     r.e_com_ma.len(),
                     r.views_per_setting
-                )));
+                );
+                return Err(if r.views_per_setting > MAX_VIEWS_PER_SETTING {
+                    Error::invalid_value("setting_rig.views_per_setting", r.views_per_setting, message)
+                } else {
+                    Error::invalid("setting_rig.e_com_ma", message)
+                });
             }
             for e in &r.e_com_ma {
                 etl_formats::check_range("setting_rig.e_com_ma", *e, etl_core::thermal::E_IN_DOMAIN_MA, "mA")?;
             }
-            if !(r.blur_px > 0.0 && r.aperture_mm > 0.0 && r.max_tilt_deg >= 0.0)
-                || r.e_com_ma.iter().any(|e| !e.is_finite())
-            {
-                return Err(Error::InvalidInput(
-                    "setting_rig: blur_px and aperture_mm must be positive, currents finite".into(),
-                ));
+            let positive = [("blur_px", r.blur_px), ("aperture_mm", r.aperture_mm)];
+            let bad = positive.into_iter().find(|(_, x)| !(*x > 0.0));
+            let bad = bad.or(Some(("max_tilt_deg", r.max_tilt_deg)).filter(|(_, x)| !(*x >= 0.0)));
+            if let Some((key, x)) = bad {
+                let message = "setting_rig: blur_px and aperture_mm must be positive, currents finite";
+                return Err(Error::invalid_value(format!("setting_rig.{key}"), x, message));
             }
         }
         Ok(())

@@ -215,10 +215,12 @@ fn etl_views(sim: &Simulation, dir: &Path, options: &ImageOptions, seed: u64) ->
     };
     let mut jobs = vec![];
     for (k, view) in sim.observations.views.iter().enumerate() {
-        let z_rec =
-            view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
-                Error::InvalidInput(format!("simulated view {k} has no points, so no stage position"))
-            })?;
+        let z_rec = view.points.first().map(|p| p.world_mm[2]).ok_or_else(|| {
+            Error::invalid(
+                format!("views[{k}].points"),
+                format!("simulated view {k} has no points, so no stage position"),
+            )
+        })?;
         let e_rec = view.e_com_ma.unwrap_or(view.e_in_ma);
         let z = z_rec + sim.true_dz_mm.get(k).copied().unwrap_or(0.0);
         let e = e_rec + sim.true_de_ma.get(k).copied().unwrap_or(0.0);
@@ -227,7 +229,8 @@ fn etl_views(sim: &Simulation, dir: &Path, options: &ImageOptions, seed: u64) ->
             RigBoard::CheckerboardBlocks => {
                 let (block, first) =
                     visible_block(truth, e, paper_board, z, size, options.margin_px).ok_or_else(|| {
-                        Error::InvalidInput(format!("view {k}: not even 3 x 3 corners of the board fit the image"))
+                        let message = format!("view {k}: not even 3 x 3 corners of the board fit the image");
+                        Error::invalid(format!("views[{k}]"), message)
                     })?;
                 (Scene::new(shifted(truth, first, paper_square), e, block, z, size), Some(block), Some(first))
             }
@@ -275,9 +278,10 @@ fn lens_off_views(
             RigBoard::Charuco => (Scene::new(charuco_frame(pose, off_square), 0.0, charuco, 0.0, size), None, None),
             RigBoard::CheckerboardBlocks => {
                 let Some((block, first)) = visible_block(pose, 0.0, off_board, 0.0, size, options.margin_px) else {
-                    return Err(Error::InvalidInput(format!(
-                        "lens-off view {k}: not even 3 x 3 corners fit the image"
-                    )));
+                    return Err(Error::invalid(
+                        format!("offstate_views[{k}]"),
+                        format!("lens-off view {k}: not even 3 x 3 corners fit the image"),
+                    ));
                 };
                 (Scene::new(shifted(pose, first, off_square), 0.0, block, 0.0, size), Some(block), Some(first))
             }

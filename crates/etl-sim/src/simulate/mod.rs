@@ -311,8 +311,9 @@ pub fn core_points(sim: &Simulation) -> Vec<Vec<Point>> {
 
 /// The noise model of the simulation flags.
 pub fn noise_from(stage_um: f64, current_ma: f64, pixel_px: f64) -> Result<NoiseModel> {
-    if ![stage_um, current_ma, pixel_px].iter().all(|x| x.is_finite() && *x >= 0.0) {
-        return Err(Error::InvalidInput("noise levels must be finite and not negative".into()));
+    let levels = [("stage_noise_um", stage_um), ("current_noise_ma", current_ma), ("pixel_noise_px", pixel_px)];
+    if let Some((what, x)) = levels.into_iter().find(|(_, x)| !(x.is_finite() && *x >= 0.0)) {
+        return Err(Error::invalid_value(what, x, "noise levels must be finite and not negative"));
     }
     Ok(NoiseModel { z_mm: stage_um / 1000.0, e_ma: current_ma, px: pixel_px, ..NoiseModel::PAPER })
 }
