@@ -327,7 +327,38 @@ fn a_board_in_opencvs_legacy_layout_gives_no_wrong_ids() {
     let e = r["images"].as_array().unwrap().iter().find(|e| e["source"] == "legacy").expect("the legacy fixture");
     assert_eq!(ids(&e["ids"]).len(), 35);
     let m = not_found(detect_charuco_file(&fixtures().join(e["file"].as_str().unwrap()), &board_of(e)));
-    assert!(m.contains("none confirmed"), "{m}");
+    assert!(m.contains("do not fit the 8x6 board's layout"), "{m}");
+}
+
+/// A board of another size asked for: with another number of columns the ids fall in other
+/// squares and the markers contradict each other: refused, not a wrong id; with another
+/// number of rows the ids keep their squares (row-major), and the corners reported are the
+/// true ones of the real board, within the board asked for.
+#[test]
+fn a_board_of_another_size_gives_no_wrong_ids() {
+    let r = reference();
+    for e in r["images"].as_array().unwrap().iter().filter(|e| e["source"] == "generated") {
+        let file = fixtures().join(e["file"].as_str().unwrap());
+        let b = board_of(e);
+        let [cols, rows] = b.squares();
+        let truth = points(&e["truth_px"]);
+        for squares in [[cols + 1, rows], [cols - 1, rows], [cols + 2, rows + 1], [cols, rows + 1], [cols, rows - 1]] {
+            let Ok(other) = CharucoBoard::new(squares, b.square_mm(), b.marker_mm(), b.dictionary()) else { continue };
+            match detect_charuco_file(&file, &other) {
+                Err(Error::BoardNotFound(m)) => {
+                    assert!(squares[0] != cols && m.contains("do not fit"), "{file:?} as {squares:?}: {m}")
+                }
+                Ok(d) => {
+                    assert_eq!(squares[0], cols, "{file:?} as {squares:?}: ids {:?}", d.ids);
+                    for (&id, p) in d.ids.iter().zip(&d.corners_px) {
+                        let t = truth[id as usize];
+                        assert!((p[0] - t[0]).hypot(p[1] - t[1]) < 0.05, "{file:?} as {squares:?}: id {id}");
+                    }
+                }
+                Err(e) => panic!("{e}"),
+            }
+        }
+    }
 }
 
 /// The board-generic entry point: a ChArUco board as `detect_charuco`, a checkerboard as

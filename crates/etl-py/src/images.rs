@@ -111,15 +111,15 @@ pub fn detect_corners<'py>(
     pattern: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let target = match (board, pattern) {
-        (Some(_), Some(_)) => return Err(input_error("give the board once: board or pattern, not both")),
-        (None, None) => return Err(input_error("give the board: an etlcal.Board, or a pattern \"CxR\"")),
+        (Some(_), Some(_)) => return Err(invalid("board", "give the board once: board or pattern, not both")),
+        (None, None) => return Err(invalid("board", "give the board: an etlcal.Board, or a pattern \"CxR\"")),
         (Some(b), None) if b.extract::<String>().is_err() && b.extract::<(usize, usize)>().is_err() => {
             Some(board_arg(b, "board")?)
         }
         _ => None,
     };
     let Some(target) = target else {
-        let pattern = pattern_of(board.or(pattern).ok_or_else(|| input_error("no pattern"))?)?;
+        let pattern = pattern_of(board.or(pattern).ok_or_else(|| invalid("pattern", "no pattern"))?)?;
         let corners = with_view(py, image, |v| detect_view(v, pattern), |v| detect_view(v, pattern))?;
         return points_out(py, corners.corners_px, false);
     };
@@ -142,7 +142,7 @@ fn with_view<'py, R: Send>(
     at16: impl FnOnce(GrayView<'_, u16>) -> etl_formats::Result<R> + Send,
 ) -> PyResult<R> {
     with_image(image, |w, h, px| {
-        let bad = || input_error(format!("image of {w} x {h} px has an inconsistent buffer"));
+        let bad = || invalid("image", format!("image of {w} x {h} px has an inconsistent buffer"));
         py.detach(|| match px {
             ImageRef::U8(s) => GrayView::new(w, h, s).map(at8),
             ImageRef::U16(s) => GrayView::new(w, h, s).map(at16),

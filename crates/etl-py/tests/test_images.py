@@ -2,7 +2,7 @@
 the Rust side, and each bad input as the right exception class."""
 import json
 import pathlib
-from typing import Any, List, Tuple
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -160,19 +160,22 @@ def test_autofocus_bad_options() -> None:
 
 CHARUCO = pathlib.Path(__file__).resolve().parents[3] / "fixtures" / "charuco"
 
+# An image drawn by OpenCV and its entry in fixtures/charuco/opencv.json.
+Drawn = Tuple[npt.NDArray[np.uint8], Dict[str, Any]]
+
 
 @pytest.fixture(scope="module")
-def drawn_board():
+def drawn_board() -> Drawn:
     """A board drawn by OpenCV (fixtures/charuco/SOURCE.md) and what OpenCV 5's
     CharucoDetector finds on it, with the true corners (fixtures/charuco/opencv.json)."""
-    cv2 = pytest.importorskip("cv2")
+    cv2: Any = pytest.importorskip("cv2")
     reference = json.loads((CHARUCO / "opencv.json").read_text())
-    entry = next(e for e in reference["images"] if e["file"] == "opencv_DICT_5X5_100.png")
-    image = cv2.imread(str(CHARUCO / entry["file"]), cv2.IMREAD_GRAYSCALE)
+    entry: Dict[str, Any] = next(e for e in reference["images"] if e["file"] == "opencv_DICT_5X5_100.png")
+    image: npt.NDArray[np.uint8] = cv2.imread(str(CHARUCO / entry["file"]), cv2.IMREAD_GRAYSCALE)
     return image, entry
 
 
-def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
+def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board: Drawn) -> None:
     image, entry = drawn_board
     b = entry["board"]
     board = etlcal.Board.charuco(tuple(b["squares"]), b["square_mm"], b["marker_mm"], b["dictionary"])
@@ -183,7 +186,7 @@ def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
     assert np.allclose(found.board_mm, entry["board_mm"], atol=1e-6)
     assert found.image_size == (640, 480)
     truth = np.array(entry["truth_px"])[found.ids]
-    rms = np.sqrt(np.mean(np.sum((found.corners_px - truth) ** 2, axis=1)))
+    rms = float(np.sqrt(np.mean(np.sum((found.corners_px - truth) ** 2, axis=1))))
     assert rms < 0.015, rms
     # The board as a dict of its fields, and a 16-bit image: the same corners.
     as_dict = dict(b, type="charuco")
@@ -192,7 +195,7 @@ def test_detect_corners_of_a_charuco_board_gives_opencvs_ids(drawn_board):
     assert np.allclose(again.corners_px, found.corners_px, atol=1e-3)
 
 
-def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board):
+def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board: Board) -> None:
     image, _ = board
     found = etlcal.detect_corners(image, etlcal.Board.checkerboard((14, 12), 1.5))
     assert found.ids.tolist() == list(range(168))
@@ -201,7 +204,7 @@ def test_detect_corners_of_a_checkerboard_board_has_row_major_ids(board):
     assert np.allclose(found.board_mm[15], [1.5, 1.5])
 
 
-def test_detect_corners_of_a_charuco_board_bad_input(drawn_board):
+def test_detect_corners_of_a_charuco_board_bad_input(drawn_board: Drawn) -> None:
     image, entry = drawn_board
     b = entry["board"]
     other = etlcal.Board.charuco(tuple(b["squares"]), b["square_mm"], b["marker_mm"], "DICT_APRILTAG_36h11")
@@ -212,9 +215,10 @@ def test_detect_corners_of_a_charuco_board_bad_input(drawn_board):
     with pytest.raises(etlcal.InputError, match="dictionary"):
         etlcal.detect_corners(image, {"type": "charuco", "squares": [8, 6], "square_mm": 25, "marker_mm": 18,
                                       "dictionary": "DICT_5X5_99"})
-    with pytest.raises(etlcal.InputError, match="not both"):
-        etlcal.detect_corners(image, etlcal.Board.checkerboard((9, 6), 1.0), pattern="9x6")
+    with pytest.raises(etlcal.InputError, match="not both") as e:
+        etlcal.detect_corners(image, etlcal.Board.checkerboard((9, 6), 1.0), pattern="9x6")  # type: ignore[call-overload]
+    assert e.value.what == "board"
     with pytest.raises(etlcal.InputError):
-        etlcal.detect_corners(image)
+        etlcal.detect_corners(image)  # type: ignore[call-overload]
     with pytest.raises(etlcal.InputError):
-        etlcal.detect_corners(image, 42)
+        etlcal.detect_corners(image, 42)  # type: ignore[call-overload]

@@ -53,7 +53,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         (Some(path), _) => Board::load(path)?,
         // The square size plays no part in detection.
         (None, Some(p)) => Board::checkerboard([p.cols, p.rows], 1.0)?,
-        (None, None) => return Err(Error::invalid("--board", "give the board: --board FILE or --pattern CxR")),
+        (None, None) => return Err(Error::invalid("board", "give the board: --board FILE or --pattern CxR")),
     };
     let results = detect_board_many(&args.images, &board);
     let mut failures = Vec::new();

@@ -187,10 +187,14 @@ mod tests {
         assert_eq!(p[1], [2, 1], "clockwise in the image: east first along the top");
         assert!(!c[0].touches_border);
         // Every boundary pixel once.
-        let mut sorted = p.clone();
+        assert_eq!(distinct(p), p.len());
+    }
+
+    fn distinct(p: &[[i32; 2]]) -> usize {
+        let mut sorted = p.to_vec();
         sorted.sort();
         sorted.dedup();
-        assert_eq!(sorted.len(), p.len());
+        sorted.len()
     }
 
     /// Regions touching by a corner only are one (8-connectivity); a region on the image
@@ -211,9 +215,6 @@ mod tests {
         // The two contact pixels are passed twice (out along one square, back along the other).
         let p = &c[0].points;
         assert_eq!(p.len(), 18, "{p:?}");
-        let mut sorted = p.clone();
-        sorted.sort();
-        sorted.dedup();
-        assert_eq!(sorted.len(), 16);
+        assert_eq!(distinct(p), 16);
     }
 }

@@ -7,9 +7,11 @@
 //! it was found, within 30 % of a square and 1.5 px per square of distance. A misread id
 //! places its homography at least one square off, so a marker is kept when some neighbours
 //! agree with it and those outnumber three times the nearest ones (diagonal) that disagree.
-//! A board laid out otherwise than the board asked for (OpenCV's legacy layout of boards with
-//! an even number of rows: rows of one parity shifted against the others) is thus refused,
-//! and a lone marker, unconfirmed, gives no corner.
+//! A lone marker, unconfirmed, gives no corner. On a board laid out otherwise than the board
+//! asked for (another number of columns; OpenCV's legacy layout of boards with an even number
+//! of rows: rows of one parity shifted against the others) most markers are contradicted by a
+//! diagonal neighbour, and the detector refuses the image rather than give the few that
+//! happen to agree.
 
 use std::collections::HashMap;
 
@@ -33,6 +35,17 @@ pub(crate) struct Placed {
 /// A marker is kept when its agreeing neighbours outnumber its disagreeing diagonal ones this
 /// many times over.
 const DISAGREEMENT: usize = 3;
+/// The markers checked against the board.
+pub(crate) struct Layout {
+    /// The confirmed markers, in increasing id order.
+    pub kept: Vec<Placed>,
+    /// Markers decoded with an id on the board (each once).
+    pub on_board: usize,
+    /// Of those, how many a diagonal neighbour contradicts. On the board asked for, next to
+    /// none; on a board of another size or layout, most (ids fall in other squares).
+    pub contradicted: usize,
+}
+
 /// Farthest neighbour checked, squares along either axis.
 const REACH: i64 = 2;
 /// Agreement needed between a predicted and an observed marker centre, squares, plus
@@ -41,9 +54,8 @@ const REACH: i64 = 2;
 const TOLERANCE: f64 = 0.3;
 const EXTRAPOLATION_PX: f64 = 1.5;
 
-/// The markers of `decoded` that are on `board`, unique and confirmed by a neighbour,
-/// in increasing id order.
-pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed> {
+/// The markers of `decoded` that are on `board`, unique and confirmed by their neighbours.
+pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Layout {
     let mut by_id: HashMap<u32, Vec<&Decoded>> = HashMap::new();
     for d in decoded {
         by_id.entry(d.id).or_default().push(d);
@@ -63,7 +75,8 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
     }
     placed.sort_by_key(|p| p.id);
     let at: HashMap<[u32; 2], usize> = placed.iter().enumerate().map(|(k, p)| (p.square, k)).collect();
-    let keep: Vec<bool> = placed
+    // (agreeing neighbours, disagreeing diagonal ones) of each marker.
+    let votes: Vec<(usize, usize)> = placed
         .iter()
         .map(|p| {
             let (mut agree, mut disagree) = (0, 0);
@@ -88,10 +101,17 @@ pub(crate) fn confirmed(board: &CharucoBoard, decoded: &[Decoded]) -> Vec<Placed
                     }
                 }
             }
-            agree > 0 && DISAGREEMENT * disagree < agree
+            (agree, disagree)
         })
         .collect();
-    placed.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect()
+    let contradicted = votes.iter().filter(|v| v.1 > 0).count();
+    let on_board = placed.len();
+    let kept = placed
+        .into_iter()
+        .zip(votes)
+        .filter_map(|(p, (agree, disagree))| (agree > 0 && DISAGREEMENT * disagree < agree).then_some(p))
+        .collect();
+    Layout { kept, on_board, contradicted }
 }
 
 /// Whether `p`'s homography puts `q`'s centre where `q` was found.
@@ -114,4 +134,46 @@ pub(crate) fn side_px(q: &[[f64; 2]; 4]) -> f64 {
 
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use etl_core::board::Dictionary;
+
+    /// Every marker of a 6 x 5 board seen face-on at 10 px per mm.
+    fn markers(board: &CharucoBoard) -> Vec<Decoded> {
+        (0..board.markers() as u32)
+            .map(|id| {
+                let c = board.marker_corners_mm(id).unwrap().map(|p| [10.0 * p[0] + 20.0, 10.0 * p[1] + 30.0]);
+                Decoded { id, corners_px: c, black: 40.0, white: 210.0 }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_misread_id_is_dropped_and_its_neighbours_kept() {
+        let board = CharucoBoard::new([6, 5], 10.0, 7.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+        let mut found = markers(&board);
+        let all = confirmed(&board, &found);
+        assert_eq!((all.kept.len(), all.on_board, all.contradicted), (15, 15, 0));
+        // Marker 7 read as 9 (another square of the board), 12 read as 40 (not on it).
+        found[7].id = 9;
+        found[12].id = 40;
+        let l = confirmed(&board, &found);
+        let ids: Vec<u32> = l.kept.iter().map(|p| p.id).collect();
+        // 9 is now at two places: both dropped; 12 and 40 are gone; the rest kept.
+        let want: Vec<u32> = (0..15).filter(|i| ![7, 9, 12].contains(i)).collect();
+        assert_eq!(ids, want);
+        // A lone marker is not confirmed.
+        assert!(confirmed(&board, &found[..1]).kept.is_empty());
+    }
+
+    #[test]
+    fn a_board_of_another_width_is_contradicted() {
+        let printed = CharucoBoard::new([6, 5], 10.0, 7.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+        let asked = CharucoBoard::new([7, 5], 10.0, 7.0, Dictionary::by_name("DICT_4X4_50").unwrap()).unwrap();
+        let l = confirmed(&asked, &markers(&printed));
+        assert!(l.contradicted > l.kept.len(), "{} contradicted, {} kept", l.contradicted, l.kept.len());
+    }
 }

@@ -30,7 +30,7 @@
 //!
 //! Accuracy (1936 x 1458 renders, squares of 150-200 px, noise 2 grey levels): RMS
 //! 0.007-0.011 px at blur sigma 0.5 to 3 px, 96 % of the corners in the frame; OpenCV 5's
-//! `CharucoDetector` on the same images 0.026-0.052 px and 76 %, at 6x the time
+//! `CharucoDetector` on the same images 0.026-0.052 px and 76 %, at 4-10x the time
 //! (docs/BENCHMARKS.md, tests/charuco.rs).
 //!
 //! Pixel (0, 0) is the centre of the top-left pixel. Ids, board layout and marker corner
@@ -184,14 +184,21 @@ pub fn detect_charuco_view<T: Sample>(img: GrayView<'_, T>, board: &CharucoBoard
         )));
     }
     let decoded: Vec<decode::Decoded> = found.iter().map(|m| m.decoded).collect();
-    let placed = layout::confirmed(board, &decoded);
+    let layout = layout::confirmed(board, &decoded);
+    let [cols, rows] = board.squares();
+    if layout.contradicted > layout.kept.len() {
+        return Err(Error::BoardNotFound(format!(
+            "the markers do not fit the {cols}x{rows} board's layout: {} of the {} decoded are contradicted by a \
+             neighbour (a board of another size, or OpenCV's legacy layout?)",
+            layout.contradicted, layout.on_board
+        )));
+    }
+    let placed = layout.kept;
     if placed.is_empty() {
         return Err(Error::BoardNotFound(format!(
-            "{} marker(s) of {} decoded, none confirmed by a neighbour where the {}x{} board puts it",
+            "{} marker(s) of {} decoded, none confirmed by a neighbour where the {cols}x{rows} board puts it",
             decoded.len(),
             dict.name(),
-            board.squares()[0],
-            board.squares()[1]
         )));
     }
     let (blur_px, contrast) = blur_and_contrast(&found);
