@@ -47,11 +47,11 @@ fn baseline_error_grows_with_current_and_the_proposed_method_beats_it_there() {
         let (s_lo, s_hi) = (&b.settings[0], &b.settings[6]);
         base_lo += (s_lo.zhang.fx / t.focal_lengths(s_lo.e_com_ma).0 - 1.0).abs() / trials as f64;
         base_hi += (s_hi.zhang.fx / t.focal_lengths(s_hi.e_com_ma).0 - 1.0).abs() / trials as f64;
-        curve_hi += rel_err(&b.calibration.model(), 225.0) / trials as f64;
+        curve_hi += rel_err(&b.calibration.model().unwrap(), 225.0) / trials as f64;
         let a0 = etl_calib::pipeline::a0_from_offstate(&sim.observations).unwrap().a0();
         let opts = CalibrateOptions { estimator: Estimator::EIV_PAPER, ..CalibrateOptions::default() };
         let p = calibrate(&sim.observations, &a0, Some(&thermal), &opts).unwrap();
-        eiv_hi += rel_err(&p.calibration.model(), 225.0) / trials as f64;
+        eiv_hi += rel_err(&p.calibration.model().unwrap(), 225.0) / trials as f64;
     }
     println!(
         "mean |fx error|: baseline settings {:.3} % at 80 mA, {:.3} % at 225 mA; baseline curve {:.3} %, \
@@ -91,7 +91,7 @@ fn noise_free_baseline_recovers_the_curve() {
     let mut sim = paper_rig(&NoiseModel::NONE, 1);
     add_setting_views(&mut sim.observations, &rig, &NoiseModel::NONE, 1);
     let b = per_setting(&sim.observations, Some(&ThermalRef::paper())).unwrap();
-    let m = b.calibration.model();
+    let m = b.calibration.model().unwrap();
     for e in [80.0, 120.0, 170.0, 225.0] {
         assert!(rel_err(&m, e) < 1e-7, "{e}: {}", rel_err(&m, e));
     }

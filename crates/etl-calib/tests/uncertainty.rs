@@ -10,7 +10,13 @@
 
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{KF_X, KF_Y, PARAMS, PARAM_NAMES, U0, V0};
+use etl_core::calib::params::Layout;
+
+/// The pipeline calibrates the paper's model: its layout.
+const PAPER: Layout = Layout::PAPER;
+const PARAMS: usize = PAPER.len();
+const U0: usize = PAPER.u0();
+const V0: usize = PAPER.v0();
 use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::pnp::{
     displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, solve_pnp, PixelNoise,
@@ -49,7 +55,7 @@ fn trial(seed: u64) -> Trial {
     let params = core::array::from_fn(|i| z(x[i], truth[i], cov[i][i].sqrt()));
     // fx(E) = sum kf_i E^i: var = g C g^T with g = (1, E, E^2, E^3) on kf_x (kf_y).
     let mut felt = vec![];
-    for span in [KF_X, KF_Y] {
+    for span in [PAPER.kf_x(), PAPER.kf_y()] {
         for e in CURVE_E_MA {
             let g = [1.0, e, e * e, e * e * e];
             let (mut v, mut est, mut tru) = (0.0, 0.0, 0.0);
@@ -69,7 +75,7 @@ fn trial(seed: u64) -> Trial {
     // The measurement: two fresh images of the board at the true current, 2 mm apart.
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(1_000_003));
     let z_a = focused_z_mm(MEASURE_E_MA);
-    let model = r.calibration.model();
+    let model = r.calibration.model().unwrap();
     let mut poses = vec![];
     for z_w in [z_a, z_a + MOVE_MM] {
         let obs = observe_board(&sim.truth, z_w, MEASURE_E_MA, &NoiseModel::PAPER, &mut rng);
@@ -108,7 +114,7 @@ fn one_sigma_intervals_cover_the_truth_68_percent_of_the_time() {
     let all_felt = coverage(runs.iter().flat_map(|t| t.felt.iter()));
     let all_disp = coverage(runs.iter().flat_map(|t| t.displacement.iter()));
     eprintln!("{trials} trials; coverage of the one-sigma intervals:");
-    for (name, c) in PARAM_NAMES.iter().zip(&per_param) {
+    for (name, c) in PAPER.names().zip(&per_param) {
         eprintln!("  {name}: {:.3}", c);
     }
     eprintln!("  fx at {CURVE_E_MA:?} mA, fy at the same, u0, v0: {per_felt:.3?}");
@@ -137,7 +143,7 @@ fn the_calibration_file_records_the_covariance_with_std_as_its_diagonal() {
     let cov = r.calibration.covariance_matrix().unwrap();
     let std = r.report.std;
     for i in 0..PARAMS {
-        assert_eq!(cov[i][i].sqrt(), std[i], "{}", PARAM_NAMES[i]);
+        assert_eq!(cov[i][i].sqrt(), std[i], "{}", PAPER.name(i));
         for j in 0..PARAMS {
             assert_eq!(cov[i][j], cov[j][i]);
             let solver = 0.5 * (r.report.covariance[i][j] + r.report.covariance[j][i]);

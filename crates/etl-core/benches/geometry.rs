@@ -78,7 +78,7 @@ fn zhang_rows(n: usize) -> Vec<[f64; 6]> {
         let cam = CameraModel {
             rotation_rodrigues: [a, -0.8 * a + 0.05 * (k % 3) as f64, 0.1 * k as f64],
             translation_mm: [-20.0, -14.0, 300.0 + 5.0 * k as f64],
-            distortion_a: [0.0; 9],
+            distortion_a: etl_core::model::DistortionA::paper([0.0; 9]),
             ..CameraModel::paper_rig()
         };
         let img: Vec<[f64; 2]> = board

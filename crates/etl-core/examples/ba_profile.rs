@@ -4,7 +4,7 @@
 //! `cargo run --release -p etl-core --example ba_profile`
 use std::time::Instant;
 
-use etl_core::calib::jacobian::{to_params, Projector};
+use etl_core::calib::jacobian::Projector;
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, Point, View, ViewScratch, A0,
 };
@@ -91,8 +91,7 @@ fn main() {
         return;
     }
     let runs = 1;
-    let x = to_params(&init);
-    let proj = Projector::new(&x);
+    let proj = Projector::new(&init);
     let mut acc = 0.0;
     let jac = min_time(&mut || {
         for v in &views {

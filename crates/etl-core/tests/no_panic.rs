@@ -5,9 +5,9 @@
 use etl_core::error::{all_finite, finite};
 use etl_core::fit::basis::{chebyshev_to_monomial, chebyshev_values, horner, scaled_power_in_raw, scaled_to_raw};
 use etl_core::fit::{GivensQr, PolyFit, Polynomial};
-use etl_core::model::camera::{cubic, project_camera_point};
+use etl_core::model::camera::project_camera_point;
 use etl_core::model::rotation::{mat_t_vec, mat_vec, matrix_to_rodrigues, rodrigues_to_matrix};
-use etl_core::model::{CameraModel, Distortion, Intrinsics, Ray};
+use etl_core::model::{CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, Intrinsics, Ray};
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::{Compensation, ThermalCalibration, ThermalFit, ThermalSurface};
 use etl_core::Result;
@@ -67,7 +67,7 @@ impl NoNan for Intrinsics {
 }
 impl NoNan for Distortion {
     fn nan_free(&self) -> bool {
-        [self.k1, self.p1, self.p2].nan_free()
+        self.coefficients().iter().all(|v| !v.is_nan())
     }
 }
 impl NoNan for Ray {
@@ -129,21 +129,24 @@ fn ok_finite<T: Finite + core::fmt::Debug>(r: Result<T>) {
 }
 
 fn camera() -> impl Strategy<Value = CameraModel> {
-    (arr::<3>(), arr::<3>(), arr::<4>(), arr::<4>(), arr::<2>(), arr::<9>()).prop_map(|(r, t, kx, ky, pp, a)| {
-        CameraModel {
-            rotation_rodrigues: r,
-            translation_mm: t,
-            kf_x: kx,
-            kf_y: ky,
-            principal_point: pp,
-            distortion_a: a,
-        }
-    })
+    (arr::<3>(), arr::<3>(), arr::<6>(), arr::<6>(), arr::<2>(), arr::<15>(), 1usize..=5, any::<bool>()).prop_map(
+        |(r, t, kx, ky, pp, a, degree, opencv)| {
+            let family = if opencv { DistortionModel::OpenCv } else { DistortionModel::Paper };
+            CameraModel {
+                rotation_rodrigues: r,
+                translation_mm: t,
+                kf_x: FocalPoly::new(&kx[..=degree]).unwrap(),
+                kf_y: FocalPoly::new(&ky[..=degree]).unwrap(),
+                principal_point: pp,
+                distortion_a: DistortionA::new(family, &a[..family.a_len()]).unwrap(),
+            }
+        },
+    )
 }
 
 /// The paper rig, or an arbitrary model.
 fn some_camera() -> impl Strategy<Value = CameraModel> {
-    prop_oneof![Just(CameraModel::paper_rig()), camera()]
+    prop_oneof![Just(CameraModel::paper_rig()), Just(CameraModel::strong_distortion_rig()), camera()]
 }
 
 fn lens() -> impl Strategy<Value = LensPhysics> {
@@ -183,7 +186,7 @@ proptest! {
         s in any_f64(),
         pts in prop::collection::vec(arr::<3>(), 0..6),
         out_len in 0usize..8,
-        a in arr::<9>(),
+        a in arr::<15>(),
         f in any_f64(),
         m in arr::<9>(),
     ) {
@@ -203,16 +206,22 @@ proptest! {
         }
         let k = Intrinsics { fx: m[0], fy: m[1], u0: m[2], v0: m[3] };
         let _ = k.matrix();
-        let d = Distortion::from_a(&a, f);
-        let dd = Distortion { k1: m[4], p1: m[5], p2: m[6] };
-        for d in [d, dd] {
+        let a9: [f64; 9] = core::array::from_fn(|i| a[i]);
+        let d = Distortion::from_a(&DistortionA::paper(a9), f, m[8]);
+        let dd = Distortion::paper(m[4], m[5], m[6]);
+        let dc = Distortion::from_a(&DistortionA::opencv(a), f, m[8]);
+        let dcc = Distortion::opencv([m[4], m[5], m[6], m[7], m[8]], m[0], m[1]);
+        for d in [d, dd, dc, dcc] {
             let _ = d.distort(px[0], px[1]);
             let _ = d.distort_jacobian(px[0], px[1]);
+            let _ = d.coefficient_jacobian(px[0], px[1]);
             let _ = d.to_opencv(f);
             ok_no_nan(d.undistort(px[0], px[1]));
             ok_no_nan(project_camera_point(p, &k, &d));
         }
-        let _ = cubic(&[m[0], m[1], m[2], m[3]], e);
+        if let Ok(poly) = FocalPoly::new(&m[..4]) {
+            let _ = (poly.eval(e), poly.slope(e));
+        }
         let r = rodrigues_to_matrix(p);
         let _ = matrix_to_rodrigues(&r);
         let mm = [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]];

@@ -1,18 +1,21 @@
 //! `etlcal.calibration/1`: the result of a calibration (README, "File formats").
 //!
-//! The model's 25 numbers under the names of [`etl_core::model::CameraModel`], `std` with
-//! one standard deviation of each, the calibrated current range, the RMS reprojection
-//! error, and what produced it (estimator, iterations, per-view residuals and, for the
-//! errors-in-variables estimator, each view's stage and current corrections).
+//! The model's numbers under the names of [`etl_core::model::CameraModel`] (the paper's 25:
+//! cubic `kf_x`, `kf_y` and `distortion_a` of 9; or focal polynomials of degree 1..=5 and,
+//! with `"distortion_model": "opencv"`, `distortion_a` of 15), `std` with one standard
+//! deviation of each, the calibrated current range, the RMS reprojection error, and what
+//! produced it (estimator, iterations, per-view residuals and, for the errors-in-variables
+//! estimator, each view's stage and current corrections). A file of the paper's model is
+//! written exactly as before the families existed: no `"distortion_model"` field.
 
 use std::path::Path;
 
-use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
+use etl_core::calib::jacobian::{from_params, to_params};
+use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
 use etl_core::camera::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::focus::FocusLaw;
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use serde::{Deserialize, Serialize};
 
@@ -23,8 +26,8 @@ use crate::{Error, Result};
 /// The format tag.
 pub const FORMAT: &str = "etlcal.calibration/1";
 
-/// One standard deviation of every model number (same keys as the model).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// One standard deviation of every model number (same keys and lengths as the model).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelStd {
     /// Of the Rodrigues vector, rad.
@@ -32,41 +35,90 @@ pub struct ModelStd {
     /// Of T, mm.
     pub translation_mm: [f64; 3],
     /// Of kf_x.
-    pub kf_x: [f64; 4],
+    pub kf_x: Vec<f64>,
     /// Of kf_y.
-    pub kf_y: [f64; 4],
+    pub kf_y: Vec<f64>,
     /// Of (u0, v0), px.
     pub principal_point: [f64; 2],
-    /// Of a1..a9.
-    pub distortion_a: [f64; 9],
+    /// Of the a_i.
+    pub distortion_a: Vec<f64>,
 }
 
 impl ModelStd {
-    /// From the 25 standard deviations in parameter order.
-    pub fn from_params(s: &[f64; 25]) -> Self {
-        let m = etl_core::calib::jacobian::from_params(s);
+    /// From the standard deviations in the parameter order of `layout` (at least its
+    /// length of them; missing ones read as 0).
+    pub fn from_params(layout: &Layout, s: &[f64]) -> Self {
+        let m = from_params(layout, s);
         ModelStd {
             rotation_rodrigues: m.rotation_rodrigues,
             translation_mm: m.translation_mm,
-            kf_x: m.kf_x,
-            kf_y: m.kf_y,
+            kf_x: m.kf_x.coefficients().to_vec(),
+            kf_y: m.kf_y.coefficients().to_vec(),
             principal_point: m.principal_point,
-            distortion_a: m.distortion_a,
+            distortion_a: m.distortion_a.as_slice().to_vec(),
         }
+    }
+
+    /// Zero standard deviations (an exact model) of `layout`.
+    pub fn zero(layout: &Layout) -> Self {
+        Self::from_params(layout, &[0.0; MAX_PARAMS])
+    }
+
+    /// The standard deviations in parameter order (at capacity; the inverse of
+    /// [`ModelStd::from_params`]), for a calibration of `layout`. Errors: lengths that do
+    /// not match the layout (naming the field).
+    pub fn to_params(&self, layout: &Layout) -> Result<[f64; MAX_PARAMS]> {
+        self.checked_params(layout).map_err(Error::InvalidInput)
+    }
+
+    /// [`Self::to_params`] with the message alone (for the file's validator).
+    fn checked_params(&self, layout: &Layout) -> std::result::Result<[f64; MAX_PARAMS], String> {
+        let model = model_of(
+            layout.model(),
+            self.rotation_rodrigues,
+            self.translation_mm,
+            (&self.kf_x, &self.kf_y),
+            self.principal_point,
+            &self.distortion_a,
+        )
+        .map_err(|e| format!("std.{e}"))?;
+        if model.layout() != *layout {
+            return Err("std: kf_x, kf_y and distortion_a must have the lengths of the model's".into());
+        }
+        Ok(to_params(&model))
     }
 }
 
-/// The 25 standard deviations of `s` in parameter order (the inverse of
-/// [`ModelStd::from_params`]).
-fn to_params_std(s: &ModelStd) -> [f64; PARAMS] {
-    to_params(&CameraModel {
-        rotation_rodrigues: s.rotation_rodrigues,
-        translation_mm: s.translation_mm,
-        kf_x: s.kf_x,
-        kf_y: s.kf_y,
-        principal_point: s.principal_point,
-        distortion_a: s.distortion_a,
-    })
+/// A model from the file's fields, with errors naming the field (without the file path).
+fn model_of(
+    family: DistortionModel,
+    rotation_rodrigues: [f64; 3],
+    translation_mm: [f64; 3],
+    (kf_x, kf_y): (&[f64], &[f64]),
+    principal_point: [f64; 2],
+    distortion_a: &[f64],
+) -> std::result::Result<CameraModel, String> {
+    let focal = |v: &[f64], name: &str| {
+        FocalPoly::new(v)
+            .map_err(|_| format!("{name} has {} numbers: a focal polynomial needs 2..=6 (degree 1..=5)", v.len()))
+    };
+    let (kf_x, kf_y) = (focal(kf_x, "kf_x")?, focal(kf_y, "kf_y")?);
+    if kf_x.degree() != kf_y.degree() {
+        return Err(format!(
+            "kf_y has {} numbers and kf_x {}: both focal polynomials must have the same degree",
+            kf_y.degree() + 1,
+            kf_x.degree() + 1
+        ));
+    }
+    let distortion_a = DistortionA::new(family, distortion_a).map_err(|_| {
+        format!(
+            "distortion_a has {} numbers: the {} distortion model has {}",
+            distortion_a.len(),
+            family.name(),
+            family.a_len()
+        )
+    })?;
+    Ok(CameraModel { rotation_rodrigues, translation_mm, kf_x, kf_y, principal_point, distortion_a })
 }
 
 /// The temperature compensation a calibration was made with and is used with: the whole
@@ -182,6 +234,14 @@ pub struct ViewSummary {
     pub fy_px: f64,
 }
 
+/// The file's `"distortion_model"` for a family: none for the paper's (files unchanged).
+fn distortion_model_field(model: DistortionModel) -> Option<String> {
+    match model {
+        DistortionModel::Paper => None,
+        DistortionModel::OpenCv => Some(model.name().to_owned()),
+    }
+}
+
 /// Which way [`Calibration::focus_thermal`] converts.
 #[derive(Debug, Clone, Copy)]
 enum Direction {
@@ -201,14 +261,18 @@ pub struct Calibration {
     pub rotation_rodrigues: [f64; 3],
     /// T, mm.
     pub translation_mm: [f64; 3],
-    /// kf0x..kf3x.
-    pub kf_x: [f64; 4],
-    /// kf0y..kf3y.
-    pub kf_y: [f64; 4],
+    /// kf0x..kf_dx (the paper: kf0x..kf3x; degree d = 1..=5).
+    pub kf_x: Vec<f64>,
+    /// kf0y..kf_dy (as many as kf_x).
+    pub kf_y: Vec<f64>,
     /// (u0, v0), px.
     pub principal_point: [f64; 2],
-    /// a1..a9.
-    pub distortion_a: [f64; 9],
+    /// The distortion family: absent for the paper's (files of the paper model have no
+    /// such field, as before the families existed), `"opencv"` for OpenCV's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distortion_model: Option<String>,
+    /// The a_i: a1..a9 (paper) or a1..a15 (opencv: k1, k2, p1, p2, k3, each (w^2, w, 1)).
+    pub distortion_a: Vec<f64>,
     /// The thermal surface (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thermal: Option<ThermalRef>,
@@ -230,11 +294,12 @@ pub struct Calibration {
     /// Per-view summaries.
     #[serde(default)]
     pub views: Vec<ViewSummary>,
-    /// Covariance of the 25 numbers (optional: older files have none), 25 rows of 25 in
-    /// the order of `etl_core::calib::params::PARAM_NAMES` (om1..om3, tx..tz, kf_x, kf_y,
-    /// u0, v0, a1..a9), each number in its own unit; its diagonal is `std` squared. For
-    /// the errors-in-variables estimator it is that of the 25 shared numbers with the
-    /// per-view corrections marginalised out (the Schur complement).
+    /// Covariance of the model's numbers (optional: older files have none), p rows of p
+    /// (25 for the paper's model) in the order of `etl_core::calib::params::Layout::names`
+    /// (om1..om3, tx..tz, kf_x, kf_y, u0, v0, the a_i), each number in its own unit; its
+    /// diagonal is `std` squared. For the errors-in-variables estimator it is that of the
+    /// shared numbers with the per-view corrections marginalised out (the Schur
+    /// complement).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub covariance: Option<Vec<Vec<f64>>>,
     /// The focus law: the distance in focus (mm, along the optical axis from the camera's
@@ -275,19 +340,21 @@ impl Calibration {
     /// no thermal part, zero standard deviations, zero RMS and no views: an exact model,
     /// not an estimate. Estimators fill in the rest (`Calibration { .., ..from_model() }`).
     pub fn from_model(model: &CameraModel, image_size: [u32; 2], e_com_range_ma: [f64; 2]) -> Self {
+        let layout = model.layout();
         Calibration {
             format: FORMAT.to_owned(),
             image_size,
             rotation_rodrigues: model.rotation_rodrigues,
             translation_mm: model.translation_mm,
-            kf_x: model.kf_x,
-            kf_y: model.kf_y,
+            kf_x: model.kf_x.coefficients().to_vec(),
+            kf_y: model.kf_y.coefficients().to_vec(),
             principal_point: model.principal_point,
-            distortion_a: model.distortion_a,
+            distortion_model: distortion_model_field(model.distortion_model()),
+            distortion_a: model.distortion_a.as_slice().to_vec(),
             thermal: None,
             e_com_range_ma,
             rms_reprojection_px: 0.0,
-            std: ModelStd::from_params(&[0.0; 25]),
+            std: ModelStd::zero(&layout),
             estimator: String::new(),
             outliers: Vec::new(),
             warnings: Vec::new(),
@@ -299,33 +366,62 @@ impl Calibration {
         }
     }
 
-    /// Stores `covariance` (of the 25 numbers, as `etl_core`'s bundle adjustment reports
-    /// it) as the file's `"covariance"`: symmetrised as (C + C^T) / 2, since the solver's
-    /// products are symmetric only to rounding; a negative diagonal entry (rounding of a
-    /// held number, whose `std` the solver reports as 0) is stored as 0 with its row and
-    /// column, so that the diagonal stays `std` squared.
-    pub fn set_covariance(&mut self, covariance: &[[f64; PARAMS]; PARAMS]) {
+    /// The distortion family: `"distortion_model"`, the paper's when absent. Errors: a
+    /// name that is no family (naming the field).
+    pub fn distortion_model(&self) -> Result<DistortionModel> {
+        match self.distortion_model.as_deref() {
+            None => Ok(DistortionModel::Paper),
+            Some(name) => DistortionModel::from_name(name).ok_or_else(|| {
+                Error::InvalidInput(format!(
+                    "distortion_model = {name:?} is not a distortion model: use \"paper\" or \"opencv\""
+                ))
+            }),
+        }
+    }
+
+    /// The layout of the model's numbers (family and focal degree; that of `std` and
+    /// `covariance`). Errors: as [`Self::model`].
+    pub fn layout(&self) -> Result<Layout> {
+        Ok(self.model()?.layout())
+    }
+
+    /// Stores `covariance` (of the model's numbers, at capacity, as `etl_core`'s bundle
+    /// adjustment reports it) as the file's `"covariance"` of the model's layout:
+    /// symmetrised as (C + C^T) / 2, since the solver's products are symmetric only to
+    /// rounding; a negative diagonal entry (rounding of a held number, whose `std` the
+    /// solver reports as 0) is stored as 0 with its row and column, so that the diagonal
+    /// stays `std` squared. Errors: a calibration whose model is invalid ([`Self::model`]).
+    pub fn set_covariance(&mut self, covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> Result<()> {
+        let n = self.layout()?.len();
         let mut c: Vec<Vec<f64>> =
-            (0..PARAMS).map(|i| (0..PARAMS).map(|j| 0.5 * (covariance[i][j] + covariance[j][i])).collect()).collect();
-        for i in 0..PARAMS {
+            (0..n).map(|i| (0..n).map(|j| 0.5 * (covariance[i][j] + covariance[j][i])).collect()).collect();
+        for i in 0..n {
             if !(c[i][i] >= 0.0) {
-                for j in 0..PARAMS {
+                for j in 0..n {
                     c[i][j] = 0.0;
                     c[j][i] = 0.0;
                 }
             }
         }
         self.covariance = Some(c);
+        Ok(())
     }
 
-    /// The covariance as a matrix, or `None` when the file has none (or, in a file not
-    /// validated, one of the wrong shape).
-    pub fn covariance_matrix(&self) -> Option<[[f64; PARAMS]; PARAMS]> {
+    /// The covariance as a matrix at capacity (zero past the layout's numbers), or `None`
+    /// when the file has none (or, in a file not validated, one of the wrong shape).
+    pub fn covariance_matrix(&self) -> Option<[[f64; MAX_PARAMS]; MAX_PARAMS]> {
         let rows = self.covariance.as_ref()?;
-        if rows.len() != PARAMS || rows.iter().any(|r| r.len() != PARAMS) {
+        let n = self.layout().ok()?.len();
+        if rows.len() != n || rows.iter().any(|r| r.len() != n) {
             return None;
         }
-        Some(core::array::from_fn(|i| core::array::from_fn(|j| rows[i][j])))
+        let mut c = [[0.0; MAX_PARAMS]; MAX_PARAMS];
+        for (out, row) in c.iter_mut().zip(rows) {
+            for (o, &v) in out.iter_mut().zip(row) {
+                *o = v;
+            }
+        }
+        Some(c)
     }
 
     /// The standard deviation of the pixel the calibrated model projects `world_mm` to
@@ -338,11 +434,11 @@ impl Calibration {
     pub fn projection_std(&self, world_mm: [f64; 3], e_com_ma: f64, trust: Trust) -> Result<PixelUncertainty> {
         let c = self.require_covariance()?;
         self.camera()?.at_e_com(e_com_ma, trust)?;
-        Ok(projection_uncertainty(&self.model(), &c, world_mm, e_com_ma)?)
+        Ok(projection_uncertainty(&self.model()?, &c, world_mm, e_com_ma)?)
     }
 
     /// The covariance, or an error saying that the file has none.
-    pub fn require_covariance(&self) -> Result<[[f64; PARAMS]; PARAMS]> {
+    pub fn require_covariance(&self) -> Result<[[f64; MAX_PARAMS]; MAX_PARAMS]> {
         self.covariance_matrix().ok_or_else(|| {
             Error::InvalidInput(
                 "this calibration has no covariance (files written before it was recorded): calibrate again to get one"
@@ -351,20 +447,22 @@ impl Calibration {
         })
     }
 
-    /// The checks of `"covariance"` (see [`COVARIANCE_TOLERANCE`]): 25 x 25, finite,
-    /// symmetric, a non-negative diagonal equal to `std` squared, |c_ij| <= sqrt(c_ii c_jj).
-    fn validate_covariance(&self) -> std::result::Result<(), String> {
+    /// The checks of `"covariance"` (see [`COVARIANCE_TOLERANCE`]): p x p for the model's
+    /// p numbers, finite, symmetric, a non-negative diagonal equal to `std` squared,
+    /// |c_ij| <= sqrt(c_ii c_jj).
+    fn validate_covariance(&self, layout: &Layout) -> std::result::Result<(), String> {
         let Some(rows) = &self.covariance else { return Ok(()) };
-        if rows.len() != PARAMS {
-            return Err(format!("covariance must be {PARAMS} x {PARAMS}: it has {} rows", rows.len()));
+        let n = layout.len();
+        if rows.len() != n {
+            return Err(format!("covariance must be {n} x {n}: it has {} rows", rows.len()));
         }
-        if let Some((i, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != PARAMS) {
-            return Err(format!("covariance must be {PARAMS} x {PARAMS}: row {i} has {} numbers", r.len()));
+        if let Some((i, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != n) {
+            return Err(format!("covariance must be {n} x {n}: row {i} has {} numbers", r.len()));
         }
-        let std = to_params_std(&self.std);
-        let name = |i: usize| PARAM_NAMES[i];
+        let std = self.std.checked_params(layout)?;
+        let name = |i: usize| layout.name(i);
         let tol = COVARIANCE_TOLERANCE;
-        for i in 0..PARAMS {
+        for i in 0..n {
             let cii = rows[i][i];
             if !(cii.is_finite() && cii >= 0.0) {
                 return Err(format!("covariance[{i}][{i}] = {cii} (variance of {}) must be finite and >= 0", name(i)));
@@ -377,8 +475,8 @@ impl Calibration {
                 ));
             }
         }
-        for i in 0..PARAMS {
-            for j in 0..PARAMS {
+        for i in 0..n {
+            for j in 0..n {
                 let (cij, cji) = (rows[i][j], rows[j][i]);
                 let scale = (rows[i][i] * rows[j][j]).sqrt();
                 if !cij.is_finite() {
@@ -399,16 +497,19 @@ impl Calibration {
         Ok(())
     }
 
-    /// The camera model.
-    pub fn model(&self) -> CameraModel {
-        CameraModel {
-            rotation_rodrigues: self.rotation_rodrigues,
-            translation_mm: self.translation_mm,
-            kf_x: self.kf_x,
-            kf_y: self.kf_y,
-            principal_point: self.principal_point,
-            distortion_a: self.distortion_a,
-        }
+    /// The camera model. Errors (naming the field): an unknown `distortion_model`; `kf_x`,
+    /// `kf_y` not of 2..=6 numbers or of different lengths; `distortion_a` not of the
+    /// family's length.
+    pub fn model(&self) -> Result<CameraModel> {
+        model_of(
+            self.distortion_model()?,
+            self.rotation_rodrigues,
+            self.translation_mm,
+            (&self.kf_x, &self.kf_y),
+            self.principal_point,
+            &self.distortion_a,
+        )
+        .map_err(Error::InvalidInput)
     }
 
     /// The thermal surface the calibration was made with. A file without one is refused
@@ -429,7 +530,7 @@ impl Calibration {
     /// The run-time camera of this calibration (etl-core, no allocation): model, thermal
     /// part with its ranges, calibrated E_com range.
     pub fn camera(&self) -> Result<Camera> {
-        Ok(Camera::new(self.model(), self.thermal.as_ref().map(ThermalRef::trust), self.e_com_range_ma)?)
+        Ok(Camera::new(self.model()?, self.thermal.as_ref().map(ThermalRef::trust), self.e_com_range_ma)?)
     }
 
     /// The camera at driver current `e_in_ma` and temperature `temperature_c`, refused
@@ -446,7 +547,12 @@ impl Calibration {
     /// file in the message.
     pub fn validate(&self, path: &Path) -> Result<()> {
         let bad = |message: String| Err(Error::Parse { path: path.to_owned(), message });
-        if let Err(e) = self.model().validate() {
+        let model = match self.model() {
+            Ok(m) => m,
+            Err(Error::InvalidInput(message)) => return bad(message),
+            Err(e) => return bad(e.to_string()),
+        };
+        if let Err(e) = model.validate() {
             return bad(e.to_string());
         }
         if let Err(e) = crate::observations::check_image_size(self.image_size, "image_size") {
@@ -484,7 +590,10 @@ impl Calibration {
         if let Some((i, o)) = self.outliers.iter().enumerate().find(|(_, o)| o.view >= self.views.len()) {
             return bad(format!("outliers[{i}].view = {} must name one of the {} views", o.view, self.views.len()));
         }
-        self.validate_covariance().or_else(bad)
+        if let Err(e) = self.std.checked_params(&model.layout()) {
+            return bad(e);
+        }
+        self.validate_covariance(&model.layout()).or_else(bad)
     }
 
     /// The focus law, or an error saying that this calibration has none.

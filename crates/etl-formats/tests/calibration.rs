@@ -54,14 +54,14 @@ fn a_calibration_without_a_thermal_surface_gets_none_assumed() {
 /// correlated by 0.3, with the covariance that says so.
 fn with_principal_point_covariance() -> Calibration {
     let mut c = Calibration::load(&fixture()).unwrap();
-    c.std = etl_formats::calibration::ModelStd::from_params(&[0.0; 25]);
+    c.std = etl_formats::calibration::ModelStd::zero(&etl_core::calib::Layout::PAPER);
     c.std.principal_point = [2.0, 0.5];
-    let mut cov = [[0.0; 25]; 25];
+    let mut cov = [[0.0; etl_core::calib::params::MAX_PARAMS]; etl_core::calib::params::MAX_PARAMS];
     cov[14][14] = 4.0;
     cov[15][15] = 0.25;
     cov[14][15] = 0.3 * 2.0 * 0.5;
     cov[15][14] = 0.3 * 2.0 * 0.5;
-    c.set_covariance(&cov);
+    c.set_covariance(&cov).unwrap();
     c
 }
 
@@ -228,5 +228,99 @@ fn outliers_and_warnings_are_optional_round_trip_and_are_checked() {
         assert!(e.to_string().contains(&message), "{name}: {e}");
         assert_eq!(e.to_string().lines().count(), 1);
         assert!(!out.exists(), "{name}: a refused calibration was written");
+    }
+}
+
+/// Issue 16: a file of the paper's model is written exactly as before the distortion
+/// families (no `"distortion_model"`, kf of 4, distortion_a of 9), byte for byte.
+#[test]
+fn a_paper_model_file_is_written_byte_for_byte_as_before() {
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    assert!(!text.contains("distortion_model"));
+    let c = Calibration::load(&fixture()).unwrap();
+    assert_eq!(c.distortion_model().unwrap(), etl_core::model::DistortionModel::Paper);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("again.json");
+    c.save(&out).unwrap();
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), text);
+    // And the model built from the file is the paper's layout.
+    assert_eq!(c.model().unwrap().layout(), etl_core::calib::Layout::PAPER);
+}
+
+/// An opencv-family calibration with quintic focal polynomials and a covariance of its
+/// 35 numbers round-trips exactly; its file names the family.
+#[test]
+fn an_opencv_family_calibration_round_trips() {
+    use etl_core::calib::params::MAX_PARAMS;
+    use etl_core::model::{CameraModel, FocalPoly};
+    let mut model = CameraModel::strong_distortion_rig();
+    model.kf_x = FocalPoly::new(&[1500.0, -1.96, 0.0056, -8.4e-6, 1e-10, -2e-13]).unwrap();
+    model.kf_y = FocalPoly::new(&[1510.0, -1.96, 0.0056, -8.4e-6, 1e-10, -2e-13]).unwrap();
+    let mut c = Calibration::from_model(&model, [1936, 1458], [80.0, 225.0]);
+    let layout = model.layout();
+    assert_eq!(layout.len(), 35);
+    let s: Vec<f64> = (0..layout.len()).map(|i| 1e-3 * (i + 1) as f64).collect();
+    c.std = etl_formats::calibration::ModelStd::from_params(&layout, &s);
+    let mut cov = [[0.0; MAX_PARAMS]; MAX_PARAMS];
+    for (i, si) in s.iter().enumerate() {
+        cov[i][i] = si * si;
+    }
+    cov[3][34] = 0.5 * s[3] * s[34];
+    cov[34][3] = cov[3][34];
+    c.set_covariance(&cov).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("opencv.json");
+    c.save(&out).unwrap();
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.contains("\"distortion_model\": \"opencv\""), "{text}");
+    let back = Calibration::load(&out).unwrap();
+    assert_eq!(back, c);
+    assert_eq!(back.model().unwrap(), model);
+    assert_eq!(back.covariance_matrix().unwrap()[3][34], cov[3][34]);
+    assert_eq!(back.distortion_a.len(), 15);
+}
+
+/// A spoiled calibration: a name, the message it must give, the spoiling.
+type Named = (&'static str, &'static str, fn(&mut Calibration));
+
+/// Bad families and lengths are one-line errors naming the field, and nothing is
+/// written.
+#[test]
+fn a_bad_family_or_length_is_refused_naming_the_field() {
+    let good = Calibration::load(&fixture()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let bads: [Named; 6] = [
+        ("family", "distortion_model = \"brown\" is not a distortion model", |c| {
+            c.distortion_model = Some("brown".into())
+        }),
+        ("a-length", "distortion_a has 9 numbers: the opencv distortion model has 15", |c| {
+            c.distortion_model = Some("opencv".into())
+        }),
+        ("a-short", "distortion_a has 8 numbers: the paper distortion model has 9", |c| {
+            c.distortion_a.pop();
+        }),
+        ("kf-long", "kf_x has 7 numbers: a focal polynomial needs 2..=6", |c| {
+            c.kf_x.extend([0.0, 0.0, 0.0]);
+        }),
+        ("kf-mismatch", "kf_y has 5 numbers and kf_x 4", |c| {
+            c.kf_y.push(0.0);
+        }),
+        ("std-length", "std.distortion_a has 8 numbers", |c| {
+            c.std.distortion_a.pop();
+        }),
+    ];
+    for (name, message, spoil) in bads {
+        let mut c = good.clone();
+        spoil(&mut c);
+        let out = dir.path().join(format!("{name}.json"));
+        let e = c.save(&out).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Parse, "{name}: {e}");
+        let text = e.to_string();
+        assert!(text.contains(message), "{name}: {text}");
+        assert_eq!(text.lines().count(), 1, "{name}: {text}");
+        assert!(!out.exists(), "{name}: a refused calibration was written");
+        // The same text read back is refused by the parser too.
+        let json = serde_json::to_string(&c).unwrap();
+        assert_eq!(Calibration::parse(&json, &out).unwrap_err().kind(), ErrorKind::Parse, "{name}");
     }
 }

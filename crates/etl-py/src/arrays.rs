@@ -76,6 +76,13 @@ pub fn matrix_out<'py, const R: usize, const C: usize>(py: Python<'py>, m: &[[f6
     }
 }
 
+/// An n x n float64 array of `rows` (None if a row is not n long).
+pub fn square_out<'py>(py: Python<'py>, rows: &[Vec<f64>]) -> Option<Bound<'py, PyAny>> {
+    let n = rows.len();
+    let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+    Array2::from_shape_vec((n, n), flat).ok().map(|a| a.into_pyarray(py).into_any())
+}
+
 /// A 1-D float64 array.
 pub fn vec_out<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
     Array1::from(v.to_vec()).into_pyarray(py).into_any()

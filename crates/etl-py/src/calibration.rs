@@ -6,14 +6,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use etl_core::calib::projection_uncertainty;
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, DistortionA, FocalPoly};
 use etl_core::pnp::{pose_uncertainty, PixelNoise};
 use etl_core::thermal::ThermalSurface as CoreSurface;
 use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::arrays::{mat3_out, matrix_out, points, points_out, vec_out};
+use crate::arrays::{mat3_out, points, points_out, vec_out};
 use crate::camera::{trust, CameraAt};
 use crate::errors::{input_error, CoreResultExt};
 use crate::pose::BoardPose;
@@ -63,13 +63,14 @@ impl Calibration {
     /// A calibration of `model` with no thermal part, zero standard deviations and zero
     /// RMS (an exact model, not an estimate).
     pub fn from_model(model: CameraModel, image_size: [u32; 2], e_com_range_ma: [f64; 2]) -> Self {
-        Calibration::from_file(CalFile::from_model(&model, image_size, e_com_range_ma))
+        Calibration { file: CalFile::from_model(&model, image_size, e_com_range_ma), model }
     }
 
-    /// Wraps a calibration file's content.
-    pub fn from_file(file: CalFile) -> Self {
-        let model = file.model();
-        Calibration { file, model }
+    /// Wraps a calibration file's content. Errors: a file whose model is invalid (an
+    /// unknown distortion model, numbers of the wrong lengths), naming the field.
+    pub fn from_file(file: CalFile) -> PyResult<Self> {
+        let model = file.model().py()?;
+        Ok(Calibration { file, model })
     }
 }
 
@@ -97,10 +98,10 @@ impl Calibration {
         let model = CameraModel {
             rotation_rodrigues: fixed::<3>(rotation_rodrigues, "rotation_rodrigues")?,
             translation_mm: fixed::<3>(translation_mm, "translation_mm")?,
-            kf_x: fixed::<4>(kf_x, "kf_x")?,
-            kf_y: fixed::<4>(kf_y, "kf_y")?,
+            kf_x: FocalPoly::cubic(fixed::<4>(kf_x, "kf_x")?),
+            kf_y: FocalPoly::cubic(fixed::<4>(kf_y, "kf_y")?),
             principal_point: fixed::<2>(principal_point, "principal_point")?,
-            distortion_a: fixed::<9>(distortion_a, "distortion_a")?,
+            distortion_a: DistortionA::paper(fixed::<9>(distortion_a, "distortion_a")?),
         };
         model.validate().py()?;
         etl_core::error::finite(rms_px, "rms_px").py()?;
@@ -132,7 +133,7 @@ impl Calibration {
     fn load(_cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
         let text = std::fs::read_to_string(&path)
             .map_err(|source| crate::errors::calib_err(etl_calib::Error::Io { path: path.clone(), source }))?;
-        Ok(Calibration::from_file(parse_file(&text, &path)?))
+        Calibration::from_file(parse_file(&text, &path)?)
     }
 
     /// Writes the calibration as an `etlcal.calibration/1` file (atomically: a failed
@@ -155,7 +156,7 @@ impl Calibration {
     ///     text: the JSON text.
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
-        Ok(Calibration::from_file(parse_file(text, Path::new("<json>"))?))
+        Calibration::from_file(parse_file(text, Path::new("<json>"))?)
     }
 
     /// Rodrigues vector of R (world -> camera), rad.
@@ -179,13 +180,13 @@ impl Calibration {
     /// kf0x..kf3x of fx(E), px (E in mA).
     #[getter]
     fn kf_x<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_out(py, &self.model.kf_x)
+        vec_out(py, self.model.kf_x.coefficients())
     }
 
     /// kf0y..kf3y of fy(E), px (E in mA).
     #[getter]
     fn kf_y<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_out(py, &self.model.kf_y)
+        vec_out(py, self.model.kf_y.coefficients())
     }
 
     /// (u0, v0), px: a float64 array of shape (2,).
@@ -199,20 +200,20 @@ impl Calibration {
     /// check: `focal_lengths` checks the calibrated range).
     #[getter]
     fn fx_poly<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        polynomial(py, &self.model.kf_x)
+        polynomial(py, self.model.kf_x.coefficients())
     }
 
     /// fy(E) as a `numpy.polynomial.Polynomial` in E (mA), px (coefficients `kf_y`; as
     /// `fx_poly`).
     #[getter]
     fn fy_poly<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        polynomial(py, &self.model.kf_y)
+        polynomial(py, self.model.kf_y.coefficients())
     }
 
     /// a1..a9 of Eq. 18.
     #[getter]
     fn distortion_a<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        vec_out(py, &self.model.distortion_a)
+        vec_out(py, self.model.distortion_a.as_slice())
     }
 
     /// (width, height), px.
@@ -512,8 +513,8 @@ impl Calibration {
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
     fn distortion<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
         let parts = self.per_current(e_com_ma, allow_extrapolation, [&[], &[], &[]], |at, _| {
-            let d = at.distortion();
-            Ok([vec![d.k1], vec![d.p1], vec![d.p2]])
+            let c = at.distortion().padded();
+            Ok([vec![c[0]], vec![c[1]], vec![c[2]]])
         })?;
         Ok(PyTuple::new(e_com_ma.py(), parts)?.into_any())
     }
@@ -652,7 +653,7 @@ impl Calibration {
     /// calibration built from numbers).
     #[getter]
     fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
-        self.file.covariance_matrix().map(|c| matrix_out(py, &c))
+        self.file.covariance.as_deref().and_then(|rows| crate::arrays::square_out(py, rows))
     }
 
     /// The standard deviation of projected pixels due to the calibration's uncertainty:

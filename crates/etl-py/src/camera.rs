@@ -70,8 +70,8 @@ impl CameraAt {
     /// (k1, p1, p2) at E_com (Eq. 18; pixel units, as `Calibration.distortion`).
     #[getter]
     fn distortion(&self) -> (f64, f64, f64) {
-        let d = self.inner.distortion();
-        (d.k1, d.p1, d.p2)
+        let c = self.inner.distortion().padded();
+        (c[0], c[1], c[2])
     }
     /// Projects world points (N, 3) or (3,), mm, to observed pixels.
     fn project<'py>(&self, world_mm: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {

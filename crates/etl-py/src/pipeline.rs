@@ -84,7 +84,7 @@ pub fn calibrate(
             .py()?;
             let obs = observations.file.clone();
             let result = py.detach(|| etl_calib::baseline::per_setting(&obs, thermal.as_ref())).py()?;
-            return Ok(Calibration::from_file(result.calibration));
+            return Calibration::from_file(result.calibration);
         }
         other => return Err(input_error(format!("method must be \"proposed\" or \"per-setting\", got {other:?}"))),
     }
@@ -117,7 +117,7 @@ pub fn calibrate(
         let message = std::ffi::CString::new(why.as_str()).map_err(|e| input_error(e.to_string()))?;
         PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
     }
-    Ok(Calibration::from_file(result.calibration))
+    Calibration::from_file(result.calibration)
 }
 
 /// The Cramer-Rao lower bound of the calibration: the smallest standard deviation any
@@ -170,7 +170,8 @@ pub fn cramer_rao_std<'py>(
             etl_core::calib::crlb::crlb_covariance_eiv(&views, &model, sigma_px, priors)
         })
         .py()?;
-    let sd: [f64; 25] = core::array::from_fn(|i| if cov[i][i] >= 0.0 { cov[i][i].sqrt() } else { f64::NAN });
-    let std = etl_formats::calibration::ModelStd::from_params(&sd);
+    let sd: [f64; etl_core::calib::params::MAX_PARAMS] =
+        core::array::from_fn(|i| if cov[i][i] >= 0.0 { cov[i][i].sqrt() } else { f64::NAN });
+    let std = etl_formats::calibration::ModelStd::from_params(&model.layout(), &sd);
     crate::calibration::std_dict(py, &std)
 }

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use etl_core::calib::params::PARAMS;
+use etl_core::calib::params::MAX_PARAMS as PARAMS;
 use etl_core::model::rotation::rodrigues_to_matrix;
 use etl_core::pnp::{
     displacement_covariance_mm2, displacement_mm, displacement_std_mm, BoardPose as CorePose, PoseUncertainty,
@@ -19,7 +19,7 @@ use crate::errors::{input_error, CoreResultExt};
 pub(crate) type CalCovariance = Arc<[[f64; PARAMS]; PARAMS]>;
 
 /// Numbers of a pose's uncertainty in its pickled state: sigma, the 6 x 6 pixel-noise
-/// covariance, the 6 x 25 sensitivity.
+/// covariance, the 6 x p sensitivity (at capacity: p = etl-core's `MAX_PARAMS`).
 const STATE: usize = 1 + 36 + 6 * PARAMS;
 
 /// The pose of a planar board (board frame -> camera frame) found by

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use etl_core::calib::distortion_init::view_distortion;
-use etl_core::calib::params::PARAMS;
+use etl_core::calib::params::MAX_PARAMS;
 use etl_core::calib::{projection_uncertainty, View};
 use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, ThermalRef};
@@ -133,7 +133,7 @@ pub(crate) struct StdMap {
 pub(crate) struct Data {
     pub cal: Calibration,
     pub model: CameraModel,
-    pub covariance: Option<[[f64; PARAMS]; PARAMS]>,
+    pub covariance: Option<[[f64; MAX_PARAMS]; MAX_PARAMS]>,
     /// (E, fx, fy) of every view's own estimate (0: none).
     pub view_focal: Vec<(f64, f64, f64)>,
     /// (E, k1, p1, p2) of every view's own estimate.
@@ -200,7 +200,8 @@ fn gather_views(
                 view_focal.push((e, fx, fy));
             }
             if let Ok(dd) = view_distortion(model, &View { e_com_ma: e, points: &shifted }) {
-                view_dist.push((e, [dd.k1, dd.p1, dd.p2]));
+                let c = dd.padded();
+                view_dist.push((e, [c[0], c[1], c[2]]));
             }
             for q in &shifted {
                 if let Ok(m) = model.project(q.world_mm, e) {
@@ -252,7 +253,7 @@ fn map_depth(d: &Data, e_com_ma: f64) -> (f64, &'static str) {
 /// Cells of the projection-uncertainty map (columns x rows over the image).
 const MAP_CELLS: (usize, usize) = (32, 24);
 
-fn std_map(d: &Data, c: &[[f64; PARAMS]; PARAMS], e_com_ma: f64) -> StdMap {
+fn std_map(d: &Data, c: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_com_ma: f64) -> StdMap {
     let (depth_mm, _) = map_depth(d, e_com_ma);
     let [w, h] = d.cal.image_size;
     let cells = (0..MAP_CELLS.1)
@@ -276,7 +277,7 @@ fn std_map(d: &Data, c: &[[f64; PARAMS]; PARAMS], e_com_ma: f64) -> StdMap {
 }
 
 fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Option<&ThermalRef>) -> Result<Data> {
-    let model = cal.model();
+    let model = cal.model()?;
     let mut d = match obs {
         Some(obs) => gather_views(cal, &model, obs, thermal)?,
         None => Data {

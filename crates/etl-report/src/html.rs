@@ -5,10 +5,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 
 use crate::calibration::{Data, Provenance, REPORT_FIGURES};
-use crate::uncertainty::{correlation, curve_std, curve_values, param_meaning, strong_pairs, CURVES, PARAM_UNITS};
+use crate::uncertainty::{correlation, curve_std, curve_values, param_meaning, param_unit, strong_pairs, CURVES};
 
 /// |r| above which a pair of numbers is listed as strongly correlated.
 pub(crate) const STRONG_CORRELATION: f64 = 0.9;
@@ -59,28 +58,22 @@ fn esc(s: &str) -> String {
 /// The parameter table: name, meaning, unit, value, std, relative std, flag.
 fn parameter_table(d: &Data) -> String {
     let x = to_params(&d.model);
-    let std: [f64; PARAMS] = to_params(&etl_core::model::CameraModel {
-        rotation_rodrigues: d.cal.std.rotation_rodrigues,
-        translation_mm: d.cal.std.translation_mm,
-        kf_x: d.cal.std.kf_x,
-        kf_y: d.cal.std.kf_y,
-        principal_point: d.cal.std.principal_point,
-        distortion_a: d.cal.std.distortion_a,
-    });
+    let layout = d.model.layout();
+    let std = d.cal.std.to_params(&layout).unwrap_or([f64::NAN; etl_core::calib::params::MAX_PARAMS]);
     let mut t = String::from(
         "<table class=\"num\"><tr><th>name</th><th>meaning</th><th>unit</th><th>value</th><th>std</th>\
          <th>std / |value|</th><th>flag</th></tr>\n",
     );
-    for i in 0..PARAMS {
+    for i in 0..layout.len() {
         let flagged = std[i] > 0.0 && x[i].abs() < 2.0 * std[i];
         let rel = if x[i] != 0.0 && std[i] > 0.0 { sd(std[i] / x[i].abs()) } else { "-".into() };
         let _ = writeln!(
             t,
             "<tr{}><td><b>{}</b></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{rel}</td><td>{}</td></tr>",
             if flagged { " class=\"flag\"" } else { "" },
-            PARAM_NAMES[i],
-            param_meaning(i),
-            PARAM_UNITS[i],
+            layout.name(i),
+            param_meaning(&layout, i),
+            param_unit(&layout, i),
             num(x[i]),
             sd(std[i]),
             if flagged { "⚠ |value| &lt; 2 std: not determined" } else { "" }
@@ -180,13 +173,14 @@ fn figures_html(d: &Data, files: &[PathBuf]) -> (String, String) {
 
 fn correlated_pairs(d: &Data) -> String {
     let Some(c) = d.covariance else { return String::new() };
-    let pairs = strong_pairs(&correlation(&c), STRONG_CORRELATION);
+    let layout = d.model.layout();
+    let pairs = strong_pairs(&correlation(&c), layout.len(), STRONG_CORRELATION);
     if pairs.is_empty() {
         return format!("<p>No pair of numbers has |r| &gt; {STRONG_CORRELATION}.</p>\n");
     }
     let rows: String = pairs
         .iter()
-        .map(|(i, j, r)| format!("<li><b>{}</b> &amp; <b>{}</b>: {r:+.4}</li>", PARAM_NAMES[*i], PARAM_NAMES[*j]))
+        .map(|(i, j, r)| format!("<li><b>{}</b> &amp; <b>{}</b>: {r:+.4}</li>", layout.name(*i), layout.name(*j)))
         .collect();
     format!(
         "<p>{} pairs with |r| &gt; {STRONG_CORRELATION}: their numbers are not separately determined by these views \

@@ -5,7 +5,6 @@ use plotters::prelude::*;
 
 use crate::calibration::Data;
 use crate::uncertainty::{correlation, curve_std, curve_values};
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
@@ -583,31 +582,34 @@ where
     root.fill(&WHITE)?;
     let Some(c) = d.covariance else { return Ok(()) };
     let r = correlation(&c);
+    let layout = d.model.layout();
+    let n_params = layout.len();
     let (mat, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
     let (w, h) = mat.dim_in_pixel();
     let (left, topm) = (60i32, 40i32);
-    let cell = ((w as i32 - left - 10).min(h as i32 - topm - 60) / PARAMS as i32).max(1);
-    for (i, row) in r.iter().enumerate() {
-        for (j, v) in row.iter().enumerate() {
+    let cell = ((w as i32 - left - 10).min(h as i32 - topm - 60) / n_params as i32).max(1);
+    for (i, row) in r.iter().enumerate().take(n_params) {
+        for (j, v) in row.iter().enumerate().take(n_params) {
             let (x, y) = (left + j as i32 * cell, topm + i as i32 * cell);
             mat.draw(&Rectangle::new([(x, y), (x + cell, y + cell)], diverging(*v).filled()))?;
         }
     }
     // Lines between the groups of numbers (rotation, translation, kf_x, kf_y, u0 v0, a).
-    for g in [3, 6, 10, 14, 16] {
+    let groups = [layout.translation(), layout.kf_x(), layout.kf_y(), layout.principal_point(), layout.distortion_a()];
+    for g in groups.map(|s| s.start as i32) {
         let p = g * cell;
-        let n = PARAMS as i32 * cell;
+        let n = n_params as i32 * cell;
         mat.draw(&PathElement::new(vec![(left + p, topm), (left + p, topm + n)], BLACK.stroke_width(1)))?;
         mat.draw(&PathElement::new(vec![(left, topm + p), (left + n, topm + p)], BLACK.stroke_width(1)))?;
     }
     if text {
         let font = ("sans-serif", 13).into_font();
-        for (k, name) in PARAM_NAMES.iter().enumerate() {
+        for (k, name) in layout.names().enumerate() {
             let at = k as i32 * cell + cell / 2;
-            mat.draw(&Text::new(*name, (6, topm + at - 6), font.clone()))?;
+            mat.draw(&Text::new(name, (6, topm + at - 6), font.clone()))?;
             mat.draw(&Text::new(
-                *name,
-                (left + at - 5, topm + PARAMS as i32 * cell + 6),
+                name,
+                (left + at - 5, topm + n_params as i32 * cell + 6),
                 font.clone().transform(FontTransform::Rotate90),
             ))?;
         }

@@ -1,11 +1,12 @@
-//! The numbers the report derives from the calibration's covariance C (25 x 25, order of
-//! [`PARAM_NAMES`]): the standard deviation of a curve value q(E) (fx, fy, k1, p1, p2) as
-//! sqrt(J_q C J_q^T), the correlation matrix, and the parameter table's names and units.
+//! The numbers the report derives from the calibration's covariance C (p x p, order of
+//! the model's [`Layout`] names; at capacity): the standard deviation of a curve value q(E)
+//! (fx, fy and the first three distortion coefficients) as sqrt(J_q C J_q^T), the
+//! correlation matrix, and the parameter table's names and units.
 
 use etl_core::calib::jacobian::{from_params, to_params};
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
+use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::uncertainty::sandwich;
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, DistortionModel};
 
 /// The curves the report draws against the current: fx, fy (px), k1 (1/px^2), p1, p2 (1/px).
 pub(crate) const CURVES: [&str; 5] = ["fx", "fy", "k1", "p1", "p2"];
@@ -15,7 +16,10 @@ pub(crate) const CURVES: [&str; 5] = ["fx", "fy", "k1", "p1", "p2"];
 pub(crate) fn curve_values(model: &CameraModel, e_com_ma: f64) -> [f64; 5] {
     let (fx, fy) = model.focal_lengths(e_com_ma);
     match model.distortion(e_com_ma) {
-        Ok(d) => [fx, fy, d.k1, d.p1, d.p2],
+        Ok(d) => {
+            let c = d.padded();
+            [fx, fy, c[0], c[1], c[2]]
+        }
         Err(_) => [fx, fy, f64::NAN, f64::NAN, f64::NAN],
     }
 }
@@ -24,10 +28,11 @@ pub(crate) fn curve_values(model: &CameraModel, e_com_ma: f64) -> [f64; 5] {
 /// by central differences, the step of parameter i being 1e-4 of its own std (q is
 /// polynomial in kf and a, so the difference is exact to rounding for the linear numbers
 /// and to O(h^2) for w = 2 / (fx + fy)). Parameters with zero std (held) do not enter.
-pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; PARAMS]; PARAMS], e_com_ma: f64) -> [f64; 5] {
+pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_com_ma: f64) -> [f64; 5] {
+    let layout = model.layout();
     let x = to_params(model);
-    let mut j = [[0.0; PARAMS]; 5];
-    for i in 0..PARAMS {
+    let mut j = [[0.0; MAX_PARAMS]; 5];
+    for i in 0..layout.len() {
         let h = 1e-4 * covariance[i][i].max(0.0).sqrt();
         if h == 0.0 {
             continue;
@@ -35,7 +40,8 @@ pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; PARAMS]; PARAMS
         let (mut up, mut down) = (x, x);
         up[i] += h;
         down[i] -= h;
-        let (qu, qd) = (curve_values(&from_params(&up), e_com_ma), curve_values(&from_params(&down), e_com_ma));
+        let (qu, qd) =
+            (curve_values(&from_params(&layout, &up), e_com_ma), curve_values(&from_params(&layout, &down), e_com_ma));
         for (k, row) in j.iter_mut().enumerate() {
             row[i] = (qu[k] - qd[k]) / (2.0 * h);
         }
@@ -46,7 +52,7 @@ pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; PARAMS]; PARAMS
 
 /// The correlation matrix r_ij = C_ij / sqrt(C_ii C_jj); 0 off the diagonal (and 1 on it)
 /// for a held number (C_ii = 0), whose correlation is undefined.
-pub(crate) fn correlation(covariance: &[[f64; PARAMS]; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
+pub(crate) fn correlation(covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> [[f64; MAX_PARAMS]; MAX_PARAMS] {
     core::array::from_fn(|i| {
         core::array::from_fn(|j| {
             let s = (covariance[i][i] * covariance[j][j]).sqrt();
@@ -61,41 +67,73 @@ pub(crate) fn correlation(covariance: &[[f64; PARAMS]; PARAMS]) -> [[f64; PARAMS
     })
 }
 
-/// The pairs (i, j, r_ij), i < j, with |r_ij| > `threshold`, strongest first.
-pub(crate) fn strong_pairs(r: &[[f64; PARAMS]; PARAMS], threshold: f64) -> Vec<(usize, usize, f64)> {
+/// The pairs (i, j, r_ij), i < j < `n`, with |r_ij| > `threshold`, strongest first.
+pub(crate) fn strong_pairs(r: &[[f64; MAX_PARAMS]; MAX_PARAMS], n: usize, threshold: f64) -> Vec<(usize, usize, f64)> {
+    let n = n.min(MAX_PARAMS);
     let mut pairs: Vec<(usize, usize, f64)> =
-        (0..PARAMS).flat_map(|i| (i + 1..PARAMS).map(move |j| (i, j))).map(|(i, j)| (i, j, r[i][j])).collect();
+        (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j))).map(|(i, j)| (i, j, r[i][j])).collect();
     pairs.retain(|p| p.2.abs() > threshold);
     pairs.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
     pairs
 }
 
-/// The unit of each of the 25 numbers, in [`PARAM_NAMES`] order. fx(E) = sum kf_i E^i
-/// (px, E in mA); k1 = a1 w^2 + a2 w + a3 (1/px^2), p1 = a4 w^2 + a5 w + a6 and
-/// p2 = a7 w^2 + a8 w + a9 (1/px), w = 2 / (fx + fy) in 1/px.
-pub(crate) const PARAM_UNITS: [&str; PARAMS] = [
-    "rad", "rad", "rad", "mm", "mm", "mm", "px", "px/mA", "px/mA²", "px/mA³", "px", "px/mA", "px/mA²", "px/mA³", "px",
-    "px", "none", "1/px", "1/px²", "px", "none", "1/px", "px", "none", "1/px",
-];
+/// The unit of number `i` of `layout`. fx(E) = sum kf_k E^k (px, E in mA, kf_k in
+/// px/mA^k); each distortion coefficient c = a w^2 + b w + c0 with w = 2 / (fx + fy) in
+/// 1/px, so its a carries c's unit times px^2 and its b c's unit times px. The paper's
+/// k1 is in 1/px^2, its p1, p2 in 1/px; OpenCV's coefficients are dimensionless.
+pub(crate) fn param_unit(layout: &Layout, i: usize) -> &'static str {
+    const KF: [&str; 6] = ["px", "px/mA", "px/mA²", "px/mA³", "px/mA⁴", "px/mA⁵"];
+    if layout.rotation().contains(i) {
+        "rad"
+    } else if layout.translation().contains(i) {
+        "mm"
+    } else if let Some(s) = [layout.kf_x(), layout.kf_y()].into_iter().find(|s| s.contains(i)) {
+        KF.get(i - s.start).copied().unwrap_or("")
+    } else if layout.principal_point().contains(i) {
+        "px"
+    } else {
+        let k = i.saturating_sub(layout.distortion_a().start);
+        let (coefficient, term) = (k / 3, k % 3);
+        let paper_radial = layout.model() == DistortionModel::Paper && coefficient == 0;
+        match (layout.model(), paper_radial, term) {
+            (DistortionModel::Paper, true, 0) => "none",
+            (DistortionModel::Paper, true, 1) => "1/px",
+            (DistortionModel::Paper, true, _) => "1/px²",
+            (DistortionModel::Paper, false, 0) => "px",
+            (DistortionModel::Paper, false, 1) => "none",
+            (DistortionModel::Paper, false, _) => "1/px",
+            (DistortionModel::OpenCv, _, 0) => "px²",
+            (DistortionModel::OpenCv, _, 1) => "px",
+            (DistortionModel::OpenCv, _, _) => "none",
+        }
+    }
+}
 
-/// What each number is, for the parameter table.
-pub(crate) fn param_meaning(i: usize) -> &'static str {
-    match PARAM_NAMES[i] {
-        "om1" | "om2" | "om3" => "rotation (Rodrigues) world → camera",
-        "tx" | "ty" | "tz" => "translation world → camera",
-        n if n.starts_with("kf") && n.ends_with('x') => "fx(E) polynomial coefficient",
-        n if n.starts_with("kf") => "fy(E) polynomial coefficient",
-        "u0" | "v0" => "principal point",
-        "a1" | "a2" | "a3" => "k1 = a1 w² + a2 w + a3",
-        "a4" | "a5" | "a6" => "p1 = a4 w² + a5 w + a6",
-        _ => "p2 = a7 w² + a8 w + a9",
+/// What number `i` of `layout` is, for the parameter table.
+pub(crate) fn param_meaning(layout: &Layout, i: usize) -> String {
+    let name = layout.name(i);
+    match name {
+        "om1" | "om2" | "om3" => "rotation (Rodrigues) world → camera".into(),
+        "tx" | "ty" | "tz" => "translation world → camera".into(),
+        n if n.starts_with("kf") && n.ends_with('x') => "fx(E) polynomial coefficient".into(),
+        n if n.starts_with("kf") => "fy(E) polynomial coefficient".into(),
+        "u0" | "v0" => "principal point".into(),
+        _ => {
+            let k = i.saturating_sub(layout.distortion_a().start) / 3;
+            let c = layout.model().coefficient_names().get(k).copied().unwrap_or("?");
+            let a = |t: usize| layout.name(layout.distortion_triple(k).at(t));
+            format!("{c} = {} w² + {} w + {}", a(0), a(1), a(2))
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use etl_core::calib::params::{DISTORTION_A, KF_X};
+    use etl_core::calib::params::Span;
+    const KF_X: Span = Span { start: 6, len: 4 };
+    const DISTORTION_A: Span = Span { start: 16, len: 9 };
+    const PARAMS: usize = MAX_PARAMS;
 
     /// A covariance with known entries on kf_x and a1..a3 (and a correlation between them).
     fn covariance() -> [[f64; PARAMS]; PARAMS] {
@@ -154,7 +192,7 @@ mod tests {
         assert!((r[KF_X.at(0)][KF_X.at(1)] - 0.5).abs() < 1e-12);
         assert_eq!(r[0][0], 1.0);
         assert_eq!(r[0][1], 0.0);
-        assert!(strong_pairs(&r, 0.9).is_empty());
-        assert_eq!(strong_pairs(&r, 0.4).len(), 6);
+        assert!(strong_pairs(&r, 25, 0.9).is_empty());
+        assert_eq!(strong_pairs(&r, 25, 0.4).len(), 6);
     }
 }

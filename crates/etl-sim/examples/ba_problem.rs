@@ -29,8 +29,8 @@ fn main() {
     let cost = r.rms_px * r.rms_px * n as f64;
     let out = serde_json::json!({
         "observations": sim.observations,
-        "start": to_params(&init),
-        "etlcal_final": to_params(&r.model),
+        "start": to_params(&init)[..init.layout().len()],
+        "etlcal_final": to_params(&r.model)[..r.model.layout().len()],
         "etlcal_cost": cost,
         "etlcal_seconds": secs,
         "etlcal_iterations": r.iterations,

@@ -11,7 +11,7 @@
 //! image size is held fixed (a pinhole of focal length 26 mm / 5.86 um); only the focus
 //! moves with the current, so a sharpness peak is where the board is in focus.
 
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, DistortionA, FocalPoly};
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::ThermalSurface;
 use etl_hw::virtual_lens::VirtualLens;
@@ -82,10 +82,10 @@ impl Camera for VirtualCamera<'_> {
         let model = CameraModel {
             rotation_rodrigues: [0.0; 3],
             translation_mm: [-centre[0], -centre[1], self.board_depth_mm],
-            kf_x: [f_px, 0.0, 0.0, 0.0],
-            kf_y: [f_px, 0.0, 0.0, 0.0],
+            kf_x: FocalPoly::cubic([f_px, 0.0, 0.0, 0.0]),
+            kf_y: FocalPoly::cubic([f_px, 0.0, 0.0, 0.0]),
             principal_point: [0.5 * (w as f64 - 1.0), 0.5 * (h as f64 - 1.0)],
-            distortion_a: [0.0; 9],
+            distortion_a: DistortionA::paper([0.0; 9]),
         };
         self.frames += 1;
         let scene = Scene::new(model, 0.0, self.board, 0.0, self.image_size);

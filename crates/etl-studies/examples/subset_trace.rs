@@ -5,9 +5,8 @@
 //! `cargo run --release -p etl-studies --example subset_trace -- [VIEWS] [TRIAL]`, VIEWS as
 //! the study labels them (e.g. 135789, 1-based in the nine).
 use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_sim::simulate::{paper_rig, NoiseModel};
-use etl_studies::common::{calibrate_paper_capped, StudyOptions};
+use etl_studies::common::{calibrate_paper_capped, param_name, StudyOptions, PARAMS};
 use etl_studies::subsets::NINE_VIEWS;
 
 fn main() {
@@ -33,6 +32,6 @@ fn main() {
         let (worst, i) = (0..PARAMS)
             .map(|i| ((xk[i] - x[i]).abs() / full.std[i].max(1e-300), i))
             .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
-        println!("iter {k:2}: rms {:.6} px, worst shift {worst:9.3} std ({})", r.rms_px, PARAM_NAMES[i]);
+        println!("iter {k:2}: rms {:.6} px, worst shift {worst:9.3} std ({})", r.rms_px, param_name(i));
     }
 }

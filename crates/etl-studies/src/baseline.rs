@@ -63,7 +63,7 @@ fn one(seed: u64) -> Result<BaselineTrial> {
     add_setting_views(&mut sim.observations, &rig, &noise, seed);
     let pair = calibrate_pair(&sim.observations, &sim.a0, noise.z_mm, noise.e_ma)?;
     let base = etl_calib::baseline::per_setting(&sim.observations, Some(&ThermalRef::paper()))?;
-    let models = [pair.paper.model, pair.eiv.model, base.calibration.model()];
+    let models = [pair.paper.model, pair.eiv.model, base.calibration.model()?];
     let es = curve_currents();
     let t = &sim.truth;
     let fx_rel = models.map(|m| es.iter().map(|&e| m.focal_lengths(e).0 / t.focal_lengths(e).0 - 1.0).collect());

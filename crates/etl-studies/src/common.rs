@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{KF_X, PARAMS};
+use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{
     bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, View,
     ViewScratch, A0,
@@ -141,12 +141,12 @@ pub fn model_errors(est: &CameraModel, truth: &CameraModel) -> ModelErrors {
     let (fx, fy) = curve_errors(est, truth, RIG_RANGE_MA);
     ModelErrors {
         kf_rel: [
-            rel(est.kf_x[1], truth.kf_x[1]),
-            rel(est.kf_x[2], truth.kf_x[2]),
-            rel(est.kf_x[3], truth.kf_x[3]),
-            rel(est.kf_y[1], truth.kf_y[1]),
-            rel(est.kf_y[2], truth.kf_y[2]),
-            rel(est.kf_y[3], truth.kf_y[3]),
+            rel(est.kf_x.coefficients()[1], truth.kf_x.coefficients()[1]),
+            rel(est.kf_x.coefficients()[2], truth.kf_x.coefficients()[2]),
+            rel(est.kf_x.coefficients()[3], truth.kf_x.coefficients()[3]),
+            rel(est.kf_y.coefficients()[1], truth.kf_y.coefficients()[1]),
+            rel(est.kf_y.coefficients()[2], truth.kf_y.coefficients()[2]),
+            rel(est.kf_y.coefficients()[3], truth.kf_y.coefficients()[3]),
         ],
         om_rel: d(est.rotation_rodrigues, truth.rotation_rodrigues),
         t_rel: d(est.translation_mm, truth.translation_mm),
@@ -272,27 +272,43 @@ pub fn stat(values: &[f64]) -> Stat {
     Stat { mean, std: var.sqrt(), p95: s[k] }
 }
 
+/// The number of numbers of the paper's model, which the studies calibrate
+/// ([`Layout::PAPER`]).
+pub const PARAMS: usize = Layout::PAPER.len();
+
+/// The name of number `i` of the paper's model.
+pub fn param_name(i: usize) -> &'static str {
+    Layout::PAPER.name(i)
+}
+
+/// The paper model's numbers of `m` (the first [`PARAMS`] of its parameter vector).
+pub fn paper_params(m: &CameraModel) -> [f64; PARAMS] {
+    let x = to_params(m);
+    core::array::from_fn(|i| x[i])
+}
+
 /// Relative std of every parameter and the max relative std of fx(E) over
 /// [`RIG_RANGE_MA`] from a covariance of the 25 numbers.
-pub fn cov_std(cov: &[[f64; PARAMS]; PARAMS]) -> [f64; PARAMS] {
+pub fn cov_std(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> [f64; PARAMS] {
     core::array::from_fn(|i| cov[i][i].max(0.0).sqrt())
 }
 
 /// The standard deviation of fx(E) (px) at `e_ma` from a covariance of the 25 numbers
 /// (fx is linear in kf0x..kf3x: var = g^T C g with g = [1, E, E^2, E^3]).
-pub fn fx_std_px(cov: &[[f64; PARAMS]; PARAMS], e_ma: f64) -> f64 {
+pub fn fx_std_px(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_ma: f64) -> f64 {
+    let kf_x = Layout::PAPER.kf_x();
     let g = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
     let mut v = 0.0;
     for i in 0..4 {
         for j in 0..4 {
-            v += g[i] * cov[KF_X.at(i)][KF_X.at(j)] * g[j];
+            v += g[i] * cov[kf_x.at(i)][kf_x.at(j)] * g[j];
         }
     }
     v.max(0.0).sqrt()
 }
 
 /// Max over [`RIG_RANGE_MA`] (1 mA steps) of std(fx(E)) / fx(E).
-pub fn fx_curve_rel_std(cov: &[[f64; PARAMS]; PARAMS], truth: &CameraModel) -> f64 {
+pub fn fx_curve_rel_std(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], truth: &CameraModel) -> f64 {
     (RIG_RANGE_MA[0] as usize..=RIG_RANGE_MA[1] as usize)
         .map(|e| fx_std_px(cov, e as f64) / truth.focal_lengths(e as f64).0)
         .fold(0.0, f64::max)
@@ -302,9 +318,9 @@ pub fn fx_curve_rel_std(cov: &[[f64; PARAMS]; PARAMS], truth: &CameraModel) -> f
 /// Cramer-Rao standard deviation into the mean absolute error it implies (Gaussian errors).
 pub const MEAN_ABS_OF_STD: f64 = 0.797_884_560_802_865_4;
 
-/// The truth as a parameter vector (order of `PARAM_NAMES`).
+/// The truth as a parameter vector (order of [`param_name`]).
 pub fn truth_params() -> [f64; PARAMS] {
-    to_params(&CameraModel::paper_rig())
+    paper_params(&CameraModel::paper_rig())
 }
 
 // ---------------------------------------------------------------- markdown

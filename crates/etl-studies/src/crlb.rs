@@ -16,15 +16,13 @@
 //! about 1 / sqrt(2 (trials - 1)) relative (4 % at 300 trials).
 
 use etl_core::calib::crlb::{crlb_covariance, crlb_covariance_eiv};
-use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
 use serde_json::json;
 
 use super::common::{
-    calibrate_pair, calibrate_paper, cov_std, fx_std_px, md_table, run_jobs, sci, stat, truth_params, Chart, Figure,
-    Series, StudyOptions, StudyOutput,
+    calibrate_pair, calibrate_paper, cov_std, fx_std_px, md_table, paper_params, param_name, run_jobs, sci, stat,
+    truth_params, Chart, Figure, Series, StudyOptions, StudyOutput, PARAMS,
 };
 use etl_formats::{Error, Result};
 use etl_sim::simulate::{core_points, paper_rig, NoiseModel, PAPER_E_COM_MA};
@@ -46,7 +44,7 @@ pub const PER_VIEW: NoiseModel =
 /// One parameter's row.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ParamRow {
-    /// Name (`PARAM_NAMES`).
+    /// Name ([`super::common::param_name`]).
     pub name: &'static str,
     /// True value.
     pub truth: f64,
@@ -131,14 +129,15 @@ pub fn crlb(opts: &StudyOptions) -> Result<Crlb> {
         return Err(Error::InvalidInput("the CRLB study needs at least 2 trials that calibrate".into()));
     }
     let x = truth_params();
-    let p: [Vec<[f64; PARAMS]>; 2] = [est[0].iter().map(to_params).collect(), est[1].iter().map(to_params).collect()];
+    let p: [Vec<[f64; PARAMS]>; 2] =
+        [est[0].iter().map(paper_params).collect(), est[1].iter().map(paper_params).collect()];
     let (cs, fs) = (cov_std(&plain), cov_std(&full));
     let parameters = (0..PARAMS)
         .map(|i| {
             let s0 = stat(&p[0].iter().map(|v| v[i]).collect::<Vec<_>>());
             let s1 = stat(&p[1].iter().map(|v| v[i]).collect::<Vec<_>>());
             ParamRow {
-                name: PARAM_NAMES[i],
+                name: param_name(i),
                 truth: x[i],
                 crlb_std: cs[i],
                 mc_std: s0.std,

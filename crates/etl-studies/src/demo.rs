@@ -6,8 +6,6 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::PARAM_NAMES;
 use etl_core::calib::Estimator;
 use etl_core::model::CameraModel;
 use etl_core::pnp::{displacement_mm, solve_pnp};
@@ -25,7 +23,7 @@ use etl_formats::{Error, Result};
 use etl_sim::simulate::images::{render_rig, ImageOptions};
 use etl_sim::simulate::{focused_z_mm, noise_from, observe_board, paper_rig, Simulation};
 
-use crate::common::curve_errors;
+use crate::common::{curve_errors, paper_params, param_name, PARAMS};
 
 /// Currents of the validation measurements, mA.
 pub const VALIDATION_E_MA: [f64; 5] = [80.0, 120.0, 150.0, 190.0, 225.0];
@@ -156,12 +154,12 @@ pub fn summary_markdown(demo: &Demo, options: &DemoOptions) -> String {
 /// The markdown table of every parameter: truth, both estimates and their standard
 /// deviations (square roots of the covariance's diagonal).
 pub fn parameter_table(truth: &CameraModel, paper: &CalibrationResult, eiv: &CalibrationResult) -> String {
-    let truth = to_params(truth);
-    let (xp, xe) = (to_params(&paper.report.model), to_params(&eiv.report.model));
+    let truth = paper_params(truth);
+    let (xp, xe) = (paper_params(&paper.report.model), paper_params(&eiv.report.model));
     let mut table = String::new();
     let _ = writeln!(table, "| parameter | truth | paper BA | std | eiv BA | std |");
     let _ = writeln!(table, "|---|---|---|---|---|---|");
-    let rows = PARAM_NAMES.iter().zip(truth).zip(xp).zip(xe).zip(paper.report.std.iter().zip(&eiv.report.std));
+    let rows = (0..PARAMS).map(param_name).zip(truth).zip(xp).zip(xe).zip(paper.report.std.iter().zip(&eiv.report.std));
     for ((((name, t), p), e), (sp, se)) in rows {
         let _ = writeln!(table, "| {name} | {t:.6e} | {p:.6e} | {sp:.1e} | {e:.6e} | {se:.1e} |");
     }
@@ -209,7 +207,7 @@ pub fn figures_table(vp: &Validation, ve: &Validation) -> String {
 /// renders the board before and after the move and detects its corners; otherwise the
 /// corners are simulated with the paper's noise model.
 pub fn validate(result: &CalibrationResult, truth: &CameraModel, seed: u64, images: bool) -> Result<Validation> {
-    let m = result.calibration.model();
+    let m = result.calibration.model()?;
     let (ex, ey) = curve_errors(&m, truth, result.calibration.e_com_range_ma);
     let pp = (m.principal_point[0] - truth.principal_point[0]).hypot(m.principal_point[1] - truth.principal_point[1]);
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5e_ed0f_9a11);
@@ -309,11 +307,14 @@ mod tests {
         assert!(d.eiv_validation.fx_curve_max_rel_err < 0.005, "{:?}", d.eiv_validation);
         assert_eq!(d.paper_validation.pnp_displacement_err_um.len(), VALIDATION_E_MA.len());
         // One table row per parameter, its truth column the true model's parameter.
-        let truth = to_params(&d.sim.truth);
-        let rows: Vec<&str> =
-            d.summary_md.lines().filter(|l| PARAM_NAMES.iter().any(|n| l.starts_with(&format!("| {n} |")))).collect();
+        let truth = paper_params(&d.sim.truth);
+        let rows: Vec<&str> = d
+            .summary_md
+            .lines()
+            .filter(|l| (0..PARAMS).map(param_name).any(|n| l.starts_with(&format!("| {n} |"))))
+            .collect();
         assert_eq!(rows.len(), 25);
-        for (row, (name, t)) in rows.iter().zip(PARAM_NAMES.iter().zip(truth)) {
+        for (row, (name, t)) in rows.iter().zip((0..PARAMS).map(param_name).zip(truth)) {
             let cell: f64 = row.split('|').nth(2).unwrap().trim().parse().unwrap();
             assert!((cell - t).abs() <= 1e-6 * t.abs(), "{name}: {cell} vs {t}");
         }

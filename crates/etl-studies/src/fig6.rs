@@ -20,7 +20,7 @@
 //! views.
 
 use etl_core::calib::crlb::crlb_covariance_eiv;
-use etl_core::calib::params::{KF_X, KF_Y, PARAMS};
+use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
 use rand::SeedableRng;
@@ -234,8 +234,9 @@ pub fn level_bound(study: Fig6Study, level: f64) -> Result<LevelBound> {
     }
     let noise = study.noise(level);
     let x = super::common::truth_params();
-    let rel = |cov: &[[f64; PARAMS]; PARAMS]| -> [f64; 6] {
-        let idx = [KF_X.at(1), KF_X.at(2), KF_X.at(3), KF_Y.at(1), KF_Y.at(2), KF_Y.at(3)];
+    let rel = |cov: &[[f64; MAX_PARAMS]; MAX_PARAMS]| -> [f64; 6] {
+        let (kx, ky) = (Layout::PAPER.kf_x(), Layout::PAPER.kf_y());
+        let idx = [kx.at(1), kx.at(2), kx.at(3), ky.at(1), ky.at(2), ky.at(3)];
         core::array::from_fn(|k| MEAN_ABS_OF_STD * cov[idx[k]][idx[k]].max(0.0).sqrt() / x[idx[k]].abs())
     };
     if noise.px <= 0.0 {

@@ -62,9 +62,9 @@ pub fn model_row(cam: &CameraModel, lens: &LensPhysics, e_ma: f64) -> Result<Mod
         e_ma,
         fx_px: k.fx,
         fy_px: k.fy,
-        k1: d.k1,
-        p1: d.p1,
-        p2: d.p2,
+        k1: d.padded()[0],
+        p1: d.padded()[1],
+        p2: d.padded()[2],
         f_liq_mm: lens.f_liq_mm(e_ma).map_err(at)?,
         f_com_mm: lens.f_com_mm(e_ma).map_err(at)?,
     })

@@ -15,14 +15,12 @@
 //! reports) and per coordinate (that divided by sqrt 2: the estimate of the pixel noise's
 //! standard deviation, comparable to the noise level).
 
-use etl_core::calib::jacobian::to_params;
-use etl_core::calib::params::{PARAMS, PARAM_NAMES};
 use etl_core::model::CameraModel;
 use serde_json::{json, Value};
 
 use super::common::{
-    calibrate_pair, calibrate_paper_capped, md_table, run_jobs, sci, stat, truth_params, Chart, Figure, Series,
-    StudyOptions, StudyOutput,
+    calibrate_pair, calibrate_paper_capped, md_table, paper_params, param_name, run_jobs, sci, stat, truth_params,
+    Chart, Figure, Series, StudyOptions, StudyOutput, PARAMS,
 };
 use etl_formats::Result;
 use etl_sim::simulate::{paper_rig, NoiseModel, PAPER_E_COM_MA};
@@ -106,7 +104,7 @@ pub fn subsets(opts: &StudyOptions) -> Result<Subsets> {
         let pair = calibrate_pair(&obs, &sim.a0, noise.z_mm, noise.e_ma)?;
         let r = &pair.paper;
         let five = calibrate_paper_capped(&obs, &sim.a0, 5)?;
-        let (x, x5) = (to_params(&r.model), to_params(&five.model));
+        let (x, x5) = (paper_params(&r.model), paper_params(&five.model));
         let shift = (0..PARAMS).map(|i| (x5[i] - x[i]).abs() / r.std[i].max(1e-300)).fold(0.0, f64::max);
         Ok(SubsetFit {
             mask,
@@ -183,7 +181,7 @@ impl Subsets {
         let stats = self.six_view_stats(0);
         let mut rows = vec![];
         for i in 0..PARAMS {
-            let mut r = vec![PARAM_NAMES[i].to_string(), sci(truth[i])];
+            let mut r = vec![param_name(i).to_string(), sci(truth[i])];
             r.extend(numbers.iter().map(|f| sci(f.params[i])));
             r.push(sci(stats[i].0));
             r.push(sci(stats[i].1));
@@ -237,7 +235,7 @@ impl Subsets {
             if rms_ok { "yes" } else { "**no**" },
         );
         let param_obj = |p: &[f64; PARAMS]| -> Value {
-            Value::Object(PARAM_NAMES.iter().zip(p).map(|(n, v)| (n.to_string(), json!(v))).collect())
+            Value::Object((0..PARAMS).map(param_name).zip(p).map(|(n, v)| (n.to_string(), json!(v))).collect())
         };
         let j = json!({
             "views_of_15": NINE_VIEWS,
@@ -247,7 +245,7 @@ impl Subsets {
                 "parameters": param_obj(&f.params)})).collect::<Vec<_>>(),
             "six_view_subsets": {
                 "count": six.len(),
-                "parameters": (0..PARAMS).map(|i| json!({"name": PARAM_NAMES[i], "truth": truth[i],
+                "parameters": (0..PARAMS).map(|i| json!({"name": param_name(i), "truth": truth[i],
                     "mean": stats[i].0, "std": stats[i].1})).collect::<Vec<_>>(),
                 "subsets": six.iter().map(|f| json!({"views": f.label(), "iterations": f.iterations,
                     "initial_rms_px": f.initial_rms_px, "rms_px": f.rms_px, "eiv_rms_px": f.eiv_rms_px,
@@ -265,8 +263,8 @@ impl Subsets {
     fn figure(&self, numbers: &[&SubsetFit], six: &[&SubsetFit]) -> Figure {
         let es: Vec<f64> = (0..=29).map(|k| PAPER_E_COM_MA[0] + 5.0 * k as f64).collect();
         let coef = |p: &[f64; PARAMS], e: f64, k: usize| -> f64 {
-            let m: CameraModel = etl_core::calib::jacobian::from_params(p);
-            m.distortion(e).map_or(f64::NAN, |d| [d.k1, d.p1, d.p2][k])
+            let m: CameraModel = etl_core::calib::jacobian::from_params(&etl_core::calib::Layout::PAPER, p);
+            m.distortion(e).map_or(f64::NAN, |d| d.padded()[k])
         };
         let names = ["k1 (1/px^2) x 1e9", "p1 (1/px) x 1e6", "p2 (1/px) x 1e6"];
         let scale = [1e9, 1e6, 1e6];

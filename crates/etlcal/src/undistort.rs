@@ -130,7 +130,7 @@ pub fn run(args: Args) -> Result<()> {
         jobs.push(job);
     }
     crate::output::create_dir(&args.out)?;
-    let model = cal.model();
+    let model = cal.model()?;
     for job in &jobs {
         undistort_file(job, &model, e_com)?;
         if !args.json {

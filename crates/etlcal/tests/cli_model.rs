@@ -56,9 +56,9 @@ fn model_table_matches_the_core_and_the_paper() {
         let pairs = [
             (&r["fx_px"], k.fx),
             (&r["fy_px"], k.fy),
-            (&r["k1"], d.k1),
-            (&r["p1"], d.p1),
-            (&r["p2"], d.p2),
+            (&r["k1"], d.padded()[0]),
+            (&r["p1"], d.padded()[1]),
+            (&r["p2"], d.padded()[2]),
             (&r["f_liq_mm"], lens.f_liq_mm(e).unwrap()),
             (&r["f_com_mm"], lens.f_com_mm(e).unwrap()),
         ];

@@ -171,7 +171,60 @@ pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
     let Ok(q) = etl_core::calib::projection_uncertainty(&r.model, &r.covariance, board[0], 130.0) else {
         return f64::NAN;
     };
-    r.model.kf_x[1] + p.translation_mm[2] + d[2][2] + q.std_px[0]
+    r.model.kf_x.padded()[1] + p.translation_mm[2] + d[2][2] + q.std_px[0]
+}
+
+/// The calibration chain in any layout on a small synthetic rig of the strong-distortion
+/// camera: focal degree `degree` (1..=5), the opencv family (with OpenCV's flags) or the
+/// paper's, plain or errors-in-variables, with the Cramer-Rao bound at the result.
+/// Returns kf0x + the bound of u0 (or NaN on error).
+#[no_mangle]
+pub extern "C" fn etl_gate_calibrate_family(noise_px: f64, degree: usize, opencv: bool, flags: u8, eiv: bool) -> f64 {
+    use etl_core::calib::crlb::crlb_covariance_eiv;
+    use etl_core::calib::{bundle_adjust, initialise_model, BundleAdjustOptions, Estimator, Layout, Point, View, ViewScratch, A0};
+    use etl_core::model::{DistortionModel, OpenCvFlags};
+    let cam = CameraModel::strong_distortion_rig();
+    let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 30]; 6];
+    let currents = [80.0, 110.0, 140.0, 170.0, 200.0, 225.0];
+    for (k, view) in pts.iter_mut().enumerate() {
+        for (i, p) in view.iter_mut().enumerate() {
+            let w = [20.0 * (i % 6) as f64, 20.0 * (i / 6) as f64, -40.0 + 16.0 * k as f64];
+            let Ok(px) = cam.project(w, currents[k]) else { return f64::NAN };
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            *p = Point { world_mm: w, pixel: [px[0] + sign * noise_px, px[1] - sign * noise_px] };
+        }
+    }
+    let views: [View; 6] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
+    let family = if opencv { DistortionModel::OpenCv } else { DistortionModel::Paper };
+    let Ok(layout) = Layout::new(family, degree) else { return f64::NAN };
+    let flags = OpenCvFlags { fix_k3: flags & 1 != 0, zero_tangent: flags & 2 != 0 };
+    let a0 = A0 { kf0x: 1500.0, kf0y: 1510.0, u0: 980.0, v0: 720.0 };
+    let Ok(init) = initialise_model(&views, &a0, layout, flags) else { return f64::NAN };
+    let Ok(hold) = layout.opencv_mask(flags) else { return f64::NAN };
+    let estimator = if eiv { Estimator::EIV_PAPER } else { Estimator::Paper };
+    let opts = BundleAdjustOptions { estimator, hold: hold | layout.a0_mask(), ..BundleAdjustOptions::default() };
+    let mut scratch = [ViewScratch::ZERO; 6];
+    let Ok(r) = bundle_adjust(&views, &init, &opts, &mut scratch) else { return f64::NAN };
+    let Ok(c) = crlb_covariance_eiv(&views, &r.model, 0.2, Some((0.01, 0.4))) else { return f64::NAN };
+    r.model.kf_x.padded()[0] + c[layout.u0()][layout.u0()]
+}
+
+/// The strong-distortion camera (opencv family): a projection, its undistortion, the
+/// exact OpenCV export and a band of undistortion maps; their sum, or NaN on error.
+#[no_mangle]
+pub extern "C" fn etl_gate_opencv_family(x: f64, y: f64, z: f64, e_ma: f64, maps: &mut [f32; 128]) -> f64 {
+    use etl_core::undistort::{undistort_maps, OutputCamera};
+    let cam = CameraModel::strong_distortion_rig();
+    let Ok([u, v]) = cam.project([x, y, z], e_ma) else { return f64::NAN };
+    let Ok([a, b]) = cam.undistort([u, v], e_ma) else { return f64::NAN };
+    let (Ok(k), Ok(d)) = (cam.intrinsics(e_ma), cam.distortion(e_ma)) else { return f64::NAN };
+    let Ok(fit) = etl_core::model::fit_opencv5(&k, &d, [1936, 1458]) else { return f64::NAN };
+    let Ok(out) = OutputCamera::of_intrinsics(&k, 8, 8) else { return f64::NAN };
+    let (mx, my) = maps.split_at_mut(64);
+    if undistort_maps(&k, &d, &out, 0..8, mx, my).is_err() {
+        return f64::NAN;
+    }
+    a + b + fit.dist_coeffs[0] + mx[9] as f64
 }
 
 /// The four sharpness measures on a caller's 8-bit frame with stride; their sum, or NaN.

@@ -18,7 +18,7 @@ mod view_focal;
 pub use planar_views::{detect_views, PlanarViews};
 pub use view_focal::view_focal;
 
-use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss, View, A0};
+use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, Layout, ParamMask, RobustLoss, View, A0};
 use etl_core::model::CameraModel;
 
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
@@ -135,7 +135,7 @@ pub fn calibrate(
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let ba = BundleAdjustOptions {
         estimator: options.estimator,
-        hold_a0: options.hold_a0,
+        hold: if options.hold_a0 { Layout::PAPER.a0_mask() } else { ParamMask::NONE },
         robust: options.robust,
         ..BundleAdjustOptions::default()
     };
@@ -179,7 +179,7 @@ pub fn calibrate(
     let mut calibration = Calibration {
         thermal: thermal.cloned(),
         rms_reprojection_px: report.rms_px,
-        std: ModelStd::from_params(&report.std),
+        std: ModelStd::from_params(&m.layout(), &report.std),
         estimator: match options.estimator {
             Estimator::Paper => "paper".into(),
             Estimator::Eiv { .. } => "eiv".into(),
@@ -194,6 +194,6 @@ pub fn calibrate(
     calibration.warnings = solve::plausibility_warnings(&calibration, &solved.rounds, options);
     // The covariance of the 25 shared numbers (for errors-in-variables, with the view
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.
-    calibration.set_covariance(&report.covariance);
+    calibration.set_covariance(&report.covariance)?;
     Ok(CalibrationResult { calibration, report, initial, focus_law_warning })
 }

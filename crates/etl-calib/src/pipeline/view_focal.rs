@@ -2,11 +2,11 @@
 //! the curve): fx, fy refitted to one view's points with R, T, the principal point and
 //! the distortion of the calibration held.
 
-use etl_core::calib::jacobian::{to_params, Projector};
+use etl_core::calib::jacobian::Projector;
 use etl_core::calib::params::{R_FX, R_FY};
 use etl_core::calib::View;
 use etl_core::lm::{solve, Options, Problem, RowSink};
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, FocalPoly};
 
 use etl_formats::Result;
 
@@ -20,13 +20,17 @@ impl OneView<'_> {
     fn at(&self, x: &[f64; 2]) -> CameraModel {
         // A constant cubic: the current no longer matters, the distortion's w = 1 / f_mean
         // follows the view's own focal lengths.
-        CameraModel { kf_x: [x[0], 0.0, 0.0, 0.0], kf_y: [x[1], 0.0, 0.0, 0.0], ..self.model }
+        CameraModel {
+            kf_x: FocalPoly::cubic([x[0], 0.0, 0.0, 0.0]),
+            kf_y: FocalPoly::cubic([x[1], 0.0, 0.0, 0.0]),
+            ..self.model
+        }
     }
 }
 
 impl Problem<2> for OneView<'_> {
     fn eval(&mut self, x: &[f64; 2], jacobian: bool, sink: &mut dyn RowSink<2>) -> etl_core::Result<()> {
-        let proj = Projector::new(&to_params(&self.at(x)));
+        let proj = Projector::new(&self.at(x));
         for p in self.view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + self.dz_mm];
             // With a constant cubic, d pixel / d kf0x is the per-view d pixel / d fx (the

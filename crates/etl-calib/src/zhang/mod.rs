@@ -16,12 +16,12 @@
 //! Needs at least 3 views of the board in distinct orientations (each view gives two
 //! constraints on the 5 unknowns of B up to scale).
 
-use etl_core::calib::jacobian::{to_params, Projector};
+use etl_core::calib::jacobian::Projector;
 use etl_core::calib::A0;
 use etl_core::linalg::svd::Svd;
 use etl_core::lm::{solve_blocks, BlockProblem, BlockReport, BlockRowSink, BlockScratch, Options, StopReason};
 use etl_core::model::rotation::{matrix_to_rodrigues, rotation_from_two_columns};
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, DistortionA, FocalPoly};
 use etl_core::pnp::homography;
 
 use etl_formats::calibration::Outlier;
@@ -95,10 +95,10 @@ fn model(x: &[f64; 7], pose: &[f64; 6]) -> CameraModel {
     CameraModel {
         rotation_rodrigues: [pose[0], pose[1], pose[2]],
         translation_mm: [pose[3], pose[4], pose[5]],
-        kf_x: [x[0], 0.0, 0.0, 0.0],
-        kf_y: [x[1], 0.0, 0.0, 0.0],
+        kf_x: FocalPoly::cubic([x[0], 0.0, 0.0, 0.0]),
+        kf_y: FocalPoly::cubic([x[1], 0.0, 0.0, 0.0]),
         principal_point: [x[2], x[3]],
-        distortion_a: [0.0, 0.0, x[4], 0.0, 0.0, x[5], 0.0, 0.0, x[6]],
+        distortion_a: DistortionA::paper([0.0, 0.0, x[4], 0.0, 0.0, x[5], 0.0, 0.0, x[6]]),
     }
 }
 
@@ -123,7 +123,7 @@ impl BlockProblem<7, 6> for Refine<'_> {
         sink: &mut dyn BlockRowSink<7, 6>,
     ) -> etl_core::Result<()> {
         let v = self.views.get(b).ok_or(etl_core::Error::InvalidArgument { what: "view index" })?;
-        let proj = Projector::new(&to_params(&model(x, y)));
+        let proj = Projector::new(&model(x, y));
         for (w, px) in v.board_mm.iter().zip(&v.pixels) {
             let p = proj.project([w[0], w[1], 0.0], 0.0, jacobian)?;
             for row in 0..2 {

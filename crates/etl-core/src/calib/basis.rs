@@ -30,40 +30,57 @@
 //! so dx/dz is evaluated at z ([`Basis::params_jacobian`]).
 
 use super::observations::View;
-use super::params::{DISTORTION_TRIPLES, KF_X, KF_Y, PARAMS};
-use crate::model::camera::cubic;
+use super::params::Layout;
+use crate::model::{FocalPoly, MAX_FOCAL_DEGREE};
 
-/// Where fx's and fy's coefficients start (kf0x, kf0y).
-const KF_STARTS: [usize; 2] = [KF_X.start, KF_Y.start];
-/// Where each distortion coefficient's a-triple starts (a1, a4, a7).
-const A_STARTS: [usize; 3] = [DISTORTION_TRIPLES[0].start, DISTORTION_TRIPLES[1].start, DISTORTION_TRIPLES[2].start];
+/// Most coefficients of one polynomial the maps handle (a focal polynomial of degree 5).
+const MAXN: usize = MAX_FOCAL_DEGREE + 1;
 
-/// Monomial coefficients (t^0..t^3) of T_0..T_3.
-const MONO_OF_CHEB: [[f64; 4]; 4] =
-    [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [-1.0, 0.0, 2.0, 0.0], [0.0, -3.0, 0.0, 4.0]];
-/// Chebyshev coefficients (T_0..T_3) of t^0..t^3.
-const CHEB_OF_MONO: [[f64; 4]; 4] =
-    [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.5, 0.0, 0.5, 0.0], [0.0, 0.75, 0.0, 0.25]];
+/// Monomial coefficients (t^0..t^5) of T_0..T_5.
+const MONO_OF_CHEB: [[f64; MAXN]; MAXN] = [
+    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+    [-1.0, 0.0, 2.0, 0.0, 0.0, 0.0],
+    [0.0, -3.0, 0.0, 4.0, 0.0, 0.0],
+    [1.0, 0.0, -8.0, 0.0, 8.0, 0.0],
+    [0.0, 5.0, 0.0, -20.0, 0.0, 16.0],
+];
+/// Chebyshev coefficients (T_0..T_5) of t^0..t^5.
+const CHEB_OF_MONO: [[f64; MAXN]; MAXN] = [
+    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+    [0.5, 0.0, 0.5, 0.0, 0.0, 0.0],
+    [0.0, 0.75, 0.0, 0.25, 0.0, 0.0],
+    [0.375, 0.0, 0.5, 0.0, 0.125, 0.0],
+    [0.0, 0.625, 0.0, 0.3125, 0.0, 0.0625],
+];
 
 fn binomial(n: usize, k: usize) -> f64 {
-    const ROWS: [[f64; 4]; 4] =
-        [[1.0, 0.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 2.0, 1.0, 0.0], [1.0, 3.0, 3.0, 1.0]];
+    const ROWS: [[f64; MAXN]; MAXN] = [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 2.0, 1.0, 0.0, 0.0, 0.0],
+        [1.0, 3.0, 3.0, 1.0, 0.0, 0.0],
+        [1.0, 4.0, 6.0, 4.0, 1.0, 0.0],
+        [1.0, 5.0, 10.0, 10.0, 5.0, 1.0],
+    ];
     ROWS.get(n).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
 }
 
-/// Coefficients of a polynomial of degree < `n` (n <= 4) in x, as Chebyshev
+/// Coefficients of a polynomial of degree < `n` (n <= 6) in x, as Chebyshev
 /// coefficients in t = (x - mid) / half.
-fn mono_to_cheb(a: [f64; 4], n: usize, mid: f64, half: f64) -> [f64; 4] {
+fn mono_to_cheb(a: [f64; MAXN], n: usize, mid: f64, half: f64) -> [f64; MAXN] {
+    let n = n.min(MAXN);
     // In t: a'_j = sum_{k >= j} a_k C(k, j) mid^(k - j) half^j.
-    let mut at = [0.0; 4];
-    for j in 0..n.min(4) {
-        for k in j..n.min(4) {
+    let mut at = [0.0; MAXN];
+    for j in 0..n {
+        for k in j..n {
             at[j] += a[k] * binomial(k, j) * libm::pow(mid, (k - j) as f64) * libm::pow(half, j as f64);
         }
     }
-    let mut c = [0.0; 4];
-    for j in 0..n.min(4) {
-        for i in 0..4 {
+    let mut c = [0.0; MAXN];
+    for j in 0..n {
+        for i in 0..n {
             c[i] += at[j] * CHEB_OF_MONO[j][i];
         }
     }
@@ -71,75 +88,102 @@ fn mono_to_cheb(a: [f64; 4], n: usize, mid: f64, half: f64) -> [f64; 4] {
 }
 
 /// The inverse of [`mono_to_cheb`].
-fn cheb_to_mono(c: [f64; 4], n: usize, mid: f64, half: f64) -> [f64; 4] {
-    let mut at = [0.0; 4];
-    for i in 0..n.min(4) {
-        for j in 0..4 {
+fn cheb_to_mono(c: [f64; MAXN], n: usize, mid: f64, half: f64) -> [f64; MAXN] {
+    let n = n.min(MAXN);
+    let mut at = [0.0; MAXN];
+    for i in 0..n {
+        for j in 0..n {
             at[j] += c[i] * MONO_OF_CHEB[i][j];
         }
     }
     // In x: t^j = (x - mid)^j / half^j, so a_i = sum_{j >= i} a'_j C(j, i) (-mid)^(j - i) / half^j.
-    let mut a = [0.0; 4];
-    for i in 0..n.min(4) {
-        for j in i..n.min(4) {
+    let mut a = [0.0; MAXN];
+    for i in 0..n {
+        for j in i..n {
             a[i] += at[j] * binomial(j, i) * libm::pow(-mid, (j - i) as f64) / libm::pow(half, j as f64);
         }
     }
     a
 }
 
-/// The current range that defines the internal parameters (see the module documentation).
+/// The current range that defines the internal parameters (see the module documentation),
+/// for one layout of the parameter vector.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Basis {
+    layout: Layout,
     e_mid: f64,
     e_half: f64,
 }
 
 /// The w range (mid, half) under some focal-length coefficients, with its gradient with
-/// respect to the Chebyshev coefficients of fx and fy (internal slots 6..14).
+/// respect to the Chebyshev coefficients of fx and fy (kf_x's slots, then kf_y's).
 struct WRange {
     mid: f64,
     half: f64,
-    d_mid: [f64; 8],
-    d_half: [f64; 8],
+    d_mid: [f64; 2 * MAXN],
+    d_half: [f64; 2 * MAXN],
 }
 
-/// `N` numbers of `v` from `at` (0 past the end: the callers' ranges lie inside).
-fn read<const N: usize>(v: &[f64; PARAMS], at: usize) -> [f64; N] {
-    core::array::from_fn(|k| v.get(at + k).copied().unwrap_or(0.0))
+/// `n` numbers of `v` from `at` (0 past the end of `v` or past `n`: the callers' ranges lie
+/// inside).
+fn read<const N: usize>(v: &[f64; N], at: usize, n: usize) -> [f64; MAXN] {
+    core::array::from_fn(|k| if k < n { v.get(at + k).copied().unwrap_or(0.0) } else { 0.0 })
 }
 
-/// Writes `vals` into `v` from `at`.
-fn write(v: &mut [f64; PARAMS], at: usize, vals: &[f64]) {
-    for (slot, &val) in v.iter_mut().skip(at).zip(vals) {
+/// Writes the first `n` of `vals` into `v` from `at`.
+fn write<const N: usize>(v: &mut [f64; N], at: usize, vals: &[f64], n: usize) {
+    for (slot, &val) in v.iter_mut().skip(at).zip(vals.iter().take(n)) {
         *slot = val;
     }
 }
 
-/// Sets entry (row, col) of a 25 x 25 matrix.
-fn set(j: &mut [[f64; PARAMS]; PARAMS], row: usize, col: usize, val: f64) {
+/// Sets entry (row, col) of an N x N matrix.
+fn set<const N: usize>(j: &mut [[f64; N]; N], row: usize, col: usize, val: f64) {
     if let Some(x) = j.get_mut(row).and_then(|r| r.get_mut(col)) {
         *x = val;
     }
 }
 
-impl Basis {
-    /// The identity-like basis on E in [-1, 1] mA; used when the data give no range (a
-    /// single current: the solvers refuse that anyway).
-    const UNIT: Basis = Basis { e_mid: 0.0, e_half: 1.0 };
+/// The a-triple (w^2, w, 1) in slots [descending degree] as ascending coefficients.
+fn triple_up(v: [f64; MAXN]) -> [f64; MAXN] {
+    [v[2], v[1], v[0], 0.0, 0.0, 0.0]
+}
 
+impl Basis {
     /// The basis on the range of the views' currents (the w range follows the parameters,
-    /// see [`Basis::params_jacobian`]).
-    pub fn for_views(views: &[View<'_>]) -> Self {
+    /// see [`Basis::params_jacobian`]) for parameter vectors laid out by `layout`; the
+    /// identity-like range E in [-1, 1] mA when the data give no range (a single current:
+    /// the solvers refuse that anyway).
+    pub fn for_views(views: &[View<'_>], layout: Layout) -> Self {
         let (mut elo, mut ehi) = (f64::INFINITY, f64::NEG_INFINITY);
         for v in views {
             elo = elo.min(v.e_com_ma);
             ehi = ehi.max(v.e_com_ma);
         }
         if !(ehi > elo && (ehi - elo).is_finite()) {
-            return Basis::UNIT;
+            return Basis { layout, e_mid: 0.0, e_half: 1.0 };
         }
-        Basis { e_mid: 0.5 * (ehi + elo), e_half: 0.5 * (ehi - elo) }
+        Basis { layout, e_mid: 0.5 * (ehi + elo), e_half: 0.5 * (ehi - elo) }
+    }
+
+    /// The layout of the vectors this basis maps.
+    pub fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// Coefficients per focal polynomial (degree + 1).
+    fn nk(&self) -> usize {
+        self.layout.focal_degree() + 1
+    }
+
+    /// Where fx's and fy's coefficients start (kf0x, kf0y).
+    fn kf_starts(&self) -> [usize; 2] {
+        [self.layout.kf0x(), self.layout.kf0y()]
+    }
+
+    /// Where each distortion coefficient's a-triple starts (a1, a4, ...).
+    fn a_starts(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.layout.model().coefficient_count()).map(|c| self.layout.distortion_triple(c).start)
     }
 
     /// w = 2 / (fx + fy) at the ends of the current range under the monomial kf of `x`,
@@ -148,57 +192,64 @@ impl Basis {
     /// dw/dc = -w^2 / 2 dfx/dc. A degenerate range (w_lo = w_hi, or a non-positive focal
     /// length) falls back to mid 0, half 1 (the solver's trial step is then rejected by the
     /// projection's own checks).
-    fn w_range(&self, x: &[f64; PARAMS]) -> WRange {
+    fn w_range<const N: usize>(&self, x: &[f64; N]) -> WRange {
+        let nk = self.nk();
         let (lo, hi) = (self.e_mid - self.e_half, self.e_mid + self.e_half);
-        let (kx, ky) = (read::<4>(x, KF_X.start), read::<4>(x, KF_Y.start));
-        let f = |e: f64| 0.5 * (cubic(&kx, e) + cubic(&ky, e));
+        let [sx, sy] = self.kf_starts();
+        let (cx, cy) = (read(x, sx, nk), read(x, sy, nk));
+        let poly = |c: &[f64; MAXN]| c.get(..nk).map(FocalPoly::new);
+        let (Some(Ok(kx)), Some(Ok(ky))) = (poly(&cx), poly(&cy)) else {
+            return WRange { mid: 0.0, half: 1.0, d_mid: [0.0; 2 * MAXN], d_half: [0.0; 2 * MAXN] };
+        };
+        let f = |e: f64| 0.5 * (kx.eval(e) + ky.eval(e));
         let (flo, fhi) = (f(lo), f(hi));
         let (wlo, whi) = (1.0 / flo, 1.0 / fhi);
         let half = 0.5 * (whi - wlo);
         if !(flo > 0.0 && fhi > 0.0 && half != 0.0 && half.is_finite()) {
-            return WRange { mid: 0.0, half: 1.0, d_mid: [0.0; 8], d_half: [0.0; 8] };
+            return WRange { mid: 0.0, half: 1.0, d_mid: [0.0; 2 * MAXN], d_half: [0.0; 2 * MAXN] };
         }
         // w = 2 / (fx + fy): dw/dfx = dw/dfy = -w^2 / 2.
         let (glo, ghi) = (-0.5 * wlo * wlo, -0.5 * whi * whi);
-        // Slot c: coefficient m = c % 4 of fx (c < 4) or fy; T_m(-1) = (-1)^m, T_m(1) = 1.
-        let dlo = |c: usize| if c % 2 == 0 { glo } else { -glo };
-        let d_mid: [f64; 8] = core::array::from_fn(|c| 0.5 * (ghi + dlo(c)));
-        let d_half: [f64; 8] = core::array::from_fn(|c| 0.5 * (ghi - dlo(c)));
+        // Slot c: coefficient m = c % nk of fx (c < nk) or fy; T_m(-1) = (-1)^m, T_m(1) = 1.
+        let dlo = |c: usize| if c.checked_rem(nk).unwrap_or(0) % 2 == 0 { glo } else { -glo };
+        let live = |c: usize| c < 2 * nk;
+        let d_mid: [f64; 2 * MAXN] = core::array::from_fn(|c| if live(c) { 0.5 * (ghi + dlo(c)) } else { 0.0 });
+        let d_half: [f64; 2 * MAXN] = core::array::from_fn(|c| if live(c) { 0.5 * (ghi - dlo(c)) } else { 0.0 });
         WRange { mid: 0.5 * (whi + wlo), half, d_mid, d_half }
     }
 
     /// The internal parameters z of the model's parameters x.
-    pub fn to_internal(&self, x: &[f64; PARAMS]) -> [f64; PARAMS] {
+    pub fn to_internal<const N: usize>(&self, x: &[f64; N]) -> [f64; N] {
+        let nk = self.nk();
         let mut z = *x;
-        for start in KF_STARTS {
-            write(&mut z, start, &mono_to_cheb(read(x, start), 4, self.e_mid, self.e_half));
+        for start in self.kf_starts() {
+            write(&mut z, start, &mono_to_cheb(read(x, start, nk), nk, self.e_mid, self.e_half), nk);
         }
         let w = self.w_range(x);
-        for s in A_STARTS {
+        for s in self.a_starts() {
             // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
-            let [q2, q1, q0] = read::<3>(x, s);
-            let m = mono_to_cheb([q0, q1, q2, 0.0], 3, w.mid, w.half);
-            write(&mut z, s, &[m[2], m[1], m[0]]);
+            let m = mono_to_cheb(triple_up(read(x, s, 3)), 3, w.mid, w.half);
+            write(&mut z, s, &[m[2], m[1], m[0]], 3);
         }
         z
     }
 
     /// The model's parameters x of the internal parameters z.
-    pub fn to_params(&self, z: &[f64; PARAMS]) -> [f64; PARAMS] {
+    pub fn to_params<const N: usize>(&self, z: &[f64; N]) -> [f64; N] {
+        let nk = self.nk();
         let mut x = *z;
-        for start in KF_STARTS {
-            write(&mut x, start, &cheb_to_mono(read(z, start), 4, self.e_mid, self.e_half));
+        for start in self.kf_starts() {
+            write(&mut x, start, &cheb_to_mono(read(z, start, nk), nk, self.e_mid, self.e_half), nk);
         }
         let w = self.w_range(&x);
-        for s in A_STARTS {
-            let [d2, d1, d0] = read::<3>(z, s);
-            let m = cheb_to_mono([d0, d1, d2, 0.0], 3, w.mid, w.half);
-            write(&mut x, s, &[m[2], m[1], m[0]]);
+        for s in self.a_starts() {
+            let m = cheb_to_mono(triple_up(read(z, s, 3)), 3, w.mid, w.half);
+            write(&mut x, s, &[m[2], m[1], m[0]], 3);
         }
         x
     }
 
-    /// dx/dz (25 x 25) at internal parameters `z`: row i is the gradient of the model's
+    /// dx/dz (N x N) at internal parameters `z`: row i is the gradient of the model's
     /// parameter i with respect to the internal ones.
     ///
     /// Linear parts: the identity (om, T, u0, v0), the Chebyshev-to-monomial maps of kf
@@ -208,38 +259,41 @@ impl Basis {
     /// whose Chebyshev coefficients are -(d_1, 4 d_2, 0) / half and
     /// -(2 d_2, d_1, 2 d_2) / half (k' = d_1 + 4 d_2 s, s k' = 2 d_2 T_0 + d_1 T_1 +
     /// 2 d_2 T_2); the range moves with the kf coefficients ([`Basis::w_range`]).
-    pub fn params_jacobian(&self, z: &[f64; PARAMS]) -> [[f64; PARAMS]; PARAMS] {
-        let mut j = [[0.0; PARAMS]; PARAMS];
-        for i in 0..PARAMS {
+    pub fn params_jacobian<const N: usize>(&self, z: &[f64; N]) -> [[f64; N]; N] {
+        let nk = self.nk();
+        let mut j = [[0.0; N]; N];
+        for i in 0..N {
             set(&mut j, i, i, 1.0);
         }
-        for start in KF_STARTS {
-            for col in 0..4 {
-                let unit: [f64; 4] = core::array::from_fn(|k| if k == col { 1.0 } else { 0.0 });
-                for (row, a) in cheb_to_mono(unit, 4, self.e_mid, self.e_half).into_iter().enumerate() {
+        for start in self.kf_starts() {
+            for col in 0..nk {
+                let unit: [f64; MAXN] = core::array::from_fn(|k| if k == col { 1.0 } else { 0.0 });
+                for (row, a) in cheb_to_mono(unit, nk, self.e_mid, self.e_half).into_iter().take(nk).enumerate() {
                     set(&mut j, start + row, start + col, a);
                 }
             }
         }
         let x = self.to_params(z);
         let w = self.w_range(&x);
-        for s in A_STARTS {
+        let kf0x = self.layout.kf0x();
+        for s in self.a_starts() {
             // The slots hold z (T_2, T_1, T_0) and x (w^2, w, 1): descending degree.
-            let [d2, d1, _] = read::<3>(z, s);
-            let to_slots = |m: [f64; 4]| [m[2], m[1], m[0]];
-            for (k, unit) in [[0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]].into_iter().enumerate()
-            {
-                for (row, a) in to_slots(cheb_to_mono(unit, 3, w.mid, w.half)).into_iter().enumerate() {
+            let [d2, d1, ..] = read(z, s, 3);
+            let to_slots = |m: [f64; MAXN]| [m[2], m[1], m[0]];
+            for (k, unit) in [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]].into_iter().enumerate() {
+                let up = [unit[0], unit[1], unit[2], 0.0, 0.0, 0.0];
+                for (row, a) in to_slots(cheb_to_mono(up, 3, w.mid, w.half)).into_iter().enumerate() {
                     set(&mut j, s + row, s + k, a);
                 }
             }
             let ih = 1.0 / w.half;
-            let da_dmid = to_slots(cheb_to_mono([-d1 * ih, -4.0 * d2 * ih, 0.0, 0.0], 3, w.mid, w.half));
-            let da_dhalf = to_slots(cheb_to_mono([-2.0 * d2 * ih, -d1 * ih, -2.0 * d2 * ih, 0.0], 3, w.mid, w.half));
+            let da_dmid = to_slots(cheb_to_mono([-d1 * ih, -4.0 * d2 * ih, 0.0, 0.0, 0.0, 0.0], 3, w.mid, w.half));
+            let da_dhalf =
+                to_slots(cheb_to_mono([-2.0 * d2 * ih, -d1 * ih, -2.0 * d2 * ih, 0.0, 0.0, 0.0], 3, w.mid, w.half));
             for (row, (dm, dh)) in da_dmid.into_iter().zip(da_dhalf).enumerate() {
-                for (c, (&gm, &gh)) in w.d_mid.iter().zip(w.d_half.iter()).enumerate() {
-                    // Slot c < 8 runs over kf_x then kf_y (contiguous).
-                    set(&mut j, s + row, KF_X.at(c), dm * gm + dh * gh);
+                for (c, (&gm, &gh)) in w.d_mid.iter().zip(w.d_half.iter()).enumerate().take(2 * nk) {
+                    // Slot c < 2 nk runs over kf_x then kf_y (contiguous).
+                    set(&mut j, s + row, kf0x + c, dm * gm + dh * gh);
                 }
             }
         }
@@ -250,58 +304,81 @@ impl Basis {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::jacobian::to_params;
-    use crate::model::CameraModel;
+    use crate::calib::jacobian::to_params_n;
+    use crate::model::{CameraModel, DistortionA, DistortionModel};
 
-    #[test]
-    fn round_trip_and_the_same_curves() {
-        let m = CameraModel::paper_rig();
+    /// The paper rig, and the strong rig with quintic focal polynomials (every slot of the
+    /// largest layout in play).
+    fn models() -> [CameraModel; 2] {
+        let mut strong = CameraModel::strong_distortion_rig();
+        strong.kf_x = FocalPoly::new(&[1500.0, -1.96, 0.0056, -8.4e-6, 2e-9, -1e-12]).unwrap();
+        strong.kf_y = FocalPoly::new(&[1510.0, -1.96, 0.0056, -8.4e-6, 2e-9, -1e-12]).unwrap();
+        [CameraModel::paper_rig(), strong]
+    }
+
+    fn round_trip<const N: usize>(m: &CameraModel) {
         let pts = [];
         let views = [View { e_com_ma: 80.0, points: &pts }, View { e_com_ma: 225.0, points: &pts }];
-        let b = Basis::for_views(&views);
-        let x = to_params(&m);
+        let layout = m.layout();
+        let b = Basis::for_views(&views, layout);
+        let x = to_params_n::<N>(m).unwrap();
         let z = b.to_internal(&x);
         let back = b.to_params(&z);
-        for i in 0..PARAMS {
+        for i in 0..N {
             assert!((back[i] - x[i]).abs() <= 1e-9 * x[i].abs().max(1e-12), "{i}: {} vs {}", back[i], x[i]);
         }
-        // fx(E) from the Chebyshev coefficients equals the cubic; k1(w) from its Chebyshev
-        // coefficients on the w range at the ends of 80..225 mA equals the quadratic.
-        let f = |e: f64| 0.5 * (cubic(&m.kf_x, e) + cubic(&m.kf_y, e));
+        // fx(E) from the Chebyshev coefficients equals the polynomial; k1(w) from its
+        // Chebyshev coefficients on the w range at the ends of 80..225 mA equals the
+        // quadratic.
+        let f = |e: f64| 0.5 * (m.kf_x.eval(e) + m.kf_y.eval(e));
         let (wlo, whi) = (1.0 / f(80.0), 1.0 / f(225.0));
+        let nk = layout.focal_degree() + 1;
         for e in [80.0, 131.0, 225.0] {
-            let t = (e - 152.5) / 72.5;
-            let col = [1.0, t, 2.0 * t * t - 1.0, 4.0 * t * t * t - 3.0 * t];
-            let fx: f64 = (0..4).map(|k| z[KF_X.at(k)] * col[k]).sum();
-            assert!((fx / cubic(&m.kf_x, e) - 1.0).abs() < 1e-12);
+            let t: f64 = (e - 152.5) / 72.5;
+            // T_k(t) = cos(k acos t).
+            let fx: f64 = (0..nk).map(|k| z[layout.kf_x().at(k)] * libm::cos(k as f64 * libm::acos(t))).sum();
+            assert!((fx / m.kf_x.eval(e) - 1.0).abs() < 1e-12);
             let w = 1.0 / f(e);
             let s = (w - 0.5 * (whi + wlo)) / (0.5 * (whi - wlo));
-            let k1 = z[16] * (2.0 * s * s - 1.0) + z[17] * s + z[18];
-            let want = x[16] * w * w + x[17] * w + x[18];
+            let a1 = layout.distortion_a().start;
+            let k1 = z[a1] * (2.0 * s * s - 1.0) + z[a1 + 1] * s + z[a1 + 2];
+            let want = x[a1] * w * w + x[a1 + 1] * w + x[a1 + 2];
             assert!((k1 - want).abs() <= 1e-9 * want.abs().max(1e-12), "{k1} vs {want}");
         }
     }
 
+    #[test]
+    fn round_trip_and_the_same_curves() {
+        let [paper, strong] = models();
+        round_trip::<25>(&paper);
+        round_trip::<35>(&strong);
+        // Every degree of the paper family: a linear fx(E) round-trips too.
+        let mut linear = paper;
+        linear.kf_x = FocalPoly::new(&[5380.0, -3.0]).unwrap();
+        linear.kf_y = FocalPoly::new(&[5430.0, -3.0]).unwrap();
+        round_trip::<21>(&linear);
+        assert_eq!(DistortionA::zero(DistortionModel::Paper).as_slice().len(), 9);
+    }
+
     /// dx/dz against central differences of `to_params`, at a point where every part of
     /// the map (kf, the moving w range, d) is exercised.
-    #[test]
-    fn params_jacobian_matches_finite_differences() {
-        let m = CameraModel::paper_rig();
+    fn jacobian_check<const N: usize>(m: &CameraModel) {
         let pts = [];
         let views = [View { e_com_ma: 80.0, points: &pts }, View { e_com_ma: 225.0, points: &pts }];
-        let b = Basis::for_views(&views);
-        let mut x = to_params(&m);
-        x[7] *= 1.03;
-        x[12] *= 0.97;
+        let layout = m.layout();
+        let b = Basis::for_views(&views, layout);
+        let mut x = to_params_n::<N>(m).unwrap();
+        x[layout.kf0x() + 1] *= 1.03;
+        x[layout.kf0y() + 2] *= 0.97;
         let z = b.to_internal(&x);
         let j = b.params_jacobian(&z);
-        for col in 0..PARAMS {
+        for col in 0..N {
             let h = 1e-6 * z[col].abs().max(1e-12);
             let (mut zp, mut zm) = (z, z);
             zp[col] += h;
             zm[col] -= h;
             let (xp, xm) = (b.to_params(&zp), b.to_params(&zm));
-            for row in 0..PARAMS {
+            for row in 0..N {
                 let fd = (xp[row] - xm[row]) / (2.0 * h);
                 let scale = (j[row][col].abs() + fd.abs()).max(1e-300);
                 let ok =
@@ -309,5 +386,12 @@ mod tests {
                 assert!(ok, "dx{row}/dz{col}: analytic {} vs {fd}", j[row][col]);
             }
         }
+    }
+
+    #[test]
+    fn params_jacobian_matches_finite_differences() {
+        let [paper, strong] = models();
+        jacobian_check::<25>(&paper);
+        jacobian_check::<35>(&strong);
     }
 }

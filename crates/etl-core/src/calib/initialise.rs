@@ -1,11 +1,12 @@
 //! The linear initialisation chain: RAC -> focal polynomial -> distortion.
 
 use super::distortion_init::distortion_a;
-use super::focal_poly::focal_poly;
+use super::focal_poly::focal_poly_of_degree;
 use super::observations::View;
+use super::params::Layout;
 use super::rac::rac;
 use crate::error::{all_finite, Result};
-use crate::model::CameraModel;
+use crate::model::{CameraModel, DistortionA, OpenCvFlags};
 
 /// The lens-off intrinsics A0 (section 4.2): focal lengths at E = 0 and principal point.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -20,24 +21,36 @@ pub struct A0 {
     pub v0: f64,
 }
 
-/// The initial camera model from the views and A0: RAC (R, tx, ty), the focal
-/// polynomial (kf1..3, tz), then the distortion coefficients a1..a9.
+/// The paper's initial camera model from the views and A0: RAC (R, tx, ty), the cubic
+/// focal polynomial (kf1..3, tz), then the distortion coefficients a1..a9.
 ///
-/// Errors: those of [`rac`], [`focal_poly`] and [`distortion_a`] (each names its unmet
-/// precondition).
+/// Errors: those of [`rac`], [`super::focal_poly::focal_poly`] and [`distortion_a`] (each
+/// names its unmet precondition).
 pub fn initialise(views: &[View<'_>], a0: &A0) -> Result<CameraModel> {
+    initialise_model(views, a0, Layout::PAPER, OpenCvFlags::NONE)
+}
+
+/// The initial camera model of `layout` (distortion family, focal degree) from the views
+/// and A0: RAC (R, tx, ty), the focal polynomial of the layout's degree (kf1..kf_d, tz),
+/// then the family's a_i, those held by OpenCV's `flags` at zero (hold them in the bundle
+/// adjustment with [`Layout::opencv_mask`]).
+///
+/// Errors: those of [`rac`], [`focal_poly_of_degree`] and [`distortion_a`]; flags with
+/// the paper family.
+pub fn initialise_model(views: &[View<'_>], a0: &A0, layout: Layout, flags: OpenCvFlags) -> Result<CameraModel> {
     all_finite(&[a0.kf0x, a0.kf0y, a0.u0, a0.v0], "A0 (kf0x, kf0y, u0, v0)")?;
+    flags.check(layout.model())?;
     let pp = [a0.u0, a0.v0];
     let r = rac(views, pp)?;
-    let f = focal_poly(views, &r, [a0.kf0x, a0.kf0y], pp)?;
+    let f = focal_poly_of_degree(views, &r, [a0.kf0x, a0.kf0y], pp, layout.focal_degree())?;
     let mut model = CameraModel {
         rotation_rodrigues: r.rotation_rodrigues,
         translation_mm: [r.tx_mm, r.ty_mm, f.tz_mm],
         kf_x: f.kf_x,
         kf_y: f.kf_y,
         principal_point: pp,
-        distortion_a: [0.0; 9],
+        distortion_a: DistortionA::zero(layout.model()),
     };
-    model.distortion_a = distortion_a(&model, views)?;
+    model.distortion_a = distortion_a(&model, views, flags)?;
     Ok(model)
 }

@@ -1,48 +1,72 @@
-//! The 25 numbers as one parameter vector (layout: [`super::params`]), and the
-//! projection (Eq. 13-18) with its analytic Jacobian.
+//! A model's numbers as one parameter vector (layout: [`super::params::Layout`]), and the
+//! projection (Eq. 13-18, either distortion family) with its analytic Jacobian.
 
-use super::params::{
-    Span, DISTORTION_A, DISTORTION_TRIPLES, KF0X, KF0Y, KF_X, KF_Y, PARAMS, PRINCIPAL_POINT, REDUCED, ROTATION,
-    R_DISTORTION, R_FX, R_FY, R_POSE, R_U0, R_V0, TRANSLATION, U0, V0,
-};
+use super::params::{Layout, Span, MAX_PARAMS, MAX_REDUCED, ROTATION, R_FX, R_FY, R_K1, R_POSE, R_U0, TRANSLATION};
 use crate::error::{Error, Result};
-use crate::model::camera::cubic;
+use crate::model::distortion::{opencv_rows, paper_rows};
 use crate::model::rotation::{mat_vec, rodrigues_to_matrix, Mat3};
-use crate::model::{CameraModel, Distortion};
+use crate::model::{CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, MAX_COEFFICIENTS};
 
-/// The `N` entries of `x` in `span` (N = span.len; 0 past the end of `x`).
-fn entries<const N: usize>(x: &[f64; PARAMS], span: Span) -> [f64; N] {
-    core::array::from_fn(|k| x.get(span.at(k)).copied().unwrap_or(0.0))
+/// Writes `values` into `x` from `span.start` (at most `span.len` of them).
+fn put_span(x: &mut [f64], span: Span, values: &[f64]) {
+    for (slot, &v) in x.iter_mut().skip(span.start).take(span.len).zip(values) {
+        *slot = v;
+    }
 }
 
-/// The model as a parameter vector.
-pub fn to_params(m: &CameraModel) -> [f64; PARAMS] {
-    let mut x = [0.0; PARAMS];
-    let parts: [(Span, &[f64]); 6] = [
-        (ROTATION, &m.rotation_rodrigues),
-        (TRANSLATION, &m.translation_mm),
-        (KF_X, &m.kf_x),
-        (KF_Y, &m.kf_y),
-        (PRINCIPAL_POINT, &m.principal_point),
-        (DISTORTION_A, &m.distortion_a),
-    ];
-    for (span, values) in parts {
-        for (slot, &v) in x.iter_mut().skip(span.start).take(span.len).zip(values) {
-            *slot = v;
-        }
-    }
+/// The entries of `x` in `span` (empty past the end of `x`).
+fn span_of(x: &[f64], span: Span) -> &[f64] {
+    x.get(span.start..span.end()).unwrap_or(&[])
+}
+
+/// The model as a parameter vector of its layout ([`CameraModel::layout`]), at capacity:
+/// entries past the layout's length are zero.
+pub fn to_params(m: &CameraModel) -> [f64; MAX_PARAMS] {
+    let l = m.layout();
+    let mut x = [0.0; MAX_PARAMS];
+    put_span(&mut x, l.rotation(), &m.rotation_rodrigues);
+    put_span(&mut x, l.translation(), &m.translation_mm);
+    put_span(&mut x, l.kf_x(), m.kf_x.coefficients());
+    put_span(&mut x, l.kf_y(), m.kf_y.coefficients());
+    put_span(&mut x, l.principal_point(), &m.principal_point);
+    put_span(&mut x, l.distortion_a(), m.distortion_a.as_slice());
     x
 }
 
-/// The parameter vector as a model.
-pub fn from_params(x: &[f64; PARAMS]) -> CameraModel {
+/// The model's parameter vector of exactly `N` numbers. Errors: `N` is not the length of
+/// the model's layout ([`Error::InvalidArgument`]).
+pub fn to_params_n<const N: usize>(m: &CameraModel) -> Result<[f64; N]> {
+    if m.layout().len() != N {
+        return Err(Error::InvalidArgument { what: "parameter vector length differs from the model's layout" });
+    }
+    let x = to_params(m);
+    Ok(core::array::from_fn(|i| x.get(i).copied().unwrap_or(0.0)))
+}
+
+/// The parameter vector `x` (at least `layout.len()` numbers; missing ones read as 0) as a
+/// model of `layout`.
+pub fn from_params(layout: &Layout, x: &[f64]) -> CameraModel {
+    let mut kf_x = FocalPoly::zero(layout.focal_degree());
+    let mut kf_y = kf_x;
+    copy_into(kf_x.coefficients_mut(), span_of(x, layout.kf_x()));
+    copy_into(kf_y.coefficients_mut(), span_of(x, layout.kf_y()));
+    let mut distortion_a = DistortionA::zero(layout.model());
+    copy_into(distortion_a.as_mut_slice(), span_of(x, layout.distortion_a()));
+    let fixed = |span: Span| -> [f64; 3] { core::array::from_fn(|k| x.get(span.at(k)).copied().unwrap_or(0.0)) };
+    let pp = layout.principal_point();
     CameraModel {
-        rotation_rodrigues: entries(x, ROTATION),
-        translation_mm: entries(x, TRANSLATION),
-        kf_x: entries(x, KF_X),
-        kf_y: entries(x, KF_Y),
-        principal_point: entries(x, PRINCIPAL_POINT),
-        distortion_a: entries(x, DISTORTION_A),
+        rotation_rodrigues: fixed(layout.rotation()),
+        translation_mm: fixed(layout.translation()),
+        kf_x,
+        kf_y,
+        principal_point: [x.get(pp.at(0)).copied().unwrap_or(0.0), x.get(pp.at(1)).copied().unwrap_or(0.0)],
+        distortion_a,
+    }
+}
+
+fn copy_into(dst: &mut [f64], src: &[f64]) {
+    for (d, &s) in dst.iter_mut().zip(src) {
+        *d = s;
     }
 }
 
@@ -93,31 +117,33 @@ pub fn rotate_point_jacobian(r: &Mat3, om: [f64; 3], p: [f64; 3]) -> Mat3 {
 pub struct Projection {
     /// Observed-frame pixel (u_d + u0, v_d + v0).
     pub pixel: [f64; 2],
-    /// d pixel / d parameters (2 x 25).
-    pub d_params: [[f64; PARAMS]; 2],
+    /// d pixel / d parameters (2 x the layout's length, at capacity: zero past it).
+    pub d_params: [[f64; MAX_PARAMS]; 2],
     /// d pixel / d Z_W (a shift of the point along the world Z axis, i.e. of the stage).
     pub d_z_w: [f64; 2],
     /// d pixel / d E (the current).
     pub d_e: [f64; 2],
 }
 
-/// The projection of one point with its derivatives with respect to the 13 per-view
-/// variables ([`REDUCED`]). The full Jacobian is `d_reduced * chain`, with
-/// [`Projector::chain`] the view's 13 x 25 matrix: this factorisation is what makes the
-/// bundle adjustment's normal equations cheap (13 x 13 per point instead of 25 x 25).
+/// The projection of one point with its derivatives with respect to the per-view
+/// variables ([`Layout::reduced_len`]: 13 or 15). The full Jacobian is `d_reduced *
+/// chain`, with [`Projector::chain`] the view's matrix: this factorisation is what makes
+/// the bundle adjustment's normal equations cheap (13 x 13 per point instead of 25 x 25).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ReducedProjection {
     /// Observed-frame pixel (u_d + u0, v_d + v0).
     pub pixel: [f64; 2],
-    /// d pixel / d (om, T, fx, fy, u0, v0, k1, p1, p2); fx and fy as total derivatives
-    /// (directly, and through w = 2 / (fx + fy) in the distortion coefficients at fixed a).
-    pub d_reduced: [[f64; REDUCED]; 2],
+    /// d pixel / d (om, T, fx, fy, u0, v0, the distortion coefficients) at capacity (zero
+    /// past the layout's per-view variables); fx and fy as total derivatives (directly, and
+    /// through w = 2 / (fx + fy) in the distortion coefficients at fixed a).
+    pub d_reduced: [[f64; MAX_REDUCED]; 2],
 }
 
-/// Precomputed per-parameter-vector quantities (rotation), shared by all points.
+/// Precomputed per-model quantities (rotation), shared by all points.
 #[derive(Debug, Clone, Copy)]
 pub struct Projector {
-    x: [f64; PARAMS],
+    model: CameraModel,
+    layout: Layout,
     r: Mat3,
     /// M_l = R [e_l]x J_r(om): d(R p)/d om = -sum_l p_l M_l, so the rotation's Jacobian
     /// costs 27 multiplications per point and no trigonometry.
@@ -125,9 +151,9 @@ pub struct Projector {
 }
 
 impl Projector {
-    /// Prepares the projection for parameter vector `x`.
-    pub fn new(x: &[f64; PARAMS]) -> Self {
-        let om = entries(x, ROTATION);
+    /// Prepares the projection for `model` (whose layout fixes the parameter vector).
+    pub fn new(model: &CameraModel) -> Self {
+        let om = model.rotation_rodrigues;
         let r = rodrigues_to_matrix(om);
         let jr = right_jacobian(om);
         // d(R p)/d om = -R [p]x J_r, linear in p: -R [p]x J_r = sum_l p_l (R [J_r]... ) is
@@ -137,28 +163,37 @@ impl Projector {
             e[l] = 1.0;
             mat_mul(&mat_mul(&r, &skew(e)), &jr)
         });
-        Projector { x: *x, r, r_skew_jr }
+        Projector { model: *model, layout: model.layout(), r, r_skew_jr }
+    }
+
+    /// The model projected.
+    pub fn model(&self) -> &CameraModel {
+        &self.model
+    }
+
+    /// The layout of the model's parameter vector.
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
     fn focal(&self, e_ma: f64) -> Result<(f64, f64)> {
-        let x = &self.x;
-        let fx = cubic(&entries(x, KF_X), e_ma);
-        let fy = cubic(&entries(x, KF_Y), e_ma);
+        let fx = self.model.kf_x.eval(e_ma);
+        let fy = self.model.kf_y.eval(e_ma);
         if !(fx > 0.0 && fy > 0.0) {
             return Err(Error::Degenerate { what: "focal length is not positive at a view's current" });
         }
         Ok((fx, fy))
     }
 
-    /// The chain matrix C of a view at current `e_ma`: d(per-view variables)/d(25 numbers),
-    /// with fx = sum kf_xi E^i (Eq. 16), k_c = a_3c+1 w^2 + a_3c+2 w + a_3c+3 (Eq. 18) at
-    /// fixed w (w's own dependence on kf is already in the total derivatives of
-    /// [`ReducedProjection::d_reduced`]).
-    pub fn chain(&self, e_ma: f64) -> Result<[[f64; PARAMS]; REDUCED]> {
+    /// The chain matrix C of a view at current `e_ma`: d(per-view variables)/d(the
+    /// layout's numbers), at capacity, with fx = sum kf_xi E^i (Eq. 16) and each coefficient
+    /// k_c = a_3c+1 w^2 + a_3c+2 w + a_3c+3 (Eq. 18) at fixed w (w's own dependence on kf is
+    /// already in the total derivatives of [`ReducedProjection::d_reduced`]).
+    pub fn chain(&self, e_ma: f64) -> Result<[[f64; MAX_PARAMS]; MAX_REDUCED]> {
         let (fx, fy) = self.focal(e_ma)?;
+        let l = &self.layout;
         let w = 2.0 / (fx + fy);
-        let powers = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
-        let mut c = [[0.0; PARAMS]; REDUCED];
+        let mut c = [[0.0; MAX_PARAMS]; MAX_REDUCED];
         // Entry (row, col) of C; the spans lie inside C by construction (params.rs tests).
         let mut put = |row: usize, col: usize, v: f64| {
             if let Some(slot) = c.get_mut(row).and_then(|r| r.get_mut(col)) {
@@ -169,28 +204,32 @@ impl Projector {
         for k in 0..R_POSE.len {
             put(R_POSE.at(k), R_POSE.at(k), 1.0);
         }
-        for (i, &p) in powers.iter().enumerate() {
-            put(R_FX, KF0X + i, p);
-            put(R_FY, KF0Y + i, p);
+        // E^i as 1, E, E E, (E E) E, ...: the paper cubic's own products.
+        let mut power = 1.0;
+        for i in 0..l.kf_x().len {
+            put(R_FX, l.kf_x().at(i), power);
+            put(R_FY, l.kf_y().at(i), power);
+            power *= e_ma;
         }
-        put(R_U0, U0, 1.0);
-        put(R_V0, V0, 1.0);
+        put(R_U0, l.u0(), 1.0);
+        put(R_U0 + 1, l.v0(), 1.0);
         let wp = [w * w, w, 1.0];
-        for (k, triple) in DISTORTION_TRIPLES.iter().enumerate() {
+        for k in 0..l.model().coefficient_count() {
+            let triple = l.distortion_triple(k);
             for (i, &wpi) in wp.iter().enumerate() {
-                put(R_DISTORTION.at(k), triple.at(i), wpi);
+                put(R_K1 + k, triple.at(i), wpi);
             }
         }
         Ok(c)
     }
 
     /// The chain matrix of [`Projector::chain`] with respect to the bundle adjustment's
-    /// internal parameters ([`super::basis::Basis`]): C dx/dz, with `dxdz` =
-    /// [`super::basis::Basis::params_jacobian`]
-    /// at the internal parameters of this projector.
-    pub fn chain_in(&self, e_ma: f64, dxdz: &[[f64; PARAMS]; PARAMS]) -> Result<[[f64; PARAMS]; REDUCED]> {
+    /// `N` internal parameters ([`super::basis::Basis`]): C dx/dz, with `dxdz` =
+    /// [`super::basis::Basis::params_jacobian`] at the internal parameters of this
+    /// projector.
+    pub fn chain_in<const N: usize>(&self, e_ma: f64, dxdz: &[[f64; N]; N]) -> Result<[[f64; N]; MAX_REDUCED]> {
         let c = self.chain(e_ma)?;
-        let mut out = [[0.0; PARAMS]; REDUCED];
+        let mut out = [[0.0; N]; MAX_REDUCED];
         for (orow, crow) in out.iter_mut().zip(c.iter()) {
             for (&cik, drow) in crow.iter().zip(dxdz.iter()) {
                 if cik != 0.0 {
@@ -203,65 +242,64 @@ impl Projector {
         Ok(out)
     }
 
-    /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the 13
+    /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the
     /// per-view variables when `jacobian`.
     ///
     /// Errors: the point at or behind the camera; non-positive focal length; non-finite
     /// result.
     pub fn project_reduced(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<ReducedProjection> {
-        let x = &self.x;
         let (fx, fy) = self.focal(e_ma)?;
         let rc = mat_vec(&self.r, world_mm);
-        let t = entries::<3>(x, TRANSLATION);
+        let t = self.model.translation_mm;
         let pc = [rc[0] + t[0], rc[1] + t[1], rc[2] + t[2]];
         if !(pc[2] > 0.0) {
             return Err(Error::BehindCamera);
         }
         let iz = 1.0 / pc[2];
         let (xn, yn) = (pc[0] * iz, pc[1] * iz);
-        let (u, v) = (fx * xn, fy * yn);
         let w = 2.0 / (fx + fy);
-        let a: [f64; 9] = entries(x, DISTORTION_A);
-        let d = Distortion::from_a(&a, 0.5 * (fx + fy));
-        let [ud, vd] = d.distort(u, v);
-        let pixel = [ud + x[U0], vd + x[V0]];
+        let a = self.model.distortion_a.padded();
+        let d = Distortion::from_a(&self.model.distortion_a, fx, fy);
+        let [u0, v0] = self.model.principal_point;
+        // Per family: the pixel, d pixel / d pc, d pixel / d(fx, fy) at fixed coefficients,
+        // and d pixel / d coefficients.
+        let local = match self.layout.model() {
+            DistortionModel::Paper => paper_local(&d, fx, fy, xn, yn, iz, jacobian),
+            DistortionModel::OpenCv => opencv_local(&d, fx, fy, xn, yn, iz, jacobian),
+        };
+        let pixel = [local.pixel[0] + u0, local.pixel[1] + v0];
         if !(pixel[0].is_finite() && pixel[1].is_finite()) {
             return Err(Error::NotFinite { what: "projected pixel" });
         }
-        let mut out = ReducedProjection { pixel, d_reduced: [[0.0; REDUCED]; 2] };
+        let mut out = ReducedProjection { pixel, d_reduced: [[0.0; MAX_REDUCED]; 2] };
         if !jacobian {
             return Ok(out);
         }
-        // Distortion: d(ud, vd)/d(u, v) and d(ud, vd)/d(k1, p1, p2).
-        let jd = d.distort_jacobian(u, v);
-        let r2 = u * u + v * v;
-        let dk = [[u * r2, 3.0 * u * u + v * v, 2.0 * u * v], [v * r2, 2.0 * u * v, u * u + 3.0 * v * v]];
+        let n = self.layout.model().coefficient_count();
         // k = a_1 w^2 + a_2 w + a_3 (per coefficient): dk/dw, dw/dfx = dw/dfy = -w^2 / 2.
-        let dkdw = [2.0 * a[0] * w + a[1], 2.0 * a[3] * w + a[4], 2.0 * a[6] * w + a[7]];
+        let dkdw: [f64; MAX_COEFFICIENTS] = core::array::from_fn(|c| {
+            let (q2, q1) = (a.get(3 * c).copied().unwrap_or(0.0), a.get(3 * c + 1).copied().unwrap_or(0.0));
+            2.0 * q2 * w + q1
+        });
         let dwdf = -0.5 * w * w;
-        // d(u, v)/d pc.
-        let du_dpc = [fx * iz, 0.0, -u * iz];
-        let dv_dpc = [0.0, fy * iz, -v * iz];
         let m = &self.r_skew_jr;
         let drot: Mat3 = core::array::from_fn(|i| {
             core::array::from_fn(|j| -(world_mm[0] * m[0][i][j] + world_mm[1] * m[1][i][j] + world_mm[2] * m[2][i][j]))
         });
         for row in 0..2 {
             let dp = &mut out.d_reduced[row];
-            let mut dpix_dpc = [0.0; 3];
-            for k in 0..3 {
-                dpix_dpc[k] = jd[row][0] * du_dpc[k] + jd[row][1] * dv_dpc[k];
-            }
+            let dpix_dpc = &local.d_pc[row];
             for j in 0..3 {
                 dp[ROTATION.at(j)] = (0..3).map(|k| dpix_dpc[k] * drot[k][j]).sum();
                 dp[TRANSLATION.at(j)] = dpix_dpc[j];
             }
-            // fx enters u directly (u = fx xn) and the distortion through w.
-            let via_w: f64 = (0..3).map(|k| dk[row][k] * dkdw[k]).sum::<f64>() * dwdf;
-            dp[R_FX] = jd[row][0] * xn + via_w;
-            dp[R_FY] = jd[row][1] * yn + via_w;
+            // fx enters the projection directly and the distortion through w.
+            let dk = &local.d_coefficients[row];
+            let via_w: f64 = dk.iter().zip(dkdw.iter()).take(n).map(|(d, k)| d * k).sum::<f64>() * dwdf;
+            dp[R_FX] = local.d_focal[row][0] + via_w;
+            dp[R_FY] = local.d_focal[row][1] + via_w;
             dp[R_U0 + row] = 1.0;
-            for (d, &v) in dp.iter_mut().skip(R_DISTORTION.start).zip(dk[row].iter()) {
+            for (d, &v) in dp.iter_mut().skip(R_K1).zip(dk.iter().take(n)) {
                 *d = v;
             }
         }
@@ -270,14 +308,13 @@ impl Projector {
 
     /// d(fx, fy)/dE at `e_ma` (Eq. 16 differentiated).
     pub fn focal_slope(&self, e_ma: f64) -> [f64; 2] {
-        let (kx, ky) = (entries::<4>(&self.x, KF_X), entries::<4>(&self.x, KF_Y));
-        [kx[1] + 2.0 * kx[2] * e_ma + 3.0 * kx[3] * e_ma * e_ma, ky[1] + 2.0 * ky[2] * e_ma + 3.0 * ky[3] * e_ma * e_ma]
+        [self.model.kf_x.slope(e_ma), self.model.kf_y.slope(e_ma)]
     }
 
     /// d pixel / d Z_W and d pixel / d E of a point from its per-view derivatives: a stage
     /// shift moves the point along world Z (d pc / d Z_W = R e_z, as a change of T would),
     /// and the current acts through fx and fy only.
-    pub fn view_shift_derivatives(&self, d_reduced: &[[f64; REDUCED]; 2], e_ma: f64) -> ([f64; 2], [f64; 2]) {
+    pub fn view_shift_derivatives(&self, d_reduced: &[[f64; MAX_REDUCED]; 2], e_ma: f64) -> ([f64; 2], [f64; 2]) {
         let c = self.shift_chain(e_ma);
         let mut d = [[0.0; 2]; 2];
         for row in 0..2 {
@@ -289,11 +326,12 @@ impl Projector {
         (d[0], d[1])
     }
 
-    /// d(per-view variables)/d(Z_W, E) (13 x 2): a stage shift moves the point along
-    /// world Z, which acts as the change R e_z of T; the current acts through fx and fy.
-    pub fn shift_chain(&self, e_ma: f64) -> [[f64; 2]; REDUCED] {
+    /// d(per-view variables)/d(Z_W, E) (at capacity x 2): a stage shift moves the point
+    /// along world Z, which acts as the change R e_z of T; the current acts through fx
+    /// and fy.
+    pub fn shift_chain(&self, e_ma: f64) -> [[f64; 2]; MAX_REDUCED] {
         let slope = self.focal_slope(e_ma);
-        let mut c = [[0.0; 2]; REDUCED];
+        let mut c = [[0.0; 2]; MAX_REDUCED];
         for k in 0..3 {
             c[TRANSLATION.at(k)][0] = self.r[k][2];
         }
@@ -302,22 +340,23 @@ impl Projector {
         c
     }
 
-    /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the 25
-    /// numbers, Z_W and E when `jacobian`.
+    /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the
+    /// layout's numbers, Z_W and E when `jacobian`.
     ///
     /// Errors: the point at or behind the camera; non-positive focal length; non-finite
     /// result.
     pub fn project(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<Projection> {
         let red = self.project_reduced(world_mm, e_ma, jacobian)?;
-        let mut out = Projection { pixel: red.pixel, d_params: [[0.0; PARAMS]; 2], d_z_w: [0.0; 2], d_e: [0.0; 2] };
+        let mut out = Projection { pixel: red.pixel, d_params: [[0.0; MAX_PARAMS]; 2], d_z_w: [0.0; 2], d_e: [0.0; 2] };
         if !jacobian {
             return Ok(out);
         }
         let c = self.chain(e_ma)?;
+        let (nr, np) = (self.layout.reduced_len(), self.layout.len());
         for row in 0..2 {
-            for (k, ck) in c.iter().enumerate() {
+            for (k, ck) in c.iter().enumerate().take(nr) {
                 let g = red.d_reduced[row][k];
-                for (dp, &ckp) in out.d_params[row].iter_mut().zip(ck.iter()) {
+                for (dp, &ckp) in out.d_params[row].iter_mut().zip(ck.iter()).take(np) {
                     *dp += g * ckp;
                 }
             }
@@ -327,46 +366,139 @@ impl Projector {
     }
 }
 
+/// One family's part of a projection: the pixel relative to the principal point and its
+/// derivatives with respect to the camera point, to (fx, fy) at fixed coefficients, and to
+/// the coefficients.
+struct Local {
+    pixel: [f64; 2],
+    d_pc: [[f64; 3]; 2],
+    d_focal: [[f64; 2]; 2],
+    d_coefficients: [[f64; MAX_COEFFICIENTS]; 2],
+}
+
+/// The paper family (Eq. 15, 17): u = fx x, v = fy y, then Eq. 17 in centred pixels.
+#[inline]
+fn paper_local(d: &Distortion, fx: f64, fy: f64, xn: f64, yn: f64, iz: f64, jacobian: bool) -> Local {
+    let (u, v) = (fx * xn, fy * yn);
+    let pixel = d.distort(u, v);
+    let mut out = Local { pixel, d_pc: [[0.0; 3]; 2], d_focal: [[0.0; 2]; 2], d_coefficients: [[0.0; 5]; 2] };
+    if !jacobian {
+        return out;
+    }
+    let jd = d.distort_jacobian(u, v);
+    // d(u, v)/d pc.
+    let du_dpc = [fx * iz, 0.0, -u * iz];
+    let dv_dpc = [0.0, fy * iz, -v * iz];
+    for row in 0..2 {
+        for k in 0..3 {
+            out.d_pc[row][k] = jd[row][0] * du_dpc[k] + jd[row][1] * dv_dpc[k];
+        }
+        out.d_focal[row] = [jd[row][0] * xn, jd[row][1] * yn];
+    }
+    out.d_coefficients = paper_rows(u, v);
+    out
+}
+
+/// OpenCV's family: x_d, y_d of the normalised point, then u_d = fx x_d, v_d = fy y_d.
+#[inline]
+fn opencv_local(d: &Distortion, fx: f64, fy: f64, xn: f64, yn: f64, iz: f64, jacobian: bool) -> Local {
+    let [xd, yd] = d.distort_normalised(xn, yn);
+    let pixel = [fx * xd, fy * yd];
+    let mut out = Local { pixel, d_pc: [[0.0; 3]; 2], d_focal: [[0.0; 2]; 2], d_coefficients: [[0.0; 5]; 2] };
+    if !jacobian {
+        return out;
+    }
+    let jn = d.normalised_jacobian(xn, yn);
+    let dx_dpc = [iz, 0.0, -xn * iz];
+    let dy_dpc = [0.0, iz, -yn * iz];
+    let f = [fx, fy];
+    for row in 0..2 {
+        for k in 0..3 {
+            out.d_pc[row][k] = f[row] * (jn[row][0] * dx_dpc[k] + jn[row][1] * dy_dpc[k]);
+        }
+    }
+    out.d_focal = [[xd, 0.0], [0.0, yd]];
+    let rows = opencv_rows(xn, yn);
+    out.d_coefficients = [rows[0].map(|c| fx * c), rows[1].map(|c| fy * c)];
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::params::PARAM_NAMES;
+    use crate::model::FocalPoly;
 
-    #[test]
-    fn jacobian_matches_central_differences() {
-        let x0 = to_params(&CameraModel::paper_rig());
-        for &(pw, e) in &[([3.0, 4.5, 48.0], 100.0), ([19.5, 16.5, 2.0], 225.0), ([0.0, 0.0, 75.0], 80.0)] {
-            let p = Projector::new(&x0).project(pw, e, true).unwrap();
-            for j in 0..PARAMS {
+    /// d pixel / d(numbers, Z_W, E) against central differences, for a model of `layout`.
+    fn check(model: &CameraModel, points: &[([f64; 3], f64)]) {
+        let l = model.layout();
+        let x0 = to_params(model);
+        let at = |x: &[f64; MAX_PARAMS]| Projector::new(&from_params(&l, x));
+        for &(pw, e) in points {
+            let p = Projector::new(model).project(pw, e, true).unwrap();
+            for j in 0..l.len() {
                 // The pixel is linear in a_i, so a large step is exact there and beats roundoff.
-                let h = if j >= DISTORTION_A.start { 1e-2 } else { 1e-6 } * x0[j].abs().max(1e-3);
+                // (A zero a_i gets a step of 1: its pixel change is still small and linear.)
+                // A focal coefficient kf_i steps so that f(E) moves by 1e-6 of itself.
+                let kf_power = [l.kf_x(), l.kf_y()].iter().find(|s| s.contains(j)).map(|s| j - s.start);
+                let h = match (l.distortion_a().contains(j), x0[j] == 0.0, kf_power) {
+                    (true, true, _) => 1.0,
+                    (true, false, _) => 1e-2 * x0[j].abs(),
+                    (false, _, Some(i)) => 1e-6 * x0[l.kf0x()] / libm::pow(e, i as f64),
+                    (false, _, None) => 1e-6 * x0[j].abs().max(1e-3),
+                };
                 let (mut xp, mut xm) = (x0, x0);
                 xp[j] += h;
                 xm[j] -= h;
-                let fp = Projector::new(&xp).project(pw, e, false).unwrap().pixel;
-                let fm = Projector::new(&xm).project(pw, e, false).unwrap().pixel;
+                let fp = at(&xp).project(pw, e, false).unwrap().pixel;
+                let fm = at(&xm).project(pw, e, false).unwrap().pixel;
                 for row in 0..2 {
                     let fd = (fp[row] - fm[row]) / (2.0 * h);
                     let an = p.d_params[row][j];
-                    assert!(
-                        (fd - an).abs() <= 1e-5 * an.abs().max(1e-3),
-                        "{} row {row}: fd {fd} an {an}",
-                        PARAM_NAMES[j]
-                    );
+                    assert!((fd - an).abs() <= 1e-5 * an.abs().max(1e-3), "{} row {row}: fd {fd} an {an}", l.name(j));
                 }
             }
+            assert!(p.d_params.iter().all(|r| r[l.len()..].iter().all(|&v| v == 0.0)));
             for row in 0..2 {
                 let h = 1e-4;
-                let fz =
-                    |dz: f64| Projector::new(&x0).project([pw[0], pw[1], pw[2] + dz], e, false).unwrap().pixel[row];
-                let fe = |de: f64| Projector::new(&x0).project(pw, e + de, false).unwrap().pixel[row];
+                let proj = Projector::new(model);
+                let fz = |dz: f64| proj.project([pw[0], pw[1], pw[2] + dz], e, false).unwrap().pixel[row];
+                let fe = |de: f64| proj.project(pw, e + de, false).unwrap().pixel[row];
                 let (dz, de) = ((fz(h) - fz(-h)) / (2.0 * h), (fe(h) - fe(-h)) / (2.0 * h));
                 assert!((dz - p.d_z_w[row]).abs() < 1e-5 * dz.abs().max(1.0), "dZ {dz} {}", p.d_z_w[row]);
                 assert!((de - p.d_e[row]).abs() < 1e-5 * de.abs().max(1.0), "dE {de} {}", p.d_e[row]);
             }
             // And the value agrees with the model's own projection.
-            let q = CameraModel::paper_rig().project(pw, e).unwrap();
-            assert!((q[0] - p.pixel[0]).abs() < 1e-12 && (q[1] - p.pixel[1]).abs() < 1e-12);
+            let q = model.project(pw, e).unwrap();
+            assert!((q[0] - p.pixel[0]).abs() < 1e-9 && (q[1] - p.pixel[1]).abs() < 1e-9, "{q:?} {:?}", p.pixel);
         }
+    }
+
+    #[test]
+    fn jacobian_matches_central_differences() {
+        check(
+            &CameraModel::paper_rig(),
+            &[([3.0, 4.5, 48.0], 100.0), ([19.5, 16.5, 2.0], 225.0), ([0.0, 0.0, 75.0], 80.0)],
+        );
+        let strong = CameraModel::strong_distortion_rig();
+        let pts = [([0.0, 0.0, 0.0], 100.0), ([120.0, 90.0, -40.0], 225.0), ([60.0, -30.0, 50.0], 80.0)];
+        check(&strong, &pts);
+        // Other focal degrees: linear and quintic.
+        let mut lin = strong;
+        lin.kf_x = FocalPoly::new(&[1400.0, -0.9]).unwrap();
+        lin.kf_y = FocalPoly::new(&[1410.0, -0.9]).unwrap();
+        check(&lin, &pts);
+        let mut quintic = CameraModel::paper_rig();
+        quintic.kf_x = FocalPoly::new(&[5380.0, -7.0, 0.02, -3e-5, 1e-9, -2e-12]).unwrap();
+        quintic.kf_y = FocalPoly::new(&[5430.0, -7.0, 0.02, -3e-5, 1e-9, -2e-12]).unwrap();
+        check(&quintic, &[([3.0, 4.5, 48.0], 100.0), ([19.5, 16.5, 2.0], 225.0)]);
+    }
+
+    #[test]
+    fn vectors_round_trip_for_every_layout() {
+        let m = CameraModel::strong_distortion_rig();
+        let back = from_params(&m.layout(), &to_params(&m));
+        assert_eq!(back, m);
+        assert!(to_params_n::<25>(&m).is_err() && to_params_n::<31>(&m).is_ok());
+        assert_eq!(from_params(&Layout::PAPER, &to_params(&CameraModel::paper_rig())), CameraModel::paper_rig());
     }
 }

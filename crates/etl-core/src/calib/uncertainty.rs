@@ -6,8 +6,8 @@
 //! reports it ([`super::BundleAdjustReport::covariance`]). A quantity q(x) of the numbers
 //! has, to first order, the covariance J_q C J_q^T with J_q = dq/dx at the estimate.
 
-use super::jacobian::{to_params, Projector};
-use super::params::PARAMS;
+use super::jacobian::Projector;
+use super::params::MAX_PARAMS;
 use crate::error::{all_finite, Error, Result};
 use crate::model::CameraModel;
 
@@ -21,11 +21,12 @@ pub struct PixelUncertainty {
     pub std_px: [f64; 2],
 }
 
-/// J C J^T for an R x 25 Jacobian `j` and a 25 x 25 covariance `c` (exactly symmetric:
-/// the lower triangle is mirrored from the upper).
-pub fn sandwich<const R: usize>(j: &[[f64; PARAMS]; R], c: &[[f64; PARAMS]; PARAMS]) -> [[f64; R]; R] {
+/// J C J^T for an R x p Jacobian `j` and a p x p covariance `c`, both at capacity (zero
+/// past the layout's p numbers), exactly symmetric: the lower triangle is mirrored from
+/// the upper.
+pub fn sandwich<const R: usize>(j: &[[f64; MAX_PARAMS]; R], c: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> [[f64; R]; R] {
     // t = J C (R x 25), then out = t J^T.
-    let mut t = [[0.0; PARAMS]; R];
+    let mut t = [[0.0; MAX_PARAMS]; R];
     for (ti, ji) in t.iter_mut().zip(j.iter()) {
         for (&jik, ck) in ji.iter().zip(c.iter()) {
             if jik != 0.0 {
@@ -54,7 +55,7 @@ pub fn sandwich<const R: usize>(j: &[[f64; PARAMS]; R], c: &[[f64; PARAMS]; PARA
 }
 
 /// Refuses a covariance with a NaN or infinite entry.
-pub fn check_covariance(covariance: &[[f64; PARAMS]; PARAMS]) -> Result<()> {
+pub fn check_covariance(covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> Result<()> {
     covariance.iter().try_for_each(|row| all_finite(row, "calibration covariance"))
 }
 
@@ -71,7 +72,7 @@ pub fn check_covariance(covariance: &[[f64; PARAMS]; PARAMS]) -> Result<()> {
 /// the camera; a non-positive focal length at `e_com_ma`.
 pub fn projection_uncertainty(
     model: &CameraModel,
-    covariance: &[[f64; PARAMS]; PARAMS],
+    covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS],
     world_mm: [f64; 3],
     e_com_ma: f64,
 ) -> Result<PixelUncertainty> {
@@ -80,7 +81,7 @@ pub fn projection_uncertainty(
         return Err(Error::NotFinite { what: "current" });
     }
     check_covariance(covariance)?;
-    let p = Projector::new(&to_params(model)).project(world_mm, e_com_ma, true)?;
+    let p = Projector::new(model).project(world_mm, e_com_ma, true)?;
     let cov = sandwich(&p.d_params, covariance);
     let [[uu, _], [_, vv]] = cov;
     let std_px = [libm::sqrt(uu.max(0.0)), libm::sqrt(vv.max(0.0))];
@@ -93,15 +94,18 @@ pub fn projection_uncertainty(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::params::{KF0X, U0, V0};
+    use crate::calib::params::Layout;
 
     /// The pixel is u0 + ..., v0 + ...: a covariance on (u0, v0) alone passes through as
     /// is; one on kf0x alone gives |d u / d kf0x| times its std, against central
     /// differences of the projection.
     #[test]
+    #[allow(non_snake_case)]
     fn matches_the_principal_point_and_a_finite_difference() {
         let m = CameraModel::paper_rig();
-        let mut c = [[0.0; PARAMS]; PARAMS];
+        let l = Layout::PAPER;
+        let (U0, V0, KF0X) = (l.u0(), l.v0(), l.kf0x());
+        let mut c = [[0.0; MAX_PARAMS]; MAX_PARAMS];
         c[U0][U0] = 4.0;
         c[V0][V0] = 0.25;
         c[U0][V0] = 0.5;
@@ -110,13 +114,13 @@ mod tests {
         let p = projection_uncertainty(&m, &c, w, 150.0).unwrap();
         assert_eq!(p.std_px, [2.0, 0.5]);
         assert_eq!(p.covariance_px2[0][1], 0.5);
-        let mut c = [[0.0; PARAMS]; PARAMS];
+        let mut c = [[0.0; MAX_PARAMS]; MAX_PARAMS];
         let s = 3.0;
         c[KF0X][KF0X] = s * s;
         let p = projection_uncertainty(&m, &c, w, 150.0).unwrap();
         let (mut mp, mut mm) = (m, m);
-        mp.kf_x[0] += 1e-3;
-        mm.kf_x[0] -= 1e-3;
+        mp.kf_x.coefficients_mut()[0] += 1e-3;
+        mm.kf_x.coefficients_mut()[0] -= 1e-3;
         let du = (mp.project(w, 150.0).unwrap()[0] - mm.project(w, 150.0).unwrap()[0]) / 2e-3;
         let dv = (mp.project(w, 150.0).unwrap()[1] - mm.project(w, 150.0).unwrap()[1]) / 2e-3;
         assert!((p.std_px[0] - du.abs() * s).abs() < 1e-6 * p.std_px[0], "{:?} {du}", p.std_px);
@@ -126,11 +130,11 @@ mod tests {
     #[test]
     fn refuses_a_non_finite_covariance_or_point() {
         let m = CameraModel::paper_rig();
-        let mut c = [[0.0; PARAMS]; PARAMS];
+        let mut c = [[0.0; MAX_PARAMS]; MAX_PARAMS];
         c[3][4] = f64::NAN;
         let e = projection_uncertainty(&m, &c, [0.0, 0.0, 40.0], 150.0).unwrap_err();
         assert_eq!(e, Error::NotFinite { what: "calibration covariance" });
-        let c = [[0.0; PARAMS]; PARAMS];
+        let c = [[0.0; MAX_PARAMS]; MAX_PARAMS];
         let e = projection_uncertainty(&m, &c, [f64::NAN, 0.0, 40.0], 150.0).unwrap_err();
         assert_eq!(e, Error::NotFinite { what: "world point" });
     }

@@ -194,7 +194,7 @@ mod tests {
         let mut m = CameraModel::paper_rig();
         assert!(Camera::new(m, None, [225.0, 80.0]).is_err());
         assert!(Camera::new(m, None, [f64::NAN, 80.0]).is_err());
-        m.kf_x[0] = f64::NAN;
+        m.kf_x.coefficients_mut()[0] = f64::NAN;
         assert!(Camera::new(m, None, [80.0, 225.0]).is_err());
         let bad = ThermalTrust {
             t_range_c: Some([37.0, 27.0]),

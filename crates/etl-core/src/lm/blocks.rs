@@ -92,6 +92,25 @@ impl<const N: usize, const M: usize> BlockScratch<N, M> {
     }
 }
 
+/// Where a block's [`BlockScratch`] lives: the scratch itself, or a caller's type that
+/// holds one of several sizes (the bundle adjustment's per-view storage serves every
+/// parameter layout). [`solve_blocks`] refuses storage that holds none of size `N`.
+pub trait BlockStorage<const N: usize, const M: usize> {
+    /// The block's scratch of size `N`, if this storage holds one.
+    fn block(&self) -> Option<&BlockScratch<N, M>>;
+    /// The same, mutable.
+    fn block_mut(&mut self) -> Option<&mut BlockScratch<N, M>>;
+}
+
+impl<const N: usize, const M: usize> BlockStorage<N, M> for BlockScratch<N, M> {
+    fn block(&self) -> Option<&BlockScratch<N, M>> {
+        Some(self)
+    }
+    fn block_mut(&mut self) -> Option<&mut BlockScratch<N, M>> {
+        Some(self)
+    }
+}
+
 /// Number of [`BlockScratch`] elements [`solve_blocks`] needs for `block_count` blocks.
 pub const fn solve_blocks_scratch<const N: usize, const M: usize>(block_count: usize) -> usize {
     block_count
@@ -148,13 +167,13 @@ struct Linearization<const N: usize> {
     rows: usize,
 }
 
-fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>>(
+fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>, S: BlockStorage<N, M>>(
     problem: &mut P,
     x: &[f64; N],
-    scratch: &mut [BlockScratch<N, M>],
+    scratch: &mut [S],
 ) -> Result<Linearization<N>> {
     let mut lin = Linearization { u: [[0.0; N]; N], gx: [0.0; N], cost: 0.0, rows: 0 };
-    for (b, blk) in scratch.iter_mut().enumerate() {
+    for (b, blk) in scratch.iter_mut().filter_map(S::block_mut).enumerate() {
         let y = &{ blk.y };
         blk.w = [[0.0; M]; N];
         blk.v = [[0.0; M]; M];
@@ -192,9 +211,9 @@ fn evaluate<const N: usize, const M: usize, P: BlockProblem<N, M>>(
 
 /// One damped step: returns dx, the rank of the reduced system, and writes y_b + dy_b
 /// into each block's `y_trial`. Also returns the predicted reduction of the cost.
-fn step<const N: usize, const M: usize>(
+fn step<const N: usize, const M: usize, S: BlockStorage<N, M>>(
     lin: &Linearization<N>,
-    scratch: &mut [BlockScratch<N, M>],
+    scratch: &mut [S],
     mu: f64,
     tol: f64,
 ) -> ([f64; N], usize, f64) {
@@ -204,7 +223,7 @@ fn step<const N: usize, const M: usize>(
         s[i][i] += mu * lin.u[i][i];
         rhs[i] = -lin.gx[i];
     }
-    for blk in scratch.iter() {
+    for blk in scratch.iter().filter_map(S::block) {
         let mut vd = blk.v;
         for k in 0..M {
             vd[k][k] += mu * blk.v[k][k];
@@ -234,7 +253,7 @@ fn step<const N: usize, const M: usize>(
     for i in 0..N {
         pred += mu * lin.u[i][i] * dx[i] * dx[i] - dx[i] * lin.gx[i];
     }
-    for blk in scratch.iter_mut() {
+    for blk in scratch.iter_mut().filter_map(S::block_mut) {
         let mut vd = blk.v;
         for k in 0..M {
             vd[k][k] += mu * blk.v[k][k];
@@ -256,16 +275,16 @@ fn step<const N: usize, const M: usize>(
 /// The report at (x, y): rank of the undamped reduced system, and the covariance of the
 /// shared parameters marginalised over the blocks, (U - sum_b W_b V_b^-1 W_b^T)^-1 sigma2
 /// with sigma2 = cost / (residuals - unknowns).
-fn finish<const N: usize, const M: usize>(
+fn finish<const N: usize, const M: usize, S: BlockStorage<N, M>>(
     state: &State<N>,
     lin: &Linearization<N>,
-    scratch: &[BlockScratch<N, M>],
+    scratch: &[S],
     stop: StopReason,
     rank: usize,
     tol: f64,
 ) -> BlockReport<N> {
     let mut s0 = lin.u;
-    for blk in scratch.iter() {
+    for blk in scratch.iter().filter_map(S::block) {
         let (vinv, _) = psd_inverse(&blk.v, tol);
         for i in 0..N {
             for j in 0..N {
@@ -305,7 +324,10 @@ fn finish<const N: usize, const M: usize>(
 
 /// The largest cosine between r and a column of J over every parameter:
 /// |g_j| / (||J e_j|| ||r||).
-fn gradient_cosine<const N: usize, const M: usize>(lin: &Linearization<N>, scratch: &[BlockScratch<N, M>]) -> f64 {
+fn gradient_cosine<const N: usize, const M: usize, S: BlockStorage<N, M>>(
+    lin: &Linearization<N>,
+    scratch: &[S],
+) -> f64 {
     let sf = libm::sqrt(lin.cost);
     let mut gnorm = 0.0f64;
     for i in 0..N {
@@ -313,7 +335,7 @@ fn gradient_cosine<const N: usize, const M: usize>(lin: &Linearization<N>, scrat
             gnorm = gnorm.max(lin.gx[i].abs() / (libm::sqrt(lin.u[i][i]) * sf));
         }
     }
-    for blk in scratch.iter() {
+    for blk in scratch.iter().filter_map(S::block) {
         for k in 0..M {
             if blk.v[k][k] > 0.0 {
                 gnorm = gnorm.max(blk.gy[k].abs() / (libm::sqrt(blk.v[k][k]) * sf));
@@ -325,11 +347,11 @@ fn gradient_cosine<const N: usize, const M: usize>(lin: &Linearization<N>, scrat
 
 /// Scaled norms of the step (dx, the blocks' y_trial - y) and of the parameters, the scale
 /// being sqrt(diag(J^T J)).
-fn scaled_norms<const N: usize, const M: usize>(
+fn scaled_norms<const N: usize, const M: usize, S: BlockStorage<N, M>>(
     lin: &Linearization<N>,
     x: &[f64; N],
     dx: &[f64; N],
-    scratch: &[BlockScratch<N, M>],
+    scratch: &[S],
 ) -> (f64, f64) {
     let (mut hn, mut xn) = (0.0, 0.0);
     for i in 0..N {
@@ -337,7 +359,7 @@ fn scaled_norms<const N: usize, const M: usize>(
         hn += d * dx[i] * dx[i];
         xn += d * x[i] * x[i];
     }
-    for blk in scratch.iter() {
+    for blk in scratch.iter().filter_map(S::block) {
         for k in 0..M {
             let d = blk.v[k][k];
             let dy = blk.y_trial[k] - blk.y[k];
@@ -369,11 +391,11 @@ enum Inner {
 
 /// The inner loop: raise the damping until a step is accepted (Nielsen's update) or a
 /// stop test fires.
-fn inner_loop<const N: usize, const M: usize, P: BlockProblem<N, M>>(
+fn inner_loop<const N: usize, const M: usize, P: BlockProblem<N, M>, S: BlockStorage<N, M>>(
     problem: &mut P,
     state: &mut State<N>,
     lin: &Linearization<N>,
-    scratch: &mut [BlockScratch<N, M>],
+    scratch: &mut [S],
     options: &Options,
 ) -> Inner {
     let f = lin.cost;
@@ -397,7 +419,7 @@ fn inner_loop<const N: usize, const M: usize, P: BlockProblem<N, M>>(
         };
         if accepted {
             state.x = xnew;
-            for blk in scratch.iter_mut() {
+            for blk in scratch.iter_mut().filter_map(S::block_mut) {
                 blk.y = blk.y_trial;
             }
             let t = 2.0 * rho - 1.0;
@@ -427,11 +449,11 @@ fn inner_loop<const N: usize, const M: usize, P: BlockProblem<N, M>>(
 /// after the start is reported through [`BlockReport::stop`].
 ///
 /// Stack: about 6 N^2 + 4 M^2 + 3 N M numbers.
-pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
+pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>, S: BlockStorage<N, M>>(
     problem: &mut P,
     x0: [f64; N],
     options: &Options,
-    blocks: &mut [BlockScratch<N, M>],
+    blocks: &mut [S],
 ) -> Result<BlockReport<N>> {
     all_finite(&x0, "starting point")?;
     let count = problem.block_count();
@@ -440,7 +462,10 @@ pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
     }
     let scratch =
         blocks.get_mut(..count).ok_or(Error::BufferTooSmall { what: "block scratch", needed: count, got: 0 })?;
-    if scratch.iter().any(|b| b.y.iter().any(|v| !v.is_finite())) {
+    if scratch.iter().any(|b| b.block().is_none()) {
+        return Err(Error::InvalidArgument { what: "block storage does not hold this problem's size" });
+    }
+    if scratch.iter().filter_map(S::block).any(|b| b.y.iter().any(|v| !v.is_finite())) {
         return Err(Error::NotFinite { what: "block starting values" });
     }
     let tol = options.rank_tolerance;
@@ -487,10 +512,10 @@ pub fn solve_blocks<const N: usize, const M: usize, P: BlockProblem<N, M>>(
 }
 
 /// Cost at the trial point (x, the blocks' `y_trial`), or `None` if refused or non-finite.
-fn trial_cost<const N: usize, const M: usize, P: BlockProblem<N, M>>(
+fn trial_cost<const N: usize, const M: usize, P: BlockProblem<N, M>, S: BlockStorage<N, M>>(
     problem: &mut P,
     x: &[f64; N],
-    scratch: &[BlockScratch<N, M>],
+    scratch: &[S],
 ) -> Option<f64> {
     struct Cost(f64);
     impl<const N: usize, const M: usize> BlockRowSink<N, M> for Cost {
@@ -499,7 +524,7 @@ fn trial_cost<const N: usize, const M: usize, P: BlockProblem<N, M>>(
         }
     }
     let mut c = Cost(0.0);
-    for (b, blk) in scratch.iter().enumerate() {
+    for (b, blk) in scratch.iter().filter_map(S::block).enumerate() {
         if problem.eval_block(b, x, &blk.y_trial, false, &mut c).is_err() {
             return None;
         }

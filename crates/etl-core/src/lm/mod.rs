@@ -39,7 +39,9 @@ mod dense;
 mod options;
 mod report;
 
-pub use blocks::{solve_blocks, solve_blocks_scratch, BlockNormal, BlockProblem, BlockRowSink, BlockScratch};
+pub use blocks::{
+    solve_blocks, solve_blocks_scratch, BlockNormal, BlockProblem, BlockRowSink, BlockScratch, BlockStorage,
+};
 pub use dense::solve;
 pub use options::{Accumulation, Options, StopReason};
 pub use report::{BlockReport, Report};

@@ -3,30 +3,35 @@
 use serde::{Deserialize, Serialize};
 
 use super::distortion::Distortion;
+use super::family::{DistortionA, DistortionModel};
+use super::focal::FocalPoly;
 use nalgebra::Vector3;
 
 use super::rotation::{rodrigues_to_matrix, to_matrix3, Mat3};
 use crate::error::{all_finite, finite, Error, Result};
 
-/// The 25 numbers of the paper's camera model, exactly as the paper defines them.
+/// The numbers of the ETL camera model: the paper's 25 (Eq. 13-18: pose, cubic focal
+/// polynomials, principal point, a1..a9) or, generalised, a focal polynomial of any degree
+/// 1..=5 and either distortion family ([`DistortionModel`]). The parameter vector of a
+/// model is laid out by [`crate::calib::params::Layout`] ([`Self::layout`]).
 ///
 /// Invariants a *usable* model satisfies (checked where they matter, never assumed):
-/// all numbers finite; fx(E), fy(E) > 0 over the currents it is used at.
-/// Field names are those of the `etlcal.calibration/1` file format.
+/// all numbers finite; kf_x and kf_y of one degree; fx(E), fy(E) > 0 over the currents it
+/// is used at. Field names are those of the `etlcal.calibration/1` file format.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CameraModel {
     /// Rodrigues vector of R (world -> camera), radians.
     pub rotation_rodrigues: [f64; 3],
     /// T (world -> camera), mm.
     pub translation_mm: [f64; 3],
-    /// fx(E) = kf_x[0] + kf_x[1] E + kf_x[2] E^2 + kf_x[3] E^3 (px; E in mA), Eq. 16.
-    pub kf_x: [f64; 4],
-    /// fy(E), as `kf_x`.
-    pub kf_y: [f64; 4],
+    /// fx(E) = kf_x[0] + kf_x[1] E + ... + kf_x[d] E^d (px; E in mA), Eq. 16 (the paper: d = 3).
+    pub kf_x: FocalPoly,
+    /// fy(E), as `kf_x` (same degree).
+    pub kf_y: FocalPoly,
     /// (u0, v0), px.
     pub principal_point: [f64; 2],
-    /// a1..a9 of Eq. 18.
-    pub distortion_a: [f64; 9],
+    /// The a_i of Eq. 18 (the paper: a1..a9) with their distortion family.
+    pub distortion_a: DistortionA,
 }
 
 /// Pinhole intrinsics at one current.
@@ -49,36 +54,81 @@ impl Intrinsics {
     }
 }
 
-/// Evaluates c0 + c1 x + c2 x^2 + c3 x^3 (Horner).
-#[inline]
-pub fn cubic(c: &[f64; 4], x: f64) -> f64 {
-    ((c[3] * x + c[2]) * x + c[1]) * x + c[0]
-}
-
 impl CameraModel {
     /// The simulated rig of the paper's section 5.1.2 (docs/METHOD.md, "The paper rig").
     pub const fn paper_rig() -> Self {
         CameraModel {
             rotation_rodrigues: [0.2, 0.2, 0.2],
             translation_mm: [-11.0, -4.0, 48.0],
-            kf_x: [5380.0, -7.0, 0.02, -3e-5],
-            kf_y: [5430.0, -7.0, 0.02, -3e-5],
+            kf_x: FocalPoly::cubic([5380.0, -7.0, 0.02, -3e-5]),
+            kf_y: FocalPoly::cubic([5430.0, -7.0, 0.02, -3e-5]),
             principal_point: [900.0, 550.0],
-            distortion_a: [-0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6],
+            distortion_a: DistortionA::paper([
+                -0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6,
+            ]),
         }
+    }
+
+    /// The distortion family of the model.
+    pub const fn distortion_model(&self) -> DistortionModel {
+        self.distortion_a.model()
+    }
+
+    /// The degree of the focal polynomials (kf_x's; [`Self::validate`] checks kf_y's).
+    pub const fn focal_degree(&self) -> usize {
+        self.kf_x.degree()
+    }
+
+    /// The layout of this model's parameter vector (family and focal degree).
+    pub fn layout(&self) -> crate::calib::params::Layout {
+        crate::calib::params::Layout::of(self)
     }
 
     /// Image size of the paper rig's camera, px (width, height).
     pub const PAPER_IMAGE_SIZE: [u32; 2] = [1936, 1458];
 
+    /// A camera with strong barrel distortion in OpenCV's family: a short prime (about
+    /// 6 mm, fx 1375..1247 px over 80..225 mA) behind the ETL on the paper rig's sensor
+    /// ([`Self::PAPER_IMAGE_SIZE`]), with k1 = -0.28..-0.32, k2 = 0.14..0.16,
+    /// k3 = -0.019..-0.021 (normalised units) and small decentering (p1 ~ 2e-4, p2 =
+    /// -3e-4), all varying with focus through w = 1 / f_mean (Eq. 18):
+    ///
+    /// ```text
+    /// k1 = -0.3 - 540 (w - w0) + 2e5 (w - w0)^2,  k2 = 0.15 + 270 (w - w0),
+    /// p1 = 2e-4 + 0.5 (w - w0),  p2 = -3e-4,  k3 = -0.02 - 20 (w - w0),  w0 = 7.6e-4 / px
+    /// ```
+    ///
+    /// The distortion is one-to-one over the whole image at every current of 80..225 mA.
+    /// The pose puts the world origin (a stage's) about 200 mm in front of the camera.
+    /// The simulated strong-distortion rig and the tests of the opencv family use it.
+    pub const fn strong_distortion_rig() -> Self {
+        CameraModel {
+            rotation_rodrigues: [0.05, -0.08, 0.02],
+            translation_mm: [-60.0, -45.0, 200.0],
+            kf_x: FocalPoly::cubic([1500.0, -1.96, 0.0056, -8.4e-6]),
+            kf_y: FocalPoly::cubic([1510.0, -1.96, 0.0056, -8.4e-6]),
+            principal_point: [980.0, 720.0],
+            distortion_a: DistortionA::opencv([
+                2.0e5, -844.0, 0.22592, // k1
+                0.0, 270.0, -0.0552, // k2
+                0.0, 0.5, -1.8e-4, // p1
+                0.0, 0.0, -3.0e-4, // p2
+                0.0, -20.0, -4.8e-3, // k3
+            ]),
+        }
+    }
+
     /// Checks that every number of the model is finite.
     pub fn validate(&self) -> Result<()> {
         all_finite(&self.rotation_rodrigues, "rotation_rodrigues")?;
         all_finite(&self.translation_mm, "translation_mm")?;
-        all_finite(&self.kf_x, "kf_x")?;
-        all_finite(&self.kf_y, "kf_y")?;
+        self.kf_x.validate("kf_x")?;
+        self.kf_y.validate("kf_y")?;
+        if self.kf_x.degree() != self.kf_y.degree() {
+            return Err(Error::InvalidArgument { what: "kf_x and kf_y must have the same degree" });
+        }
         all_finite(&self.principal_point, "principal_point")?;
-        all_finite(&self.distortion_a, "distortion_a")
+        self.distortion_a.validate()
     }
 
     /// Rotation matrix R (world -> camera).
@@ -90,7 +140,7 @@ impl CameraModel {
     /// Focal lengths (fx, fy) in px at compensated current `e_com_ma` (Eq. 16), unchecked.
     #[inline]
     pub fn focal_lengths(&self, e_com_ma: f64) -> (f64, f64) {
-        (cubic(&self.kf_x, e_com_ma), cubic(&self.kf_y, e_com_ma))
+        (self.kf_x.eval(e_com_ma), self.kf_y.eval(e_com_ma))
     }
 
     /// Intrinsics at compensated current `e_com_ma` (Eq. 16).
@@ -110,14 +160,15 @@ impl CameraModel {
         Ok(Intrinsics { fx, fy, u0, v0 })
     }
 
-    /// Distortion (k1, p1, p2) at compensated current `e_com_ma` (Eq. 18).
+    /// The distortion at compensated current `e_com_ma` (Eq. 18): k1, p1, p2 (paper) or
+    /// k1, k2, p1, p2, k3 (opencv).
     ///
     /// Errors: as [`Self::intrinsics`]; non-finite coefficients (NaN or infinite a_i, or
     /// an overflow) ([`Error::NotFinite`]).
     pub fn distortion(&self, e_com_ma: f64) -> Result<Distortion> {
         let k = self.intrinsics(e_com_ma)?;
-        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
-        all_finite(&[d.k1, d.p1, d.p2], "distortion coefficients (check distortion_a)")?;
+        let d = Distortion::from_a(&self.distortion_a, k.fx, k.fy);
+        all_finite(d.coefficients(), "distortion coefficients (check distortion_a)")?;
         Ok(d)
     }
 
@@ -135,7 +186,7 @@ impl CameraModel {
     pub fn project(&self, world_mm: [f64; 3], e_com_ma: f64) -> Result<[f64; 2]> {
         all_finite(&world_mm, "world_mm")?;
         let k = self.intrinsics(e_com_ma)?;
-        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
+        let d = Distortion::from_a(&self.distortion_a, k.fx, k.fy);
         let pc = self.world_to_camera(world_mm);
         project_camera_point(pc, &k, &d)
     }
@@ -149,7 +200,7 @@ impl CameraModel {
             return Err(Error::BufferTooSmall { what: "out", needed: world_mm.len(), got: out.len() });
         }
         let k = self.intrinsics(e_com_ma)?;
-        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
+        let d = Distortion::from_a(&self.distortion_a, k.fx, k.fy);
         let r = to_matrix3(&self.rotation_matrix());
         let t = Vector3::from(self.translation_mm);
         for (w, o) in world_mm.iter().zip(out.iter_mut()) {
@@ -161,16 +212,26 @@ impl CameraModel {
 }
 
 /// Camera point (mm) -> observed pixel under intrinsics `k` and distortion `d`
-/// (Eq. 15, 17).
+/// (Eq. 15, 17; for the opencv family exactly `cv2.projectPoints`' expressions, `d`'s own
+/// focal lengths unused).
 #[inline]
 pub fn project_camera_point(pc: [f64; 3], k: &Intrinsics, d: &Distortion) -> Result<[f64; 2]> {
     if !(pc[2] > 0.0) {
         return Err(Error::BehindCamera);
     }
-    let u = k.fx * pc[0] / pc[2];
-    let v = k.fy * pc[1] / pc[2];
-    let [ud, vd] = d.distort(u, v);
-    let px = [ud + k.u0, vd + k.v0];
+    let px = match d.model() {
+        DistortionModel::Paper => {
+            let u = k.fx * pc[0] / pc[2];
+            let v = k.fy * pc[1] / pc[2];
+            let [ud, vd] = d.distort(u, v);
+            [ud + k.u0, vd + k.v0]
+        }
+        // OpenCV's own order of operations (`cv2.projectPoints`): x = X / Z, then distort.
+        DistortionModel::OpenCv => {
+            let [xd, yd] = d.distort_normalised(pc[0] / pc[2], pc[1] / pc[2]);
+            [k.fx * xd + k.u0, k.fy * yd + k.v0]
+        }
+    };
     if px[0].is_finite() && px[1].is_finite() {
         Ok(px)
     } else {

@@ -2,10 +2,13 @@
 //!
 //! World point P_W (mm) -> camera P_C = R P_W + T (Eq. 13) -> ideal centred pixel
 //! u = fx(E) X_C / Z_C, v = fy(E) Y_C / Z_C (Eq. 15-16) -> distorted centred pixel (Eq. 17,
-//! with Weng's decentering term, see [`distortion`]) -> observed pixel (u_d + u0, v_d + v0).
+//! with Weng's decentering term, or OpenCV's model: see [`family`] and [`distortion`]) ->
+//! observed pixel (u_d + u0, v_d + v0).
 
 pub mod camera;
 pub mod distortion;
+pub mod family;
+pub mod focal;
 pub mod opencv;
 pub mod ray;
 pub mod rotation;
@@ -13,5 +16,7 @@ pub mod undistort;
 
 pub use camera::{CameraModel, Intrinsics};
 pub use distortion::Distortion;
+pub use family::{DistortionA, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS, MAX_DISTORTION_A};
+pub use focal::{FocalPoly, MAX_FOCAL_DEGREE, PAPER_FOCAL_DEGREE};
 pub use opencv::{fit_opencv5, OpenCvFit};
 pub use ray::Ray;

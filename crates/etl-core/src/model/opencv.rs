@@ -16,13 +16,15 @@
 
 use super::camera::Intrinsics;
 use super::distortion::Distortion;
+use super::family::DistortionModel;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::psd_inverse;
 
 /// Grid of image points the fit is made over (columns, rows), corners included.
 pub const OPENCV_FIT_GRID: [usize; 2] = [41, 31];
 
-/// OpenCV coefficients fitted to the paper's distortion at one current.
+/// OpenCV coefficients of the distortion at one current: fitted to the paper family's, or
+/// the opencv family's own (then exact: errors 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OpenCvFit {
     /// k1, k2, p1, p2, k3 (OpenCV's order and signs).
@@ -33,9 +35,11 @@ pub struct OpenCvFit {
     pub max_px: f64,
 }
 
-/// The (k1, k2, p1, p2, k3) whose projection is closest, in the least-squares sense over
-/// an [`OPENCV_FIT_GRID`] of points spanning the `image_size` px image, to the paper's
-/// distortion `d` with intrinsics `k`. The distortion is linear in OpenCV's coefficients,
+/// OpenCV's (k1, k2, p1, p2, k3) for the distortion `d` with intrinsics `k`.
+///
+/// The opencv family: `d`'s own coefficients, exact (`rms_px` = `max_px` = 0). The paper
+/// family: the coefficients whose projection is closest, in the least-squares sense over
+/// an [`OPENCV_FIT_GRID`] of points spanning the `image_size` px image, to `d`. The distortion is linear in OpenCV's coefficients,
 /// so the fit is one linear least-squares solve (columns scaled; a direction the field of
 /// view cannot determine, e.g. k3 of a narrow lens, is set by the minimum-norm solution).
 ///
@@ -44,6 +48,11 @@ pub struct OpenCvFit {
 pub fn fit_opencv5(k: &Intrinsics, d: &Distortion, image_size: [u32; 2]) -> Result<OpenCvFit> {
     if image_size[0] < 2 || image_size[1] < 2 {
         return Err(Error::InvalidArgument { what: "image_size must be at least 2 x 2 px" });
+    }
+    if d.model() == DistortionModel::OpenCv {
+        // OpenCV's own model: its coefficients are the export, exactly.
+        crate::error::all_finite(d.coefficients(), "OpenCV coefficients")?;
+        return Ok(OpenCvFit { dist_coeffs: *d.padded(), rms_px: 0.0, max_px: 0.0 });
     }
     let (mut a, mut g) = ([[0.0; 5]; 5], [0.0; 5]);
     for_grid(k, d, image_size, |rows, target| {
@@ -137,10 +146,11 @@ mod tests {
     #[test]
     fn equal_focal_lengths_give_the_closed_form_exactly() {
         let k = Intrinsics { fx: 4875.0, fy: 4875.0, u0: 900.0, v0: 550.0 };
-        let d = Distortion { k1: -2.2e-9, p1: 1.3e-6, p2: -4e-7 };
+        let (k1, p1, p2) = (-2.2e-9, 1.3e-6, -4e-7);
+        let d = Distortion::paper(k1, p1, p2);
         let fit = fit_opencv5(&k, &d, [1936, 1458]).unwrap();
         let f = 4875.0;
-        let expect = [d.k1 * f * f, 0.0, d.p2 * f, d.p1 * f, 0.0];
+        let expect = [k1 * f * f, 0.0, p2 * f, p1 * f, 0.0];
         for i in 0..5 {
             assert!((fit.dist_coeffs[i] - expect[i]).abs() < 1e-9 * (1.0 + expect[i].abs()), "{i}: {fit:?}");
         }

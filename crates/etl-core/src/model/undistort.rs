@@ -1,4 +1,5 @@
-//! Undistortion: the inverse of Eq. 17, by a safeguarded Newton iteration.
+//! Undistortion: the inverse of the distortion (Eq. 17 or OpenCV's), by a safeguarded
+//! Newton iteration.
 
 use super::camera::CameraModel;
 use super::distortion::Distortion;
@@ -18,7 +19,8 @@ impl Distortion {
     /// singular (the distortion folds the image there) or the residual stays above
     /// [`UNDISTORT_TOL_PX`] after [`UNDISTORT_MAX_ITER`] iterations.
     pub fn undistort(&self, ud: f64, vd: f64) -> Result<[f64; 2]> {
-        all_finite(&[ud, vd, self.k1, self.p1, self.p2], "undistort input")?;
+        all_finite(&[ud, vd], "undistort input")?;
+        all_finite(self.coefficients(), "undistort input")?;
         let (mut u, mut v) = (ud, vd);
         let resid = |u: f64, v: f64| {
             let [a, b] = self.distort(u, v);
@@ -92,7 +94,7 @@ impl CameraModel {
     pub fn undistort(&self, pixel: [f64; 2], e_com_ma: f64) -> Result<[f64; 2]> {
         all_finite(&pixel, "pixel")?;
         let k = self.intrinsics(e_com_ma)?;
-        let d = Distortion::from_a(&self.distortion_a, 0.5 * (k.fx + k.fy));
+        let d = Distortion::from_a(&self.distortion_a, k.fx, k.fy);
         let [u, v] = d.undistort(pixel[0] - k.u0, pixel[1] - k.v0)?;
         Ok([u + k.u0, v + k.v0])
     }
@@ -125,7 +127,7 @@ mod tests {
     #[test]
     fn folding_distortion_is_an_error_not_a_wrong_answer() {
         // Strong barrel distortion folds the image beyond r = 1 / sqrt(3 |k1|).
-        let d = Distortion { k1: -1e-6, p1: 0.0, p2: 0.0 };
+        let d = Distortion::paper(-1e-6, 0.0, 0.0);
         let r = d.undistort(2000.0, 0.0);
         assert!(r.is_err(), "{r:?}");
     }

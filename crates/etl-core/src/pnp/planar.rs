@@ -1,7 +1,7 @@
 //! Planar PnP: closed-form start from the homography, then LM.
 
 use super::homography::homography;
-use crate::calib::jacobian::{to_params, Projector};
+use crate::calib::jacobian::Projector;
 use crate::error::{all_finite, Error, Result};
 use crate::lm::{solve, Options, Problem, RowSink};
 use crate::model::rotation::{matrix_to_rodrigues, rotation_from_two_columns, to_matrix3};
@@ -46,7 +46,7 @@ impl Problem<6> for Reprojection<'_> {
         let mut m = self.model;
         m.rotation_rodrigues = [x[0], x[1], x[2]];
         m.translation_mm = [x[3], x[4], x[5]];
-        let proj = Projector::new(&to_params(&m));
+        let proj = Projector::new(&m);
         for (w, px) in self.board_mm.iter().zip(self.pixels) {
             let p = proj.project(*w, self.e_com_ma, jacobian)?;
             for row in 0..2 {

@@ -27,8 +27,8 @@
 //! would move fx(E) for both poses alike.
 
 use super::planar::BoardPose;
-use crate::calib::jacobian::{to_params, Projector};
-use crate::calib::params::PARAMS;
+use crate::calib::jacobian::Projector;
+use crate::calib::params::MAX_PARAMS;
 use crate::calib::uncertainty::{check_covariance, sandwich};
 use crate::error::{all_finite, Error, Result};
 use crate::linalg::spd_inverse;
@@ -54,7 +54,7 @@ pub struct PoseUncertainty {
     /// Covariance of (om1..om3 rad, t1..t3 mm) from the pixel noise: sigma^2 N^-1.
     pub pixel_covariance: [[f64; POSE]; POSE],
     /// S = d(om, t) / d(25 calibrated numbers) (zero columns for the calibration's R, T).
-    pub d_pose_d_params: [[f64; PARAMS]; POSE],
+    pub d_pose_d_params: [[f64; MAX_PARAMS]; POSE],
 }
 
 impl PoseUncertainty {
@@ -62,7 +62,10 @@ impl PoseUncertainty {
     /// the pixel noise alone).
     ///
     /// Errors: a NaN or infinite covariance entry.
-    pub fn covariance(&self, calibration_covariance: Option<&[[f64; PARAMS]; PARAMS]>) -> Result<[[f64; POSE]; POSE]> {
+    pub fn covariance(
+        &self,
+        calibration_covariance: Option<&[[f64; MAX_PARAMS]; MAX_PARAMS]>,
+    ) -> Result<[[f64; POSE]; POSE]> {
         let mut out = self.pixel_covariance;
         if let Some(c) = calibration_covariance {
             check_covariance(c)?;
@@ -106,10 +109,10 @@ pub fn pose_uncertainty(
     let mut m = *model;
     m.rotation_rodrigues = pose.rotation_rodrigues;
     m.translation_mm = pose.translation_mm;
-    let proj = Projector::new(&to_params(&m));
+    let proj = Projector::new(&m);
     // N = J_p^T J_p, B = J_p^T J_x (the pose is the first 6 of the 25 numbers here).
     let mut n = [[0.0; POSE]; POSE];
-    let mut b = [[0.0; PARAMS]; POSE];
+    let mut b = [[0.0; MAX_PARAMS]; POSE];
     let mut cost = 0.0;
     for (w, px) in board_mm.iter().zip(pixels) {
         all_finite(w, "board point")?;
@@ -139,7 +142,7 @@ pub fn pose_uncertainty(
     let mut pixel_covariance = ninv;
     pixel_covariance.iter_mut().flatten().for_each(|v| *v *= sigma_px * sigma_px);
     // S = -N^-1 B.
-    let mut d_pose_d_params = [[0.0; PARAMS]; POSE];
+    let mut d_pose_d_params = [[0.0; MAX_PARAMS]; POSE];
     for (si, nii) in d_pose_d_params.iter_mut().zip(ninv.iter()) {
         for (&nik, bk) in nii.iter().zip(b.iter()) {
             for (sij, &bkj) in si.iter_mut().zip(bk.iter()) {
@@ -161,14 +164,14 @@ pub fn pose_uncertainty(
 pub fn displacement_covariance_mm2(
     ua: &PoseUncertainty,
     ub: &PoseUncertainty,
-    calibration_covariance: Option<&[[f64; PARAMS]; PARAMS]>,
+    calibration_covariance: Option<&[[f64; MAX_PARAMS]; MAX_PARAMS]>,
 ) -> Result<[[f64; 3]; 3]> {
     let mut out = translation_block(&ua.pixel_covariance);
     add(&mut out, &translation_block(&ub.pixel_covariance));
     if let Some(c) = calibration_covariance {
         check_covariance(c)?;
         // The translation rows of S_b - S_a.
-        let mut diff = [[0.0; PARAMS]; 3];
+        let mut diff = [[0.0; MAX_PARAMS]; 3];
         let rows = ub.d_pose_d_params.iter().skip(3).zip(ua.d_pose_d_params.iter().skip(3));
         for (d, (rb, ra)) in diff.iter_mut().zip(rows) {
             for (x, (b, a)) in d.iter_mut().zip(rb.iter().zip(ra.iter())) {
@@ -221,13 +224,15 @@ mod tests {
         let u = pose_uncertainty(&cam, 120.0, &b, &px, &pose, PixelNoise::Known(0.2)).unwrap();
         assert_eq!(u.sigma_px, 0.2);
         for (k, h) in [(6, 1.0), (14, 0.5), (15, 0.5), (16, 1e-3)] {
+            use crate::calib::jacobian::{from_params, to_params};
             let mut x = to_params(&cam);
             let mut xm = x;
             x[k] += h;
             xm[k] -= h;
+            let l = cam.layout();
             let (pp, pm) = (
-                solve_pnp(&crate::calib::jacobian::from_params(&x), 120.0, &b, &px).unwrap(),
-                solve_pnp(&crate::calib::jacobian::from_params(&xm), 120.0, &b, &px).unwrap(),
+                solve_pnp(&from_params(&l, &x), 120.0, &b, &px).unwrap(),
+                solve_pnp(&from_params(&l, &xm), 120.0, &b, &px).unwrap(),
             );
             for i in 0..3 {
                 let fd = (pp.translation_mm[i] - pm.translation_mm[i]) / (2.0 * h);
@@ -253,7 +258,7 @@ mod tests {
         assert_eq!(e, Error::InvalidArgument { what: "pixel noise sigma must be finite and >= 0" });
         let e = pose_uncertainty(&cam, 120.0, &b[..3], &px[..3], &pose, PixelNoise::FromResidual).unwrap_err();
         assert_eq!(e, Error::TooFew { what: "points for PnP", needed: 4, got: 3 });
-        let mut c = [[0.0; PARAMS]; PARAMS];
+        let mut c = [[0.0; MAX_PARAMS]; MAX_PARAMS];
         c[0][0] = f64::INFINITY;
         let e = displacement_covariance_mm2(&u, &u, Some(&c)).unwrap_err();
         assert_eq!(e, Error::NotFinite { what: "calibration covariance" });

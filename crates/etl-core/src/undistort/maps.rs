@@ -5,7 +5,7 @@ use core::ops::Range;
 
 use super::camera::OutputCamera;
 use crate::error::{all_finite, Error, Result};
-use crate::model::{Distortion, Intrinsics};
+use crate::model::{Distortion, DistortionModel, Intrinsics};
 
 /// Fills the undistortion maps of the output rows `rows` (a band of the output image) in
 /// `cv2.remap`'s convention: `map_x[i]`, `map_y[i]` (`i = (y - rows.start) * width + x`)
@@ -20,8 +20,9 @@ use crate::model::{Distortion, Intrinsics};
 /// map_x = u_d + u0,  map_y = v_d + v0
 /// ```
 ///
-/// evaluated in f64 (along a row by Horner's rule, see `row_polynomials`) and rounded once to
-/// f32: every entry is the model's own projection of
+/// evaluated in f64 (along a row by Horner's rule, see `row_polynomials`; for the opencv
+/// family OpenCV's distortion of the ray's normalised point, u_d = fx x_d(x', y') with
+/// x' = (x - cx') / fx') and rounded once to f32: every entry is the model's own projection of
 /// that ray to within f32 rounding (6e-8 relative, 1.2e-4 px at 2000 px). With the default
 /// output camera ([`OutputCamera::of_intrinsics`]) u = x - u0, v = y - v0.
 ///
@@ -44,6 +45,10 @@ pub fn undistort_maps(
     out.validate()?;
     check_model(k, d)?;
     check_band(out, &rows, map_x.len(), map_y.len())?;
+    if d.model() == DistortionModel::OpenCv {
+        super::opencv_maps::fill(k, d, out, rows, map_x, map_y);
+        return Ok(());
+    }
     let w = out.width_px;
     // u = a x + b is affine in x along a row (and v constant): one multiply-add per pixel.
     let (ax, bx) = (k.fx / out.fx_px, -k.fx * out.cx_px / out.fx_px);
@@ -74,7 +79,7 @@ pub fn undistort_maps(
 /// the same numbers to f64 rounding. Returns the coefficients, lowest degree first.
 #[inline]
 fn row_polynomials(d: &Distortion, v: f64, u0: f64, v0: f64) -> [[f64; 4]; 2] {
-    let (k1, p1, p2) = (d.k1, d.p1, d.p2);
+    let [k1, p1, p2, ..] = *d.padded();
     let vv = v * v;
     [
         [p1 * vv + u0, 1.0 + k1 * vv + 2.0 * p2 * v, 3.0 * p1, k1],
@@ -88,7 +93,7 @@ fn check_model(k: &Intrinsics, d: &Distortion) -> Result<()> {
         return Err(Error::InvalidArgument { what: "model intrinsics: fx and fy must be finite and > 0" });
     }
     all_finite(&[k.u0, k.v0], "model principal point")?;
-    all_finite(&[d.k1, d.p1, d.p2], "distortion coefficients")
+    all_finite(d.coefficients(), "distortion coefficients")
 }
 
 /// Checks a band of output rows against the image and the buffers.
@@ -195,7 +200,8 @@ mod tests {
         let bad_k = Intrinsics { fx: -1.0, ..k };
         let e = undistort_maps(&bad_k, &d, &out, 0..1, &mut mx, &mut my).unwrap_err();
         assert!(matches!(e, Error::InvalidArgument { .. }), "{e:?}");
-        let bad_d = Distortion { k1: f64::NAN, ..d };
+        let [_, p1, p2, ..] = *d.padded();
+        let bad_d = Distortion::paper(f64::NAN, p1, p2);
         let e = undistort_maps(&k, &bad_d, &out, 0..1, &mut mx, &mut my).unwrap_err();
         assert_eq!(e, Error::NotFinite { what: "distortion coefficients" });
         assert!(mx.iter().chain(my.iter()).all(|&v| v == 7.0), "nothing written on error");

@@ -31,6 +31,7 @@
 
 pub mod camera;
 pub mod maps;
+mod opencv_maps;
 pub mod remap;
 
 pub use camera::{OutputCamera, MAX_SIDE_PX};

@@ -197,8 +197,8 @@ pub fn paper_rig(noise: &NoiseModel, seed: u64) -> Simulation {
     }
     obs.offstate_views = lens_off_views(&truth, noise, &mut rng);
     let a0 = A0 {
-        kf0x: truth.kf_x[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
-        kf0y: truth.kf_y[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
+        kf0x: truth.kf_x.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
+        kf0y: truth.kf_y.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
         u0: truth.principal_point[0] + gauss(noise.pp_px, &mut rng),
         v0: truth.principal_point[1] + gauss(noise.pp_px, &mut rng),
     };
