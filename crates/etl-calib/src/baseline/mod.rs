@@ -222,7 +222,7 @@ fn calibration_of(
     let mut sa = [0.0; 9];
     for (k, idx) in [4usize, 5, 6].into_iter().enumerate() {
         let (y, sd) = col(&|z| {
-            let v = [z.k1, z.p1, z.p2][k];
+            let v = z.coefficients[k];
             (v, z.std[idx])
         });
         let (c, cov) = poly_fit(&ws, &y, &sd, 2)?;

@@ -15,6 +15,8 @@ use crate::zhang::PlanarView;
 pub struct PlanarViews {
     /// One view per image where the board was found, in the images' order.
     pub views: Vec<PlanarView>,
+    /// The image of each view (same order as `views`).
+    pub images: Vec<PathBuf>,
     /// The images' size, px (all alike).
     pub image_size: [u32; 2],
     /// Why each image without a view was skipped (the board not found), in order.
@@ -42,7 +44,7 @@ pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) 
         })
         .collect();
     progress.finish();
-    let (mut views, mut size, mut skipped) = (vec![], None::<[u32; 2]>, vec![]);
+    let (mut views, mut used, mut size, mut skipped) = (vec![], vec![], None::<[u32; 2]>, vec![]);
     for (p, r) in images.iter().zip(results) {
         match r {
             Ok(d) => {
@@ -61,11 +63,12 @@ pub fn detect_views(images: &[PathBuf], board: &Board, progress: &dyn Progress) 
                     board_mm: d.corners.iter().map(|(ij, _)| [ij[0] as f64 * sq, ij[1] as f64 * sq]).collect(),
                     pixels: d.corners.iter().map(|c| c.1).collect(),
                 });
+                used.push(p.clone());
             }
             Err(Error::BoardNotFound(m)) => skipped.push(m),
             Err(e) => return Err(e),
         }
     }
     let image_size = size.ok_or_else(|| Error::BoardNotFound(format!("in none of the {} images", images.len())))?;
-    Ok(PlanarViews { views, image_size, skipped })
+    Ok(PlanarViews { views, images: used, image_size, skipped })
 }
