@@ -24,7 +24,9 @@ fn opencv_model_adds_camera_matrix_dist_coeffs_per_view_rms_and_stds() {
     let out = zhang(&["--model", "opencv", "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    for key in ["fx", "fy", "u0", "v0", "rms_px", "views_used", "camera_matrix", "dist_coeffs", "per_view_rms_px", "std"] {
+    for key in
+        ["fx", "fy", "u0", "v0", "rms_px", "views_used", "camera_matrix", "dist_coeffs", "per_view_rms_px", "std"]
+    {
         assert!(v.get(key).is_some(), "{key} missing: {v}");
     }
     assert_eq!(v["model"], "opencv");
@@ -55,7 +57,10 @@ fn opencv_flags_with_the_paper_model_are_refused_naming_the_flag() {
             assert_eq!(out.status.code(), Some(1), "{flag} {model:?}");
             let err = String::from_utf8_lossy(&out.stderr);
             assert_eq!(err.lines().count(), 1, "{err}");
-            assert!(err.starts_with("etlcal: error: ") && err.contains(flag) && err.contains("--model opencv"), "{err}");
+            assert!(
+                err.starts_with("etlcal: error: ") && err.contains(flag) && err.contains("--model opencv"),
+                "{err}"
+            );
             assert!(out.stdout.is_empty());
         }
     }

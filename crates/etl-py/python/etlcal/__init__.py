@@ -77,6 +77,7 @@ from .results import (
     ThermalCalibrationResult,
     View,
     ViewSummary,
+    ZhangOpenCvResult,
     ZhangResult,
 )
 from . import options, physics, results, simulate, studies
@@ -122,6 +123,7 @@ __all__ = [
     "ThermalCalibrationResult",
     "View",
     "ViewSummary",
+    "ZhangOpenCvResult",
     "ZhangResult",
     "options",
     "physics",

@@ -6,7 +6,17 @@ import numpy as np
 import numpy.typing as npt
 from numpy.polynomial import Polynomial
 
-from etlcal.options import Estimator, ExportFormat, Method, NoisePreset, RobustLoss, SharpnessMetric, StudyName
+from etlcal.options import (
+    DistortionChoice,
+    Estimator,
+    ExportFormat,
+    FocalDegreeChoice,
+    Method,
+    NoisePreset,
+    RobustLoss,
+    SharpnessMetric,
+    StudyName,
+)
 from etlcal.results import (
     AutofocusResult,
     Compensation,
@@ -19,6 +29,7 @@ from etlcal.results import (
     ThermalCalibrationResult,
     View,
     ViewSummary,
+    ZhangOpenCvResult,
     ZhangResult,
 )
 
@@ -596,9 +607,27 @@ class VirtualLens:
     def disconnect(self) -> None: ...
     def reconnect(self) -> None: ...
 
-def zhang(views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]], image_size: Tuple[int, int]) -> ZhangResult:
+@overload
+def zhang(
+    views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]],
+    image_size: Tuple[int, int],
+    model: Literal["paper"] = "paper",
+    fix_k3: Literal[False] = False,
+    zero_tangent: Literal[False] = False,
+) -> ZhangResult:
     """Zhang's monofocal calibration from (board_mm (N,2), pixels (N,2)) views: fx, fy, u0, v0
     (px), k1, p1, p2, std, rms_px, iterations, views_used, poses."""
+    ...
+@overload
+def zhang(
+    views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]],
+    image_size: Tuple[int, int],
+    model: Literal["opencv"],
+    fix_k3: bool = False,
+    zero_tangent: bool = False,
+) -> ZhangOpenCvResult:
+    """The same in OpenCV's model (cv2.calibrateCamera's): also k2, k3, camera_matrix,
+    dist_coeffs, per_view_rms_px; std of fx, fy, u0, v0, k1, k2, p1, p2, k3."""
     ...
 
 def thermal_calibration(

@@ -29,6 +29,7 @@ __all__ = [
     "ThermalCalibrationResult",
     "View",
     "ViewSummary",
+    "ZhangOpenCvResult",
     "ZhangResult",
 ]
 
@@ -108,6 +109,23 @@ class ZhangResult(_Result):
     iterations: int
     views_used: int
     poses: List[Tuple[List[float], List[float]]]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ZhangOpenCvResult(ZhangResult):
+    """`zhang(..., model="opencv")`: OpenCV's camera, the model and least-squares problem of
+    `cv2.calibrateCamera`. `fx`, `fy`, `u0`, `v0` (px); `k1`, `k2`, `p1`, `p2`, `k3`
+    (dimensionless, OpenCV's); `camera_matrix` (3 x 3) and `dist_coeffs` ([k1, k2, p1, p2,
+    k3]) for cv2 as they are; `std`: one standard deviation of fx, fy, u0, v0, k1, k2, p1,
+    p2, k3 (cv2.calibrateCameraExtended's `stdDeviationsIntrinsics`; 0 for a coefficient a
+    flag holds); `per_view_rms_px` (its `perViewErrors`); `model` is "opencv"."""
+
+    model: str
+    k2: float
+    k3: float
+    camera_matrix: _F64
+    dist_coeffs: _F64
+    per_view_rms_px: List[float]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
