@@ -2,10 +2,12 @@
 //! `camera_info` YAML and mrcal's `.cameramodel`.
 //!
 //! All three hold a pinhole camera with OpenCV's five distortion coefficients
-//! (k1, k2, p1, p2, k3; mrcal's `LENSMODEL_OPENCV5`, ROS's `plumb_bob`). The paper's
-//! distortion has no exact counterpart among them when fx != fy, so the coefficients are
-//! the least-squares fit over the image ([`etl_core::model::fit_opencv5`]) and every file
-//! states the fit's RMS and largest error, in px, in a comment; [`Exported`] returns them.
+//! (k1, k2, p1, p2, k3; mrcal's `LENSMODEL_OPENCV5`, ROS's `plumb_bob`). A calibration of
+//! the opencv distortion family exports its own coefficients at the setting, exactly. The
+//! paper's distortion has no exact counterpart among them when fx != fy, so its
+//! coefficients are the least-squares fit over the image ([`etl_core::model::fit_opencv5`])
+//! and every file states the fit's RMS and largest error, in px, in a comment;
+//! [`Exported`] returns them.
 //!
 //! Numbers are written with 17 significant digits in a form every reader parses as a
 //! float: a decimal point and a signed exponent (YAML 1.1, which ROS's PyYAML reads,
@@ -16,7 +18,7 @@ use std::path::Path;
 use std::str::FromStr;
 
 use etl_core::camera::CameraAt;
-use etl_core::model::{fit_opencv5, OpenCvFit};
+use etl_core::model::{fit_opencv5, DistortionModel, OpenCvFit};
 
 use crate::calibration::Calibration;
 use crate::{write_atomic, Error, Result};
@@ -86,6 +88,10 @@ fn header(c: &CameraAt, fit: &OpenCvFit) -> String {
     let _ = write!(h, ", E_com {} mA", num(c.e_com_ma()));
     if c.extrapolated() {
         h.push_str(" (EXTRAPOLATED beyond the calibrated ranges)");
+    }
+    if c.distortion().model() == DistortionModel::OpenCv {
+        h.push_str("\n# distortion: OpenCV (k1, k2, p1, p2, k3): etlcal's opencv model at this setting, exact\n");
+        return h;
     }
     let _ = write!(
         h,
@@ -164,6 +170,27 @@ mod tests {
         assert_eq!(num(-0.0561972549810319), "-0.0561972549810319");
         for x in [1e-5, 1.5e20, -3.3e-300, 0.1 + 0.2] {
             assert_eq!(num(x).parse::<f64>().unwrap(), x);
+        }
+    }
+
+    /// An opencv-family calibration exports its own coefficients at the setting, with
+    /// error 0, and says it is exact.
+    #[test]
+    fn an_opencv_family_export_is_exact() {
+        use etl_core::camera::Trust;
+        use etl_core::model::CameraModel;
+        let model = CameraModel::strong_distortion_rig();
+        let cal = Calibration::from_model(&model, [1936, 1458], [80.0, 225.0]);
+        let at = cal.camera().unwrap().at_e_com(150.0, Trust::Refuse).unwrap();
+        for format in [ExportFormat::OpenCv, ExportFormat::Ros, ExportFormat::Mrcal] {
+            let e = export_text(&cal, &at, format).unwrap();
+            assert_eq!((e.fit.rms_px, e.fit.max_px), (0.0, 0.0));
+            assert_eq!(&e.fit.dist_coeffs[..], model.distortion(150.0).unwrap().coefficients());
+            assert!(e.text.contains("etlcal's opencv model at this setting, exact"), "{}", e.text);
+            // Each coefficient is in the file as written (17 digits round-trip).
+            for c in e.fit.dist_coeffs {
+                assert!(e.text.contains(&num(c)), "{c}");
+            }
         }
     }
 

@@ -43,7 +43,7 @@ pub fn crlb_covariance_eiv(
     truth.validate()?;
     let layout = truth.layout();
     let mut out = [[0.0; MAX_PARAMS]; MAX_PARAMS];
-    with_layout!(layout, N, _P, {
+    with_layout!(layout, N, _O, _P, {
         let cov = crlb_n::<N>(views, truth, sigma_px, priors)?;
         for (o, row) in out.iter_mut().zip(cov.iter()) {
             for (x, &v) in o.iter_mut().zip(row.iter()) {

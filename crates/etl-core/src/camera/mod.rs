@@ -203,6 +203,25 @@ mod tests {
         assert!(Camera::new(CameraModel::paper_rig(), Some(bad), [80.0, 225.0]).is_err());
     }
 
+    /// The run-time camera of an opencv-family model is that model at the setting.
+    #[test]
+    fn the_opencv_family_at_a_setting_is_its_model() {
+        let model = CameraModel::strong_distortion_rig();
+        let cam = Camera::new(model, Some(ThermalTrust::from_calibration(&ThermalCalibration::PAPER)), [80.0, 225.0])
+            .unwrap();
+        let at = cam.at(150.0, 32.0).unwrap();
+        let e = at.e_com_ma();
+        assert_eq!(*at.distortion(), model.distortion(e).unwrap());
+        let w = [30.0, -20.0, 10.0];
+        let px = at.project(w).unwrap();
+        assert_eq!(px, model.project(w, e).unwrap());
+        let back = at.undistort_point(px).unwrap();
+        assert_eq!(back, model.undistort(px, e).unwrap());
+        let ray = at.ray(px).unwrap();
+        let s = (0..3).map(|i| (w[i] - ray.origin_mm[i]).powi(2)).sum::<f64>().sqrt();
+        assert!((0..3).all(|i| (ray.at(s)[i] - w[i]).abs() < 1e-6));
+    }
+
     #[test]
     fn camera_is_send_sync_copy() {
         fn assert_bounds<T: Send + Sync + Copy>() {}

@@ -191,6 +191,27 @@ mod tests {
         }
     }
 
+    /// The opencv family exports its own coefficients: OpenCV's projection with them and
+    /// K(E) is the model's projection to 1e-9 px, at five currents, over the image.
+    #[test]
+    fn the_opencv_family_exports_exactly() {
+        let cam = CameraModel::strong_distortion_rig();
+        for e in [80.0, 110.0, 150.0, 190.0, 225.0] {
+            let (k, d) = (cam.intrinsics(e).unwrap(), cam.distortion(e).unwrap());
+            let fit = fit_opencv5(&k, &d, [1936, 1458]).unwrap();
+            assert_eq!((fit.rms_px, fit.max_px), (0.0, 0.0));
+            assert_eq!(&fit.dist_coeffs[..], d.coefficients());
+            assert_eq!(d.to_opencv(k.fx), fit.dist_coeffs);
+            for (i, j) in [(0, 0), (7, 3), (14, 11), (3, 12), (10, 6)] {
+                let w = [-80.0 + 20.0 * i as f64, -60.0 + 15.0 * j as f64, 20.0];
+                let pc = cam.world_to_camera(w);
+                let want = opencv_project(&k, &fit.dist_coeffs, pc[0] / pc[2], pc[1] / pc[2]);
+                let got = cam.project(w, e).unwrap();
+                assert!((got[0] - want[0]).abs() < 1e-9 && (got[1] - want[1]).abs() < 1e-9, "{got:?} {want:?}");
+            }
+        }
+    }
+
     #[test]
     fn a_tiny_image_is_refused() {
         let cam = CameraModel::paper_rig();

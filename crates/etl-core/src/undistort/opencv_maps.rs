@@ -32,3 +32,39 @@ pub(super) fn fill(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::model::camera::project_camera_point;
+    use crate::model::CameraModel;
+    use crate::undistort::{undistort_maps, OutputCamera};
+
+    /// Every entry of the strong lens's maps over its whole image, at three currents and
+    /// two output cameras, is the model's own projection of the output pixel's ray (f32
+    /// rounding aside).
+    #[test]
+    fn maps_are_the_models_projection_of_each_ray() {
+        const W: usize = 1936;
+        let cam = CameraModel::strong_distortion_rig();
+        let (mut mx, mut my) = ([0.0f32; W], [0.0f32; W]);
+        for e in [80.0, 150.0, 225.0] {
+            let (k, d) = (cam.intrinsics(e).unwrap(), cam.distortion(e).unwrap());
+            let cams = [
+                OutputCamera::of_intrinsics(&k, W, 1458).unwrap(),
+                OutputCamera::new(0.7 * k.fx, 0.72 * k.fy, 900.0, 700.0, W, 1400).unwrap(),
+            ];
+            for out in cams {
+                let mut worst = 0.0f64;
+                for y in (0..out.height_px).step_by(7) {
+                    undistort_maps(&k, &d, &out, y..y + 1, &mut mx, &mut my).unwrap();
+                    for x in 0..out.width_px {
+                        let pc = [(x as f64 - out.cx_px) / out.fx_px, (y as f64 - out.cy_px) / out.fy_px, 1.0];
+                        let p = project_camera_point(pc, &k, &d).unwrap();
+                        worst = worst.max((mx[x] as f64 - p[0]).abs()).max((my[x] as f64 - p[1]).abs());
+                    }
+                }
+                assert!(worst < 2.5e-4, "E = {e}: worst {worst} px");
+            }
+        }
+    }
+}

@@ -7,7 +7,7 @@
 //! per-point work is a rank-2 update of the small reduced matrix, the fold through C is
 //! once per view.
 
-use crate::calib::params::{Layout, MAX_REDUCED, R_POSE, R_U0, R_V0};
+use crate::calib::params::{MAX_REDUCED, R_POSE, R_U0, R_V0};
 
 /// The per-view variables other than u0, v0 (whose columns are the constants (1, 0) and
 /// (0, 1) and are accumulated as plain sums): pose, fx, fy, the coefficients.
@@ -25,18 +25,12 @@ const OTHER: [usize; MAX_REDUCED - 2] = {
     o
 };
 
-/// The per-view variables other than u0, v0 of `layout`.
-fn other(layout: &Layout) -> &'static [usize] {
-    OTHER.get(..layout.reduced_len() - 2).unwrap_or(&OTHER)
-}
-
-/// A view's reduced normal equations: the block of the variables in [`OTHER`] (upper
-/// triangle: row i holds columns i.., rows padded to `P`, a multiple of 4, so that the
-/// accumulation vectorises), their cross terms with u0 and v0 (column sums of the two
-/// rows), and the right-hand sides.
-pub(super) struct ViewNormal<const P: usize> {
-    other: &'static [usize],
-    a: [[f64; P]; P],
+/// A view's reduced normal equations: the block of the `O` per-view variables other than
+/// u0, v0 ([`OTHER`]'s first `O`: the layout's; upper triangle: row i holds columns i..,
+/// padded to `P`, a multiple of 4, so that the accumulation vectorises), their cross terms
+/// with u0 and v0 (column sums of the two rows), and the right-hand sides.
+pub(super) struct ViewNormal<const O: usize, const P: usize> {
+    a: [[f64; P]; O],
     g: [f64; P],
     /// sum f j_u and sum f j_v over the points (the u0 and v0 columns' cross terms).
     sum: [[f64; P]; 2],
@@ -45,10 +39,22 @@ pub(super) struct ViewNormal<const P: usize> {
     r_sum: [f64; 2],
 }
 
-impl<const P: usize> ViewNormal<P> {
-    /// Empty equations for the per-view variables of `layout`.
-    pub(super) fn new(layout: &Layout) -> Self {
-        ViewNormal { other: other(layout), a: [[0.0; P]; P], g: [0.0; P], sum: [[0.0; P]; 2], f2: 0.0, r_sum: [0.0; 2] }
+impl<const O: usize, const P: usize> ViewNormal<O, P> {
+    /// The per-view variables other than u0, v0 of the layout (a constant per `O`, so that
+    /// the gather of a point's rows compiles to fixed loads).
+    const OTHER: [usize; O] = {
+        let mut o = [0; O];
+        let mut k = 0;
+        while k < O {
+            o[k] = if k < OTHER.len() { OTHER[k] } else { 0 };
+            k += 1;
+        }
+        o
+    };
+
+    /// Empty equations.
+    pub(super) fn new() -> Self {
+        ViewNormal { a: [[0.0; P]; O], g: [0.0; P], sum: [[0.0; P]; 2], f2: 0.0, r_sum: [0.0; 2] }
     }
 
     /// Adds a point's two rows f j (u and v) with residuals r.
@@ -56,7 +62,7 @@ impl<const P: usize> ViewNormal<P> {
     pub(super) fn add_point(&mut self, j: &[[f64; MAX_REDUCED]; 2], f: f64, r: [f64; 2]) {
         let fj: [[f64; P]; 2] = core::array::from_fn(|row| {
             let mut v = [0.0; P];
-            for (vk, &o) in v.iter_mut().zip(self.other.iter()) {
+            for (vk, &o) in v.iter_mut().zip(Self::OTHER.iter()) {
                 *vk = f * j[row].get(o).copied().unwrap_or(0.0);
             }
             v
@@ -85,8 +91,8 @@ impl<const P: usize> ViewNormal<P> {
         let (iu, iv) = (R_U0, R_V0);
         let mut a = [[0.0; MAX_REDUCED]; MAX_REDUCED];
         let mut g = [0.0; MAX_REDUCED];
-        for (p, &op) in self.other.iter().enumerate() {
-            for (q, &oq) in self.other.iter().enumerate() {
+        for (p, &op) in Self::OTHER.iter().enumerate() {
+            for (q, &oq) in Self::OTHER.iter().enumerate() {
                 // Stored: the upper triangle (q >= p).
                 let w =
                     if q >= p { self.a.get(p).and_then(|r| r.get(q)) } else { self.a.get(q).and_then(|r| r.get(p)) };
@@ -116,18 +122,20 @@ impl<const P: usize> ViewNormal<P> {
 }
 
 /// out_a += C^T a C (upper triangle), out_g += C^T g, for a view's reduced normal
-/// equations (a: the full square) and its chain matrix C (per-view variables x N).
+/// equations (a: the full square of its first `reduced` per-view variables, zero past
+/// them) and its chain matrix C (per-view variables x N).
 pub(super) fn fold_view<const N: usize>(
+    reduced: usize,
     a: &[[f64; MAX_REDUCED]; MAX_REDUCED],
     g: &[f64; MAX_REDUCED],
     c: &[[f64; N]; MAX_REDUCED],
     out_a: &mut [[f64; N]; N],
     out_g: &mut [f64; N],
 ) {
-    // t = a_sym C, row by row.
+    // t = a_sym C, row by row (rows past the layout's variables are zero in a and C).
     let mut t = [[0.0; N]; MAX_REDUCED];
-    for (r, tr) in t.iter_mut().enumerate() {
-        for (s, cs) in c.iter().enumerate() {
+    for (r, tr) in t.iter_mut().enumerate().take(reduced) {
+        for (s, cs) in c.iter().enumerate().take(reduced) {
             let ars = a[r][s];
             if ars != 0.0 {
                 for (trq, &csq) in tr.iter_mut().zip(cs.iter()) {
@@ -136,7 +144,7 @@ pub(super) fn fold_view<const N: usize>(
             }
         }
     }
-    for (r, (cr, tr)) in c.iter().zip(t.iter()).enumerate() {
+    for (r, (cr, tr)) in c.iter().zip(t.iter()).enumerate().take(reduced) {
         for (p, ((&crp, outp), gp)) in cr.iter().zip(out_a.iter_mut()).zip(out_g.iter_mut()).enumerate() {
             if crp != 0.0 {
                 *gp += crp * g[r];
@@ -154,10 +162,10 @@ mod tests {
 
     #[test]
     fn the_other_variables_skip_the_principal_point() {
-        use crate::calib::params::R_K1;
-        assert_eq!(other(&Layout::PAPER), &[0, 1, 2, 3, 4, 5, 6, 7, 10, 11, 12]);
-        let l = Layout::new(crate::model::DistortionModel::OpenCv, 3).unwrap();
-        assert_eq!(other(&l), &[0, 1, 2, 3, 4, 5, 6, 7, 10, 11, 12, 13, 14]);
+        use crate::calib::params::{Layout, R_K1};
+        assert_eq!(ViewNormal::<11, 12>::OTHER, [0, 1, 2, 3, 4, 5, 6, 7, 10, 11, 12]);
+        assert_eq!(ViewNormal::<13, 16>::OTHER, [0, 1, 2, 3, 4, 5, 6, 7, 10, 11, 12, 13, 14]);
+        assert_eq!(Layout::PAPER.reduced_len() - 2, 11);
         assert_eq!(R_K1, 10);
     }
 }

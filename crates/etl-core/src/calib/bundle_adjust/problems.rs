@@ -69,7 +69,7 @@ pub(super) fn row_in<const N: usize>(dxdz: &[[f64; N]; N], jx: &[f64]) -> [f64; 
 }
 
 /// The paper's problem over the internal parameters z ([`Basis`]).
-pub(super) struct Plain<'a, 'b, const N: usize, const P: usize> {
+pub(super) struct Plain<'a, 'b, const N: usize, const O: usize, const P: usize> {
     pub views: &'a [View<'b>],
     pub x0: [f64; N],
     pub options: &'a BundleAdjustOptions,
@@ -78,7 +78,7 @@ pub(super) struct Plain<'a, 'b, const N: usize, const P: usize> {
     pub basis: &'a Basis,
 }
 
-impl<const N: usize, const P: usize> Problem<N> for Plain<'_, '_, N, P> {
+impl<const N: usize, const O: usize, const P: usize> Problem<N> for Plain<'_, '_, N, O, P> {
     fn eval(&mut self, z: &[f64; N], jacobian: bool, sink: &mut dyn RowSink<N>) -> Result<()> {
         let layout = self.basis.layout();
         let x = &self.basis.to_params(z);
@@ -118,7 +118,7 @@ impl<const N: usize, const P: usize> Problem<N> for Plain<'_, '_, N, P> {
         let proj = projector(&layout, x);
         let dxdz = self.basis.params_jacobian(z);
         for view in self.views {
-            let mut normal = ViewNormal::<P>::new(&layout);
+            let mut normal = ViewNormal::<O, P>::new();
             for p in view.points {
                 let pr = proj.project_reduced(p.world_mm, view.e_com_ma, true)?;
                 let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
@@ -128,7 +128,7 @@ impl<const N: usize, const P: usize> Problem<N> for Plain<'_, '_, N, P> {
                 normal.add_point(&pr.d_reduced, f, r);
             }
             let (a, g) = normal.expand();
-            fold_view(&a, &g, &proj.chain_in(view.e_com_ma, &dxdz)?, &mut out.a, &mut out.g);
+            fold_view(O + 2, &a, &g, &proj.chain_in(view.e_com_ma, &dxdz)?, &mut out.a, &mut out.g);
         }
         hold_rows(self.options.hold, x, &self.x0, &dxdz, |r, j| out.push(r, j));
         Ok(true)
@@ -137,7 +137,7 @@ impl<const N: usize, const P: usize> Problem<N> for Plain<'_, '_, N, P> {
 
 /// The errors-in-variables problem: the shared z and, per view, its correction
 /// y = (dZ mm, dE mA) with Gaussian priors; rows normalised by their standard deviations.
-pub(super) struct Eiv<'a, 'b, const N: usize, const P: usize> {
+pub(super) struct Eiv<'a, 'b, const N: usize, const O: usize, const P: usize> {
     pub views: &'a [View<'b>],
     /// The solver's parameters: x = to_params(z), dx/dz evaluated at z (basis.rs).
     pub basis: &'a Basis,
@@ -149,7 +149,7 @@ pub(super) struct Eiv<'a, 'b, const N: usize, const P: usize> {
     pub reference: Option<Projector>,
 }
 
-impl<const N: usize, const P: usize> BlockProblem<N, 2> for Eiv<'_, '_, N, P> {
+impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<'_, '_, N, O, P> {
     fn block_count(&self) -> usize {
         self.views.len()
     }
@@ -201,7 +201,7 @@ impl<const N: usize, const P: usize> BlockProblem<N, 2> for Eiv<'_, '_, N, P> {
         let proj = projector(&layout, x);
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
-        let mut normal = ViewNormal::<P>::new(&layout);
+        let mut normal = ViewNormal::<O, P>::new();
         for p in view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + y[0]];
             let pr = proj.project_reduced(w, e_ma, true)?;
@@ -213,7 +213,7 @@ impl<const N: usize, const P: usize> BlockProblem<N, 2> for Eiv<'_, '_, N, P> {
         }
         let (a, g) = normal.expand();
         let c = proj.chain_in(e_ma, &dxdz)?;
-        fold_view(&a, &g, &c, out.u, out.gx);
+        fold_view(O + 2, &a, &g, &c, out.u, out.gx);
         // W = C^T a C_y, V = C_y^T a C_y, g_y = C_y^T g.
         let cy = proj.shift_chain(e_ma);
         let mut acy = [[0.0; 2]; MAX_REDUCED];
@@ -242,7 +242,7 @@ impl<const N: usize, const P: usize> BlockProblem<N, 2> for Eiv<'_, '_, N, P> {
     }
 }
 
-impl<const N: usize, const P: usize> Eiv<'_, '_, N, P> {
+impl<const N: usize, const O: usize, const P: usize> Eiv<'_, '_, N, O, P> {
     /// The rows of the priors on the view's corrections, and (once) the hold rows.
     fn prior_rows(
         &self,
