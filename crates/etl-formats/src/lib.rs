@@ -49,6 +49,7 @@ pub mod calibration;
 pub mod dataset;
 mod error;
 pub mod export;
+pub mod model_selection;
 pub mod observations;
 pub mod output;
 pub mod thermal;

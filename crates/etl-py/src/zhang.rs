@@ -15,14 +15,15 @@ use crate::errors::{input_error, CoreResultExt};
 fn options(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangOptions> {
     let model = DistortionModel::from_name(model)
         .ok_or_else(|| input_error(format!("model must be \"paper\" or \"opencv\", got {model:?}")))?;
-    if model == DistortionModel::Paper {
-        for (name, set) in [("fix_k3", fix_k3), ("zero_tangent", zero_tangent)] {
-            if set {
-                return Err(input_error(format!("{name}=True is an OpenCV flag: it needs model=\"opencv\"")));
-            }
-        }
-    }
-    Ok(ZhangOptions { model, flags: OpenCvFlags { fix_k3, zero_tangent } })
+    let flags = OpenCvFlags { fix_k3, zero_tangent };
+    etl_calib::pipeline::select::refuse_opencv_flags(
+        Some(model),
+        flags,
+        ["fix_k3=True", "zero_tangent=True"],
+        "model=\"opencv\"",
+    )
+    .map_err(crate::errors::calib_err)?;
+    Ok(ZhangOptions { model, flags })
 }
 
 /// The (board_mm, pixels) pairs as planar views.

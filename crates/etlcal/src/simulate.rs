@@ -5,8 +5,9 @@
 //! observations.json (with the paper's noise model, lens-off views included,
 //! and with `--setting-views` the per-setting baseline's views), a0.json (the A0 a
 //! lens-off calibration would give) and truth.json (the true model and per-view errors).
-//! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
-//! given on the command line override it.
+//! `--config` (`etlcal.simconfig/1`) sets seed, rig (`"paper"`, or `"strong"`: the
+//! strong-distortion rig, corners only), noise and setting rig in one file; flags given on
+//! the command line override it.
 //!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
@@ -21,7 +22,7 @@ use etl_formats::{Error, Result};
 
 /// The names `simulate` writes into its directory.
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
-use etl_sim::simulate::{simulate, write_simulation, SettingRig, SimConfig};
+use etl_sim::simulate::{simulate, write_simulation, SettingRig, SimConfig, SimRig};
 
 /// Arguments of `etlcal simulate`.
 #[derive(clap::Args, Debug)]
@@ -94,6 +95,12 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 pub fn run(args: Args) -> Result<()> {
     crate::output::check([args.config.as_deref()], &[Output::Dir(&args.out)])?;
     let config = config_from(&args)?;
+    if !args.observations_only && config.rig == SimRig::Strong {
+        return Err(Error::InvalidInput(
+            "the strong-distortion rig (\"rig\": \"strong\") is simulated as corners only: pass --observations-only"
+                .into(),
+        ));
+    }
     if !args.observations_only && config.setting_rig.is_some() {
         return Err(Error::InvalidInput(
             "rendering the per-setting baseline's views is not supported: pass --observations-only with --setting-views"

@@ -20,6 +20,7 @@ use serde_json::{json, Value};
 use super::print_json;
 use crate::board::BoardArgs;
 use etl_calib::pipeline::detect_views;
+use etl_calib::pipeline::select::refuse_opencv_flags;
 use etl_calib::zhang::{zhang_with, ZhangOptions, ZhangResult};
 use etl_core::model::{DistortionModel, OpenCvFlags};
 use etl_formats::{Error, Result};
@@ -64,16 +65,9 @@ fn options(args: &Args) -> Result<ZhangOptions> {
         ModelArg::Paper => DistortionModel::Paper,
         ModelArg::Opencv => DistortionModel::OpenCv,
     };
-    if model == DistortionModel::Paper {
-        for (flag, set) in [("--fix-k3", args.fix_k3), ("--zero-tangent", args.zero_tangent)] {
-            if set {
-                return Err(Error::InvalidInput(format!(
-                    "{flag} is an OpenCV flag: it needs --model opencv (the paper's model has no k3 and keeps its decentering terms)"
-                )));
-            }
-        }
-    }
-    Ok(ZhangOptions { model, flags: OpenCvFlags { fix_k3: args.fix_k3, zero_tangent: args.zero_tangent } })
+    let flags = OpenCvFlags { fix_k3: args.fix_k3, zero_tangent: args.zero_tangent };
+    refuse_opencv_flags(Some(model), flags, ["--fix-k3", "--zero-tangent"], "--model opencv")?;
+    Ok(ZhangOptions { model, flags })
 }
 
 /// The `--json` object of an opencv-family result.

@@ -273,6 +273,7 @@ fn calibration_of(
         // Each setting's boards are in their own frames and the calibration has no pose:
         // there is no distance to fit a focus law to.
         focus_law: None,
+        model_selection: None,
         views: settings
             .iter()
             .map(|s| ViewSummary {
