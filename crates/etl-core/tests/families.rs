@@ -6,6 +6,9 @@
 //! against the Cramer-Rao bound, OpenCV's flags, PnP. Focal polynomials of degree 1, 2, 4
 //! and 5 recovered from noise-free data of a truth of that degree.
 
+mod common;
+
+use common::{as_views, paper_rig_of, NO_NOISE};
 use etl_core::calib::crlb::crlb_covariance;
 use etl_core::calib::jacobian::to_params;
 use etl_core::calib::{
@@ -59,10 +62,6 @@ fn strong_views(truth: &CameraModel, sigma_px: f64, seed: u64) -> (Vec<Vec<Point
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let pts = STRONG_VIEWS.iter().map(|&(e, z)| board_view(truth, z, e, sigma_px, &mut rng)).collect();
     (pts, STRONG_VIEWS.iter().map(|v| v.0).collect())
-}
-
-fn as_views<'a>(pts: &'a [Vec<Point>], e: &[f64]) -> Vec<View<'a>> {
-    pts.iter().zip(e).map(|(p, &e)| View { e_com_ma: e, points: p }).collect()
 }
 
 /// The exact lens-off intrinsics of `truth` (A0 as a perfect Zhang would give it).
@@ -244,8 +243,12 @@ fn focal_degrees_1_2_4_5_recover_a_truth_of_that_degree() {
             cy[0] += 10.0 * scale;
             truth.kf_x = FocalPoly::new(&cx).unwrap();
             truth.kf_y = FocalPoly::new(&cy).unwrap();
-            let (pts, e) =
-                if family == DistortionModel::Paper { paper_views(&truth) } else { strong_views(&truth, 0.0, 3) };
+            let (pts, e) = if family == DistortionModel::Paper {
+                let (pts, e, _) = paper_rig_of(&truth, &NO_NOISE, 0);
+                (pts, e)
+            } else {
+                strong_views(&truth, 0.0, 3)
+            };
             let views = as_views(&pts, &e);
             let layout = Layout::new(family, d).unwrap();
             let r = calibrate(&views, &exact_a0(&truth), layout, OpenCvFlags::NONE);
@@ -258,29 +261,6 @@ fn focal_degrees_1_2_4_5_recover_a_truth_of_that_degree() {
             }
         }
     }
-}
-
-/// The paper rig's 15 noise-free views (docs/METHOD.md) of `truth`.
-fn paper_views(truth: &CameraModel) -> (Vec<Vec<Point>>, Vec<f64>) {
-    const Z_W: [f64; 15] = [75.0, 60.0, 48.0, 43.0, 35.0, 31.0, 28.0, 22.0, 19.0, 16.0, 13.0, 10.0, 8.0, 4.0, 2.0];
-    let mut pts = vec![];
-    let mut e = vec![];
-    for (k, &z) in Z_W.iter().enumerate() {
-        let cur = if k == 14 { 225.0 } else { 80.0 + 10.0 * k as f64 };
-        let mut v = vec![];
-        for j in 0..12 {
-            for i in 0..14 {
-                let w = [1.5 * i as f64, 1.5 * j as f64, z];
-                let p = truth.project(w, cur).unwrap();
-                if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
-                    v.push(Point { world_mm: w, pixel: p });
-                }
-            }
-        }
-        pts.push(v);
-        e.push(cur);
-    }
-    (pts, e)
 }
 
 /// PnP through the opencv family: a board's pose from its noise-free pixels, exactly.
@@ -297,4 +277,26 @@ fn pnp_through_the_opencv_family_is_exact() {
         }
         assert!(pose.rms_px < 1e-8);
     }
+}
+
+/// The model serialises as the calibration file's fields: the paper's exactly as before
+/// the families (what `etlcal simulate` writes as truth.json), the opencv family naming
+/// itself.
+#[test]
+fn models_serialise_as_the_files_fields() {
+    let paper = serde_json::to_string(&CameraModel::paper_rig()).unwrap();
+    let before = serde_json::json!({
+        "rotation_rodrigues": [0.2, 0.2, 0.2], "translation_mm": [-11.0, -4.0, 48.0],
+        "kf_x": [5380.0, -7.0, 0.02, -3e-5], "kf_y": [5430.0, -7.0, 0.02, -3e-5], "principal_point": [900.0, 550.0],
+        "distortion_a": [-0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6]
+    });
+    // The same text, keys in the same order (serde_json's map keeps insertion order only
+    // with a feature: compare the text of the expected value re-serialised in field order).
+    assert_eq!(serde_json::from_str::<serde_json::Value>(&paper).unwrap(), before);
+    let keys: Vec<&str> = paper.split('"').skip(1).step_by(2).collect();
+    assert_eq!(keys, ["rotation_rodrigues", "translation_mm", "kf_x", "kf_y", "principal_point", "distortion_a"]);
+    let strong: serde_json::Value = serde_json::to_value(CameraModel::strong_distortion_rig()).unwrap();
+    assert_eq!(strong["distortion_model"], "opencv");
+    assert_eq!(strong["distortion_a"].as_array().unwrap().len(), 15);
+    assert_eq!(strong["kf_x"].as_array().unwrap().len(), 4);
 }

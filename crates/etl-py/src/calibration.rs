@@ -823,8 +823,8 @@ impl Calibration {
         let m = &self.model;
         format!(
             "Calibration(kf_x={:?}, kf_y={:?}, principal_point={:?}, image_size={:?}, e_com_range_ma={:?}, thermal={}, rms_px={:?})",
-            m.kf_x,
-            m.kf_y,
+            m.kf_x.coefficients(),
+            m.kf_y.coefficients(),
             m.principal_point,
             self.file.image_size,
             self.file.e_com_range_ma,

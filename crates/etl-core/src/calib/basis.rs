@@ -1,4 +1,4 @@
-//! A well-conditioned internal parameterisation of the 25 numbers for the bundle
+//! A well-conditioned internal parameterisation of the model's numbers for the bundle
 //! adjustment.
 //!
 //! The model writes fx(E) = sum kf_xi E^i (Eq. 16) and each distortion coefficient as

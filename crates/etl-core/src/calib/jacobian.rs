@@ -176,6 +176,7 @@ impl Projector {
         self.layout
     }
 
+    #[inline(always)]
     fn focal(&self, e_ma: f64) -> Result<(f64, f64)> {
         let fx = self.model.kf_x.eval(e_ma);
         let fy = self.model.kf_y.eval(e_ma);
@@ -189,11 +190,12 @@ impl Projector {
     /// layout's numbers), at capacity, with fx = sum kf_xi E^i (Eq. 16) and each coefficient
     /// k_c = a_3c+1 w^2 + a_3c+2 w + a_3c+3 (Eq. 18) at fixed w (w's own dependence on kf is
     /// already in the total derivatives of [`ReducedProjection::d_reduced`]).
-    pub fn chain(&self, e_ma: f64) -> Result<[[f64; MAX_PARAMS]; MAX_REDUCED]> {
+    /// `N` columns: the layout's length, or [`MAX_PARAMS`] for the matrix at capacity.
+    pub fn chain<const N: usize>(&self, e_ma: f64) -> Result<[[f64; N]; MAX_REDUCED]> {
         let (fx, fy) = self.focal(e_ma)?;
         let l = &self.layout;
         let w = 2.0 / (fx + fy);
-        let mut c = [[0.0; MAX_PARAMS]; MAX_REDUCED];
+        let mut c = [[0.0; N]; MAX_REDUCED];
         // Entry (row, col) of C; the spans lie inside C by construction (params.rs tests).
         let mut put = |row: usize, col: usize, v: f64| {
             if let Some(slot) = c.get_mut(row).and_then(|r| r.get_mut(col)) {
@@ -228,7 +230,7 @@ impl Projector {
     /// [`super::basis::Basis::params_jacobian`] at the internal parameters of this
     /// projector.
     pub fn chain_in<const N: usize>(&self, e_ma: f64, dxdz: &[[f64; N]; N]) -> Result<[[f64; N]; MAX_REDUCED]> {
-        let c = self.chain(e_ma)?;
+        let c = self.chain::<N>(e_ma)?;
         let mut out = [[0.0; N]; MAX_REDUCED];
         for (orow, crow) in out.iter_mut().zip(c.iter()) {
             for (&cik, drow) in crow.iter().zip(dxdz.iter()) {
@@ -248,6 +250,17 @@ impl Projector {
     /// Errors: the point at or behind the camera; non-positive focal length; non-finite
     /// result.
     pub fn project_reduced(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<ReducedProjection> {
+        // One compiled body per family (its coefficient count a constant): this runs once
+        // per point of every bundle-adjustment evaluation.
+        match self.layout.model() {
+            DistortionModel::Paper => self.reduced::<3>(world_mm, e_ma, jacobian),
+            DistortionModel::OpenCv => self.reduced::<5>(world_mm, e_ma, jacobian),
+        }
+    }
+
+    /// [`Self::project_reduced`] for the family of `C` coefficients (3: paper, 5: opencv).
+    #[inline(always)]
+    fn reduced<const C: usize>(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<ReducedProjection> {
         let (fx, fy) = self.focal(e_ma)?;
         let rc = mat_vec(&self.r, world_mm);
         let t = self.model.translation_mm;
@@ -259,13 +272,15 @@ impl Projector {
         let (xn, yn) = (pc[0] * iz, pc[1] * iz);
         let w = 2.0 / (fx + fy);
         let a = self.model.distortion_a.padded();
-        let d = Distortion::from_a(&self.model.distortion_a, fx, fy);
+        let coefficients = self.model.distortion_a.coefficients_at(0.5 * (fx + fy));
         let [u0, v0] = self.model.principal_point;
         // Per family: the pixel, d pixel / d pc, d pixel / d(fx, fy) at fixed coefficients,
         // and d pixel / d coefficients.
-        let local = match self.layout.model() {
-            DistortionModel::Paper => paper_local(&d, fx, fy, xn, yn, iz, jacobian),
-            DistortionModel::OpenCv => opencv_local(&d, fx, fy, xn, yn, iz, jacobian),
+        let local = if C == 3 {
+            let [k1, p1, p2, ..] = coefficients;
+            paper_local(&Distortion::paper(k1, p1, p2), fx, fy, xn, yn, iz, jacobian)
+        } else {
+            opencv_local(&Distortion::opencv(coefficients, fx, fy), fx, fy, xn, yn, iz, jacobian)
         };
         let pixel = [local.pixel[0] + u0, local.pixel[1] + v0];
         if !(pixel[0].is_finite() && pixel[1].is_finite()) {
@@ -275,7 +290,6 @@ impl Projector {
         if !jacobian {
             return Ok(out);
         }
-        let n = self.layout.model().coefficient_count();
         // k = a_1 w^2 + a_2 w + a_3 (per coefficient): dk/dw, dw/dfx = dw/dfy = -w^2 / 2.
         let dkdw: [f64; MAX_COEFFICIENTS] = core::array::from_fn(|c| {
             let (q2, q1) = (a.get(3 * c).copied().unwrap_or(0.0), a.get(3 * c + 1).copied().unwrap_or(0.0));
@@ -295,11 +309,11 @@ impl Projector {
             }
             // fx enters the projection directly and the distortion through w.
             let dk = &local.d_coefficients[row];
-            let via_w: f64 = dk.iter().zip(dkdw.iter()).take(n).map(|(d, k)| d * k).sum::<f64>() * dwdf;
+            let via_w: f64 = dk.iter().zip(dkdw.iter()).take(C).map(|(d, k)| d * k).sum::<f64>() * dwdf;
             dp[R_FX] = local.d_focal[row][0] + via_w;
             dp[R_FY] = local.d_focal[row][1] + via_w;
             dp[R_U0 + row] = 1.0;
-            for (d, &v) in dp.iter_mut().skip(R_K1).zip(dk.iter().take(n)) {
+            for (d, &v) in dp.iter_mut().skip(R_K1).zip(dk.iter().take(C)) {
                 *d = v;
             }
         }
@@ -351,7 +365,7 @@ impl Projector {
         if !jacobian {
             return Ok(out);
         }
-        let c = self.chain(e_ma)?;
+        let c = self.chain::<MAX_PARAMS>(e_ma)?;
         let (nr, np) = (self.layout.reduced_len(), self.layout.len());
         for row in 0..2 {
             for (k, ck) in c.iter().enumerate().take(nr) {

@@ -1,5 +1,5 @@
 //! What the calibration's covariance means downstream: the uncertainty of a projected
-//! pixel due to the uncertainty of the 25 calibrated numbers.
+//! pixel due to the uncertainty of the calibrated numbers (any layout).
 //!
 //! The covariance C is that of the parameter vector of [`super::params`] (order of
 //! [`super::params::PARAM_NAMES`], each number in its own unit), as the bundle adjustment
@@ -25,7 +25,7 @@ pub struct PixelUncertainty {
 /// past the layout's p numbers), exactly symmetric: the lower triangle is mirrored from
 /// the upper.
 pub fn sandwich<const R: usize>(j: &[[f64; MAX_PARAMS]; R], c: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> [[f64; R]; R] {
-    // t = J C (R x 25), then out = t J^T.
+    // t = J C (R x p), then out = t J^T.
     let mut t = [[0.0; MAX_PARAMS]; R];
     for (ti, ji) in t.iter_mut().zip(j.iter()) {
         for (&jik, ck) in ji.iter().zip(c.iter()) {
@@ -61,7 +61,7 @@ pub fn check_covariance(covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> Result<
 
 /// The uncertainty of the pixel `model` projects `world_mm` to at compensated current
 /// `e_com_ma`, due to the uncertainty of the calibration (covariance `covariance` of the
-/// 25 numbers): Sigma_p = J_p C J_p^T with J_p = d pixel / d(25 numbers) (Eq. 13-18
+/// numbers, at capacity): Sigma_p = J_p C J_p^T with J_p = d pixel / d(numbers) (Eq. 13-18
 /// differentiated, [`Projector::project`]).
 ///
 /// First order: exact for the parameters the pixel is linear in (u0, v0, a1..a9), a

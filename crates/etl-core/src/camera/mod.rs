@@ -58,7 +58,7 @@ impl Camera {
         Ok(Camera { model, thermal, e_com_range_ma })
     }
 
-    /// The camera model (the 25 numbers of Eq. 13-18).
+    /// The camera model (the numbers of Eq. 13-18, in its layout).
     pub fn model(&self) -> &CameraModel {
         &self.model
     }

@@ -18,7 +18,7 @@ use crate::error::{all_finite, finite, Error, Result};
 /// Invariants a *usable* model satisfies (checked where they matter, never assumed):
 /// all numbers finite; kf_x and kf_y of one degree; fx(E), fy(E) > 0 over the currents it
 /// is used at. Field names are those of the `etlcal.calibration/1` file format.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CameraModel {
     /// Rodrigues vector of R (world -> camera), radians.
     pub rotation_rodrigues: [f64; 3],
@@ -32,6 +32,29 @@ pub struct CameraModel {
     pub principal_point: [f64; 2],
     /// The a_i of Eq. 18 (the paper: a1..a9) with their distortion family.
     pub distortion_a: DistortionA,
+}
+
+/// As the fields of `etlcal.calibration/1` (what `etlcal simulate` writes as the truth):
+/// the paper's model exactly as before the families (kf of 4, distortion_a of 9), other
+/// layouts with their lengths and, for the opencv family, `"distortion_model": "opencv"`
+/// before `distortion_a`.
+impl Serialize for CameraModel {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> core::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let family = self.distortion_model();
+        let named = family != DistortionModel::Paper;
+        let mut st = serializer.serialize_struct("CameraModel", if named { 7 } else { 6 })?;
+        st.serialize_field("rotation_rodrigues", &self.rotation_rodrigues)?;
+        st.serialize_field("translation_mm", &self.translation_mm)?;
+        st.serialize_field("kf_x", &self.kf_x)?;
+        st.serialize_field("kf_y", &self.kf_y)?;
+        st.serialize_field("principal_point", &self.principal_point)?;
+        if named {
+            st.serialize_field("distortion_model", &family)?;
+        }
+        st.serialize_field("distortion_a", &self.distortion_a)?;
+        st.end()
+    }
 }
 
 /// Pinhole intrinsics at one current.

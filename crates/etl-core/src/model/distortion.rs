@@ -44,6 +44,7 @@ impl Default for Distortion {
 impl Distortion {
     /// The paper's family: radial `k1` (1/px^2) and decentering `p1` (paired with
     /// 3u^2 + v^2 in u_d), `p2` (paired with u^2 + 3v^2 in v_d), 1/px.
+    #[inline(always)]
     pub const fn paper(k1: f64, p1: f64, p2: f64) -> Self {
         Distortion { model: DistortionModel::Paper, c: [k1, p1, p2, 0.0, 0.0], focal_px: [1.0, 1.0] }
     }
@@ -74,7 +75,7 @@ impl Distortion {
 
     /// Eq. 18 (generalised): the coefficients of `a` at focal lengths `fx_px`, `fy_px`,
     /// each a quadratic in w = 1 / f_mean, f_mean = (fx + fy) / 2.
-    #[inline]
+    #[inline(always)]
     pub fn from_a(a: &DistortionA, fx_px: f64, fy_px: f64) -> Self {
         let c = a.coefficients_at(0.5 * (fx_px + fy_px));
         Self::from_coefficients(a.model(), &c, fx_px, fy_px)
@@ -112,7 +113,7 @@ impl Distortion {
     }
 
     /// Ideal centred (u, v) -> distorted centred (u_d, v_d) (module documentation).
-    #[inline]
+    #[inline(always)]
     pub fn distort(&self, u: f64, v: f64) -> [f64; 2] {
         match self.model {
             DistortionModel::Paper => self.distort_paper(u, v),
@@ -124,7 +125,7 @@ impl Distortion {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn distort_paper(&self, u: f64, v: f64) -> [f64; 2] {
         let [k1, p1, p2, _, _] = self.c;
         let (uu, vv, uv) = (u * u, v * v, u * v);
@@ -134,7 +135,7 @@ impl Distortion {
 
     /// OpenCV's distortion of normalised (x, y), in `cv2.projectPoints`' order of terms
     /// (the same expressions as [`super::opencv::opencv_project`]). For the opencv family.
-    #[inline]
+    #[inline(always)]
     pub fn distort_normalised(&self, x: f64, y: f64) -> [f64; 2] {
         let [k1, k2, p1, p2, k3] = self.c;
         let r2 = x * x + y * y;
@@ -147,7 +148,7 @@ impl Distortion {
 
     /// Jacobian of [`Self::distort`] with respect to (u, v): `[[du_d/du, du_d/dv],
     /// [dv_d/du, dv_d/dv]]`.
-    #[inline]
+    #[inline(always)]
     pub fn distort_jacobian(&self, u: f64, v: f64) -> [[f64; 2]; 2] {
         match self.model {
             DistortionModel::Paper => {
@@ -170,7 +171,7 @@ impl Distortion {
     }
 
     /// Jacobian of [`Self::distort_normalised`] with respect to (x, y).
-    #[inline]
+    #[inline(always)]
     pub fn normalised_jacobian(&self, x: f64, y: f64) -> [[f64; 2]; 2] {
         let [k1, k2, p1, p2, k3] = self.c;
         let r2 = x * x + y * y;
@@ -187,7 +188,7 @@ impl Distortion {
     /// d(u_d, v_d) / d(coefficients) at centred (u, v), in the family's order (columns past
     /// its count zero): the distortion is linear in its coefficients, so these are also
     /// the rows of the linear initialisation (Eq. 23).
-    #[inline]
+    #[inline(always)]
     pub fn coefficient_jacobian(&self, u: f64, v: f64) -> [[f64; MAX_COEFFICIENTS]; 2] {
         match self.model {
             DistortionModel::Paper => paper_rows(u, v),
@@ -217,14 +218,14 @@ impl Distortion {
 }
 
 /// d(u_d - u, v_d - v) / d(k1, p1, p2) of the paper family at centred (u, v).
-#[inline]
+#[inline(always)]
 pub fn paper_rows(u: f64, v: f64) -> [[f64; MAX_COEFFICIENTS]; 2] {
     let r2 = u * u + v * v;
     [[u * r2, 3.0 * u * u + v * v, 2.0 * u * v, 0.0, 0.0], [v * r2, 2.0 * u * v, u * u + 3.0 * v * v, 0.0, 0.0]]
 }
 
 /// d(x_d - x, y_d - y) / d(k1, k2, p1, p2, k3) of OpenCV's family at normalised (x, y).
-#[inline]
+#[inline(always)]
 pub fn opencv_rows(x: f64, y: f64) -> [[f64; MAX_COEFFICIENTS]; 2] {
     let r2 = x * x + y * y;
     let r4 = r2 * r2;

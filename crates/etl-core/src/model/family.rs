@@ -140,10 +140,17 @@ impl OpenCvFlags {
 /// the family's order, its quadratic in w = 1 / f_mean as (w^2, w, 1). Fixed capacity
 /// ([`MAX_DISTORTION_A`]); the entries past the family's [`DistortionModel::a_len`] are
 /// zero.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DistortionA {
     model: DistortionModel,
     a: [f64; MAX_DISTORTION_A],
+}
+
+/// As the list of the family's numbers (the form of the calibration file).
+impl Serialize for DistortionA {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> core::result::Result<S::Ok, S::Error> {
+        serializer.collect_seq(self.as_slice())
+    }
 }
 
 impl Default for DistortionA {
@@ -224,17 +231,16 @@ impl DistortionA {
     /// The coefficients at mean focal length `f_mean_px` (Eq. 18): with w = 1 / f_mean,
     /// c = a_{3c+1} w^2 + a_{3c+2} w + a_{3c+3}, in the family's order (zeros past its
     /// [`DistortionModel::coefficient_count`]).
-    #[inline]
+    #[inline(always)]
     pub fn coefficients_at(&self, f_mean_px: f64) -> [f64; MAX_COEFFICIENTS] {
         let w = 1.0 / f_mean_px;
         let w2 = w * w;
-        let mut out = [0.0; MAX_COEFFICIENTS];
-        for (c, q) in out.iter_mut().zip(self.a.chunks_exact(3)) {
-            if let [q2, q1, q0] = *q {
-                *c = q2 * w2 + q1 * w + q0;
-            }
+        let a = &self.a;
+        let q = |c: usize| a[3 * c] * w2 + a[3 * c + 1] * w + a[3 * c + 2];
+        match self.model {
+            DistortionModel::Paper => [q(0), q(1), q(2), 0.0, 0.0],
+            DistortionModel::OpenCv => [q(0), q(1), q(2), q(3), q(4)],
         }
-        out
     }
 }
 

@@ -1,8 +1,6 @@
 //! [`FocalPoly`]: a focal length as a polynomial in the compensated current (Eq. 16,
 //! generalised from the paper's cubic to any degree 1..=5).
 
-use serde::{Deserialize, Serialize};
-
 use crate::error::{all_finite, Error, Result};
 
 /// Highest degree of the focal polynomial.
@@ -15,10 +13,17 @@ pub const PAPER_FOCAL_DEGREE: usize = 3;
 /// Fixed capacity, no allocation: the coefficients past the degree are zero. The paper's
 /// model is the cubic ([`FocalPoly::cubic`]); a cubic evaluates exactly as Eq. 16's Horner
 /// form ((kf3 E + kf2) E + kf1) E + kf0.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FocalPoly {
     degree: usize,
     c: [f64; MAX_FOCAL_DEGREE + 1],
+}
+
+/// As the list of its coefficients (kf_0 first), the form of the calibration file.
+impl serde::Serialize for FocalPoly {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> core::result::Result<S::Ok, S::Error> {
+        serializer.collect_seq(self.coefficients())
+    }
 }
 
 impl Default for FocalPoly {
@@ -88,15 +93,18 @@ impl FocalPoly {
         all_finite(self.coefficients(), what)
     }
 
-    /// f(E) by Horner's rule from the highest degree.
-    #[inline]
-    pub fn eval(&self, e_ma: f64) -> f64 {
-        let c = self.coefficients();
-        let mut acc = c.last().copied().unwrap_or(0.0);
-        for &ci in c.iter().rev().skip(1) {
-            acc = acc * e_ma + ci;
+    /// f(E) by Horner's rule from the highest degree (written out per degree: this runs
+    /// twice per point of every bundle-adjustment evaluation).
+    #[inline(always)]
+    pub fn eval(&self, e: f64) -> f64 {
+        let [c0, c1, c2, c3, c4, c5] = self.c;
+        match self.degree {
+            1 => c1 * e + c0,
+            2 => (c2 * e + c1) * e + c0,
+            3 => ((c3 * e + c2) * e + c1) * e + c0,
+            4 => (((c4 * e + c3) * e + c2) * e + c1) * e + c0,
+            _ => ((((c5 * e + c4) * e + c3) * e + c2) * e + c1) * e + c0,
         }
-        acc
     }
 
     /// df/dE = sum i kf_i E^(i-1).

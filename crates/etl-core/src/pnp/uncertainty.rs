@@ -2,7 +2,7 @@
 //! noise of the images and the covariance of the calibration together.
 //!
 //! The pose p = (om, t) minimises sum_i |r_i(p, x)|^2 with r_i the reprojection error of
-//! corner i and x the 25 calibrated numbers. With N = J_p^T J_p (Gauss-Newton normal
+//! corner i and x the calibrated numbers (25 for the paper's model). With N = J_p^T J_p (Gauss-Newton normal
 //! matrix of the pose, J_p = dr / dp) and J_x = dr / dx:
 //!
 //! - pixel noise of standard deviation sigma on every coordinate gives
@@ -53,7 +53,7 @@ pub struct PoseUncertainty {
     pub sigma_px: f64,
     /// Covariance of (om1..om3 rad, t1..t3 mm) from the pixel noise: sigma^2 N^-1.
     pub pixel_covariance: [[f64; POSE]; POSE],
-    /// S = d(om, t) / d(25 calibrated numbers) (zero columns for the calibration's R, T).
+    /// S = d(om, t) / d(calibrated numbers) (zero columns for the calibration's R, T).
     pub d_pose_d_params: [[f64; MAX_PARAMS]; POSE],
 }
 
@@ -110,7 +110,7 @@ pub fn pose_uncertainty(
     m.rotation_rodrigues = pose.rotation_rodrigues;
     m.translation_mm = pose.translation_mm;
     let proj = Projector::new(&m);
-    // N = J_p^T J_p, B = J_p^T J_x (the pose is the first 6 of the 25 numbers here).
+    // N = J_p^T J_p, B = J_p^T J_x (the pose is the first 6 of the model's numbers here).
     let mut n = [[0.0; POSE]; POSE];
     let mut b = [[0.0; MAX_PARAMS]; POSE];
     let mut cost = 0.0;

@@ -135,6 +135,9 @@ impl<const N: usize, const O: usize, const P: usize> Problem<N> for Plain<'_, '_
     }
 }
 
+/// A view and, at the internal parameters z, dx/dz, x and x's projector.
+type AtView<'v, 'b, const N: usize> = (&'v View<'b>, [[f64; N]; N], [f64; N], Projector);
+
 /// The errors-in-variables problem: the shared z and, per view, its correction
 /// y = (dZ mm, dE mA) with Gaussian priors; rows normalised by their standard deviations.
 pub(super) struct Eiv<'a, 'b, const N: usize, const O: usize, const P: usize> {
@@ -162,11 +165,8 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
         jacobian: bool,
         sink: &mut dyn BlockRowSink<N, 2>,
     ) -> Result<()> {
-        let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
-        let layout = self.basis.layout();
-        let dxdz = self.basis.params_jacobian(x);
-        let x = &self.basis.to_params(x);
-        let proj = projector(&layout, x);
+        let (view, dxdz, x, proj) = self.at_view(block, x)?;
+        let x = &x;
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
         for p in view.points {
@@ -194,11 +194,8 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
         y: &[f64; 2],
         out: &mut BlockNormal<'_, N, 2>,
     ) -> Result<bool> {
-        let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
-        let layout = self.basis.layout();
-        let dxdz = self.basis.params_jacobian(x);
-        let x = &self.basis.to_params(x);
-        let proj = projector(&layout, x);
+        let (view, dxdz, x, proj) = self.at_view(block, x)?;
+        let x = &x;
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
         let mut normal = ViewNormal::<O, P>::new();
@@ -242,7 +239,15 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
     }
 }
 
-impl<const N: usize, const O: usize, const P: usize> Eiv<'_, '_, N, O, P> {
+impl<'b, const N: usize, const O: usize, const P: usize> Eiv<'_, 'b, N, O, P> {
+    /// The view of `block` and what its rows need at the internal parameters `z`: dx/dz,
+    /// the model's parameters x and their projector.
+    fn at_view(&self, block: usize, z: &[f64; N]) -> Result<AtView<'_, 'b, N>> {
+        let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
+        let x = self.basis.to_params(z);
+        Ok((view, self.basis.params_jacobian(z), x, projector(&self.basis.layout(), &x)))
+    }
+
     /// The rows of the priors on the view's corrections, and (once) the hold rows.
     fn prior_rows(
         &self,
