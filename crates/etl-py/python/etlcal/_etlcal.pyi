@@ -25,6 +25,7 @@ from etlcal.results import (
     FocusLaw,
     ModelStd,
     OffstateView,
+    OpenCvCamera,
     StudyResult,
     ThermalCalibrationResult,
     View,
@@ -71,6 +72,7 @@ __all__ = [
     "render",
     "sharpness",
     "simulate_paper_rig",
+    "simulate_strong_rig",
     "study",
     "thermal_calibration",
     "zhang",
@@ -282,6 +284,15 @@ class Calibration:
     def outliers(self) -> List[Tuple[int, int, float]]: ...
     @property
     def warnings(self) -> List[str]: ...
+    @property
+    def distortion_model(self) -> Literal["paper", "opencv"]: ...
+    @property
+    def focal_degree(self) -> int: ...
+    @property
+    def model_selection(self) -> Optional[Dict[str, Any]]:
+        """How distortion="auto" / focal_degree="auto" chose the model: {"method", "rule",
+        "candidates": [...]}; None when the model was given."""
+        ...
     def at(self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False) -> CameraAt: ...
     @property
     def rms_px(self) -> float: ...
@@ -353,7 +364,10 @@ class Calibration:
     def projection_std(self, world_mm: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
     def to_opencv(
         self, e_com_ma: Union[float, _Currents], *, allow_extrapolation: bool = False
-    ) -> Tuple[_F64, _F64]: ...
+    ) -> OpenCvCamera:
+        """(K, dist) for cv2, exact for the opencv family; `fit_rms_px`, `fit_max_px`,
+        `exact` say the paper family's fit error."""
+        ...
     def undistort_maps(
         self,
         e_com_ma: float,
@@ -484,6 +498,9 @@ class Simulation:
 def simulate_paper_rig(
     seed: int = 0, noise: Optional[Union[NoisePreset, Mapping[str, float]]] = None, setting_views: bool = False
 ) -> Simulation: ...
+def simulate_strong_rig(
+    seed: int = 0, noise: Optional[Union[NoisePreset, Mapping[str, float]]] = None
+) -> Simulation: ...
 def calibrate(
     observations: Observations,
     a0: Optional[A0] = None,
@@ -496,6 +513,10 @@ def calibrate(
     sigma_e_ma: float = 0.4,
     sigma_px: Optional[float] = None,
     method: Method = "proposed",
+    distortion: Optional[DistortionChoice] = None,
+    focal_degree: Optional[FocalDegreeChoice] = None,
+    fix_k3: bool = False,
+    zero_tangent: bool = False,
 ) -> Calibration: ...
 def cramer_rao_std(
     observations: Observations,
