@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use etl_core::calib::jacobian::to_params;
 use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{
-    bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, View,
-    ViewScratch, A0,
+    bundle_adjust, bundle_adjust_scratch, initialise, initialise_model, BundleAdjustOptions, BundleAdjustReport,
+    Estimator, View, ViewScratch, A0,
 };
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, OpenCvFlags};
 use etl_core::pnp::{displacement_mm, solve_pnp};
 use etl_core::progress::{NoProgress, Progress};
 use etl_formats::ThermalRef;
@@ -223,6 +223,18 @@ pub fn calibrate_paper_capped(obs: &Observations, a0: &A0, max_iterations: usize
     let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
     let mut options = BundleAdjustOptions::default();
     options.lm.max_iterations = max_iterations;
+    Ok(bundle_adjust(&views, &initial, &options, &mut scratch)?)
+}
+
+/// The calibration of `obs` with `a0` in `layout` (distortion family, focal degree; the
+/// numbers OpenCV's `flags` hold held): the linear initialisation then the paper's
+/// bundle adjustment (Eq. 24), as [`calibrate_paper`] for the paper's layout.
+pub fn calibrate_layout(obs: &Observations, a0: &A0, layout: Layout, flags: OpenCvFlags) -> Result<BundleAdjustReport> {
+    let (pts, e_com) = core_views(obs)?;
+    let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
+    let initial = initialise_model(&views, a0, layout, flags)?;
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    let options = BundleAdjustOptions { hold: layout.opencv_mask(flags)?, ..BundleAdjustOptions::default() };
     Ok(bundle_adjust(&views, &initial, &options, &mut scratch)?)
 }
 

@@ -129,3 +129,20 @@ fn the_strong_rig_is_corners_only_and_not_with_setting_views() {
     assert_eq!(code, 1);
     assert!(err.contains("wide"), "{err}");
 }
+
+#[test]
+fn study_crlb_on_the_strong_rig_and_rig_refused_elsewhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("study");
+    let (code, stdout, err) =
+        etlcal(&["study", "crlb", "--rig", "strong", "--trials", "4", "--out", out.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!((j["rig"].as_str(), j["trials"][0].as_u64()), (Some("strong"), Some(4)));
+    for f in ["crlb-strong.json", "crlb-strong.md", "crlb-strong.svg", "crlb-strong.png"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let (code, _, err) = etlcal(&["study", "fig5", "--rig", "strong", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--rig strong is for `study crlb` only") && err.lines().count() == 1, "{err}");
+}

@@ -23,7 +23,7 @@ Method = Literal["proposed", "per-setting"]
 """`calibrate(method=...)`: the paper's method or the per-setting baseline."""
 SharpnessMetric = Literal["cpbd", "tenengrad", "laplacian", "brenner", "normvar"]
 """`sharpness(metric=...)`, `thermal_calibration(metric=...)`."""
-StudyName = Literal["fig5", "fig6", "subsets", "baseline", "crlb"]
+StudyName = Literal["fig5", "fig6", "subsets", "baseline", "crlb", "crlb-strong"]
 """`study(name)`: the paper's studies."""
 NoisePreset = Literal["paper", "none"]
 """`simulate.paper_rig(noise=...)`: the paper's noise model or none."""
