@@ -22,7 +22,7 @@
 //! between candidates (on the paper rig, 0.4 mA is 1.4 px of focal length at 225 mA). The
 //! residual r of the view is then judged by its predictive covariance,
 //! sigma_px^2 I + J diag(sigma_z^2, sigma_e^2) J^T (J = d pixels / d (Z_W, E)): the error
-//! is sigma_px^2 r^T Sigma^-1 r, in px^2 ([`held_out_error`]). On the paper rig this is
+//! is sigma_px^2 r^T Sigma^-1 r, in px^2. On the paper rig this is
 //! what makes the family choice reliable (plain squared distances chose the opencv family
 //! in 4 of 20 seeds; this measure in none of 40).
 //!
