@@ -308,11 +308,19 @@ pub fn cov_std(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> [f64; PARAMS] {
 /// The standard deviation of fx(E) (px) at `e_ma` from a covariance of the 25 numbers
 /// (fx is linear in kf0x..kf3x: var = g^T C g with g = [1, E, E^2, E^3]).
 pub fn fx_std_px(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_ma: f64) -> f64 {
-    let kf_x = Layout::PAPER.kf_x();
-    let g = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
+    fx_std_px_in(cov, &Layout::PAPER, e_ma)
+}
+
+/// [`fx_std_px`] for a covariance in `layout` (any focal degree d: g = [1, E, .., E^d]).
+pub fn fx_std_px_in(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], layout: &Layout, e_ma: f64) -> f64 {
+    let kf_x = layout.kf_x();
+    let mut g = [1.0; etl_core::model::MAX_FOCAL_DEGREE + 1];
+    for i in 1..kf_x.len {
+        g[i] = g[i - 1] * e_ma;
+    }
     let mut v = 0.0;
-    for i in 0..4 {
-        for j in 0..4 {
+    for i in 0..kf_x.len {
+        for j in 0..kf_x.len {
             v += g[i] * cov[kf_x.at(i)][kf_x.at(j)] * g[j];
         }
     }

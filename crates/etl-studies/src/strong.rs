@@ -20,7 +20,7 @@ use etl_core::model::{CameraModel, DistortionModel, OpenCvFlags};
 use serde_json::json;
 
 use super::common::{
-    calibrate_layout, md_table, run_jobs, sci, stat, Chart, Figure, Series, StudyOptions, StudyOutput,
+    calibrate_layout, fx_std_px_in, md_table, run_jobs, sci, stat, Chart, Figure, Series, StudyOptions, StudyOutput,
 };
 use super::crlb::{CURVE_E_MA, PIXEL_ONLY, SIGMA_PX};
 use etl_formats::{Error, Result};
@@ -110,19 +110,6 @@ fn trial(opts: &StudyOptions, t: usize) -> Result<Trial> {
     Ok((o.model, o.rms_px, p.model, p.rms_px))
 }
 
-/// std of fx(E) (px) from a covariance in `layout`: fx = sum kf_xi E^i.
-fn fx_std(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], layout: &Layout, e_ma: f64) -> f64 {
-    let span = layout.kf_x();
-    let g: Vec<f64> = (0..span.len).map(|i| e_ma.powi(i as i32)).collect();
-    let mut v = 0.0;
-    for (i, gi) in g.iter().enumerate() {
-        for (j, gj) in g.iter().enumerate() {
-            v += gi * cov[span.at(i)][span.at(j)] * gj;
-        }
-    }
-    v.max(0.0).sqrt()
-}
-
 /// Runs the study (`opts.trials`, default 300).
 pub fn strong_crlb(opts: &StudyOptions) -> Result<StrongCrlb> {
     let n = opts.trials_or(DEFAULT_TRIALS);
@@ -176,7 +163,9 @@ pub fn strong_crlb(opts: &StudyOptions) -> Result<StrongCrlb> {
     ];
     for e in CURVE_E_MA {
         let fx = truth.focal_lengths(e).0;
-        bias.push(row(format!("fx({e} mA) (px)"), Some(e), fx_std(&bound, &layout, e), &|m| m.focal_lengths(e).0 - fx));
+        bias.push(row(format!("fx({e} mA) (px)"), Some(e), fx_std_px_in(&bound, &layout, e), &|m| {
+            m.focal_lengths(e).0 - fx
+        }));
     }
     let mean = |k: usize| ok.iter().map(|r| if k == 0 { r.1 } else { r.3 }).sum::<f64>() / ok.len() as f64;
     Ok(StrongCrlb { trials: [ok.len(), ok.len()], failures, points, parameters, bias, rms_px: [mean(0), mean(1)] })
