@@ -328,6 +328,10 @@ pub struct Calibration {
     /// there are none).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// How the model was chosen (`calibrate --distortion auto` / `--focal-degree auto`):
+    /// the comparison table ([`crate::model_selection`]); absent when the model was given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_selection: Option<crate::model_selection::ModelSelection>,
 }
 
 /// A corner left out of a calibration as a gross outlier (`outliers`: of the observations'
@@ -377,6 +381,7 @@ impl Calibration {
             views: vec![],
             covariance: None,
             focus_law: None,
+            model_selection: None,
         }
     }
 
@@ -598,6 +603,11 @@ impl Calibration {
         }
         if let Some(law) = &self.focus_law {
             if let Err(e) = law.validate() {
+                return bad(e.to_string());
+            }
+        }
+        if let Some(sel) = &self.model_selection {
+            if let Err(e) = sel.validate() {
                 return bad(e.to_string());
             }
         }

@@ -52,6 +52,7 @@ mod error;
 pub mod export;
 mod input_value;
 mod json_path;
+pub mod model_selection;
 pub mod observations;
 pub mod output;
 pub mod thermal;

@@ -267,6 +267,31 @@ impl Calibration {
         self.file.warnings.clone()
     }
 
+    /// The distortion family: "paper" (Eq. 17, the default) or "opencv" (OpenCV's k1, k2,
+    /// p1, p2, k3 in normalised coordinates, each quadratic in 1 / f_mean).
+    #[getter]
+    fn distortion_model(&self) -> &'static str {
+        self.model.distortion_model().name()
+    }
+
+    /// The degree of fx(E), fy(E) (3: the paper's cubic).
+    #[getter]
+    fn focal_degree(&self) -> usize {
+        self.model.focal_degree()
+    }
+
+    /// How the model was chosen when `calibrate(distortion="auto")` or
+    /// `focal_degree="auto"` chose it: a dict {"method", "rule", "candidates": [{
+    /// "distortion_model", "focal_degree", "parameters", "fit_rms_px", "prediction_rms_px",
+    /// "excess_mse_px2", "excess_se_px2", "chosen", "error"?}]}; None when the model was
+    /// given.
+    #[getter]
+    fn model_selection<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let Some(sel) = &self.file.model_selection else { return Ok(None) };
+        let text = serde_json::to_string(sel).map_err(|e| input_error(e.to_string()))?;
+        Ok(Some(py.import("json")?.call_method1("loads", (text,))?))
+    }
+
     /// Where the thermal part came from: "paper" (chosen explicitly), a thermal file's
     /// path, or None (no thermal part, or an older file that does not say).
     #[getter]
@@ -703,29 +728,42 @@ impl Calibration {
     }
 
     /// The camera at one current in OpenCV's conventions, for `cv2.projectPoints`,
-    /// `cv2.undistortPoints`, `cv2.solvePnP`.
+    /// `cv2.undistortPoints`, `cv2.initUndistortRectifyMap`, `cv2.solvePnP`.
     ///
-    /// OpenCV's distortion acts on normalised coordinates (x = X / Z); etlcal's (Eq. 17)
-    /// on centred pixels. They agree exactly only when fx = fy (k1_cv = k1 f^2,
+    /// The opencv family (`distortion_model == "opencv"`) is OpenCV's model: K and its own
+    /// coefficients at that current, exact (`cv2.projectPoints` reproduces `project`;
+    /// `exact` True, fit errors 0). The paper family (Eq. 17) acts on centred pixels, not
+    /// on normalised coordinates: the two agree exactly only when fx = fy (k1_cv = k1 f^2,
     /// p1_cv = p2 f, p2_cv = p1 f); otherwise the coefficients are the least-squares fit
-    /// over the image, whose error (a few hundredths of a pixel on the paper rig) `export`
-    /// returns and writes.
+    /// over the image, and the result says how far OpenCV's projection with them is from
+    /// the model's (`fit_rms_px`, `fit_max_px`; a few hundredths of a pixel on the paper
+    /// rig; `exact` False). `export` writes the same.
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA: a number, or an array of shape S
     ///         (vectorised).
     ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
     ///
-    /// Returns: (K, dist): the 3 x 3 camera matrix (px) and the 5 coefficients
-    /// (k1, k2, p1, p2, k3); for an array of currents, K of shape S + (3, 3) and dist of
-    /// shape S + (5,).
+    /// Returns: an OpenCvCamera: the tuple (K, dist) as before (`K, dist =
+    /// cal.to_opencv(E)`): the 3 x 3 camera matrix (px) and the 5 coefficients (k1, k2,
+    /// p1, p2, k3); for an array of currents, K of shape S + (3, 3) and dist of shape
+    /// S + (5,). Its attributes: camera_matrix, dist_coeffs, fit_rms_px and fit_max_px
+    /// (px; shape S for an array), exact.
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
     fn to_opencv<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
-        let parts = self.per_current(e_com_ma, allow_extrapolation, [&[3, 3], &[5]], |at, image_size| {
-            let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), image_size).py()?;
-            Ok([at.intrinsics().matrix().into_iter().flatten().collect(), fit.dist_coeffs.to_vec()])
-        })?;
-        Ok(PyTuple::new(e_com_ma.py(), parts)?.into_any())
+        let [k, dist, rms, max] =
+            self.per_current(e_com_ma, allow_extrapolation, [&[3, 3], &[5], &[], &[]], |at, image_size| {
+                let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), image_size).py()?;
+                Ok([
+                    at.intrinsics().matrix().into_iter().flatten().collect(),
+                    fit.dist_coeffs.to_vec(),
+                    vec![fit.rms_px],
+                    vec![fit.max_px],
+                ])
+            })?;
+        let exact = self.model.distortion_model() == etl_core::model::DistortionModel::OpenCv;
+        let py = e_com_ma.py();
+        py.import("etlcal.results")?.getattr("OpenCvCamera")?.call1((k, dist, rms, max, exact))
     }
 
     /// Writes the camera at one setting for another tool (atomically; nothing on error).

@@ -47,6 +47,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<pose::BoardPose>()?;
     m.add_class::<simulate::Simulation>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_paper_rig, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate_strong_rig, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::cramer_rao_std, m)?)?;
     m.add_function(wrap_pyfunction!(images::detect_corners, m)?)?;

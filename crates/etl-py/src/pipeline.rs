@@ -1,8 +1,10 @@
 //! `calibrate`: the calibration pipeline from observations (E_com -> RAC -> focal
 //! polynomial -> distortion -> bundle adjustment), run without the GIL.
 
+use etl_calib::pipeline::select::{refuse_opencv_flags, select, A0Source, Candidates};
 use etl_calib::pipeline::{calibrate as run_pipeline, CalibrateOptions};
-use etl_core::calib::{Estimator, RobustLoss};
+use etl_core::calib::{Estimator, Layout, RobustLoss};
+use etl_core::model::{DistortionModel, OpenCvFlags};
 use pyo3::prelude::*;
 
 use crate::calibration::Calibration;
@@ -36,8 +38,19 @@ use crate::observations::{Observations, A0};
 ///     method: "proposed" (the paper's method, above) or "per-setting" (the paper's
 ///         baseline of section 5.2.3: Zhang at each current of the observations'
 ///         setting views, >= 3 views at each of >= 3 currents, then a cubic through
-///         fx(E), fy(E); R and T are not defined and are zero; a0, estimator, hold_a0
-///         and robust do not apply and must be left at their defaults, None / False).
+///         fx(E), fy(E); R and T are not defined and are zero; a0, estimator, hold_a0,
+///         robust and the model's options below do not apply and must be left at their
+///         defaults).
+///     distortion: the distortion family: "paper" (the default: Eq. 17, k1, p1, p2 in
+///         centred pixels), "opencv" (OpenCV's k1, k2, p1, p2, k3 in normalised
+///         coordinates; `to_opencv` is then exact) or "auto" (chosen by how well each
+///         predicts the views held out one at a time; the comparison is the result's
+///         `model_selection`). With a0=None, A0 comes from Zhang's method with the same
+///         family.
+///     focal_degree: the degree of fx(E), fy(E): 1..5 (default 3, the paper's cubic) or
+///         "auto" (as distortion="auto").
+///     fix_k3: hold k3 = 0 (cv2.CALIB_FIX_K3); distortion "opencv" or "auto" only.
+///     zero_tangent: hold p1 = p2 = 0 (cv2.CALIB_ZERO_TANGENT_DIST); likewise.
 ///
 /// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
 /// error (`rms_px`), per-view summaries (`views`), the corners left out as gross outliers
@@ -50,7 +63,8 @@ use crate::observations::{Observations, A0};
 /// adjustment fails.
 #[pyfunction]
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
-    robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None, method="proposed"))]
+    robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None, method="proposed", distortion=None,
+    focal_degree=None, fix_k3=false, zero_tangent=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -65,8 +79,19 @@ pub fn calibrate(
     sigma_e_ma: f64,
     sigma_px: Option<f64>,
     method: &str,
+    distortion: Option<&str>,
+    focal_degree: Option<&Bound<'_, PyAny>>,
+    fix_k3: bool,
+    zero_tangent: bool,
 ) -> PyResult<Calibration> {
     let thermal = thermal.map(crate::calibration::thermal_ref).transpose()?;
+    let model_given = [
+        ("distortion", distortion.is_some()),
+        ("focal_degree", focal_degree.is_some()),
+        ("fix_k3", fix_k3),
+        ("zero_tangent", zero_tangent),
+    ];
+    let choice = ModelChoice::parse(distortion, focal_degree, OpenCvFlags { fix_k3, zero_tangent })?;
     match method {
         "proposed" => {}
         "per-setting" => {
@@ -82,6 +107,14 @@ pub fn calibrate(
                 ],
             )
             .py()?;
+            if let Some((name, _)) = model_given.iter().find(|(_, given)| *given) {
+                return Err(invalid(
+                    name,
+                    format!(
+                        "method=\"per-setting\" takes no {name}: the baseline fits the paper's model (cubic, paper distortion)"
+                    ),
+                ));
+            }
             let obs = observations.file.clone();
             let result = py.detach(|| etl_calib::baseline::per_setting(&obs, thermal.as_ref())).py()?;
             return Calibration::from_file(result.calibration);
@@ -117,18 +150,10 @@ pub fn calibrate(
             ))
         }
     };
-    let options = CalibrateOptions { estimator, hold_a0, robust };
+    let options = CalibrateOptions { estimator, hold_a0, robust, layout: Layout::PAPER, flags: choice.flags };
     let obs = observations.file.clone();
     let a0 = a0.map(|a| a.inner);
-    let result = py
-        .detach(|| {
-            let a0 = match a0 {
-                Some(a0) => a0,
-                None => etl_calib::pipeline::a0_from_offstate(&obs)?.a0(),
-            };
-            run_pipeline(&obs, &a0, thermal.as_ref(), &options)
-        })
-        .py()?;
+    let result = py.detach(|| choice.run(&obs, a0, thermal.as_ref(), &options)).py()?;
     // Said, not silent: a calibration without a focus law, and implausible data (also in
     // Calibration.warnings).
     for why in result.focus_law_warning.iter().chain(&result.calibration.warnings) {
@@ -136,6 +161,75 @@ pub fn calibrate(
         PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
     }
     Calibration::from_file(result.calibration)
+}
+
+/// The model `calibrate` is asked for: a family and a degree, each given or chosen by the
+/// data (None), and OpenCV's flags.
+struct ModelChoice {
+    family: Option<DistortionModel>,
+    degree: Option<usize>,
+    flags: OpenCvFlags,
+}
+
+impl ModelChoice {
+    /// From `distortion=` ("paper" | "opencv" | "auto"; None: "paper"), `focal_degree=`
+    /// (1..5 | "auto"; None: 3) and the flags, refused with the paper family.
+    fn parse(distortion: Option<&str>, focal_degree: Option<&Bound<'_, PyAny>>, flags: OpenCvFlags) -> PyResult<Self> {
+        let family = match distortion.unwrap_or("paper") {
+            "auto" => None,
+            name => Some(DistortionModel::from_name(name).ok_or_else(|| {
+                invalid_value("distortion", name, format!("distortion must be \"paper\", \"opencv\" or \"auto\", got {name:?}"))
+            })?),
+        };
+        let degree = match focal_degree {
+            None => Some(etl_core::model::PAPER_FOCAL_DEGREE),
+            Some(d) if d.extract::<String>().is_ok_and(|s| s == "auto") => None,
+            Some(d) => match d.extract::<usize>() {
+                Ok(n) if (1..=etl_core::model::MAX_FOCAL_DEGREE).contains(&n) => Some(n),
+                _ => {
+                    return Err(invalid_value(
+                        "focal_degree",
+                        d.to_string(),
+                        format!("focal_degree must be 1..5 or \"auto\", got {d}"),
+                    ))
+                }
+            },
+        };
+        refuse_opencv_flags(family, flags, ["fix_k3=True", "zero_tangent=True"], "distortion=\"opencv\" or \"auto\"")
+            .map_err(crate::errors::calib_err)?;
+        Ok(ModelChoice { family, degree, flags })
+    }
+
+    /// Calibrates: the given model, or [`select`] among the candidates. A0 given, or from
+    /// Zhang's method on the lens-off views with the (candidate's) family.
+    fn run(
+        &self,
+        obs: &etl_formats::Observations,
+        a0: Option<etl_core::calib::A0>,
+        thermal: Option<&etl_formats::ThermalRef>,
+        options: &CalibrateOptions,
+    ) -> etl_formats::Result<etl_calib::pipeline::CalibrationResult> {
+        match (self.family, self.degree) {
+            (Some(model), Some(degree)) => {
+                let layout = Layout::new(model, degree).map_err(etl_formats::Error::Core)?;
+                let a0 = match a0 {
+                    Some(a0) => a0,
+                    None => {
+                        let zhang = etl_calib::zhang::ZhangOptions { model, flags: self.flags };
+                        etl_calib::pipeline::a0_from_offstate_with(obs, &zhang)?.a0()
+                    }
+                };
+                run_pipeline(obs, &a0, thermal, &CalibrateOptions { layout, ..*options })
+            }
+            _ => {
+                let candidates = Candidates {
+                    families: self.family.map_or(DistortionModel::ALL.to_vec(), |f| vec![f]),
+                    focal_degrees: self.degree.map_or((1..=etl_core::model::MAX_FOCAL_DEGREE).collect(), |d| vec![d]),
+                };
+                select(obs, &a0.map_or(A0Source::Offstate, A0Source::Given), thermal, options, &candidates)
+            }
+        }
+    }
 }
 
 /// The Cramer-Rao lower bound of the calibration: the smallest standard deviation any

@@ -14,7 +14,8 @@ use crate::errors::{invalid_value, CoreResultExt};
 ///     name: "fig5" (polynomial degree vs the physics focal length), "fig6" (pixel noise,
 ///         current noise, number of images; plain and errors-in-variables BA), "subsets"
 ///         (6..9 of 9 views), "baseline" (per-setting Zhang vs the proposed method), or
-///         "crlb" (Cramer-Rao bound vs Monte Carlo spread).
+///         "crlb" (Cramer-Rao bound vs Monte Carlo spread), or "crlb-strong" (the same on
+///         the strong-distortion rig for OpenCV's family, with the paper family's bias).
 ///     trials: Monte Carlo trials per level (0: the study's default; fig6 100, crlb 300).
 ///     seed: base random seed.
 ///     out: a directory for name.json, name.md and the SVG/PNG plots (None: not written).

@@ -1,32 +1,33 @@
-//! `zhang(views, image_size)`: Zhang's monofocal calibration of a fixed-focus camera
-//! (etl-calib's `zhang`), e.g. the lens-off views that give A0.
+//! `zhang(views, image_size, model="paper", fix_k3=False, zero_tangent=False)`: Zhang's
+//! monofocal calibration of a fixed-focus camera (etl-calib's `zhang_with`), e.g. the
+//! lens-off views that give A0, or any camera in OpenCV's model.
 
+use etl_calib::zhang::{PlanarView, ZhangOptions, ZhangResult};
+use etl_core::model::{DistortionModel, OpenCvFlags};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::errors::{invalid, CoreResultExt};
+use crate::arrays::{mat3_out, vec_out};
+use crate::errors::{invalid, invalid_value, CoreResultExt};
 
-/// Zhang's monofocal calibration of a fixed-focus camera from views of a planar board:
-/// homographies, the closed form, then Levenberg-Marquardt over the intrinsics, the paper's
-/// distortion (k1, p1, p2) and every view's pose. Gives A0 from lens-off views.
-///
-/// Args:
-///     views: a list of (board_mm, pixels) pairs: (N, 2) board coordinates, mm (or (N, 3)
-///         with Z = 0), and the (N, 2) detected pixels, px (e.g. `detect_corners`).
-///     image_size: (width, height), px.
-///
-/// Returns: a ZhangResult (attributes, also dict keys): "fx", "fy", "u0", "v0" (px), "k1" (1/px^2), "p1", "p2" (1/px),
-/// "std" (one standard deviation of those seven, same order), "rms_px", "iterations",
-/// "views_used", "poses" (list of (rodrigues, translation_mm)).
-///
-/// Raises: InputError naming the unmet precondition (at least 3 views, 4 points each,
-/// views not all parallel).
-#[pyfunction]
-pub fn zhang<'py>(
-    py: Python<'py>,
-    views: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)>,
-    image_size: (u32, u32),
-) -> PyResult<Bound<'py, PyAny>> {
+/// The options of `model`, `fix_k3`, `zero_tangent`; an OpenCV flag with the paper model is
+/// refused naming it.
+fn options(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangOptions> {
+    let model = DistortionModel::from_name(model)
+        .ok_or_else(|| invalid_value("model", model, format!("model must be \"paper\" or \"opencv\", got {model:?}")))?;
+    let flags = OpenCvFlags { fix_k3, zero_tangent };
+    etl_calib::pipeline::select::refuse_opencv_flags(
+        Some(model),
+        flags,
+        ["fix_k3=True", "zero_tangent=True"],
+        "model=\"opencv\"",
+    )
+    .map_err(crate::errors::calib_err)?;
+    Ok(ZhangOptions { model, flags })
+}
+
+/// The (board_mm, pixels) pairs as planar views.
+fn planar_views(views: &[(Bound<'_, PyAny>, Bound<'_, PyAny>)]) -> PyResult<Vec<PlanarView>> {
     let mut planar = Vec::with_capacity(views.len());
     for (k, (board, pixels)) in views.iter().enumerate() {
         let board_mm: Vec<[f64; 2]> = match crate::arrays::points::<2>(board, "board_mm") {
@@ -44,18 +45,75 @@ pub fn zhang<'py>(
                 format!("views[{k}]: {} board points but {} pixels", board_mm.len(), pixels.len()),
             ));
         }
-        planar.push(etl_calib::zhang::PlanarView { board_mm, pixels });
+        planar.push(PlanarView { board_mm, pixels });
     }
-    let r = py.detach(|| etl_calib::zhang::zhang(&planar, [image_size.0, image_size.1])).py()?;
+    Ok(planar)
+}
+
+/// Zhang's monofocal calibration of a fixed-focus camera from views of a planar board:
+/// homographies, the closed form, then Levenberg-Marquardt over the intrinsics, the
+/// distortion and every view's pose. Gives A0 from lens-off views.
+///
+/// Args:
+///     views: a list of (board_mm, pixels) pairs: (N, 2) board coordinates, mm (or (N, 3)
+///         with Z = 0), and the (N, 2) detected pixels, px (e.g. `detect_corners`).
+///     image_size: (width, height), px.
+///     model: "paper" (the paper's distortion k1, p1, p2 in centred pixels) or "opencv"
+///         (OpenCV's k1, k2, p1, p2, k3 in normalised coordinates: the model and the
+///         least-squares problem of cv2.calibrateCamera).
+///     fix_k3: hold k3 = 0 (cv2.CALIB_FIX_K3); "opencv" only.
+///     zero_tangent: hold p1 = p2 = 0 (cv2.CALIB_ZERO_TANGENT_DIST); "opencv" only.
+///
+/// Returns: "paper": a ZhangResult (attributes, also dict keys): "fx", "fy", "u0", "v0"
+/// (px), "k1" (1/px^2), "p1", "p2" (1/px), "std" (one standard deviation of those seven,
+/// same order), "rms_px", "iterations", "views_used", "poses" (list of (rodrigues,
+/// translation_mm)). "opencv": a ZhangOpenCvResult, the same keys (k1, p1, p2 OpenCV's,
+/// dimensionless) and "k2", "k3", "camera_matrix" (3 x 3), "dist_coeffs" ([k1, k2, p1, p2,
+/// k3], cv2's order), "per_view_rms_px", "model"; "std" of fx, fy, u0, v0, k1, k2, p1, p2,
+/// k3 as cv2.calibrateCameraExtended's stdDeviationsIntrinsics (0 for a held one).
+///
+/// Raises: InputError naming the unmet precondition (at least 3 views, 4 points each,
+/// views not all parallel) or the flag given with model="paper".
+#[pyfunction]
+#[pyo3(signature = (views, image_size, model="paper", fix_k3=false, zero_tangent=false))]
+pub fn zhang<'py>(
+    py: Python<'py>,
+    views: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)>,
+    image_size: (u32, u32),
+    model: &str,
+    fix_k3: bool,
+    zero_tangent: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let opts = options(model, fix_k3, zero_tangent)?;
+    let planar = planar_views(&views)?;
+    let r = py.detach(|| etl_calib::zhang::zhang_with(&planar, [image_size.0, image_size.1], &opts)).py()?;
+    result(py, &r)
+}
+
+/// The result object of `r` (ZhangResult, or ZhangOpenCvResult for the opencv family).
+fn result<'py>(py: Python<'py>, r: &ZhangResult) -> PyResult<Bound<'py, PyAny>> {
     let d = PyDict::new(py);
-    for (name, v) in [("fx", r.fx), ("fy", r.fy), ("u0", r.u0), ("v0", r.v0), ("k1", r.k1), ("p1", r.p1), ("p2", r.p2)]
-    {
+    let c = r.coefficients;
+    let (k1, p1, p2) = match r.options.model {
+        DistortionModel::Paper => (c[0], c[1], c[2]),
+        DistortionModel::OpenCv => (c[0], c[2], c[3]),
+    };
+    for (name, v) in [("fx", r.fx), ("fy", r.fy), ("u0", r.u0), ("v0", r.v0), ("k1", k1), ("p1", p1), ("p2", p2)] {
         d.set_item(name, v)?;
     }
-    d.set_item("std", r.std.to_vec())?;
+    d.set_item("std", r.std.clone())?;
     d.set_item("rms_px", r.rms_px)?;
     d.set_item("iterations", r.iterations)?;
     d.set_item("views_used", r.views_used)?;
     d.set_item("poses", r.poses.iter().map(|(om, t)| (om.to_vec(), t.to_vec())).collect::<Vec<_>>())?;
-    crate::results::make(py, "ZhangResult", &d)
+    let Some(dist) = r.dist_coeffs() else {
+        return crate::results::make(py, "ZhangResult", &d);
+    };
+    d.set_item("model", r.options.model.name())?;
+    d.set_item("k2", dist[1])?;
+    d.set_item("k3", dist[4])?;
+    d.set_item("camera_matrix", mat3_out(py, r.camera_matrix()))?;
+    d.set_item("dist_coeffs", vec_out(py, &dist))?;
+    d.set_item("per_view_rms_px", r.per_view_rms_px.clone())?;
+    crate::results::make(py, "ZhangOpenCvResult", &d)
 }

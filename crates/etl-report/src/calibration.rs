@@ -99,7 +99,7 @@ pub const REPORT_FIGURES: [(&str, &str); 9] = [
     ("view_rms", "RMS residual per view"),
     ("residual_hist", "Histogram of the residuals"),
     ("distortion_field", "Distortion field at three currents"),
-    ("correlation", "Correlation matrix of the 25 numbers"),
+    ("correlation", "Correlation matrix of the model's numbers"),
 ];
 
 /// One residual: where (observed pixel) and the residual (model - observed), px.
@@ -137,7 +137,7 @@ pub(crate) struct Data {
     /// (E, fx, fy) of every view's own estimate (0: none).
     pub view_focal: Vec<(f64, f64, f64)>,
     /// (E, k1, p1, p2) of every view's own estimate.
-    pub view_dist: Vec<(f64, [f64; 3])>,
+    pub view_dist: Vec<(f64, [f64; etl_core::model::MAX_COEFFICIENTS])>,
     pub views: Vec<ViewData>,
     /// The three currents the maps are drawn at: the ends and the middle of the range.
     pub map_currents: [f64; 3],
@@ -200,8 +200,7 @@ fn gather_views(
                 view_focal.push((e, fx, fy));
             }
             if let Ok(dd) = view_distortion(model, &View { e_com_ma: e, points: &shifted }) {
-                let c = dd.padded();
-                view_dist.push((e, [c[0], c[1], c[2]]));
+                view_dist.push((e, *dd.padded()));
             }
             for q in &shifted {
                 if let Ok(m) = model.project(q.world_mm, e) {

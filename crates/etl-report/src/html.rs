@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use etl_core::calib::jacobian::to_params;
 
 use crate::calibration::{Data, Provenance, REPORT_FIGURES};
-use crate::uncertainty::{correlation, curve_std, curve_values, param_meaning, param_unit, strong_pairs, CURVES};
+use crate::uncertainty::{
+    correlation, curve_names, curve_std, curve_values, param_meaning, param_unit, strong_pairs, CurveSet, MAX_CURVES,
+};
 
 /// |r| above which a pair of numbers is listed as strongly correlated.
 pub(crate) const STRONG_CORRELATION: f64 = 0.9;
@@ -82,22 +84,22 @@ fn parameter_table(d: &Data) -> String {
     t + "</table>\n"
 }
 
-/// fx, fy, k1, p1, p2 with their std at the three map currents.
+/// fx, fy and the distortion coefficients with their std at the three map currents.
 fn curve_table(d: &Data) -> String {
-    let units = ["px", "px", "1/px²", "1/px", "1/px"];
     let mut t = String::from("<table class=\"num\"><tr><th>quantity</th><th>unit</th>");
     for e in d.map_currents {
         let _ = write!(t, "<th>at {e:.1} mA</th>");
     }
     t += "</tr>\n";
-    let at: Vec<([f64; 5], [f64; 5])> = d
+    let nan = [f64::NAN; MAX_CURVES];
+    let at: Vec<(CurveSet, CurveSet)> = d
         .map_currents
         .iter()
-        .map(|&e| (curve_values(&d.model, e), d.covariance.map_or([f64::NAN; 5], |c| curve_std(&d.model, &c, e))))
+        .map(|&e| (curve_values(&d.model, e), d.covariance.map_or(nan, |c| curve_std(&d.model, &c, e))))
         .collect();
-    for k in 0..5 {
+    for (k, (name, unit)) in curve_names(&d.model).into_iter().enumerate() {
         let cells: String = at.iter().map(|(v, s)| format!("<td>{} &plusmn; {}</td>", num(v[k]), sd(s[k]))).collect();
-        let _ = writeln!(t, "<tr><td><b>{}</b></td><td>{}</td>{cells}</tr>", CURVES[k], units[k]);
+        let _ = writeln!(t, "<tr><td><b>{name}</b></td><td>{unit}</td>{cells}</tr>");
     }
     t + "</table>\n"
 }
@@ -110,16 +112,20 @@ fn caption(stem: &str, d: &Data) -> String {
              as bands of one (dark) and three (light) standard deviations. The bands are the uncertainty of the \
              curve, not of a single view: single views scatter more."
             .into(),
-        "distortion" => "Top: k1, p1, p2 (Eq. 18) against the current (lines) and each view's own estimate (dots). \
-             Bottom: the dots minus the curve, with the curve's uncertainty as bands of one (dark) and three (light) \
-             standard deviations. A band as wide as the curve's values means that coefficient is not determined \
-             by these views."
-            .into(),
+        "distortion" => format!(
+            "Top: {} (each a quadratic in 1/f, Eq. 18; the {} distortion model) against the current (lines) and \
+             each view's own estimate (dots). Bottom: the dots minus the curve, with the curve's uncertainty as \
+             bands of one (dark) and three (light) standard deviations. A band as wide as the curve's values means \
+             that coefficient is not determined by these views.",
+            d.model.distortion_model().coefficient_names().join(", "),
+            d.model.distortion_model().name()
+        ),
         "projection_std" => format!(
             "The standard deviation (longest axis of the 1σ ellipse) of where the calibrated model puts a point, due \
-             to the uncertainty of the 25 numbers (J C Jᵀ), over the image at the ends and the middle of the \
+             to the uncertainty of the model's {} numbers (J C Jᵀ), over the image at the ends and the middle of the \
              calibrated range; one colour scale for the three. The points are at {}. Large values at the edges \
              call for corners there (see the coverage map).",
+            d.model.layout().len(),
             d.depth_source
         ),
         "coverage" => "Every detected corner at its place in the image, one panel per current (views within 0.5 mA \
@@ -139,10 +145,16 @@ fn caption(stem: &str, d: &Data) -> String {
              (dots) to the distorted one, magnified by the same factor in the three panels; the red cross is the \
              principal point."
             .into(),
-        "correlation" => "Correlation r_ij = C_ij / sqrt(C_ii C_jj) of the 25 numbers (blue −1, white 0, red +1); \
-             the lines separate rotation, translation, kf_x, kf_y, principal point and a1..a9. Strongly \
-             correlated pairs are listed below."
-            .into(),
+        "correlation" => {
+            let layout = d.model.layout();
+            format!(
+                "Correlation r_ij = C_ij / sqrt(C_ii C_jj) of the model's {} numbers (blue −1, white 0, red +1); \
+                 the lines separate rotation, translation, kf_x, kf_y, principal point and a1..a{}. Strongly \
+                 correlated pairs are listed below.",
+                layout.len(),
+                layout.distortion_a().len
+            )
+        }
         _ => String::new(),
     }
 }
@@ -250,7 +262,7 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1300px;margin:auto;pa
     table.num td{font-variant-numeric:tabular-nums}tr.flag{background:#fff1c2}\
     figure{margin:0 0 1.5em 0}figure img{max-width:100%;border:1px solid #eee}\
     figcaption{color:#333;max-width:1000px}.files{color:#777}.note{background:#f3f3f3;padding:.5em 1em}\
-    ul.pairs{columns:4;max-width:1000px}";
+    ul.pairs{columns:4;max-width:1000px}tr.chosen{background:#e3f2e1}";
 
 /// The corners the calibration left out of its final solve (empty when none): the bundle
 /// adjustment's (of the observations' views) and Zhang's at the per-setting baseline's
@@ -273,6 +285,47 @@ fn outliers_table(d: &Data) -> String {
     format!(
         "<h2 id=\"outliers\">Outliers</h2>\n<p>{count} corners left out of the final solve (not in the residual plots).</p>\n\
          <table class=\"num\"><tr><th>view</th><th>point</th><th>residual (px)</th></tr>\n{rows}</table>\n"
+    )
+}
+
+/// The comparison `calibrate --distortion auto` / `--focal-degree auto` chose the model
+/// by (the file's `"model_selection"`), or nothing when the model was given.
+fn model_selection_html(c: &etl_formats::Calibration) -> String {
+    let Some(sel) = &c.model_selection else { return String::new() };
+    let cell = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.4}"));
+    let rows: String = sel
+        .candidates
+        .iter()
+        .map(|r| {
+            let note = match (&r.error, r.chosen) {
+                (Some(e), _) => format!("not fitted: {}", esc(e)),
+                (None, true) => "<b>chosen</b>".into(),
+                (None, false) => String::new(),
+            };
+            format!(
+                "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{note}</td></tr>\n",
+                if r.chosen { " class=\"chosen\"" } else { "" },
+                esc(&r.distortion_model),
+                r.focal_degree,
+                r.parameters,
+                cell(r.fit_rms_px),
+                cell(r.prediction_rms_px),
+                cell(r.excess_mse_px2),
+                cell(r.excess_se_px2),
+            )
+        })
+        .collect();
+    format!(
+        "<h2 id=\"model-selection\">Model selection</h2>\n<p>The model was chosen by the data: each candidate was \
+         fitted to all views (fit RMS) and, {}, to all views but one, then asked to predict the view left out from \
+         its world points, recorded current and stage position (prediction RMS: the error in the estimator's noise \
+         model, px). The chosen model is the simplest whose held-out mean squared error exceeds the best's by no \
+         more than one standard error of that excess (paired over the views; rule: {}).</p>\n\
+         <table class=\"num\"><tr><th>distortion</th><th>focal degree</th><th>numbers</th><th>fit RMS (px)</th>\
+         <th>prediction RMS (px)</th><th>excess MSE (px²)</th><th>its std error (px²)</th><th></th></tr>\n{rows}\
+         </table>\n",
+        esc(&sel.method),
+        esc(&sel.rule)
     )
 }
 
@@ -301,7 +354,8 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>etlcal calibration report</title>\
          <style>{STYLE}</style></head><body>\n<h1>etlcal calibration report</h1>\n{notes}\n\
          <p>Estimator <b>{}</b>, {} views, E_com {:.1} .. {:.1} mA, RMS reprojection error <b>{:.4} px</b>; \
-         {flagged} of the 25 numbers flagged as not determined (|value| &lt; 2 std).</p>\n\
+         model: {} distortion, focal degree {} ({} numbers), {flagged} of them flagged as not determined \
+         (|value| &lt; 2 std).</p>\n{}\
          <ul><li><a href=\"#parameters\">Parameters</a></li>{toc}<li><a href=\"#views\">Views</a></li>\
          <li><a href=\"#provenance\">Provenance</a></li></ul>\n\
          <h2 id=\"parameters\">Parameters (value and one standard deviation)</h2>\n\
@@ -320,6 +374,10 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
         c.e_com_range_ma[0],
         c.e_com_range_ma[1],
         c.rms_reprojection_px,
+        d.model.distortion_model().name(),
+        d.model.focal_degree(),
+        d.model.layout().len(),
+        model_selection_html(c),
         parameter_table(d),
         curve_table(d),
         views_table(d),

@@ -5,7 +5,7 @@ use plotters::prelude::*;
 
 use crate::calibration::Data;
 use crate::figure::tick;
-use crate::uncertainty::{correlation, curve_std, curve_values};
+use crate::uncertainty::{correlation, curve_names, curve_std, curve_values, CurveSet, MAX_CURVES};
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
@@ -104,13 +104,16 @@ where
     Ok(())
 }
 
-/// (E, values, stds) of the five curves at 101 currents over the calibrated range; zero
-/// std without a covariance.
-fn curves(d: &Data) -> Vec<(f64, [f64; 5], [f64; 5])> {
+/// (E, values, stds) of the curves ([`curve_names`]) at 101 currents over the calibrated
+/// range; zero std without a covariance.
+fn curves(d: &Data) -> Vec<(f64, CurveSet, CurveSet)> {
     let r = d.cal.e_com_range_ma;
     (0..=100)
         .map(|k| r[0] + (r[1] - r[0]) * k as f64 / 100.0)
-        .map(|e| (e, curve_values(&d.model, e), d.covariance.map_or([0.0; 5], |c| curve_std(&d.model, &c, e))))
+        .map(|e| {
+            let zero = [0.0; MAX_CURVES];
+            (e, curve_values(&d.model, e), d.covariance.map_or(zero, |c| curve_std(&d.model, &c, e)))
+        })
         .collect()
 }
 
@@ -149,39 +152,61 @@ where
     Ok(())
 }
 
-/// k1, p1, p2 against the current with the 1- and 3-sigma bands and each view's own
-/// estimate (Eq. 23) (top), and the same minus the curve (bottom: bands too narrow to see
-/// on the top row show there).
+/// The distortion coefficients (the family's: k1, p1, p2 or k1, k2, p1, p2, k3) against
+/// the current with the 1- and 3-sigma bands and each view's own estimate (Eq. 23) (top),
+/// and the same minus the curve (bottom: bands too narrow to see on the top row show
+/// there).
 pub(crate) fn draw_distortion<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
     let c = curves(d);
-    let panels = root.split_evenly((2, 3));
-    let names = ["k1", "p1", "p2"];
-    let units = ["1e-9 / px²", "1e-6 / px", "1e-6 / px"];
-    let colours = [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44)];
-    for k in 0..3 {
-        // Scaled units keep the tick labels short.
-        let scale = if k == 0 { 1e9 } else { 1e6 };
+    let names = curve_names(&d.model);
+    let coefficients = &names[2..];
+    let panels = root.split_evenly((2, coefficients.len()));
+    let colours = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+        RGBColor(255, 127, 14),
+    ];
+    for (k, &(name, unit)) in coefficients.iter().enumerate() {
+        // Scaled units keep the tick labels short (the paper's coefficients are per px).
+        let (scale, unit) = match unit {
+            "1/px²" => (1e9, "1e-9 / px²"),
+            "1/px" => (1e6, "1e-6 / px"),
+            _ => (1.0, unit),
+        };
+        let colour = colours[k % colours.len()];
         let points: Vec<(f64, f64)> = d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect();
+        // Five panels a row leave room for short titles only.
+        let narrow = coefficients.len() > 3;
         let top = BandPanel {
-            title: format!("{}(E) (line) and each view's own (dots)", names[k]),
-            y_label: format!("{} ({})", names[k], units[k]),
+            title: if narrow {
+                format!("{name}(E), views (dots)")
+            } else {
+                format!("{name}(E) (line) and each view's own (dots)")
+            },
+            y_label: format!("{name} ({unit})"),
             curve: c.iter().map(|q| (q.0, q.1[2 + k] * scale, q.2[2 + k] * scale)).collect(),
             points: points.clone(),
-            colour: colours[k],
+            colour,
         };
         draw_band(&panels[k], &top, text)?;
         let dev = BandPanel {
-            title: format!("{0} − {0}(E): bands ±1σ (dark), ±3σ (light)", names[k]),
-            y_label: format!("{0} − {0}(E) ({1})", names[k], units[k]),
+            title: if narrow {
+                format!("{name} − {name}(E), ±1σ, ±3σ")
+            } else {
+                format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)")
+            },
+            y_label: format!("{name} − {name}(E) ({unit})"),
             curve: c.iter().map(|q| (q.0, 0.0, q.2[2 + k] * scale)).collect(),
             points: points.iter().map(|p| (p.0, p.1 - curve_values(&d.model, p.0)[2 + k] * scale)).collect(),
-            colour: colours[k],
+            colour,
         };
-        draw_band(&panels[3 + k], &dev, text)?;
+        draw_band(&panels[coefficients.len() + k], &dev, text)?;
     }
     root.present()?;
     Ok(())

@@ -6,32 +6,49 @@
 use etl_core::calib::jacobian::{from_params, to_params};
 use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::uncertainty::sandwich;
-use etl_core::model::{CameraModel, DistortionModel};
+use etl_core::model::{CameraModel, DistortionModel, MAX_COEFFICIENTS};
 
-/// The curves the report draws against the current: fx, fy (px), k1 (1/px^2), p1, p2 (1/px).
-pub(crate) const CURVES: [&str; 5] = ["fx", "fy", "k1", "p1", "p2"];
+/// Most curves the report draws against the current: fx, fy and up to five distortion
+/// coefficients.
+pub(crate) const MAX_CURVES: usize = 2 + MAX_COEFFICIENTS;
 
-/// The values of [`CURVES`] at `e_com_ma` (NaN where the model cannot be evaluated, e.g.
-/// a non-positive focal length).
-pub(crate) fn curve_values(model: &CameraModel, e_com_ma: f64) -> [f64; 5] {
-    let (fx, fy) = model.focal_lengths(e_com_ma);
-    match model.distortion(e_com_ma) {
-        Ok(d) => {
-            let c = d.padded();
-            [fx, fy, c[0], c[1], c[2]]
-        }
-        Err(_) => [fx, fy, f64::NAN, f64::NAN, f64::NAN],
-    }
+/// The values of one curve set (see [`curve_names`]), at capacity.
+pub(crate) type CurveSet = [f64; MAX_CURVES];
+
+/// The curves the report draws against the current for `model`'s family: fx, fy (px),
+/// then the distortion coefficients (paper: k1 1/px^2, p1, p2 1/px; opencv: k1, k2, p1,
+/// p2, k3, dimensionless), as (name, unit).
+pub(crate) fn curve_names(model: &CameraModel) -> Vec<(&'static str, &'static str)> {
+    let family = model.distortion_model();
+    let unit = |c: &str| match family {
+        DistortionModel::Paper if c == "k1" => "1/px²",
+        DistortionModel::Paper => "1/px",
+        DistortionModel::OpenCv => "none",
+    };
+    [("fx", "px"), ("fy", "px")].into_iter().chain(family.coefficient_names().iter().map(|&c| (c, unit(c)))).collect()
 }
 
-/// One standard deviation of each of [`CURVES`] at `e_com_ma`: sqrt(J C J^T) with J = dq/dx
+/// The values of [`curve_names`] at `e_com_ma`, at capacity (NaN where the model cannot
+/// be evaluated, e.g. a non-positive focal length; zero past the family's count).
+pub(crate) fn curve_values(model: &CameraModel, e_com_ma: f64) -> CurveSet {
+    let (fx, fy) = model.focal_lengths(e_com_ma);
+    let mut out = [f64::NAN; MAX_CURVES];
+    out[0] = fx;
+    out[1] = fy;
+    if let Ok(d) = model.distortion(e_com_ma) {
+        out[2..].copy_from_slice(d.padded());
+    }
+    out
+}
+
+/// One standard deviation of each of [`curve_names`] at `e_com_ma`: sqrt(J C J^T) with J = dq/dx
 /// by central differences, the step of parameter i being 1e-4 of its own std (q is
 /// polynomial in kf and a, so the difference is exact to rounding for the linear numbers
 /// and to O(h^2) for w = 2 / (fx + fy)). Parameters with zero std (held) do not enter.
-pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_com_ma: f64) -> [f64; 5] {
+pub(crate) fn curve_std(model: &CameraModel, covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_com_ma: f64) -> CurveSet {
     let layout = model.layout();
     let x = to_params(model);
-    let mut j = [[0.0; MAX_PARAMS]; 5];
+    let mut j = [[0.0; MAX_PARAMS]; MAX_CURVES];
     for i in 0..layout.len() {
         let h = 1e-4 * covariance[i][i].max(0.0).sqrt();
         if h == 0.0 {

@@ -111,3 +111,44 @@ fn a_missing_output_directory_is_refused_and_nothing_is_written() {
     assert!(!missing.exists());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// Issue 16: a calibration of the strong-distortion rig chosen by `--distortion auto`
+/// (the opencv family): every figure, OpenCV's five coefficients with their units in the
+/// tables, and the comparison table of the candidates.
+#[test]
+fn opencv_family_and_the_model_selection_table_are_reported() {
+    use etl_calib::pipeline::select::{select, A0Source, Candidates};
+    use etl_core::model::DistortionModel;
+    let sim = etl_sim::simulate::strong_rig(&NoiseModel::PAPER, 5);
+    let candidates = Candidates { families: DistortionModel::ALL.to_vec(), focal_degrees: vec![3] };
+    let r = select(
+        &sim.observations,
+        &A0Source::Given(sim.a0),
+        Some(&ThermalRef::paper()),
+        &Default::default(),
+        &candidates,
+    )
+    .unwrap();
+    let cal = r.calibration;
+    assert_eq!(cal.distortion_model.as_deref(), Some("opencv"));
+    let dir = tempfile::tempdir().unwrap();
+    let written =
+        write_report(&cal, Some(&sim.observations), cal.thermal.as_ref(), &Provenance::default(), dir.path()).unwrap();
+    let listed = check_report(dir.path(), &written.files);
+    assert_eq!(listed, REPORT_FIGURES.iter().map(|f| f.0).collect::<Vec<_>>());
+    let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
+    for needle in [
+        "model: opencv distortion, focal degree 3 (31 numbers)",
+        "a15",
+        "k2 = a4 w² + a5 w + a6",
+        "<td><b>k3</b></td><td>none</td>",
+        "id=\"model-selection\"",
+        "leave-one-view-out",
+        "<tr class=\"chosen\"><td>opencv</td><td>3</td><td>31</td>",
+        "k1, k2, p1, p2, k3 (each a quadratic in 1/f",
+    ] {
+        assert!(html.contains(needle), "index.html lacks {needle}");
+    }
+    // The paper candidate's row, with its (much larger) prediction error.
+    assert!(html.contains("<tr><td>paper</td><td>3</td><td>25</td>"), "paper row");
+}

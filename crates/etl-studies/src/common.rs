@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use etl_core::calib::jacobian::to_params;
 use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{
-    bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, View,
-    ViewScratch, A0,
+    bundle_adjust, bundle_adjust_scratch, initialise, initialise_model, BundleAdjustOptions, BundleAdjustReport,
+    Estimator, View, ViewScratch, A0,
 };
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, OpenCvFlags};
 use etl_core::pnp::{displacement_mm, solve_pnp};
 use etl_core::progress::{NoProgress, Progress};
 use etl_formats::ThermalRef;
@@ -226,6 +226,18 @@ pub fn calibrate_paper_capped(obs: &Observations, a0: &A0, max_iterations: usize
     Ok(bundle_adjust(&views, &initial, &options, &mut scratch)?)
 }
 
+/// The calibration of `obs` with `a0` in `layout` (distortion family, focal degree; the
+/// numbers OpenCV's `flags` hold held): the linear initialisation then the paper's
+/// bundle adjustment (Eq. 24), as [`calibrate_paper`] for the paper's layout.
+pub fn calibrate_layout(obs: &Observations, a0: &A0, layout: Layout, flags: OpenCvFlags) -> Result<BundleAdjustReport> {
+    let (pts, e_com) = core_views(obs)?;
+    let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
+    let initial = initialise_model(&views, a0, layout, flags)?;
+    let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
+    let options = BundleAdjustOptions { hold: layout.opencv_mask(flags)?, ..BundleAdjustOptions::default() };
+    Ok(bundle_adjust(&views, &initial, &options, &mut scratch)?)
+}
+
 /// Calibrates `obs` with `a0` by the paper's estimator ([`calibrate_paper`]), then by
 /// errors-in-variables with priors `sigma_z_mm`, `sigma_e_ma` (pixel noise estimated from
 /// the plain solution).
@@ -313,11 +325,19 @@ pub fn cov_std(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS]) -> [f64; PARAMS] {
 /// The standard deviation of fx(E) (px) at `e_ma` from a covariance of the 25 numbers
 /// (fx is linear in kf0x..kf3x: var = g^T C g with g = [1, E, E^2, E^3]).
 pub fn fx_std_px(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], e_ma: f64) -> f64 {
-    let kf_x = Layout::PAPER.kf_x();
-    let g = [1.0, e_ma, e_ma * e_ma, e_ma * e_ma * e_ma];
+    fx_std_px_in(cov, &Layout::PAPER, e_ma)
+}
+
+/// [`fx_std_px`] for a covariance in `layout` (any focal degree d: g = [1, E, .., E^d]).
+pub fn fx_std_px_in(cov: &[[f64; MAX_PARAMS]; MAX_PARAMS], layout: &Layout, e_ma: f64) -> f64 {
+    let kf_x = layout.kf_x();
+    let mut g = [1.0; etl_core::model::MAX_FOCAL_DEGREE + 1];
+    for i in 1..kf_x.len {
+        g[i] = g[i - 1] * e_ma;
+    }
     let mut v = 0.0;
-    for i in 0..4 {
-        for j in 0..4 {
+    for i in 0..kf_x.len {
+        for j in 0..kf_x.len {
             v += g[i] * cov[kf_x.at(i)][kf_x.at(j)] * g[j];
         }
     }

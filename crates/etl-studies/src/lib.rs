@@ -11,7 +11,9 @@
 //! - [`model`]: the camera model and lens physics over currents; polynomial fits of f_com(E);
 //! - [`demo`]: the demo's validation of a calibration against the truth;
 //! - [`crlb`]: the Cramer-Rao bound of every parameter and of fx(E) against the Monte
-//!   Carlo spread of etlcal's estimates (statistical efficiency).
+//!   Carlo spread of etlcal's estimates (statistical efficiency);
+//! - [`strong`]: the same on the strong-distortion rig for OpenCV's distortion family,
+//!   with the paper family's bias there (`crlb --rig strong`).
 //!
 //! Each study returns a result struct; its `output()` gives the `--json` object, a
 //! markdown summary and the plots ([`common::StudyOutput`]).
@@ -24,6 +26,7 @@ pub mod fig5;
 pub mod fig6;
 pub mod model;
 mod run;
+pub mod strong;
 pub mod subsets;
 
 pub use common::{StudyOptions, StudyOutput, MAX_TRIALS};

@@ -17,6 +17,9 @@ pub enum Study {
     Baseline,
     /// Cramer-Rao bound of every parameter against the Monte Carlo spread.
     Crlb,
+    /// The same on the strong-distortion rig, OpenCV's family, and the paper family's
+    /// bias there (`crlb --rig strong`; not in [`Study::ALL`]).
+    CrlbStrong,
 }
 
 impl Study {
@@ -31,13 +34,16 @@ impl Study {
             Study::Subsets => "subsets",
             Study::Baseline => "baseline",
             Study::Crlb => "crlb",
+            Study::CrlbStrong => "crlb-strong",
         }
     }
 
-    /// The study named `name` (`fig5`, `fig6`, `subsets`, `baseline`, `crlb`).
+    /// The study named `name` (`fig5`, `fig6`, `subsets`, `baseline`, `crlb`,
+    /// `crlb-strong`).
     pub fn from_name(name: &str) -> Result<Study> {
-        Study::ALL.into_iter().find(|s| s.name() == name).ok_or_else(|| {
-            let names: Vec<&str> = Study::ALL.iter().map(|s| s.name()).collect();
+        let every = Study::ALL.into_iter().chain([Study::CrlbStrong]);
+        every.clone().find(|s| s.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = every.map(|s| s.name()).collect();
             Error::invalid_value("study", name, format!("no study named {name:?} (one of {})", names.join(", ")))
         })
     }
@@ -50,6 +56,7 @@ impl Study {
             Study::Subsets => crate::subsets::subsets(opts)?.output(),
             Study::Baseline => crate::baseline::baseline(opts)?.output(),
             Study::Crlb => crate::crlb::crlb(opts)?.output(),
+            Study::CrlbStrong => crate::strong::strong_crlb(opts)?.output(),
         })
     }
 }

@@ -7,8 +7,9 @@
 //! per-setting baseline's views), a0.json (the A0 a lens-off calibration would give) and
 //! truth.json (the true model and per-view errors; with images also `"dataset_model"`,
 //! the true model in dataset.json's world frame, the ChArUco board's).
-//! `--config` (`etlcal.simconfig/1`) sets seed, noise and setting rig in one file; flags
-//! given on the command line override it.
+//! `--config` (`etlcal.simconfig/1`) sets seed, rig (`"paper"`, or `"strong"`: the
+//! strong-distortion rig, corners only), noise and setting rig in one file; flags given on
+//! the command line override it.
 //!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
@@ -25,7 +26,7 @@ use etl_formats::{Error, Result};
 /// The names `simulate` writes into its directory.
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
 use etl_sim::simulate::images::{dataset_truth, render_rig, ImageOptions};
-use etl_sim::simulate::{simulate, write_simulation, write_truth, SettingRig, SimConfig};
+use etl_sim::simulate::{simulate, write_simulation, write_truth, SettingRig, SimConfig, SimRig};
 
 /// Arguments of `etlcal simulate`.
 #[derive(clap::Args, Debug)]
@@ -98,6 +99,12 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 pub fn run(args: Args) -> Result<()> {
     crate::output::check([args.config.as_deref()], &[Output::Dir(&args.out)])?;
     let config = config_from(&args)?;
+    if !args.observations_only && config.rig == SimRig::Strong {
+        return Err(Error::invalid(
+            "--observations-only",
+            "the strong-distortion rig (\"rig\": \"strong\") is simulated as corners only: pass --observations-only",
+        ));
+    }
     if !args.observations_only && config.setting_rig.is_some() {
         return Err(Error::invalid(
             "--observations-only",

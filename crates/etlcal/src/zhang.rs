@@ -1,14 +1,25 @@
-//! `etlcal zhang IMAGE... (--pattern CxR --square MM | --board FILE) [--json]`: monofocal
-//! calibration of one fixed-focus camera (Zhang 2000, with the paper's distortion k1, p1,
-//! p2 in centred pixels) from a whole checkerboard or a ChArUco board (each view the
-//! corners it shows, no hints), printing `{"fx", "fy", "u0", "v0", "k1", "p1", "p2",
-//! "rms_px", "views_used", "outliers"}` with `--json`. Images whose board is not found are
-//! named on stderr and skipped; at least 3 views must remain. `outliers` (absent when there
-//! are none, as in a calibration file) lists the corners Zhang's method left out as gross
-//! outliers: `view` (the index of the IMAGE argument), `image`, `point` (the corner's index
-//! in the detection's order), `corner` ([i, j] on the board's corner grid), `id` (the
-//! corner's id: a ChArUco board's, a checkerboard's row-major `j * cols + i`) and
-//! `residual_px` (its distance from the model's projection, px).
+//! `etlcal zhang IMAGE... (--pattern CxR --square MM | --board FILE) [--model paper|opencv]
+//! [--fix-k3] [--zero-tangent] [--json]`: monofocal calibration of one fixed-focus camera
+//! (Zhang 2000) from a whole checkerboard or a ChArUco board (each view the corners it
+//! shows, no hints).
+//!
+//! `--model paper` (the default): the paper's distortion k1, p1, p2 in centred pixels;
+//! `--json` prints `{"fx", "fy", "u0", "v0", "k1", "p1", "p2", "rms_px", "views_used",
+//! "outliers"?}`. `--model opencv`: OpenCV's model (k1, k2, p1, p2, k3 in normalised
+//! coordinates, the same least-squares problem as `cv2.calibrateCamera`; `--fix-k3`,
+//! `--zero-tangent` as its `CALIB_FIX_K3`, `CALIB_ZERO_TANGENT_DIST`); `--json` prints
+//! `{"model", "fx", "fy", "u0", "v0", "camera_matrix" (3 x 3), "dist_coeffs" ([k1, k2, p1,
+//! p2, k3]), "rms_px", "views_used", "images_used", "per_view_rms_px", "std" (one standard
+//! deviation of fx, fy, u0, v0, k1, k2, p1, p2, k3, as `calibrateCameraExtended`; 0 for a
+//! held one), "fix_k3", "zero_tangent", "outliers"?}`.
+//!
+//! Images whose board is not found are named on stderr and skipped; at least 3 views must
+//! remain. `outliers` (absent when there are none, as in a calibration file) lists the
+//! corners Zhang's method left out as gross outliers: `view` (the index of the IMAGE
+//! argument), `image`, `point` (the corner's index in the detection's order), `corner`
+//! ([i, j] on the board's corner grid), `id` (the corner's id: a ChArUco board's, a
+//! checkerboard's row-major `j * cols + i`) and `residual_px` (its distance from the
+//! model's projection, px).
 
 use std::path::PathBuf;
 
@@ -16,11 +27,22 @@ use serde_json::{json, Value};
 
 use super::print_json;
 use crate::board::BoardArgs;
+use etl_calib::pipeline::select::refuse_opencv_flags;
 use etl_calib::pipeline::{detect_views, PlanarViews};
-use etl_calib::zhang::zhang;
+use etl_calib::zhang::{zhang_with, ZhangOptions, ZhangResult};
+use etl_core::model::{DistortionModel, OpenCvFlags};
 use etl_formats::board::Board;
 use etl_formats::calibration::Outlier;
 use etl_formats::{Error, Result};
+
+/// The distortion model of `--model`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelArg {
+    /// The paper's: k1, p1, p2 in centred pixel coordinates (Eq. 17).
+    Paper,
+    /// OpenCV's: k1, k2, p1, p2, k3 in normalised coordinates (cv2.calibrateCamera's).
+    Opencv,
+}
 
 /// Arguments of `etlcal zhang`.
 #[derive(clap::Args, Debug)]
@@ -32,13 +54,48 @@ pub struct Args {
     /// The board.
     #[command(flatten)]
     pub board: BoardArgs,
+    /// The distortion model.
+    #[arg(long, value_enum, default_value = "paper")]
+    pub model: ModelArg,
+    /// Hold k3 at 0 (OpenCV's CALIB_FIX_K3; --model opencv only).
+    #[arg(long)]
+    pub fix_k3: bool,
+    /// Hold p1 = p2 = 0 (OpenCV's CALIB_ZERO_TANGENT_DIST; --model opencv only).
+    #[arg(long)]
+    pub zero_tangent: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
 }
 
+/// The options of `--model`, `--fix-k3`, `--zero-tangent`; an OpenCV flag with the paper's
+/// model is refused, naming the flag.
+fn options(args: &Args) -> Result<ZhangOptions> {
+    let model = match args.model {
+        ModelArg::Paper => DistortionModel::Paper,
+        ModelArg::Opencv => DistortionModel::OpenCv,
+    };
+    let flags = OpenCvFlags { fix_k3: args.fix_k3, zero_tangent: args.zero_tangent };
+    refuse_opencv_flags(Some(model), flags, ["--fix-k3", "--zero-tangent"], "--model opencv")?;
+    Ok(ZhangOptions { model, flags })
+}
+
+/// The `--json` object of an opencv-family result.
+fn opencv_json(z: &ZhangResult, images: &[&PathBuf]) -> Value {
+    let names = ["fx", "fy", "u0", "v0", "k1", "k2", "p1", "p2", "k3"];
+    let std: serde_json::Map<String, Value> =
+        names.iter().zip(&z.std).map(|(n, s)| (n.to_string(), json!(s))).collect();
+    json!({"model": "opencv", "fx": z.fx, "fy": z.fy, "u0": z.u0, "v0": z.v0,
+        "camera_matrix": z.camera_matrix(), "dist_coeffs": z.dist_coeffs(),
+        "rms_px": z.rms_px, "views_used": z.views_used,
+        "images_used": images.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        "per_view_rms_px": z.per_view_rms_px, "std": std,
+        "fix_k3": z.options.flags.fix_k3, "zero_tangent": z.options.flags.zero_tangent})
+}
+
 /// Runs `etlcal zhang`.
 pub fn run(args: Args) -> Result<()> {
+    let opts = options(&args)?;
     let board = args.board.board()?;
     let found = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
     for m in &found.skipped {
@@ -52,34 +109,47 @@ pub fn run(args: Args) -> Result<()> {
             args.images.len()
         )));
     }
-    let z = zhang(views, size)?;
-    let mut j = json!({"fx": z.fx, "fy": z.fy, "u0": z.u0, "v0": z.v0, "k1": z.k1, "p1": z.p1, "p2": z.p2,
-        "rms_px": z.rms_px, "views_used": z.views_used});
+    let z = zhang_with(views, size, &opts)?;
+    let [c0, c1, c2, c3, c4] = z.coefficients;
+    let mut j = match opts.model {
+        DistortionModel::Paper => json!({"fx": z.fx, "fy": z.fy, "u0": z.u0, "v0": z.v0, "k1": c0, "p1": c1,
+            "p2": c2, "rms_px": z.rms_px, "views_used": z.views_used}),
+        DistortionModel::OpenCv => {
+            let used: Vec<&PathBuf> = found.image_index.iter().filter_map(|&k| args.images.get(k)).collect();
+            opencv_json(&z, &used)
+        }
+    };
     let outliers = outliers_json(&z.outliers, &found, &args.images, &board);
     if !outliers.is_empty() {
-        j["outliers"] = serde_json::Value::Array(outliers.clone());
+        j["outliers"] = Value::Array(outliers.clone());
     }
     if args.json {
         print_json(&j);
-    } else {
-        outln!(
-            "fx {:.3} +- {:.3}, fy {:.3} +- {:.3}, u0 {:.3} +- {:.3}, v0 {:.3} +- {:.3} px",
-            z.fx,
-            z.std[0],
-            z.fy,
-            z.std[1],
-            z.u0,
-            z.std[2],
-            z.v0,
-            z.std[3]
-        );
-        outln!("k1 {:.4e}, p1 {:.4e}, p2 {:.4e}; rms {:.4} px over {} views", z.k1, z.p1, z.p2, z.rms_px, z.views_used);
-        if !outliers.is_empty() {
-            outln!("left out {} outlier corners:", outliers.len());
+        return Ok(());
+    }
+    outln!(
+        "fx {:.3} +- {:.3}, fy {:.3} +- {:.3}, u0 {:.3} +- {:.3}, v0 {:.3} +- {:.3} px",
+        z.fx,
+        z.std[0],
+        z.fy,
+        z.std[1],
+        z.u0,
+        z.std[2],
+        z.v0,
+        z.std[3]
+    );
+    let (rms, n) = (z.rms_px, z.views_used);
+    match opts.model {
+        DistortionModel::Paper => outln!("k1 {c0:.4e}, p1 {c1:.4e}, p2 {c2:.4e}; rms {rms:.4} px over {n} views"),
+        DistortionModel::OpenCv => {
+            outln!("dist_coeffs (k1, k2, p1, p2, k3) {c0:.6}, {c1:.6}, {c2:.6}, {c3:.6}, {c4:.6}; rms {rms:.4} px over {n} views")
         }
-        for o in &outliers {
-            outln!("  {} corner {} ({:.2} px)", o["image"].as_str().unwrap_or("?"), o["corner"], o["residual_px"]);
-        }
+    }
+    if !outliers.is_empty() {
+        outln!("left out {} outlier corners:", outliers.len());
+    }
+    for o in &outliers {
+        outln!("  {} corner {} ({:.2} px)", o["image"].as_str().unwrap_or("?"), o["corner"], o["residual_px"]);
     }
     Ok(())
 }
@@ -139,7 +209,7 @@ mod tests {
             let px = &mut views[v].pixels[p];
             *px = [px[0] + 120.0, px[1] - 60.0];
         }
-        let z = zhang(&views, sim.observations.image_size).unwrap();
+        let z = zhang_with(&views, sim.observations.image_size, &ZhangOptions::default()).unwrap();
         assert_eq!(z.outliers.iter().map(|o| (o.view, o.point)).collect::<Vec<_>>(), [(1, 7), (4, cols + 2)]);
         // Six images given; the board was not found in the second one.
         let images: Vec<PathBuf> = (0..6).map(|k| PathBuf::from(format!("img{k}.png"))).collect();

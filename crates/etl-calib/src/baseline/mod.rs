@@ -247,7 +247,7 @@ fn calibration_of(
     let mut sa = [0.0; 9];
     for (k, idx) in [4usize, 5, 6].into_iter().enumerate() {
         let (y, sd) = col(&|z| {
-            let v = [z.k1, z.p1, z.p2][k];
+            let v = z.coefficients[k];
             (v, z.std[idx])
         });
         let (c, cov) = poly_fit(&ws, &y, &sd, 2)?;
@@ -299,6 +299,7 @@ fn calibration_of(
         // Each setting's boards are in their own frames and the calibration has no pose:
         // there is no distance to fit a focus law to.
         focus_law: None,
+        model_selection: None,
         views: settings
             .iter()
             .map(|s| ViewSummary {

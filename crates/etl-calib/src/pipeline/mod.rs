@@ -12,6 +12,7 @@ pub mod focus_law;
 pub mod measure;
 mod planar_views;
 pub mod robust;
+pub mod select;
 mod solve;
 mod view_focal;
 
@@ -19,15 +20,15 @@ pub use planar_views::{detect_views, PlanarViews};
 pub use view_focal::view_focal;
 
 use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, Layout, ParamMask, RobustLoss, View, A0};
-use etl_core::model::CameraModel;
+use etl_core::model::{CameraModel, OpenCvFlags};
 
 use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
 
 /// Options of [`calibrate`]. The default is errors-in-variables with the paper's noise
-/// levels ([`Estimator::EIV_PAPER`]), no robust loss, A0 free; [`Estimator::Paper`] is the
-/// paper's Eq. 24.
+/// levels ([`Estimator::EIV_PAPER`]), no robust loss, A0 free, the paper's model (its
+/// distortion family, cubic focal polynomials); [`Estimator::Paper`] is the paper's Eq. 24.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CalibrateOptions {
     /// The estimator of the bundle adjustment (default: [`Estimator::EIV_PAPER`]).
@@ -36,13 +37,40 @@ pub struct CalibrateOptions {
     pub hold_a0: bool,
     /// Robust loss.
     pub robust: Option<RobustLoss>,
+    /// The model calibrated: distortion family and focal degree (default
+    /// [`Layout::PAPER`]). [`select`] chooses one by held-out views.
+    pub layout: Layout,
+    /// OpenCV's fix-k3 and zero-tangent flags (the opencv family only; default none).
+    pub flags: OpenCvFlags,
 }
 
 impl Default for CalibrateOptions {
     fn default() -> Self {
         // Errors-in-variables: under the paper's own noise model it reaches the Cramer-Rao
         // bound where Eq. 24 does not (docs/RESULTS.md).
-        CalibrateOptions { estimator: Estimator::EIV_PAPER, hold_a0: false, robust: None }
+        CalibrateOptions {
+            estimator: Estimator::EIV_PAPER,
+            hold_a0: false,
+            robust: None,
+            layout: Layout::PAPER,
+            flags: OpenCvFlags::NONE,
+        }
+    }
+}
+
+impl CalibrateOptions {
+    /// The bundle adjustment's options: the estimator, the robust loss, and the numbers
+    /// held (A0 if asked, and those OpenCV's flags hold). Errors: a flag with the paper
+    /// family (naming it).
+    pub fn bundle_adjust(&self) -> Result<BundleAdjustOptions> {
+        let a0 = if self.hold_a0 { self.layout.a0_mask() } else { ParamMask::NONE };
+        let flags = self.layout.opencv_mask(self.flags).map_err(Error::Core)?;
+        Ok(BundleAdjustOptions {
+            estimator: self.estimator,
+            hold: a0 | flags,
+            robust: self.robust,
+            ..BundleAdjustOptions::default()
+        })
     }
 }
 
@@ -72,10 +100,22 @@ pub(crate) fn check_image_size(path: &std::path::Path, got: [u32; 2], expected: 
     })
 }
 
-/// A0 from the observations' lens-off views by Zhang's method (section 4.2).
-///
-/// Errors: no lens-off views (pass an A0 file instead), or those of [`crate::zhang::zhang`].
+/// A0 from the observations' lens-off views by Zhang's method (section 4.2) with the
+/// paper's distortion family ([`a0_from_offstate_with`]).
 pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult> {
+    a0_from_offstate_with(obs, &crate::zhang::ZhangOptions::default())
+}
+
+/// A0 from the observations' lens-off views by Zhang's method with the distortion family
+/// (and OpenCV's flags) of `options`: the same family as the calibration's, so that a
+/// strongly distorting lens does not bias the principal point and focal lengths A0 gives.
+///
+/// Errors: no lens-off views (pass an A0 file instead), or those of
+/// [`crate::zhang::zhang_with`].
+pub fn a0_from_offstate_with(
+    obs: &Observations,
+    options: &crate::zhang::ZhangOptions,
+) -> Result<crate::zhang::ZhangResult> {
     if obs.offstate_views.is_empty() {
         return Err(etl_formats::Error::invalid(
             "offstate_views",
@@ -90,7 +130,7 @@ pub fn a0_from_offstate(obs: &Observations) -> Result<crate::zhang::ZhangResult>
             pixels: v.points.iter().map(|p| p.pixel).collect(),
         })
         .collect();
-    crate::zhang::zhang(&views, obs.image_size).map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
+    crate::zhang::zhang_with(&views, obs.image_size, options).map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
 }
 
 /// Calibrates from observations with a given A0.
@@ -134,13 +174,18 @@ pub fn calibrate(
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
-    let ba = BundleAdjustOptions {
-        estimator: options.estimator,
-        hold: if options.hold_a0 { Layout::PAPER.a0_mask() } else { ParamMask::NONE },
-        robust: options.robust,
-        ..BundleAdjustOptions::default()
-    };
-    let solved = solve::solve_without_outliers(&views, a0, &ba)?;
+    let solved = solve::solve_without_outliers(&views, a0, options)?;
+    calibration_of(obs, &views, solved, thermal, options)
+}
+
+/// The calibration file's content from the solve's result.
+fn calibration_of(
+    obs: &Observations,
+    views: &[View<'_>],
+    solved: solve::Solved,
+    thermal: Option<&ThermalRef>,
+    options: &CalibrateOptions,
+) -> Result<CalibrationResult> {
     let (report, initial) = (solved.report, solved.initial);
     let m = report.model;
     let summaries = views
@@ -171,12 +216,12 @@ pub fn calibrate(
             }
         })
         .collect();
-    let (focus_law, focus_law_warning) = match focus_law::fit_focus_law(&m, &views) {
+    let (focus_law, focus_law_warning) = match focus_law::fit_focus_law(&m, views) {
         Ok(law) => (Some(law), None),
         Err(why) => (None, Some(why)),
     };
-    let lo = e_com.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = e_com.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let lo = views.iter().map(|v| v.e_com_ma).fold(f64::INFINITY, f64::min);
+    let hi = views.iter().map(|v| v.e_com_ma).fold(f64::NEG_INFINITY, f64::max);
     let mut calibration = Calibration {
         thermal: thermal.cloned(),
         rms_reprojection_px: report.rms_px,

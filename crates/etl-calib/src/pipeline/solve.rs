@@ -3,8 +3,8 @@
 //! re-solve without the outliers (see [`super::robust`]), and the plausibility warnings.
 
 use etl_core::calib::{
-    bundle_adjust, bundle_adjust_scratch, initialise, BundleAdjustOptions, BundleAdjustReport, Estimator, Point, View,
-    ViewCorrection, ViewScratch, A0,
+    bundle_adjust, bundle_adjust_scratch, initialise_model, BundleAdjustOptions, BundleAdjustReport, Estimator, Point,
+    View, ViewCorrection, ViewScratch, A0,
 };
 use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, Outlier};
@@ -53,7 +53,7 @@ pub(super) struct Rounds {
 }
 
 /// The points of `views` where `used` says so.
-fn subset(views: &[View<'_>], used: &[Vec<bool>]) -> Vec<Vec<Point>> {
+pub(super) fn subset(views: &[View<'_>], used: &[Vec<bool>]) -> Vec<Vec<Point>> {
     views.iter().zip(used).map(|(v, u)| v.points.iter().zip(u).filter(|(_, &k)| k).map(|(p, _)| *p).collect()).collect()
 }
 
@@ -96,7 +96,7 @@ fn screen(views: &[View<'_>]) -> Vec<Vec<bool>> {
 }
 
 /// One bundle adjustment over the `used` points of `views`, from `start`.
-fn solve_once(
+pub(super) fn solve_once(
     views: &[View<'_>],
     used: &[Vec<bool>],
     start: &CameraModel,
@@ -113,12 +113,15 @@ fn solve_once(
 /// the outliers (distance > [`outlier_limit_px`] of all distances) are not
 /// the points left out, a new solve from the linear initialisation without them.
 ///
-/// Errors: those of [`initialise`] and [`bundle_adjust`] on the points used.
-pub(super) fn solve_without_outliers(views: &[View<'_>], a0: &A0, ba: &BundleAdjustOptions) -> Result<Solved> {
+/// The model is that of `options` (family, focal degree, OpenCV's flags held).
+///
+/// Errors: those of [`initialise_model`] and [`bundle_adjust`] on the points used.
+pub(super) fn solve_without_outliers(views: &[View<'_>], a0: &A0, options: &CalibrateOptions) -> Result<Solved> {
+    let ba = &options.bundle_adjust()?;
     let mut used = screen(views);
     let pts = subset(views, &used);
     let sub: Vec<View<'_>> = views.iter().zip(&pts).map(|(v, p)| View { e_com_ma: v.e_com_ma, points: p }).collect();
-    let initial = initialise(&sub, a0)?;
+    let initial = initialise_model(&sub, a0, options.layout, options.flags)?;
     let mut converged = false;
     let (mut report, mut corrections) = solve_once(views, &used, &initial, ba)?;
     let mut d = distances(&report.model, views, &corrections);

@@ -6,7 +6,17 @@ import numpy as np
 import numpy.typing as npt
 from numpy.polynomial import Polynomial
 
-from etlcal.options import Estimator, ExportFormat, Method, NoisePreset, RobustLoss, SharpnessMetric, StudyName
+from etlcal.options import (
+    DistortionChoice,
+    Estimator,
+    ExportFormat,
+    FocalDegreeChoice,
+    Method,
+    NoisePreset,
+    RobustLoss,
+    SharpnessMetric,
+    StudyName,
+)
 from etlcal.results import (
     AutofocusResult,
     BoardDetection,
@@ -21,10 +31,12 @@ from etlcal.results import (
     LensState,
     ModelStd,
     OffstateView,
+    OpenCvCamera,
     StudyResult,
     ThermalCalibrationResult,
     View,
     ViewSummary,
+    ZhangOpenCvResult,
     ZhangResult,
 )
 
@@ -67,6 +79,7 @@ __all__ = [
     "render",
     "sharpness",
     "simulate_paper_rig",
+    "simulate_strong_rig",
     "study",
     "thermal_calibration",
     "zhang",
@@ -338,6 +351,15 @@ class Calibration:
     def setting_outliers(self) -> List[Tuple[int, int, float]]: ...
     @property
     def warnings(self) -> List[str]: ...
+    @property
+    def distortion_model(self) -> Literal["paper", "opencv"]: ...
+    @property
+    def focal_degree(self) -> int: ...
+    @property
+    def model_selection(self) -> Optional[Dict[str, Any]]:
+        """How distortion="auto" / focal_degree="auto" chose the model: {"method", "rule",
+        "candidates": [...]}; None when the model was given."""
+        ...
     def at(self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False) -> CameraAt: ...
     @property
     def rms_px(self) -> float: ...
@@ -441,7 +463,10 @@ class Calibration:
     def projection_std(self, world_mm: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
     def to_opencv(
         self, e_com_ma: Union[float, _Currents], *, allow_extrapolation: bool = False
-    ) -> Tuple[_F64, _F64]: ...
+    ) -> OpenCvCamera:
+        """(K, dist) for cv2, exact for the opencv family; `fit_rms_px`, `fit_max_px`,
+        `exact` say the paper family's fit error."""
+        ...
     def undistort_maps(
         self,
         e_com_ma: float,
@@ -572,6 +597,9 @@ class Simulation:
 def simulate_paper_rig(
     seed: int = 0, noise: Optional[Union[NoisePreset, Mapping[str, float]]] = None, setting_views: bool = False
 ) -> Simulation: ...
+def simulate_strong_rig(
+    seed: int = 0, noise: Optional[Union[NoisePreset, Mapping[str, float]]] = None
+) -> Simulation: ...
 def calibrate(
     observations: Observations,
     a0: Optional[A0] = None,
@@ -584,6 +612,10 @@ def calibrate(
     sigma_e_ma: float = 0.4,
     sigma_px: Optional[float] = None,
     method: Method = "proposed",
+    distortion: Optional[DistortionChoice] = None,
+    focal_degree: Optional[FocalDegreeChoice] = None,
+    fix_k3: bool = False,
+    zero_tangent: bool = False,
 ) -> Calibration: ...
 def cramer_rao_std(
     observations: Observations,
@@ -706,9 +738,27 @@ class VirtualLens:
     def disconnect(self) -> None: ...
     def reconnect(self) -> None: ...
 
-def zhang(views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]], image_size: Tuple[int, int]) -> ZhangResult:
+@overload
+def zhang(
+    views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]],
+    image_size: Tuple[int, int],
+    model: Literal["paper"] = "paper",
+    fix_k3: Literal[False] = False,
+    zero_tangent: Literal[False] = False,
+) -> ZhangResult:
     """Zhang's monofocal calibration from (board_mm (N,2), pixels (N,2)) views: fx, fy, u0, v0
     (px), k1, p1, p2, std, rms_px, iterations, views_used, poses."""
+    ...
+@overload
+def zhang(
+    views: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike]],
+    image_size: Tuple[int, int],
+    model: Literal["opencv"],
+    fix_k3: bool = False,
+    zero_tangent: bool = False,
+) -> ZhangOpenCvResult:
+    """The same in OpenCV's model (cv2.calibrateCamera's): also k2, k3, camera_matrix,
+    dist_coeffs, per_view_rms_px; std of fx, fy, u0, v0, k1, k2, p1, p2, k3."""
     ...
 
 def thermal_calibration(

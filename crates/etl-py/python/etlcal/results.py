@@ -32,10 +32,12 @@ __all__ = [
     "LensState",
     "ModelStd",
     "OffstateView",
+    "OpenCvCamera",
     "StudyResult",
     "ThermalCalibrationResult",
     "View",
     "ViewSummary",
+    "ZhangOpenCvResult",
     "ZhangResult",
 ]
 
@@ -115,6 +117,23 @@ class ZhangResult(_Result):
     iterations: int
     views_used: int
     poses: List[Tuple[List[float], List[float]]]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ZhangOpenCvResult(ZhangResult):
+    """`zhang(..., model="opencv")`: OpenCV's camera, the model and least-squares problem of
+    `cv2.calibrateCamera`. `fx`, `fy`, `u0`, `v0` (px); `k1`, `k2`, `p1`, `p2`, `k3`
+    (dimensionless, OpenCV's); `camera_matrix` (3 x 3) and `dist_coeffs` ([k1, k2, p1, p2,
+    k3]) for cv2 as they are; `std`: one standard deviation of fx, fy, u0, v0, k1, k2, p1,
+    p2, k3 (cv2.calibrateCameraExtended's `stdDeviationsIntrinsics`; 0 for a coefficient a
+    flag holds); `per_view_rms_px` (its `perViewErrors`); `model` is "opencv"."""
+
+    model: str
+    k2: float
+    k3: float
+    camera_matrix: _F64
+    dist_coeffs: _F64
+    per_view_rms_px: List[float]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -359,3 +378,30 @@ class StudyResult(_Result):
     def to_dict(self) -> Dict[str, Any]:
         """The table as a plain dict (the command line's --json object)."""
         return dict(self.table)
+
+
+class OpenCvCamera(Tuple[_F64, _F64]):
+    """`Calibration.to_opencv(...)`: the tuple (camera_matrix, dist_coeffs) for cv2, as it
+    always was (`K, dist = cal.to_opencv(E)`), saying how exact it is: `exact` is True for
+    the opencv distortion family (OpenCV's own model: `cv2.projectPoints` reproduces the
+    calibration), False for the paper family, whose coefficients are the least-squares fit
+    over the image; `fit_rms_px`, `fit_max_px` are the fit's error (0 when exact; arrays
+    over an array of currents)."""
+
+    camera_matrix: _F64
+    dist_coeffs: _F64
+    fit_rms_px: Any
+    fit_max_px: Any
+    exact: bool
+
+    def __new__(cls, camera_matrix: _F64, dist_coeffs: _F64, fit_rms_px: Any, fit_max_px: Any,
+                exact: bool) -> "OpenCvCamera":
+        self = super().__new__(cls, (camera_matrix, dist_coeffs))
+        self.camera_matrix, self.dist_coeffs = camera_matrix, dist_coeffs
+        self.fit_rms_px, self.fit_max_px, self.exact = fit_rms_px, fit_max_px, exact
+        return self
+
+    def __repr__(self) -> str:
+        how = "exact" if self.exact else f"least-squares fit, error {_short(self.fit_rms_px)} px RMS"
+        return (f"OpenCvCamera(camera_matrix={_short(self.camera_matrix)}, "
+                f"dist_coeffs={_short(self.dist_coeffs)}, {how})")

@@ -47,9 +47,14 @@ def baseline(trials: Optional[int] = None, seed: int = 1, out: _Out = None) -> S
     return study("baseline", trials or 0, seed, out)
 
 
-def crlb(trials: Optional[int] = None, seed: int = 1, out: _Out = None) -> StudyResult:
+def crlb(trials: Optional[int] = None, seed: int = 1, out: _Out = None, rig: str = "paper") -> StudyResult:
     """Cramer-Rao bound of every parameter against the Monte Carlo spread of the estimates
     over `trials` data sets: {"parameters": [{"name", "truth", "crlb_std", "mc_std",
     "mc_std_se", "efficiency", "efficiency_se", ...}, ...], "fx_curve": [...]} (each
-    observed std and efficiency with its standard error over the trials)."""
-    return study("crlb", trials or 0, seed, out)
+    observed std and efficiency with its standard error over the trials). `rig="strong"`:
+    the strong-distortion rig, OpenCV's distortion family against its bound (pixel noise
+    only), and the paper family's bias in the principal point and fx(E) there ("bias");
+    the study "crlb-strong"."""
+    if rig not in ("paper", "strong"):
+        raise ValueError(f'rig must be "paper" or "strong", got {rig!r}')
+    return study("crlb" if rig == "paper" else "crlb-strong", trials or 0, seed, out)

@@ -1,14 +1,16 @@
 //! `etlcal simulate --config sim.json`: what to simulate, as a file.
 //!
 //! ```json
-//! {"format": "etlcal.simconfig/1", "seed": 1,
+//! {"format": "etlcal.simconfig/1", "seed": 1, "rig": "paper",
 //!  "noise": {"xy_mm": 0.001, "z_mm": 0.01, "e_ma": 0.4, "px": 0.2, "kf0_rel": 0.003, "pp_px": 1.0},
 //!  "setting_rig": {"e_com_ma": [80, 150, 225], "views_per_setting": 15, "blur_px": 2.0,
 //!                  "aperture_mm": 2.5, "max_tilt_deg": 25.0}}
 //! ```
 //!
-//! Every field but `format` is optional (defaults: seed 1, the paper's noise, no setting
-//! views). Unknown fields are refused, as in every etlcal file.
+//! Every field but `format` is optional (defaults: seed 1, the paper rig, the paper's noise,
+//! no setting views). `"rig": "strong"` simulates the strong-distortion rig instead
+//! ([`super::strong_rig`]; corners only, no setting views). Unknown fields are refused, as
+//! in every etlcal file.
 
 use std::path::Path;
 
@@ -26,6 +28,23 @@ pub const MAX_VIEWS_PER_SETTING: usize = 1000;
 /// The most currents of a setting rig (the paper's has 7).
 pub const MAX_SETTINGS: usize = 1000;
 
+/// Which simulated rig.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SimRig {
+    /// The paper's rig (docs/METHOD.md).
+    #[default]
+    Paper,
+    /// The strong-distortion rig ([`super::strong_rig`]).
+    Strong,
+}
+
+impl SimRig {
+    fn is_paper(&self) -> bool {
+        *self == SimRig::Paper
+    }
+}
+
 /// A simulation's configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -35,6 +54,9 @@ pub struct SimConfig {
     /// Random seed.
     #[serde(default = "default_seed")]
     pub seed: u64,
+    /// The rig (default: the paper's).
+    #[serde(default, skip_serializing_if = "SimRig::is_paper")]
+    pub rig: SimRig,
     /// The noise model.
     #[serde(default = "default_noise")]
     pub noise: NoiseModel,
@@ -53,7 +75,13 @@ fn default_noise() -> NoiseModel {
 
 impl Default for SimConfig {
     fn default() -> Self {
-        SimConfig { format: CONFIG_FORMAT.into(), seed: 1, noise: NoiseModel::PAPER, setting_rig: None }
+        SimConfig {
+            format: CONFIG_FORMAT.into(),
+            seed: 1,
+            rig: SimRig::Paper,
+            noise: NoiseModel::PAPER,
+            setting_rig: None,
+        }
     }
 }
 
@@ -82,6 +110,12 @@ impl SimConfig {
             etl_formats::check_range(key, value, [0.0, hi], unit)?;
         }
         if let Some(r) = &self.setting_rig {
+            if self.rig != SimRig::Paper {
+                return Err(Error::invalid(
+                    "setting_rig",
+                    "setting_rig: the per-setting baseline's views are the paper rig's, not with \"rig\": \"strong\"",
+                ));
+            }
             let message = "setting_rig needs at least one current and one view";
             if r.e_com_ma.is_empty() {
                 return Err(Error::invalid("setting_rig.e_com_ma", message));

@@ -8,6 +8,7 @@
 //! 1936 x 1458 image are dropped (2311 of 2520 remain).
 
 pub mod images;
+mod strong;
 
 use etl_core::calib::{Point, A0};
 use etl_core::model::CameraModel;
@@ -23,7 +24,8 @@ use serde_json::json;
 
 mod config;
 pub use crate::rig::{focus_depth_mm, focused_z_mm, PAPER_BOARD, PAPER_E_COM_MA, PAPER_TEMPERATURE_C, PAPER_Z_W_MM};
-pub use config::{SimConfig, CONFIG_FORMAT};
+pub use config::{SimConfig, SimRig, CONFIG_FORMAT};
+pub use strong::{strong_rig, STRONG_E_COM_MA, STRONG_LENS_OFF, STRONG_RIG_BOARD, STRONG_Z_W_MM};
 
 /// Standard deviations of the noise model (docs/METHOD.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -76,13 +78,43 @@ fn gauss(s: f64, rng: &mut ChaCha8Rng) -> f64 {
 /// The visible corners of the paper board at stage position `z_mm` and current `e_ma`
 /// (board frame: X, Y in mm, Z = 0) with their noise-free pixels.
 pub fn visible_board(cam: &CameraModel, z_mm: f64, e_ma: f64) -> Vec<([f64; 2], [f64; 2])> {
-    let ([cols, rows], sq) = PAPER_BOARD;
+    visible_stage_board(cam, &PAPER_RIG_BOARD, CameraModel::PAPER_IMAGE_SIZE, z_mm, e_ma)
+}
+
+/// A rig's stage board: inner corners (columns, rows), square, and the world (X, Y) of
+/// corner (0, 0), mm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StageBoard {
+    /// Inner corners, columns x rows.
+    pub inner_corners: [usize; 2],
+    /// Side of a square, mm.
+    pub square_mm: f64,
+    /// World (X, Y) of inner corner (0, 0), mm.
+    pub origin_mm: [f64; 2],
+}
+
+/// The paper rig's board ([`PAPER_BOARD`]) at the world origin.
+pub const PAPER_RIG_BOARD: StageBoard =
+    StageBoard { inner_corners: PAPER_BOARD.0, square_mm: PAPER_BOARD.1, origin_mm: [0.0, 0.0] };
+
+/// The corners of `board` at stage position `z_mm` whose noise-free pixel at current
+/// `e_ma` lies inside an image of `image_size`, with that pixel.
+pub fn visible_stage_board(
+    cam: &CameraModel,
+    board: &StageBoard,
+    image_size: [u32; 2],
+    z_mm: f64,
+    e_ma: f64,
+) -> Vec<([f64; 2], [f64; 2])> {
+    let [cols, rows] = board.inner_corners;
+    let (sq, [x0, y0]) = (board.square_mm, board.origin_mm);
+    let (w_max, h_max) = (image_size[0] as f64 - 1.0, image_size[1] as f64 - 1.0);
     let mut out = vec![];
     for j in 0..rows {
         for i in 0..cols {
-            let w = [sq * i as f64, sq * j as f64];
+            let w = [x0 + sq * i as f64, y0 + sq * j as f64];
             if let Ok(p) = cam.project([w[0], w[1], z_mm], e_ma) {
-                if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
+                if (0.0..=w_max).contains(&p[0]) && (0.0..=h_max).contains(&p[1]) {
                     out.push((w, p));
                 }
             }
@@ -129,15 +161,44 @@ const LENS_OFF_TILTS_DEG: [(f64, f64); 10] = [
 /// camera, tilted up to about 25 degrees, with corner and pixel noise. Points are in the
 /// board frame (Z = 0).
 pub fn lens_off_views(truth: &CameraModel, noise: &NoiseModel, rng: &mut ChaCha8Rng) -> Vec<OffstateView> {
+    lens_off_views_of(truth, &LensOff::PAPER, CameraModel::PAPER_IMAGE_SIZE, noise, rng)
+}
+
+/// How a rig's lens-off views are taken: the board (inner corners, square, mm) and the
+/// distance of its centre from the camera, mm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LensOff {
+    /// Inner corners (columns, rows) and square, mm.
+    pub board: ([usize; 2], f64),
+    /// Distance of the board's centre, mm (the views spread a few percent about it).
+    pub distance_mm: f64,
+}
+
+impl LensOff {
+    /// The paper rig's ([`LENS_OFF_BOARD`] at 125 mm).
+    pub const PAPER: LensOff = LensOff { board: LENS_OFF_BOARD, distance_mm: 125.0 };
+}
+
+/// The 10 lens-off views of `design` at E = 0 (the tilts of [`lens_off_poses`]), with
+/// corner and pixel noise; only corners inside an image of `image_size`.
+pub fn lens_off_views_of(
+    truth: &CameraModel,
+    design: &LensOff,
+    image_size: [u32; 2],
+    noise: &NoiseModel,
+    rng: &mut ChaCha8Rng,
+) -> Vec<OffstateView> {
+    let ([cols, rows], sq) = design.board;
+    let (w_max, h_max) = (image_size[0] as f64 - 1.0, image_size[1] as f64 - 1.0);
     let mut views = vec![];
-    for cam in lens_off_poses(truth) {
+    for cam in lens_off_poses_of(truth, design) {
         let mut points = vec![];
-        for j in 0..LENS_OFF_BOARD.0[1] {
-            for i in 0..LENS_OFF_BOARD.0[0] {
-                let w = [LENS_OFF_BOARD.1 * i as f64, LENS_OFF_BOARD.1 * j as f64];
+        for j in 0..rows {
+            for i in 0..cols {
+                let w = [sq * i as f64, sq * j as f64];
                 let real = [w[0] + gauss(noise.xy_mm, rng), w[1] + gauss(noise.xy_mm, rng), 0.0];
                 if let Ok(p) = cam.project(real, 0.0) {
-                    if (0.0..=1935.0).contains(&p[0]) && (0.0..=1457.0).contains(&p[1]) {
+                    if (0.0..=w_max).contains(&p[0]) && (0.0..=h_max).contains(&p[1]) {
                         let pixel = [p[0] + gauss(noise.px, rng), p[1] + gauss(noise.px, rng)];
                         points.push(PointObs { world_mm: [w[0], w[1], 0.0], pixel });
                     }
@@ -155,14 +216,29 @@ pub const LENS_OFF_BOARD: ([usize; 2], f64) = ([11, 8], 4.0);
 /// The camera of each lens-off view with the board frame as its world frame (board at
 /// Z = 0): the truth's intrinsics and distortion, the view's pose.
 pub fn lens_off_poses(truth: &CameraModel) -> Vec<CameraModel> {
+    lens_off_poses_of(truth, &LensOff::PAPER)
+}
+
+/// The camera of each lens-off view of `design` (the paper's: [`lens_off_poses`]): the
+/// tilts of [`LENS_OFF_TILTS_DEG`], the board's centre about `distance_mm` away, the
+/// sideways spread scaled with the distance.
+pub fn lens_off_poses_of(truth: &CameraModel, design: &LensOff) -> Vec<CameraModel> {
+    let ([cols, rows], sq) = design.board;
+    let centre_mm = [sq * (cols - 1) as f64 / 2.0, sq * (rows - 1) as f64 / 2.0, 0.0];
+    // The paper's spread (3 mm, 2 mm, 4 mm steps at 125 mm), scaled.
+    let s = design.distance_mm / 125.0;
     LENS_OFF_TILTS_DEG
         .iter()
         .enumerate()
         .map(|(k, &(ax, ay))| {
             let om = [ax.to_radians(), ay.to_radians(), 0.05 * (k as f64 - 4.5) / 4.5];
             let r = etl_core::model::rotation::rodrigues_to_matrix(om);
-            let centre = etl_core::model::rotation::mat_vec(&r, [20.0, 14.0, 0.0]);
-            let shift = [3.0 * ((k % 3) as f64 - 1.0), 2.0 * ((k % 2) as f64 - 0.5), 125.0 + 4.0 * (k % 4) as f64];
+            let centre = etl_core::model::rotation::mat_vec(&r, centre_mm);
+            let shift = [
+                s * 3.0 * ((k % 3) as f64 - 1.0),
+                s * 2.0 * ((k % 2) as f64 - 0.5),
+                design.distance_mm + s * 4.0 * (k % 4) as f64,
+            ];
             CameraModel {
                 rotation_rodrigues: om,
                 translation_mm: [shift[0] - centre[0], shift[1] - centre[1], shift[2] - centre[2]],
@@ -174,14 +250,56 @@ pub fn lens_off_poses(truth: &CameraModel) -> Vec<CameraModel> {
 
 /// The paper rig's 15 views under `noise`, seeded.
 pub fn paper_rig(noise: &NoiseModel, seed: u64) -> Simulation {
-    let truth = CameraModel::paper_rig();
+    simulate_rig(&RigDesign::paper(), noise, seed)
+}
+
+/// A simulated ETL rig: its true camera and image, the board on its stage, the views
+/// (stage position and compensated current of each) and the lens-off views.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigDesign {
+    /// The true camera.
+    pub truth: CameraModel,
+    /// Image size, px.
+    pub image_size: [u32; 2],
+    /// The board on the stage.
+    pub board: StageBoard,
+    /// Stage position of each view, mm.
+    pub z_w_mm: &'static [f64],
+    /// Compensated current of each view, mA.
+    pub e_com_ma: &'static [f64],
+    /// The lens-off views (for A0).
+    pub lens_off: LensOff,
+}
+
+impl RigDesign {
+    /// The paper rig (docs/METHOD.md, "The paper rig").
+    pub const fn paper() -> Self {
+        RigDesign {
+            truth: CameraModel::paper_rig(),
+            image_size: CameraModel::PAPER_IMAGE_SIZE,
+            board: PAPER_RIG_BOARD,
+            z_w_mm: &PAPER_Z_W_MM,
+            e_com_ma: &PAPER_E_COM_MA,
+            lens_off: LensOff::PAPER,
+        }
+    }
+}
+
+/// The views of `design` under `noise`, seeded: per view j the stage really stands at
+/// Z_W,j + dZ_j and the lens runs at E_j + dE_j while Z_W,j and E_j are recorded; each
+/// corner sits off its nominal X, Y by the corner noise; the observed pixel carries the
+/// pixel noise; corners whose noise-free pixel leaves the image are dropped; the A0 a
+/// lens-off calibration would give is off by the noise model's kf0 and principal-point
+/// errors.
+pub fn simulate_rig(design: &RigDesign, noise: &NoiseModel, seed: u64) -> Simulation {
+    let truth = design.truth;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut obs = Observations::new(CameraModel::PAPER_IMAGE_SIZE);
+    let mut obs = Observations::new(design.image_size);
     let (mut dzs, mut des) = (vec![], vec![]);
-    for (&z, &e) in PAPER_Z_W_MM.iter().zip(&PAPER_E_COM_MA) {
+    for (&z, &e) in design.z_w_mm.iter().zip(design.e_com_ma) {
         let (dz, de) = (gauss(noise.z_mm, &mut rng), gauss(noise.e_ma, &mut rng));
         let mut points = vec![];
-        for (w, _) in visible_board(&truth, z, e) {
+        for (w, _) in visible_stage_board(&truth, &design.board, design.image_size, z, e) {
             let real = [w[0] + gauss(noise.xy_mm, &mut rng), w[1] + gauss(noise.xy_mm, &mut rng), z + dz];
             if let Ok(p) = truth.project(real, e + de) {
                 let pixel = [p[0] + gauss(noise.px, &mut rng), p[1] + gauss(noise.px, &mut rng)];
@@ -195,7 +313,7 @@ pub fn paper_rig(noise: &NoiseModel, seed: u64) -> Simulation {
         dzs.push(dz);
         des.push(de);
     }
-    obs.offstate_views = lens_off_views(&truth, noise, &mut rng);
+    obs.offstate_views = lens_off_views_of(&truth, &design.lens_off, design.image_size, noise, &mut rng);
     let a0 = A0 {
         kf0x: truth.kf_x.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
         kf0y: truth.kf_y.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
@@ -342,6 +460,9 @@ pub fn write_truth(sim: &Simulation, dataset_model: Option<&CameraModel>, dir: &
 
 /// Simulates `config`.
 pub fn simulate(config: &SimConfig) -> Simulation {
+    if config.rig == SimRig::Strong {
+        return strong_rig(&config.noise, config.seed);
+    }
     let mut sim = paper_rig(&config.noise, config.seed);
     if let Some(rig) = &config.setting_rig {
         add_setting_views(&mut sim.observations, rig, &config.noise, config.seed);

@@ -1,0 +1,70 @@
+//! `etlcal zhang --model opencv` on the wide-lens set fixtures/wide/stereo752_left
+//! (SOURCE.md there): OpenCV's keys in the JSON beside today's, and OpenCV's flags refused
+//! with the paper's model (one line naming the flag, exit 1).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn images() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/wide/stereo752_left");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    v.sort();
+    v.truncate(8);
+    v
+}
+
+fn zhang(extra: &[&str]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_etlcal"));
+    cmd.arg("zhang").args(images()).args(["--pattern", "11x8", "--square", "1"]).args(extra);
+    cmd.output().unwrap()
+}
+
+#[test]
+fn opencv_model_adds_camera_matrix_dist_coeffs_per_view_rms_and_stds() {
+    let out = zhang(&["--model", "opencv", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in
+        ["fx", "fy", "u0", "v0", "rms_px", "views_used", "camera_matrix", "dist_coeffs", "per_view_rms_px", "std"]
+    {
+        assert!(v.get(key).is_some(), "{key} missing: {v}");
+    }
+    assert_eq!(v["model"], "opencv");
+    assert_eq!(v["views_used"], 8);
+    let k = &v["camera_matrix"];
+    assert_eq!((k[0][0].as_f64(), k[0][2].as_f64()), (v["fx"].as_f64(), v["u0"].as_f64()));
+    assert_eq!((k[1][1].as_f64(), k[2][2].as_f64(), k[0][1].as_f64()), (v["fy"].as_f64(), Some(1.0), Some(0.0)));
+    let d: Vec<f64> = v["dist_coeffs"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert_eq!(d.len(), 5);
+    assert!(d[0] < -0.3 && d[1] > 0.1, "a wide lens: {d:?}");
+    assert_eq!(v["per_view_rms_px"].as_array().unwrap().len(), 8);
+    assert_eq!(v["images_used"].as_array().unwrap().len(), 8);
+    for name in ["fx", "fy", "u0", "v0", "k1", "k2", "p1", "p2", "k3"] {
+        assert!(v["std"][name].as_f64().unwrap() > 0.0, "std of {name}");
+    }
+    // --fix-k3 holds k3 at zero, with no standard deviation.
+    let out = zhang(&["--model", "opencv", "--fix-k3", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!((v["dist_coeffs"][4].as_f64(), v["std"]["k3"].as_f64()), (Some(0.0), Some(0.0)));
+    assert_eq!(v["fix_k3"], true);
+}
+
+#[test]
+fn opencv_flags_with_the_paper_model_are_refused_naming_the_flag() {
+    for flag in ["--fix-k3", "--zero-tangent"] {
+        for model in [&["--model", "paper"][..], &[][..]] {
+            let out = zhang(&[model, &[flag, "--json"]].concat());
+            assert_eq!(out.status.code(), Some(1), "{flag} {model:?}");
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(err.lines().count(), 1, "{err}");
+            assert!(
+                err.starts_with("etlcal: error: ") && err.contains(flag) && err.contains("--model opencv"),
+                "{err}"
+            );
+            assert!(out.stdout.is_empty());
+        }
+    }
+    let out = zhang(&["--model", "brown"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("brown"));
+}
