@@ -4,30 +4,34 @@ currents, and cv2.initUndistortRectifyMap reproduces etlcal's own undistortion m
 float32 rounding: both maps are float32, 6e-5 px apart near 1000 px; see the test). The calibration: the strong-distortion rig (k1 about -0.3, k2 about 0.15),
 calibrated by etlcal from its simulated corners with distortion="opencv", and its truth.
 The paper family's export says its fit error (`exact`, `fit_rms_px`)."""
+from typing import Any, Tuple
+
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
 
-cv2 = pytest.importorskip("cv2")
+cv2: Any = pytest.importorskip("cv2")
 
 CURRENTS = [80.0, 115.0, 150.0, 190.0, 225.0]
 
 
 @pytest.fixture(scope="module")
-def strong():
+def strong() -> Tuple[etlcal.simulate.Simulation, etlcal.Calibration]:
     sim = etlcal.simulate.strong_rig(3)
     cal = etlcal.calibrate(sim.observations, thermal="paper", distortion="opencv")
     return sim, cal
 
 
-def world_points(sim):
+def world_points(sim: etlcal.simulate.Simulation) -> npt.NDArray[np.float64]:
     obs = sim.observations
     return np.concatenate([obs[k].world_mm for k in range(len(obs))])
 
 
 @pytest.mark.parametrize("which", ["calibrated", "truth"])
-def test_cv2_project_points_reproduces_project_to_1e_9_px(strong, which):
+def test_cv2_project_points_reproduces_project_to_1e_9_px(
+        strong: Tuple[etlcal.simulate.Simulation, etlcal.Calibration], which: str) -> None:
     sim, cal = strong
     cal = cal if which == "calibrated" else sim.truth
     assert cal.distortion_model == "opencv" and cal.focal_degree == 3
@@ -46,7 +50,8 @@ def test_cv2_project_points_reproduces_project_to_1e_9_px(strong, which):
         assert dist[0] < -0.25 and dist[1] > 0.1
 
 
-def test_cv2_init_undistort_rectify_map_reproduces_undistort_maps(strong):
+def test_cv2_init_undistort_rectify_map_reproduces_undistort_maps(
+        strong: Tuple[etlcal.simulate.Simulation, etlcal.Calibration]) -> None:
     """Both maps are float32 (cv2 has no float64 map): an entry near 1000 px is stored to
     6e-5 px. So: etlcal's map is OpenCV's map rounded once to float32 (checked against
     cv2.projectPoints of each output pixel's ray in float64, the definition of
@@ -78,7 +83,7 @@ def test_cv2_init_undistort_rectify_map_reproduces_undistort_maps(strong):
     assert differing <= 1e-5 * 2 * w * h * 2 * len(CURRENTS), differing
 
 
-def test_paper_family_export_says_its_fit_error():
+def test_paper_family_export_says_its_fit_error() -> None:
     sim = etlcal.simulate.paper_rig(1, noise="none")
     cal = sim.truth
     assert cal.distortion_model == "paper"

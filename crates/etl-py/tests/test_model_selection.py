@@ -1,20 +1,23 @@
 """calibrate(distortion=..., focal_degree=...) (issue 16): the opencv family, the choice
 by held-out views (`model_selection`), and the bad inputs, each a one-line InputError
 naming the argument, with nothing returned."""
+from typing import Any, Dict
+
 import pytest
 
 import etlcal
 
 
 @pytest.fixture(scope="module")
-def strong():
+def strong() -> etlcal.simulate.Simulation:
     return etlcal.simulate.strong_rig(2)
 
 
-def test_auto_chooses_opencv_on_the_strong_rig_and_records_the_table(strong):
+def test_auto_chooses_opencv_on_the_strong_rig_and_records_the_table(strong: etlcal.simulate.Simulation) -> None:
     cal = etlcal.calibrate(strong.observations, thermal="paper", distortion="auto")
     assert cal.distortion_model == "opencv" and cal.focal_degree == 3
     sel = cal.model_selection
+    assert sel is not None
     assert sel["method"] == "leave-one-view-out" and sel["rule"] == "one-standard-error"
     rows = {(c["distortion_model"], c["focal_degree"]): c for c in sel["candidates"]}
     assert set(rows) == {("paper", 3), ("opencv", 3)}
@@ -26,7 +29,7 @@ def test_auto_chooses_opencv_on_the_strong_rig_and_records_the_table(strong):
     assert abs(cal.principal_point - strong.truth.principal_point).max() < 2.0
 
 
-def test_given_models_and_defaults(strong):
+def test_given_models_and_defaults(strong: etlcal.simulate.Simulation) -> None:
     cal = etlcal.calibrate(strong.observations, thermal="paper", distortion="opencv", focal_degree=2)
     assert (cal.distortion_model, cal.focal_degree, cal.model_selection) == ("opencv", 2, None)
     assert len(cal.kf_x) == 3 and len(cal.distortion_a) == 15
@@ -46,7 +49,8 @@ def test_given_models_and_defaults(strong):
         ({"method": "per-setting", "distortion": "opencv"}, 'method="per-setting" takes no distortion'),
     ],
 )
-def test_bad_model_options_are_one_line_errors(strong, kwargs, words):
+def test_bad_model_options_are_one_line_errors(strong: etlcal.simulate.Simulation, kwargs: Dict[str, Any],
+                                              words: str) -> None:
     with pytest.raises(etlcal.InputError) as e:
         etlcal.calibrate(strong.observations, thermal="paper", **kwargs)
     assert words in str(e.value) and "\n" not in str(e.value)

@@ -9,12 +9,17 @@ sets of fixtures/wide (sources in fixtures/wide/SOURCE.md; k1 < -0.25), live wit
   findChessboardCorners + cornerSubPix 11x11) and reaches at most OpenCV's RMS.
 """
 import pathlib
+from typing import Any, Dict, List, Tuple
 
-import cv2
 import numpy as np
+import numpy.typing as npt
 import pytest
 
 import etlcal
+
+# cv2 as Any (through importorskip, as test_opencv.py): its stubs type calibrateCamera's
+# optional outputs too narrowly for None.
+cv2: Any = pytest.importorskip("cv2")
 
 WIDE = pathlib.Path(__file__).resolve().parents[3] / "fixtures" / "wide"
 SETS = [("opencv_left", (9, 6)), ("stereo752_left", (11, 8))]
@@ -22,25 +27,26 @@ CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 500, 1e-15)
 FLAGS = [(False, False), (True, False), (True, True)]
 
 
-def board(cols, rows):
+def board(cols: int, rows: int) -> npt.NDArray[np.float32]:
     obj = np.zeros((rows * cols, 3), np.float32)
     obj[:, :2] = np.mgrid[0:cols, 0:rows].T.reshape(-1, 2)
     return obj
 
 
-def images(name):
+def images(name: str) -> List[Tuple[pathlib.Path, npt.NDArray[np.uint8]]]:
     paths = sorted((WIDE / name).glob("*.jpg"))
     assert paths, f"fixtures/wide/{name} is empty"
     return [(p, cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)) for p in paths]
 
 
-def cv_flags(fix_k3, zero_tangent):
-    return (cv2.CALIB_FIX_K3 if fix_k3 else 0) | (cv2.CALIB_ZERO_TANGENT_DIST if zero_tangent else 0)
+def cv_flags(fix_k3: bool, zero_tangent: bool) -> int:
+    return int((cv2.CALIB_FIX_K3 if fix_k3 else 0) | (cv2.CALIB_ZERO_TANGENT_DIST if zero_tangent else 0))
 
 
 @pytest.mark.parametrize("name,pattern", SETS)
 @pytest.mark.parametrize("fix_k3,zero_tangent", FLAGS)
-def test_same_corners_reproduce_cv2_calibrate_camera(name, pattern, fix_k3, zero_tangent):
+def test_same_corners_reproduce_cv2_calibrate_camera(name: str, pattern: Tuple[int, int], fix_k3: bool,
+                                                      zero_tangent: bool) -> None:
     imgs = images(name)
     size = (imgs[0][1].shape[1], imgs[0][1].shape[0])
     # etlcal's corners, rounded once to float32 (what cv2 takes) and given to both solvers.
@@ -67,10 +73,11 @@ def test_same_corners_reproduce_cv2_calibrate_camera(name, pattern, fix_k3, zero
 
 
 @pytest.mark.parametrize("name,pattern", SETS)
-def test_end_to_end_every_opencv_view_and_no_larger_rms(name, pattern):
+def test_end_to_end_every_opencv_view_and_no_larger_rms(name: str, pattern: Tuple[int, int]) -> None:
     imgs = images(name)
     size = (imgs[0][1].shape[1], imgs[0][1].shape[0])
-    cv_found, views = [], []
+    cv_found: List[Any] = []
+    views: List[Tuple[Any, Any]] = []
     for _, g in imgs:
         ok, c = cv2.findChessboardCorners(g, pattern)
         if ok:
@@ -89,13 +96,14 @@ def test_end_to_end_every_opencv_view_and_no_larger_rms(name, pattern):
     assert r.rms_px <= cv_rms, (r.rms_px, cv_rms)
 
 
-def test_bad_model_and_flags_are_one_line_errors():
+def test_bad_model_and_flags_are_one_line_errors() -> None:
     views = [(board(9, 6)[:, :2], etlcal.detect_corners(g, (9, 6))) for _, g in images("opencv_left")[:4]]
-    for kwargs, words in [
+    cases: List[Tuple[Dict[str, Any], str]] = [
         ({"fix_k3": True}, "fix_k3=True is an OpenCV flag"),
         ({"zero_tangent": True}, "zero_tangent=True is an OpenCV flag"),
         ({"model": "brown"}, 'model must be "paper" or "opencv", got "brown"'),
-    ]:
+    ]
+    for kwargs, words in cases:
         with pytest.raises(etlcal.InputError, match=words) as e:
             etlcal.zhang(views, (640, 480), **kwargs)
         assert "\n" not in str(e.value)
