@@ -84,6 +84,7 @@ mutations!(observations_mutations_are_refused_naming_the_field_or_read_as_writte
 mutations!(dataset_mutations_are_refused_naming_the_field_or_read_as_written, Dataset);
 mutations!(a0_mutations_are_refused_naming_the_field_or_read_as_written, A0File);
 mutations!(thermal_mutations_are_refused_naming_the_field_or_read_as_written, ThermalFile);
+mutations!(board_mutations_are_refused_naming_the_field_or_read_as_written, etl_formats::dataset::Board);
 
 /// The thermal table's columns, in order.
 const COLUMNS: [&str; 3] = ["temperature_c", "e_in_ma", "e_t_ma"];

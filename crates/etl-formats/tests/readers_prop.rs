@@ -163,6 +163,7 @@ format_properties!(observations, Observations);
 format_properties!(dataset, Dataset);
 format_properties!(a0, A0File);
 format_properties!(thermal, ThermalFile);
+format_properties!(board, etl_formats::dataset::Board);
 
 /// Rows of the thermal table: any finite numbers.
 fn table_rows() -> impl Strategy<Value = Vec<ThermalSample>> {

@@ -303,7 +303,7 @@ impl Format for Observations {
 
 /// A board the validator accepts: a checkerboard, or a ChArUco board of any of OpenCV's
 /// dictionaries with enough markers.
-fn board() -> BoxedStrategy<Board> {
+pub fn board() -> BoxedStrategy<Board> {
     let checkerboard = (3..100usize, 3..100usize, finite().prop_filter("a positive square", |s| *s > 0.0))
         .prop_map(|(c, r, square_mm)| Board::Checkerboard(Checkerboard { inner_corners: [c, r], square_mm }));
     let names: Vec<&'static str> = etl_core::board::Dictionary::all().iter().map(|d| d.name()).collect();
@@ -470,5 +470,25 @@ impl Format for ThermalFile {
 
     fn save(&self, path: &Path) -> Result<()> {
         ThermalFile::save(self, path)
+    }
+}
+
+/// The `etlcal.board/1` file: the same boards a dataset holds inline, as files of their own.
+impl Format for Board {
+    const NAME: &'static str = "board";
+    const TAG: &'static str = etl_formats::board::FORMAT;
+    // A checkerboard written without "type", as before boards had types, is read as one.
+    const OPTIONAL: &'static [&'static str] = &["type"];
+
+    fn strategy() -> BoxedStrategy<Self> {
+        board()
+    }
+
+    fn load(path: &Path) -> Result<Self> {
+        Board::load(path)
+    }
+
+    fn save(&self, path: &Path) -> Result<()> {
+        Board::save(self, path)
     }
 }
