@@ -5,6 +5,7 @@
 
 pub mod baseline;
 pub mod pipeline;
+pub mod robust;
 pub mod thermal_calibration;
 pub mod zhang;
 

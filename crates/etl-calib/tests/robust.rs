@@ -1,7 +1,7 @@
 //! Robust calibration against gross corner outliers.
 
-use etl_calib::pipeline::robust::OUTLIER_FLOOR_PX;
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
+use etl_calib::robust::OUTLIER_FLOOR_PX;
 use etl_formats::observations::Observations;
 use etl_formats::ThermalRef;
 use etl_sim::simulate::{paper_rig, NoiseModel};
@@ -90,7 +90,7 @@ fn permuted_current_labels_warn() {
 /// are set aside; too few points or mismatched counts set nothing aside.
 #[test]
 fn the_homography_screen_finds_a_quarter_of_a_view_wrong() {
-    use etl_calib::pipeline::robust::homography_inliers;
+    use etl_calib::robust::homography_inliers;
     let sim = paper_rig(&NoiseModel::PAPER, 3);
     let v = &sim.observations.views[7];
     let board: Vec<[f64; 2]> = v.points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect();

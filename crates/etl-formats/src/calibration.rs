@@ -577,7 +577,7 @@ impl Calibration {
         if let Err(e) = model.validate() {
             return bad(e.to_string());
         }
-        if let Err(e) = crate::observations::check_image_size(self.image_size, "image_size") {
+        if let Err(e) = crate::check_image_size(self.image_size, "image_size") {
             return bad(e.to_string());
         }
         let [lo, hi] = self.e_com_range_ma;

@@ -47,6 +47,7 @@ use serde::Serialize;
 pub mod a0;
 pub mod board;
 pub mod calibration;
+mod checks;
 pub mod dataset;
 mod error;
 pub mod export;
@@ -57,6 +58,8 @@ pub mod observations;
 pub mod output;
 pub mod thermal;
 
+pub(crate) use checks::first_not_finite;
+pub use checks::{check_image_size, check_range, compact, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE_PX};
 pub use error::{Error, ErrorKind, Result};
 pub use input_value::InputValue;
 
@@ -69,35 +72,6 @@ pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
 pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use observations::Observations;
 pub use thermal::ThermalFile;
-
-/// A number as messages print it: compact, so that 1e308 is `1e308`, not 309 digits
-/// (scientific notation outside [1e-4, 1e5), Rust's shortest round-trip digits inside).
-pub fn compact(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e5).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
-}
-
-/// `value` if it is in `range` (inclusive; NaN never is), else [`Error::InvalidInput`]
-/// about `what` (a flag or a key) with the value (compact), whose message names both and
-/// the range: `--aperture-mm NaN mm is outside [0, 50] mm`.
-pub fn check_range(what: &str, value: f64, range: [f64; 2], unit: &str) -> Result<f64> {
-    if (range[0]..=range[1]).contains(&value) {
-        return Ok(value);
-    }
-    let [lo, hi] = range.map(compact);
-    Err(Error::invalid_value(what, value, format!("{what} {} {unit} is outside [{lo}, {hi}] {unit}", compact(value))))
-}
-
-/// The first `(key, value)` whose value is given and not finite (NaN or infinite), so that
-/// a validator's error names it ([`Error::invalid_value`]).
-pub(crate) fn first_not_finite<'a>(
-    numbers: impl IntoIterator<Item = (&'a str, Option<f64>)>,
-) -> Option<(&'a str, f64)> {
-    numbers.into_iter().find_map(|(key, x)| x.filter(|x| !x.is_finite()).map(|x| (key, x)))
-}
 
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
 ///

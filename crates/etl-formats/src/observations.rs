@@ -19,6 +19,7 @@ use etl_core::thermal::{E_IN_DOMAIN_MA, T_DOMAIN_C};
 use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
+pub use crate::checks::{check_image_size, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE_PX};
 use crate::{Error, Result};
 
 /// The format tag this module reads and writes.
@@ -57,38 +58,11 @@ pub struct OffstateView {
     pub points: Vec<PointObs>,
 }
 
-/// The largest image side, px, and the most pixels an image may have: 65536 px and
-/// 2^28 px (268 Mpx, a 16384 x 16384 sensor), beyond any camera etlcal calibrates; larger
-/// is refused before anything is allocated for it.
-pub const MAX_IMAGE_SIDE_PX: u32 = 65_536;
-/// See [`MAX_IMAGE_SIDE_PX`].
-pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 /// World coordinates of a board point, mm: within +-10 m of the rig's origin.
 pub const WORLD_RANGE_MM: [f64; 2] = [-10_000.0, 10_000.0];
 /// How far outside the image an observed pixel may be, in image sizes: a corner is seen
 /// in the image, and one image size around it covers any distortion model's overshoot.
 pub const PIXEL_MARGIN_IMAGES: f64 = 1.0;
-
-/// Checks `image_size` against [`MAX_IMAGE_SIDE_PX`] and [`MAX_IMAGE_PIXELS`] (`what`
-/// names it: the error's `what` and the message's first word).
-pub fn check_image_size(image_size: [u32; 2], what: &str) -> Result<()> {
-    let [w, h] = image_size;
-    if !(1..=MAX_IMAGE_SIDE_PX).contains(&w) || !(1..=MAX_IMAGE_SIDE_PX).contains(&h) {
-        return Err(Error::invalid_value(
-            what,
-            image_size,
-            format!("{what} [{w}, {h}] px: each side must be in [1, {MAX_IMAGE_SIDE_PX}] px"),
-        ));
-    }
-    if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
-        return Err(Error::invalid_value(
-            what,
-            image_size,
-            format!("{what} [{w}, {h}] px: more than {MAX_IMAGE_PIXELS} pixels (the documented limit)"),
-        ));
-    }
-    Ok(())
-}
 
 /// One view of a list of the file, as messages and errors name it: `"view 3"` in words,
 /// `"views[3]"` as the key path of a field.

@@ -11,7 +11,6 @@ pub mod dataset;
 pub mod focus_law;
 pub mod measure;
 mod planar_views;
-pub mod robust;
 pub mod select;
 mod solve;
 mod view_focal;
@@ -130,7 +129,8 @@ pub fn a0_from_offstate_with(
             pixels: v.points.iter().map(|p| p.pixel).collect(),
         })
         .collect();
-    crate::zhang::zhang_with(&views, obs.image_size, options).map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
+    crate::zhang::zhang_with(&views, obs.image_size, options)
+        .map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
 }
 
 /// Calibrates from observations with a given A0.

@@ -10,8 +10,8 @@ use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, Outlier};
 use etl_formats::Result;
 
-use super::robust::{homography_inliers, outlier_limit_px, OUTLIER_FLOOR_PX, OUTLIER_SIGMAS};
 use super::CalibrateOptions;
+use crate::robust::{homography_inliers, outlier_limit_px, OUTLIER_FLOOR_PX, OUTLIER_SIGMAS};
 
 /// Solves after the first at most: the outlier set is re-tested after each solve; when it
 /// still changes after this many the last solve stands and a warning says so.

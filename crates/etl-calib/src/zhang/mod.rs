@@ -34,7 +34,7 @@ use etl_core::pnp::homography;
 use etl_formats::calibration::Outlier;
 use etl_formats::{Error, Result};
 
-use crate::pipeline::robust::{homography_inliers, outlier_limit_px};
+use crate::robust::{homography_inliers, outlier_limit_px};
 
 /// One view: board points (mm, on Z = 0) and their observed pixels.
 #[derive(Debug, Clone, Default)]
@@ -387,7 +387,7 @@ pub fn zhang(views: &[PlanarView], image_size: [u32; 2]) -> Result<ZhangResult> 
 /// Calibrates a fixed-focus camera from planar views (see the module docs) with the
 /// distortion family and flags of `options`, robustly: each view's points are first
 /// screened against a robust homography
-/// ([`crate::pipeline::robust::homography_inliers`]); after the refinement a point whose
+/// ([`crate::robust::homography_inliers`]); after the refinement a point whose
 /// distance exceeds [`outlier_limit_px`] is an outlier, and the refinement is
 /// repeated without the outliers until their set no longer changes (at most 4 times).
 ///

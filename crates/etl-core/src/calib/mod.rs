@@ -20,7 +20,9 @@ pub mod focal_poly;
 mod initialise;
 pub mod jacobian;
 pub mod observations;
-pub mod params;
+/// The parameter vector's layout: the model's ([`crate::model::params`]), named here too
+/// because every solver speaks in it.
+pub use crate::model::params;
 pub mod rac;
 pub mod uncertainty;
 

@@ -13,7 +13,7 @@ use crate::error::{all_finite, finite, Error, Result};
 /// The numbers of the ETL camera model: the paper's 25 (Eq. 13-18: pose, cubic focal
 /// polynomials, principal point, a1..a9) or, generalised, a focal polynomial of any degree
 /// 1..=5 and either distortion family ([`DistortionModel`]). The parameter vector of a
-/// model is laid out by [`crate::calib::params::Layout`] ([`Self::layout`]).
+/// model is laid out by [`super::params::Layout`] ([`Self::layout`]).
 ///
 /// Invariants a *usable* model satisfies (checked where they matter, never assumed):
 /// all numbers finite; kf_x and kf_y of one degree; fx(E), fy(E) > 0 over the currents it
@@ -103,8 +103,8 @@ impl CameraModel {
     }
 
     /// The layout of this model's parameter vector (family and focal degree).
-    pub fn layout(&self) -> crate::calib::params::Layout {
-        crate::calib::params::Layout::of(self)
+    pub fn layout(&self) -> super::params::Layout {
+        super::params::Layout::of(self)
     }
 
     /// Image size of the paper rig's camera, px (width, height).

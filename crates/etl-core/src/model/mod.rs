@@ -10,6 +10,7 @@ pub mod distortion;
 pub mod family;
 pub mod focal;
 pub mod opencv;
+pub mod params;
 pub mod ray;
 pub mod rotation;
 pub mod undistort;
