@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use etl_core::calib::jacobian::to_params;
 
-use crate::calibration::{Data, Provenance, REPORT_FIGURES};
+use crate::data::{Data, Provenance, REPORT_FIGURES};
 use crate::uncertainty::{
     correlation, curve_names, curve_std, curve_values, param_meaning, param_unit, strong_pairs, CurveSet, MAX_CURVES,
 };

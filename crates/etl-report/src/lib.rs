@@ -3,10 +3,12 @@
 //! studies ([`figure`]).
 
 mod calibration;
+mod data;
 pub mod figure;
 mod html;
 mod plots;
 mod uncertainty;
 
 pub use calibration::*;
+pub use data::{Provenance, REPORT_FIGURES};
 pub use etl_formats::{Error, Result};

@@ -3,7 +3,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::calibration::Data;
+use crate::data::Data;
 use crate::figure::tick;
 use crate::uncertainty::{correlation, curve_names, curve_std, curve_values, CurveSet, MAX_CURVES};
 
