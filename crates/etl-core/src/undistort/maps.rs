@@ -49,17 +49,37 @@ pub fn undistort_maps(
     check_model(k, d)?;
     check_band(out, &rows, map_x.len(), map_y.len())?;
     if d.model() == DistortionModel::OpenCv {
-        super::opencv_maps::fill(k, d, out, rows, map_x, map_y);
-        return Ok(());
+        for_each_row(out.width_px, rows, map_x, map_y, super::opencv_maps::row_filler(k, d, out));
+    } else {
+        for_each_row(out.width_px, rows, map_x, map_y, paper_row_filler(k, d, out));
     }
-    let w = out.width_px;
+    Ok(())
+}
+
+/// Runs `fill_row(y, row_x, row_y)` on each output row `y` of the band `rows` with that
+/// row's `width` entries of each map: the walk over a band both families' maps share.
+#[inline(always)]
+fn for_each_row(width: usize, rows: Range<usize>, map_x: &mut [f32], map_y: &mut [f32], mut fill_row: impl FillRow) {
+    for (i, y) in rows.enumerate() {
+        // The band was checked to fit: `get_mut` keeps it a checked fact, not a panic path.
+        let span = i * width..(i + 1) * width;
+        let (Some(row_x), Some(row_y)) = (map_x.get_mut(span.clone()), map_y.get_mut(span)) else { break };
+        fill_row(y, row_x, row_y);
+    }
+}
+
+/// Fills the maps of output row `y`: `(y, row_x, row_y)`, the row's entries of each map.
+pub(super) trait FillRow: FnMut(usize, &mut [f32], &mut [f32]) {}
+
+impl<F: FnMut(usize, &mut [f32], &mut [f32])> FillRow for F {}
+
+/// The maps of one output row `y` in the paper family (Eq. 17 by [`row_polynomials`]).
+#[inline(always)]
+fn paper_row_filler<'a>(k: &'a Intrinsics, d: &'a Distortion, out: &OutputCamera) -> impl FillRow + 'a {
     // u = a x + b is affine in x along a row (and v constant): one multiply-add per pixel.
     let (ax, bx) = (k.fx / out.fx_px, -k.fx * out.cx_px / out.fx_px);
     let (ay, by) = (k.fy / out.fy_px, -k.fy * out.cy_px / out.fy_px);
-    for (i, y) in rows.enumerate() {
-        // The band was checked to fit: `get_mut` keeps it a checked fact, not a panic path.
-        let span = i * w..(i + 1) * w;
-        let (Some(row_x), Some(row_y)) = (map_x.get_mut(span.clone()), map_y.get_mut(span)) else { break };
+    move |y, row_x, row_y| {
         let [cx, cy] = row_polynomials(d, ay * y as f64 + by, k.u0, k.v0);
         for (x, (mx, my)) in row_x.iter_mut().zip(row_y.iter_mut()).enumerate() {
             let u = ax * x as f64 + bx;
@@ -67,7 +87,6 @@ pub fn undistort_maps(
             *my = (cy[0] + u * (cy[1] + u * cy[2])) as f32;
         }
     }
-    Ok(())
 }
 
 /// Eq. 17 along a row: at fixed v, u_d + u0 is a cubic and v_d + v0 a quadratic in u,
