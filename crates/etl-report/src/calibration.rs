@@ -23,6 +23,7 @@ use etl_formats::write_atomic;
 use etl_formats::{Error, Result};
 use plotters::prelude::*;
 
+use crate::figure::{page, DrawResult};
 use crate::plots;
 
 const FONT_CANDIDATES: [&str; 6] = [
@@ -301,8 +302,6 @@ fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Option<&Therma
     Ok(d)
 }
 
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
-
 /// Draws `$draw` as SVG and PNG into `$dir/$name.{svg,png}` (atomic writes).
 macro_rules! plot {
     ($dir:expr, $name:expr, $size:expr, $d:expr, $text:expr, $draw:path, $files:expr) => {{
@@ -312,13 +311,13 @@ macro_rules! plot {
         let mut s = String::new();
         {
             let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
-            let r: DrawResult = $draw(&root, $d, $text);
+            let r: DrawResult = page(&root, || $draw(&root, $d, $text));
             r.map_err(fail)?;
         }
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            let r: DrawResult = $draw(&root, $d, $text);
+            let r: DrawResult = page(&root, || $draw(&root, $d, $text));
             r.map_err(fail)?;
         }
         finish_plot($dir, name, size, buf, &s, $files)?;

@@ -4,10 +4,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::calibration::Data;
-use crate::figure::tick;
+use crate::figure::{tick, Canvas, DrawResult, PALETTE};
 use crate::uncertainty::{correlation, curve_names, curve_std, curve_values, CurveSet, MAX_CURVES};
-
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
 /// Colour of view `k` of `n`: hues spread around the wheel, so that neighbouring views
 /// differ and every view keeps its colour across the figures.
@@ -68,10 +66,7 @@ struct BandPanel {
     colour: RGBColor,
 }
 
-fn draw_band<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+fn draw_band<DB: Canvas>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: bool) -> DrawResult {
     let band = |k: f64| p.curve.iter().flat_map(move |c| [c.1 - k * c.2, c.1 + k * c.2]);
     let (lo, hi) = range_of(band(3.0).chain(p.points.iter().map(|q| q.1)));
     let (e0, e1) = (p.curve.first().map_or(0.0, |c| c.0), p.curve.last().map_or(1.0, |c| c.0));
@@ -117,38 +112,68 @@ fn curves(d: &Data) -> Vec<(f64, CurveSet, CurveSet)> {
         .collect()
 }
 
+/// One curve of [`curves`] drawn as two band panels: the curve with each view's own
+/// estimate (top), and the same minus the curve (bottom: bands too narrow to see on top
+/// show there).
+struct CurvePanels<'a> {
+    /// Index of the curve ([`curve_names`]).
+    index: usize,
+    /// The curve's name and its unit after `scale`.
+    name: &'a str,
+    unit: &'a str,
+    /// The factor on every value (units that keep the tick labels short).
+    scale: f64,
+    /// Titles of the top and bottom panels.
+    titles: [String; 2],
+    /// Each view's own estimate (E, value), already scaled.
+    points: Vec<(f64, f64)>,
+    colour: RGBColor,
+}
+
+fn draw_curve_panels<DB: Canvas>(
+    [top_area, bottom_area]: [&DrawingArea<DB, Shift>; 2],
+    d: &Data,
+    c: &[(f64, CurveSet, CurveSet)],
+    p: CurvePanels<'_>,
+    text: bool,
+) -> DrawResult {
+    let (i, scale, name, unit) = (p.index, p.scale, p.name, p.unit);
+    let [top_title, bottom_title] = p.titles;
+    let top = BandPanel {
+        title: top_title,
+        y_label: format!("{name} ({unit})"),
+        curve: c.iter().map(|q| (q.0, q.1[i] * scale, q.2[i] * scale)).collect(),
+        points: p.points.clone(),
+        colour: p.colour,
+    };
+    draw_band(top_area, &top, text)?;
+    let deviation = BandPanel {
+        title: bottom_title,
+        y_label: format!("{name} − {name}(E) ({unit})"),
+        curve: c.iter().map(|q| (q.0, 0.0, q.2[i] * scale)).collect(),
+        points: p.points.iter().map(|v| (v.0, v.1 - curve_values(&d.model, v.0)[i] * scale)).collect(),
+        colour: p.colour,
+    };
+    draw_band(bottom_area, &deviation, text)
+}
+
+/// Title of a deviation panel with room for the bands' legend.
+fn deviation_title(name: &str) -> String {
+    format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)")
+}
+
 /// fx(E), fy(E) (top) and their deviations from the curve with the 1- and 3-sigma bands
 /// (bottom), with each view's own estimate.
-pub(crate) fn draw_focal<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_focal<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let c = curves(d);
     let panels = root.split_evenly((2, 2));
-    for k in 0..2 {
-        let name = ["fx", "fy"][k];
-        let colour = [RGBColor(31, 119, 180), RGBColor(214, 39, 40)][k];
+    for (k, name) in ["fx", "fy"].into_iter().enumerate() {
         let own = |v: &(f64, f64, f64)| if k == 0 { v.1 } else { v.2 };
-        let points: Vec<(f64, f64)> = d.view_focal.iter().filter(|v| own(v) > 0.0).map(|v| (v.0, own(v))).collect();
-        let top = BandPanel {
-            title: format!("{name}(E) (line) and each view's own {name} (dots)"),
-            y_label: format!("{name} (px)"),
-            curve: c.iter().map(|q| (q.0, q.1[k], q.2[k])).collect(),
-            points: points.clone(),
-            colour,
-        };
-        draw_band(&panels[k], &top, text)?;
-        let dev = BandPanel {
-            title: format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)"),
-            y_label: format!("{name} − {name}(E) (px)"),
-            curve: c.iter().map(|q| (q.0, 0.0, q.2[k])).collect(),
-            points: points.iter().map(|p| (p.0, p.1 - curve_values(&d.model, p.0)[k])).collect(),
-            colour,
-        };
-        draw_band(&panels[2 + k], &dev, text)?;
+        let points = d.view_focal.iter().filter(|v| own(v) > 0.0).map(|v| (v.0, own(v))).collect();
+        let titles = [format!("{name}(E) (line) and each view's own {name} (dots)"), deviation_title(name)];
+        let curve = CurvePanels { index: k, name, unit: "px", scale: 1.0, titles, points, colour: PALETTE[k] };
+        draw_curve_panels([&panels[k], &panels[2 + k]], d, &c, curve, text)?;
     }
-    root.present()?;
     Ok(())
 }
 
@@ -156,22 +181,14 @@ where
 /// the current with the 1- and 3-sigma bands and each view's own estimate (Eq. 23) (top),
 /// and the same minus the curve (bottom: bands too narrow to see on the top row show
 /// there).
-pub(crate) fn draw_distortion<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_distortion<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let c = curves(d);
     let names = curve_names(&d.model);
     let coefficients = &names[2..];
     let panels = root.split_evenly((2, coefficients.len()));
-    let colours = [
-        RGBColor(31, 119, 180),
-        RGBColor(214, 39, 40),
-        RGBColor(44, 160, 44),
-        RGBColor(148, 103, 189),
-        RGBColor(255, 127, 14),
-    ];
+    let colours = [PALETTE[0], PALETTE[1], PALETTE[2], PALETTE[4], PALETTE[3]];
+    // Five panels a row leave room for short titles only.
+    let narrow = coefficients.len() > 3;
     for (k, &(name, unit)) in coefficients.iter().enumerate() {
         // Scaled units keep the tick labels short (the paper's coefficients are per px).
         let (scale, unit) = match unit {
@@ -179,50 +196,27 @@ where
             "1/px" => (1e6, "1e-6 / px"),
             _ => (1.0, unit),
         };
+        let points = d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect();
+        let titles = if narrow {
+            [format!("{name}(E), views (dots)"), format!("{name} − {name}(E), ±1σ, ±3σ")]
+        } else {
+            [format!("{name}(E) (line) and each view's own (dots)"), deviation_title(name)]
+        };
         let colour = colours[k % colours.len()];
-        let points: Vec<(f64, f64)> = d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect();
-        // Five panels a row leave room for short titles only.
-        let narrow = coefficients.len() > 3;
-        let top = BandPanel {
-            title: if narrow {
-                format!("{name}(E), views (dots)")
-            } else {
-                format!("{name}(E) (line) and each view's own (dots)")
-            },
-            y_label: format!("{name} ({unit})"),
-            curve: c.iter().map(|q| (q.0, q.1[2 + k] * scale, q.2[2 + k] * scale)).collect(),
-            points: points.clone(),
-            colour,
-        };
-        draw_band(&panels[k], &top, text)?;
-        let dev = BandPanel {
-            title: if narrow {
-                format!("{name} − {name}(E), ±1σ, ±3σ")
-            } else {
-                format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)")
-            },
-            y_label: format!("{name} − {name}(E) ({unit})"),
-            curve: c.iter().map(|q| (q.0, 0.0, q.2[2 + k] * scale)).collect(),
-            points: points.iter().map(|p| (p.0, p.1 - curve_values(&d.model, p.0)[2 + k] * scale)).collect(),
-            colour,
-        };
-        draw_band(&panels[coefficients.len() + k], &dev, text)?;
+        let curve = CurvePanels { index: 2 + k, name, unit, scale, titles, points, colour };
+        draw_curve_panels([&panels[k], &panels[coefficients.len() + k]], d, &c, curve, text)?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// A vertical colour bar for values lo..hi, labelled `label`.
-fn colour_bar<DB: DrawingBackend>(
+fn colour_bar<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     (lo, hi): (f64, f64),
     label: &str,
     map: fn(f64) -> RGBColor,
     text: bool,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+) -> DrawResult {
     let mut b = ChartBuilder::on(area);
     b.margin_top(40).margin_bottom(50).margin_right(10);
     if text {
@@ -251,11 +245,7 @@ where
 }
 
 /// The projection-uncertainty maps at the three currents, one colour scale.
-pub(crate) fn draw_projection_std<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_projection_std<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let (maps, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
     let top =
         d.std_maps.iter().flat_map(|m| m.cells.iter().flatten()).copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
@@ -299,7 +289,6 @@ where
         }
     }
     colour_bar(&bar, (0.0, top), "worst-direction std (px)", sequential, text)?;
-    root.present()?;
     Ok(())
 }
 
@@ -335,11 +324,7 @@ pub(crate) fn coverage_groups(d: &Data) -> Vec<([f64; 2], Vec<usize>)> {
 }
 
 /// Where the corners were in the image, one panel per current group, coloured by view.
-pub(crate) fn draw_coverage<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_coverage<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let groups = coverage_groups(d);
     let [w, h] = d.cal.image_size;
     let n = d.views.len();
@@ -383,16 +368,11 @@ where
             ("sans-serif", 16),
         ))?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// Residual vectors (model − observed), magnified, coloured by view.
-pub(crate) fn draw_residual_map<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_residual_map<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let [w, h] = d.cal.image_size;
     let rms = d.cal.rms_reprojection_px.max(1e-6);
     // Arrows of RMS length become 2 % of the image width.
@@ -437,16 +417,11 @@ where
             ("sans-serif", 14),
         )))?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// The RMS residual of each view, bars in the view's colour, with the overall RMS.
-pub(crate) fn draw_view_rms<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_view_rms<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let n = d.views.len();
     let rms: Vec<f64> = d
         .views
@@ -491,16 +466,11 @@ where
     )?;
     let all = d.cal.rms_reprojection_px;
     chart.draw_series(DashedLineSeries::new([(-0.6, all), (n as f64 - 0.4, all)], 8, 5, BLACK.stroke_width(2)))?;
-    root.present()?;
     Ok(())
 }
 
 /// The histogram of the residual components u and v.
-pub(crate) fn draw_histogram<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_histogram<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let vals: Vec<f64> = d.views.iter().flat_map(|v| v.residuals.iter().flat_map(|r| r.d)).collect();
     let m = vals.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-6);
     let bins = 41usize;
@@ -526,7 +496,6 @@ where
         let x0 = -m + k as f64 * width;
         Rectangle::new([(x0, 0), (x0 + width, c)], RGBColor(31, 119, 180).mix(0.7).filled())
     }))?;
-    root.present()?;
     Ok(())
 }
 
@@ -554,15 +523,7 @@ fn field(d: &Data, e_com_ma: f64) -> Vec<([f64; 2], [f64; 2])> {
 
 /// The distortion field (distorted − ideal pixel, Eq. 17) at the three currents, one
 /// magnification for the three.
-pub(crate) fn draw_distortion_field<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    d: &Data,
-    text: bool,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_distortion_field<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let fields: Vec<Vec<([f64; 2], [f64; 2])>> = d.map_currents.iter().map(|&e| field(d, e)).collect();
     let norm = |v: &[f64; 2]| v[0].hypot(v[1]);
     let max = fields.iter().flatten().map(|f| norm(&f.1)).fold(0.0, f64::max).max(1e-9);
@@ -599,16 +560,11 @@ where
         let pp = d.model.principal_point;
         chart.draw_series(std::iter::once(Cross::new((pp[0], pp[1]), 6, RED.stroke_width(2))))?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// The correlation matrix as a heat map (−1 blue, 0 white, +1 red), names on both axes.
-pub(crate) fn draw_correlation<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_correlation<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let Some(c) = d.covariance else { return Ok(()) };
     let r = correlation(&c);
     let layout = d.model.layout();
@@ -645,6 +601,5 @@ where
         mat.draw(&Text::new("correlation r_ij = C_ij / sqrt(C_ii C_jj)", (left, 10), ("sans-serif", 18)))?;
     }
     colour_bar(&bar, (-1.0, 1.0), "r", |t| diverging(2.0 * t - 1.0), text)?;
-    root.present()?;
     Ok(())
 }
