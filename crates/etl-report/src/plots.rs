@@ -56,6 +56,24 @@ fn range_of(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// The frame of a chart on `area`: `margin` px around it, and when text is drawn its
+/// caption (`caption.0` in sans-serif of size `caption.1`) and room for the axis labels
+/// (`label_px`: below the plot, left of it).
+fn panel_frame<'a, DB: Canvas>(
+    area: &'a DrawingArea<DB, Shift>,
+    margin: u32,
+    caption: (impl AsRef<str>, u32),
+    [below, left]: [u32; 2],
+    text: bool,
+) -> ChartBuilder<'a, 'static, DB> {
+    let mut b = ChartBuilder::on(area);
+    b.margin(margin);
+    if text {
+        b.caption(caption.0, ("sans-serif", caption.1)).x_label_area_size(below).y_label_area_size(left);
+    }
+    b
+}
+
 /// A curve against the current with its 1- and 3-sigma bands and points.
 struct BandPanel {
     title: String,
@@ -70,11 +88,7 @@ fn draw_band<DB: Canvas>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: boo
     let band = |k: f64| p.curve.iter().flat_map(move |c| [c.1 - k * c.2, c.1 + k * c.2]);
     let (lo, hi) = range_of(band(3.0).chain(p.points.iter().map(|q| q.1)));
     let (e0, e1) = (p.curve.first().map_or(0.0, |c| c.0), p.curve.last().map_or(1.0, |c| c.0));
-    let mut b = ChartBuilder::on(area);
-    b.margin(12);
-    if text {
-        b.caption(&p.title, ("sans-serif", 17)).x_label_area_size(42).y_label_area_size(78);
-    }
+    let mut b = panel_frame(area, 12, (&p.title, 17), [42, 78], text);
     let mut chart = b.build_cartesian_2d(e0 - 5.0..e1 + 5.0, lo..hi)?;
     if text {
         chart
@@ -252,17 +266,15 @@ pub(crate) fn draw_projection_std<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: 
     let top = if top > 0.0 { top } else { 1.0 };
     let [w, h] = d.cal.image_size;
     for (m, panel) in d.std_maps.iter().zip(maps.split_evenly((1, 3)).iter()) {
-        let mut b = ChartBuilder::on(panel);
-        b.margin(10).margin_top(16);
-        if text {
-            let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
-            b.caption(
-                format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max),
-                ("sans-serif", 16),
-            )
-            .x_label_area_size(35)
-            .y_label_area_size(50);
-        }
+        let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+        let mut b = panel_frame(
+            panel,
+            10,
+            (format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max), 16),
+            [35, 50],
+            text,
+        );
+        b.margin_top(16);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         let (rows, cols) = (m.cells.len(), m.cells.first().map_or(0, |r| r.len()));
         let (cw, ch) = (w as f64 / cols.max(1) as f64, h as f64 / rows.max(1) as f64);
@@ -331,18 +343,18 @@ pub(crate) fn draw_coverage<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
     let body = root.margin(30, 0, 0, 0);
     for (g, panel) in groups.iter().zip(body.split_evenly((groups.len().div_ceil(3), 3)).iter()) {
         let corners: usize = g.1.iter().map(|&k| d.views[k].pixels.len()).sum();
-        let mut b = ChartBuilder::on(panel);
-        b.margin(10);
-        if text {
-            let range = if g.0[1] - g.0[0] < 0.05 {
-                format!("{:.1} mA", g.0[0])
-            } else {
-                format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
-            };
-            b.caption(format!("E_com {range}: {} views, {corners} corners", g.1.len()), ("sans-serif", 16))
-                .x_label_area_size(32)
-                .y_label_area_size(50);
-        }
+        let range = if g.0[1] - g.0[0] < 0.05 {
+            format!("{:.1} mA", g.0[0])
+        } else {
+            format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
+        };
+        let mut b = panel_frame(
+            panel,
+            10,
+            (format!("E_com {range}: {} views, {corners} corners", g.1.len()), 16),
+            [32, 50],
+            text,
+        );
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
             chart
@@ -377,13 +389,13 @@ pub(crate) fn draw_residual_map<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &D
     let rms = d.cal.rms_reprojection_px.max(1e-6);
     // Arrows of RMS length become 2 % of the image width.
     let gain = 0.02 * w as f64 / rms;
-    let mut b = ChartBuilder::on(root);
-    b.margin(15);
-    if text {
-        b.caption(format!("residuals (model − observed) magnified {gain:.0} times; colour: view"), ("sans-serif", 20))
-            .x_label_area_size(40)
-            .y_label_area_size(60);
-    }
+    let mut b = panel_frame(
+        root,
+        15,
+        (format!("residuals (model − observed) magnified {gain:.0} times; colour: view"), 20),
+        [40, 60],
+        text,
+    );
     // Image rows grow downwards.
     let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
     if text {
@@ -433,13 +445,13 @@ pub(crate) fn draw_view_rms<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
         })
         .collect();
     let top = rms.iter().copied().fold(d.cal.rms_reprojection_px, f64::max).max(1e-9) * 1.15;
-    let mut b = ChartBuilder::on(root);
-    b.margin(15);
-    if text {
-        b.caption("RMS residual per view (bars, colour as in the residual map); dashed: all views", ("sans-serif", 18))
-            .x_label_area_size(45)
-            .y_label_area_size(65);
-    }
+    let mut b = panel_frame(
+        root,
+        15,
+        ("RMS residual per view (bars, colour as in the residual map); dashed: all views", 18),
+        [45, 65],
+        text,
+    );
     let mut chart = b.build_cartesian_2d(-0.6..n as f64 - 0.4, 0.0..top)?;
     if text {
         chart
@@ -481,13 +493,7 @@ pub(crate) fn draw_histogram<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data
         counts[k] += 1;
     }
     let top = counts.iter().copied().max().unwrap_or(1).max(1);
-    let mut b = ChartBuilder::on(root);
-    b.margin(15);
-    if text {
-        b.caption("residual components u and v together (px)", ("sans-serif", 20))
-            .x_label_area_size(40)
-            .y_label_area_size(60);
-    }
+    let mut b = panel_frame(root, 15, ("residual components u and v together (px)", 20), [40, 60], text);
     let mut chart = b.build_cartesian_2d(-m..m, 0u32..top + top / 10 + 1)?;
     if text {
         chart.configure_mesh().x_desc("residual (px)").y_desc("count").draw()?;
@@ -532,13 +538,8 @@ pub(crate) fn draw_distortion_field<DB: Canvas>(root: &DrawingArea<DB, Shift>, d
     let gain = 0.08 * w as f64 / max;
     for ((f, e), panel) in fields.iter().zip(d.map_currents).zip(root.split_evenly((1, 3)).iter()) {
         let m = f.iter().map(|q| norm(&q.1)).fold(0.0, f64::max);
-        let mut b = ChartBuilder::on(panel);
-        b.margin(10);
-        if text {
-            b.caption(format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}"), ("sans-serif", 16))
-                .x_label_area_size(35)
-                .y_label_area_size(50);
-        }
+        let mut b =
+            panel_frame(panel, 10, (format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}"), 16), [35, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
             chart
