@@ -178,7 +178,11 @@ impl ModelChoice {
         let family = match distortion.unwrap_or("paper") {
             "auto" => None,
             name => Some(DistortionModel::from_name(name).ok_or_else(|| {
-                invalid_value("distortion", name, format!("distortion must be \"paper\", \"opencv\" or \"auto\", got {name:?}"))
+                invalid_value(
+                    "distortion",
+                    name,
+                    format!("distortion must be \"paper\", \"opencv\" or \"auto\", got {name:?}"),
+                )
             })?),
         };
         let degree = match focal_degree {

@@ -13,8 +13,9 @@ use crate::errors::{invalid, invalid_value, CoreResultExt};
 /// The options of `model`, `fix_k3`, `zero_tangent`; an OpenCV flag with the paper model is
 /// refused naming it.
 fn options(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangOptions> {
-    let model = DistortionModel::from_name(model)
-        .ok_or_else(|| invalid_value("model", model, format!("model must be \"paper\" or \"opencv\", got {model:?}")))?;
+    let model = DistortionModel::from_name(model).ok_or_else(|| {
+        invalid_value("model", model, format!("model must be \"paper\" or \"opencv\", got {model:?}"))
+    })?;
     let flags = OpenCvFlags { fix_k3, zero_tangent };
     etl_calib::pipeline::select::refuse_opencv_flags(
         Some(model),
