@@ -1,5 +1,6 @@
 //! The figures of the calibration report, each drawn on any plotters backend (SVG, PNG).
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -72,6 +73,27 @@ fn panel_frame<'a, DB: Canvas>(
         b.caption(caption.0, ("sans-serif", caption.1)).x_label_area_size(below).y_label_area_size(left);
     }
     b
+}
+
+/// The axes of a panel over the image (u to the right, v down, px; five labels each and no
+/// grid lines over the picture), when text is drawn.
+fn draw_image_axes<DB: Canvas>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    text: bool,
+) -> DrawResult {
+    if text {
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("u (px)")
+            .y_desc("v (px)")
+            .x_labels(5)
+            .y_labels(5)
+            .x_label_formatter(&px)
+            .y_label_formatter(&px)
+            .draw()?;
+    }
+    Ok(())
 }
 
 /// A curve against the current with its 1- and 3-sigma bands and points.
@@ -287,18 +309,7 @@ pub(crate) fn draw_projection_std<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: 
                 )
             })
         }))?;
-        if text {
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc("u (px)")
-                .y_desc("v (px)")
-                .x_labels(5)
-                .y_labels(5)
-                .x_label_formatter(&px)
-                .y_label_formatter(&px)
-                .draw()?;
-        }
+        draw_image_axes(&mut chart, text)?;
     }
     colour_bar(&bar, (0.0, top), "worst-direction std (px)", sequential, text)?;
     Ok(())
@@ -541,18 +552,7 @@ pub(crate) fn draw_distortion_field<DB: Canvas>(root: &DrawingArea<DB, Shift>, d
         let mut b =
             panel_frame(panel, 10, (format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}"), 16), [35, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
-        if text {
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc("u (px)")
-                .y_desc("v (px)")
-                .x_labels(5)
-                .y_labels(5)
-                .x_label_formatter(&px)
-                .y_label_formatter(&px)
-                .draw()?;
-        }
+        draw_image_axes(&mut chart, text)?;
         let col = RGBColor(140, 40, 160);
         chart.draw_series(f.iter().map(|(p, v)| {
             PathElement::new(vec![(p[0], p[1]), (p[0] + gain * v[0], p[1] + gain * v[1])], col.stroke_width(2))
