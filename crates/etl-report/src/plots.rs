@@ -289,13 +289,8 @@ pub(crate) fn draw_projection_std<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: 
     let [w, h] = d.cal.image_size;
     for (m, panel) in d.std_maps.iter().zip(maps.split_evenly((1, 3)).iter()) {
         let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
-        let mut b = panel_frame(
-            panel,
-            10,
-            (format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max), 16),
-            [35, 50],
-            text,
-        );
+        let caption = format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max);
+        let mut b = panel_frame(panel, 10, (caption, 16), [35, 50], text);
         b.margin_top(16);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         let (rows, cols) = (m.cells.len(), m.cells.first().map_or(0, |r| r.len()));
@@ -359,13 +354,8 @@ pub(crate) fn draw_coverage<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
         } else {
             format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
         };
-        let mut b = panel_frame(
-            panel,
-            10,
-            (format!("E_com {range}: {} views, {corners} corners", g.1.len()), 16),
-            [32, 50],
-            text,
-        );
+        let caption = format!("E_com {range}: {} views, {corners} corners", g.1.len());
+        let mut b = panel_frame(panel, 10, (caption, 16), [32, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
             chart
@@ -400,13 +390,8 @@ pub(crate) fn draw_residual_map<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &D
     let rms = d.cal.rms_reprojection_px.max(1e-6);
     // Arrows of RMS length become 2 % of the image width.
     let gain = 0.02 * w as f64 / rms;
-    let mut b = panel_frame(
-        root,
-        15,
-        (format!("residuals (model − observed) magnified {gain:.0} times; colour: view"), 20),
-        [40, 60],
-        text,
-    );
+    let caption = format!("residuals (model − observed) magnified {gain:.0} times; colour: view");
+    let mut b = panel_frame(root, 15, (caption, 20), [40, 60], text);
     // Image rows grow downwards.
     let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
     if text {
@@ -456,13 +441,8 @@ pub(crate) fn draw_view_rms<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
         })
         .collect();
     let top = rms.iter().copied().fold(d.cal.rms_reprojection_px, f64::max).max(1e-9) * 1.15;
-    let mut b = panel_frame(
-        root,
-        15,
-        ("RMS residual per view (bars, colour as in the residual map); dashed: all views", 18),
-        [45, 65],
-        text,
-    );
+    let caption = "RMS residual per view (bars, colour as in the residual map); dashed: all views";
+    let mut b = panel_frame(root, 15, (caption, 18), [45, 65], text);
     let mut chart = b.build_cartesian_2d(-0.6..n as f64 - 0.4, 0.0..top)?;
     if text {
         chart
@@ -549,8 +529,8 @@ pub(crate) fn draw_distortion_field<DB: Canvas>(root: &DrawingArea<DB, Shift>, d
     let gain = 0.08 * w as f64 / max;
     for ((f, e), panel) in fields.iter().zip(d.map_currents).zip(root.split_evenly((1, 3)).iter()) {
         let m = f.iter().map(|q| norm(&q.1)).fold(0.0, f64::max);
-        let mut b =
-            panel_frame(panel, 10, (format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}"), 16), [35, 50], text);
+        let caption = format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}");
+        let mut b = panel_frame(panel, 10, (caption, 16), [35, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         draw_image_axes(&mut chart, text)?;
         let col = RGBColor(140, 40, 160);
