@@ -130,7 +130,8 @@ pub fn a0_from_offstate_with(
             pixels: v.points.iter().map(|p| p.pixel).collect(),
         })
         .collect();
-    crate::zhang::zhang_with(&views, obs.image_size, options).map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
+    crate::zhang::zhang_with(&views, obs.image_size, options)
+        .map_err(|e| crate::zhang::in_list(e, "offstate_views", None))
 }
 
 /// Calibrates from observations with a given A0.
