@@ -72,6 +72,8 @@ def main():
             assert cs == all_codes[: len(cs)], f"{nm} is not a prefix of {biggest}"
             table.append((nm, n, base, len(cs), int(d.maxCorrectionBits)))
     lines.append("/// Every predefined dictionary, in OpenCV's enum order (`cv2.aruco.DICT_4X4_50` = 0, ...).")
+    # One line a dictionary (rustfmt would spread the longer ones over five): a table.
+    lines.append("#[rustfmt::skip]")
     lines.append(f"pub(super) static PREDEFINED: [Dictionary; {len(table)}] = [")
     for nm, n, base, count, corr in table:
         lines.append(

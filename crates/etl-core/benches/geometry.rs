@@ -10,7 +10,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::linalg::svd::Svd;
 use etl_core::model::rotation::{mat_vec, nearest_rotation, rodrigues_to_matrix, Mat3};
 use etl_core::model::CameraModel;
-use etl_core::pnp::homography;
+use etl_core::pnp::{homography, zhang_constraints};
 use std::hint::black_box;
 
 mod hand {
@@ -89,20 +89,7 @@ fn zhang_rows(n: usize) -> Vec<[f64; 6]> {
             })
             .collect();
         let h = homography(&board, &img).unwrap();
-        let vij = |i: usize, j: usize| -> [f64; 6] {
-            let (a, b) = ([h[0][i], h[1][i], h[2][i]], [h[0][j], h[1][j], h[2][j]]);
-            [
-                a[0] * b[0],
-                a[0] * b[1] + a[1] * b[0],
-                a[1] * b[1],
-                a[2] * b[0] + a[0] * b[2],
-                a[2] * b[1] + a[1] * b[2],
-                a[2] * b[2],
-            ]
-        };
-        let (v11, v22) = (vij(0, 0), vij(1, 1));
-        rows.push(vij(0, 1));
-        rows.push(core::array::from_fn(|i| v11[i] - v22[i]));
+        rows.extend(zhang_constraints(&h));
     }
     rows
 }

@@ -105,6 +105,18 @@ pub fn finite(x: f64, what: &'static str) -> Result<f64> {
     }
 }
 
+/// `Ok(n)` if the count or degree `n` is in `min..=max`, else [`Error::OutOfRange`]
+/// naming it: the one check of a size a caller chooses (a polynomial's degree, an image
+/// side), so that every such refusal reads the same.
+#[inline]
+pub fn count_in_range(n: usize, min: usize, max: usize, what: &'static str) -> Result<usize> {
+    if (min..=max).contains(&n) {
+        Ok(n)
+    } else {
+        Err(Error::OutOfRange { what, value: n as f64, min: min as f64, max: max as f64 })
+    }
+}
+
 /// Checks that every element of `xs` is finite.
 #[inline]
 pub fn all_finite(xs: &[f64], what: &'static str) -> Result<()> {

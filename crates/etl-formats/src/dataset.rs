@@ -56,62 +56,61 @@ struct ImageBoard<'a> {
     first_corner: Option<[usize; 2]>,
 }
 
-/// One ETL view: an image of the board on the stage.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DatasetView {
-    /// The image, relative to the dataset file.
-    pub image: PathBuf,
-    /// Commanded lens current, mA.
-    pub e_in_ma: f64,
-    /// Lens temperature, degC.
-    pub temperature_c: f64,
-    /// Compensated current, mA (optional; used as is when present).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub e_com_ma: Option<f64>,
-    /// The stage position, mm.
-    pub z_w_mm: f64,
-    /// Board of this image when it differs from the dataset's (see the module docs).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub board: Option<Board>,
-    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub first_corner: Option<[usize; 2]>,
+/// Declares an image entry of the dataset: the image first, then (with `setting`) the lens
+/// setting it was taken at, then the entry's own fields, then the two every kind of image
+/// may carry (`board`, `first_corner`; module docs). A macro rather than a flattened
+/// common struct: serde cannot refuse unknown fields (`deny_unknown_fields`) through
+/// `#[serde(flatten)]`.
+macro_rules! image_entry {
+    ($(#[$doc:meta])* $name:ident, setting, { $($own:tt)* }) => {
+        image_entry! {
+            $(#[$doc])*
+            $name {
+                /// Commanded lens current, mA.
+                e_in_ma: f64,
+                /// Lens temperature, degC.
+                temperature_c: f64,
+                /// Compensated current, mA (optional; used as is when present).
+                #[serde(default, skip_serializing_if = "Option::is_none")]
+                e_com_ma: Option<f64>,
+                $($own)*
+            }
+        }
+    };
+    ($(#[$doc:meta])* $name:ident { $($(#[$field_attr:meta])* $field:ident: $ty:ty,)* }) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name {
+            /// The image, relative to the dataset file.
+            pub image: PathBuf,
+            $($(#[$field_attr])* pub $field: $ty,)*
+            /// Board of this image when it differs from the dataset's (see the module docs).
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            pub board: Option<Board>,
+            /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
+            #[serde(default, skip_serializing_if = "Option::is_none")]
+            pub first_corner: Option<[usize; 2]>,
+        }
+    };
 }
 
-/// A lens-off view (E = 0) of the lens-off board.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct OffstateImage {
-    /// The image, relative to the dataset file.
-    pub image: PathBuf,
-    /// Board of this image when it differs from the dataset's (see the module docs).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub board: Option<Board>,
-    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub first_corner: Option<[usize; 2]>,
+image_entry! {
+    /// One ETL view: an image of the board on the stage.
+    DatasetView, setting, {
+        /// The stage position, mm.
+        z_w_mm: f64,
+    }
 }
 
-/// A view for the per-setting baseline: the board in a free pose at a current.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SettingImage {
-    /// The image, relative to the dataset file.
-    pub image: PathBuf,
-    /// Commanded lens current, mA.
-    pub e_in_ma: f64,
-    /// Lens temperature, degC.
-    pub temperature_c: f64,
-    /// Compensated current, mA (optional).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub e_com_ma: Option<f64>,
-    /// Board of this image when it differs from the dataset's (see the module docs).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub board: Option<Board>,
-    /// Index on the physical board of this image's corner (0, 0) (default [0, 0]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub first_corner: Option<[usize; 2]>,
+image_entry! {
+    /// A lens-off view (E = 0) of the lens-off board.
+    OffstateImage {}
+}
+
+image_entry! {
+    /// A view for the per-setting baseline: the board in a free pose at a current.
+    SettingImage, setting, {}
 }
 
 /// The whole file.

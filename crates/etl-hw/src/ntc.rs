@@ -72,14 +72,7 @@ impl NtcModel {
     /// Temperature, degC, at resistance `r_ohm` (> 0).
     pub fn temperature_c(&self, r_ohm: f64) -> Result<f64, Error> {
         finite(r_ohm, "thermistor resistance")?;
-        if r_ohm <= 0.0 {
-            return Err(Error::OutOfRange {
-                what: "thermistor resistance (ohm)",
-                value: r_ohm,
-                min: 0.0,
-                max: f64::INFINITY,
-            });
-        }
+        positive_ohm(r_ohm, "thermistor resistance (ohm)")?;
         let inv_t = match *self {
             NtcModel::Beta { r0_ohm, t0_c, beta_k } => 1.0 / (t0_c + ZERO_C_IN_K) + (r_ohm / r0_ohm).ln() / beta_k,
             NtcModel::SteinhartHart { a, b, c } => {
@@ -127,6 +120,15 @@ pub struct Divider {
     pub adc_full_scale: f64,
 }
 
+/// `Ok(r_ohm)` unless it is zero or negative ([`Error::OutOfRange`] naming `what`): a
+/// thermistor's resistance, given or measured, is positive.
+fn positive_ohm(r_ohm: f64, what: &'static str) -> Result<f64, Error> {
+    if r_ohm <= 0.0 {
+        return Err(Error::OutOfRange { what, value: r_ohm, min: 0.0, max: f64::INFINITY });
+    }
+    Ok(r_ohm)
+}
+
 impl Divider {
     /// The NTC resistance for an ADC reading; the normalised reading is clamped to
     /// [1e-5, 0.99999] as Klipper does, so rails give a finite (extreme) value.
@@ -137,15 +139,7 @@ impl Divider {
         }
         let x = (adc / self.adc_full_scale).clamp(1e-5, 0.99999);
         let r = self.pullup_ohm * x / (1.0 - x) - self.series_ohm;
-        if r <= 0.0 {
-            return Err(Error::OutOfRange {
-                what: "thermistor resistance from the ADC (ohm)",
-                value: r,
-                min: 0.0,
-                max: f64::INFINITY,
-            });
-        }
-        Ok(r)
+        positive_ohm(r, "thermistor resistance from the ADC (ohm)")
     }
 
     /// The ADC reading (unrounded) for an NTC resistance.

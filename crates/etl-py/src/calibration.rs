@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use etl_core::calib::projection_uncertainty;
+use etl_core::camera::Trust;
 use etl_core::model::{CameraModel, DistortionA, FocalPoly};
 use etl_core::pnp::{pose_uncertainty, PixelNoise};
 use etl_core::thermal::ThermalSurface as CoreSurface;
@@ -13,7 +14,7 @@ use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::arrays::{mat3_out, points, points_out, vec_out};
+use crate::arrays::{mat3_out, points, points_out, vec_out, Points};
 use crate::camera::{trust, CameraAt};
 use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::pose::BoardPose;
@@ -399,8 +400,7 @@ impl Calibration {
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let t = self.file.thermal_ref().map_err(crate::errors::calib_err)?.trust();
-        let policy = trust(allow_extrapolation);
-        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, c| {
+        at_temperature(e_in_ma, temperature_c, "e_in_ma", allow_extrapolation, |e, c, policy| {
             Ok(e - t.e_t_ma(e, c, policy).py()?.0)
         })
     }
@@ -420,8 +420,7 @@ impl Calibration {
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let t = self.file.thermal_ref().map_err(crate::errors::calib_err)?.trust();
-        let policy = trust(allow_extrapolation);
-        crate::arrays::map2(e_com_ma, temperature_c, ("e_com_ma", "temperature_c"), |e, c| {
+        at_temperature(e_com_ma, temperature_c, "e_com_ma", allow_extrapolation, |e, c, policy| {
             let e_in = t.surface.e_in_for_e_com(e, c).py()?;
             t.e_t_ma(e_in, c, policy).py()?;
             Ok(e_in)
@@ -469,8 +468,7 @@ impl Calibration {
         temperature_c: &Bound<'py, PyAny>,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let policy = trust(allow_extrapolation);
-        crate::arrays::map2(distance_mm, temperature_c, ("distance_mm", "temperature_c"), |d, c| {
+        at_temperature(distance_mm, temperature_c, "distance_mm", allow_extrapolation, |d, c, policy| {
             self.file.focus_e_in(d, c, policy).map_err(crate::errors::calib_err)
         })
     }
@@ -493,8 +491,7 @@ impl Calibration {
         temperature_c: &Bound<'py, PyAny>,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let policy = trust(allow_extrapolation);
-        crate::arrays::map2(e_in_ma, temperature_c, ("e_in_ma", "temperature_c"), |e, c| {
+        at_temperature(e_in_ma, temperature_c, "e_in_ma", allow_extrapolation, |e, c, policy| {
             self.file.focus_distance_mm(e, c, policy).map_err(crate::errors::calib_err)
         })
     }
@@ -571,10 +568,8 @@ impl Calibration {
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
-        let py = world_mm.py();
-        let p = points::<3>(world_mm, "world_mm")?;
-        let model = self.model;
+        let p = self.points_at::<3>(world_mm, "world_mm", e_com_ma, allow_extrapolation)?;
+        let (py, model) = (world_mm.py(), self.model);
         let mut out = vec![[0.0; 2]; p.points.len()];
         if p.points.len() > DETACH_POINTS {
             py.detach(|| model.project_many(&p.points, e_com_ma, &mut out)).py()?;
@@ -602,10 +597,8 @@ impl Calibration {
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
-        let py = pixels.py();
-        let p = points::<2>(pixels, "pixels")?;
-        let model = self.model;
+        let p = self.points_at::<2>(pixels, "pixels", e_com_ma, allow_extrapolation)?;
+        let (py, model) = (pixels.py(), self.model);
         let run = |pts: &[[f64; 2]]| -> etl_core::Result<Vec<[f64; 2]>> {
             pts.iter().map(|px| model.undistort(*px, e_com_ma)).collect()
         };
@@ -665,8 +658,7 @@ impl Calibration {
         sigma_px: Option<f64>,
         allow_extrapolation: bool,
     ) -> PyResult<BoardPose> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
-        let b = points::<3>(board_mm, "board_mm")?;
+        let b = self.points_at::<3>(board_mm, "board_mm", e_com_ma, allow_extrapolation)?;
         let p = points::<2>(pixels, "pixels")?;
         let model = self.model;
         let noise = sigma_px.map_or(PixelNoise::FromResidual, PixelNoise::Known);
@@ -711,9 +703,8 @@ impl Calibration {
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
+        let p = self.points_at::<3>(world_mm, "world_mm", e_com_ma, allow_extrapolation)?;
         let py = world_mm.py();
-        let p = points::<3>(world_mm, "world_mm")?;
         let cov = self.file.require_covariance().py()?;
         let model = self.model;
         let out = py
@@ -933,9 +924,37 @@ impl Calibration {
         let camera = self.file.camera().map_err(crate::errors::calib_err)?;
         camera.at_e_com(e_com_ma, trust(allow_extrapolation)).py()
     }
+
+    /// The points `what` (an (N, K) array, or one point) of a method at the compensated
+    /// current `e_com_ma`, the current checked first ([`Self::at_e_com`]): how every
+    /// per-point method starts, so that all refuse a bad current before a bad array.
+    fn points_at<const K: usize>(
+        &self,
+        array: &Bound<'_, PyAny>,
+        what: &str,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<Points<K>> {
+        self.at_e_com(e_com_ma, allow_extrapolation)?;
+        points::<K>(array, what)
+    }
 }
 
 /// `numpy.polynomial.Polynomial(coefficients)` (ascending powers).
+/// `f(x, temperature, policy)` over two floats or arrays broadcast against each other
+/// (numpy's rules; `what` names `x` in errors), with the extrapolation policy the caller
+/// chose: the methods of a lens setting (or a distance) and a lens temperature.
+fn at_temperature<'py>(
+    x: &Bound<'py, PyAny>,
+    temperature_c: &Bound<'py, PyAny>,
+    what: &str,
+    allow_extrapolation: bool,
+    f: impl Fn(f64, f64, Trust) -> PyResult<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let policy = trust(allow_extrapolation);
+    crate::arrays::map2(x, temperature_c, (what, "temperature_c"), |a, c| f(a, c, policy))
+}
+
 fn polynomial<'py>(py: Python<'py>, coefficients: &[f64]) -> PyResult<Bound<'py, PyAny>> {
     py.import("numpy.polynomial")?.getattr("Polynomial")?.call1((vec_out(py, coefficients),))
 }

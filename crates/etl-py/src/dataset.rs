@@ -39,6 +39,21 @@ fn board_of(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Board> {
     crate::board::board_arg(obj, what)
 }
 
+/// A view's lens setting (E_in, T and the optional E_com), each checked finite.
+fn setting(e_in_ma: f64, temperature_c: f64, e_com_ma: Option<f64>) -> PyResult<(f64, f64, Option<f64>)> {
+    let (e_in_ma, temperature_c) = (finite(e_in_ma, "e_in_ma")?, finite(temperature_c, "temperature_c")?);
+    Ok((e_in_ma, temperature_c, e_com_ma.map(|e| finite(e, "e_com_ma")).transpose()?))
+}
+
+/// An image's own board (when it differs from the dataset's) and its first corner on the
+/// physical board, as the file holds them.
+fn own_board(
+    board: Option<Bound<'_, PyAny>>,
+    first_corner: Option<(usize, usize)>,
+) -> PyResult<(Option<Board>, Option<[usize; 2]>)> {
+    Ok((board.map(|b| board_of(&b, "board")).transpose()?, first_corner.map(|(i, j)| [i, j])))
+}
+
 #[pymethods]
 impl Dataset {
     /// An empty dataset to fill with `add_view` (and `add_offstate_view`,
@@ -110,15 +125,10 @@ impl Dataset {
         board: Option<Bound<'_, PyAny>>,
         first_corner: Option<(usize, usize)>,
     ) -> PyResult<()> {
-        let view = DatasetView {
-            image,
-            e_in_ma: finite(e_in_ma, "e_in_ma")?,
-            temperature_c: finite(temperature_c, "temperature_c")?,
-            e_com_ma: e_com_ma.map(|e| finite(e, "e_com_ma")).transpose()?,
-            z_w_mm: finite(z_w_mm, "z_w_mm")?,
-            board: board.map(|b| board_of(&b, "board")).transpose()?,
-            first_corner: first_corner.map(|(i, j)| [i, j]),
-        };
+        let (e_in_ma, temperature_c, e_com_ma) = setting(e_in_ma, temperature_c, e_com_ma)?;
+        let z_w_mm = finite(z_w_mm, "z_w_mm")?;
+        let (board, first_corner) = own_board(board, first_corner)?;
+        let view = DatasetView { image, e_in_ma, temperature_c, e_com_ma, z_w_mm, board, first_corner };
         self.file.views.push(view);
         Ok(())
     }
@@ -142,11 +152,8 @@ impl Dataset {
         board: Option<Bound<'_, PyAny>>,
         first_corner: Option<(usize, usize)>,
     ) -> PyResult<()> {
-        self.file.offstate_views.push(OffstateImage {
-            image,
-            board: board.map(|b| board_of(&b, "board")).transpose()?,
-            first_corner: first_corner.map(|(i, j)| [i, j]),
-        });
+        let (board, first_corner) = own_board(board, first_corner)?;
+        self.file.offstate_views.push(OffstateImage { image, board, first_corner });
         Ok(())
     }
 
@@ -176,14 +183,9 @@ impl Dataset {
         board: Option<Bound<'_, PyAny>>,
         first_corner: Option<(usize, usize)>,
     ) -> PyResult<()> {
-        self.file.setting_views.push(SettingImage {
-            image,
-            e_in_ma: finite(e_in_ma, "e_in_ma")?,
-            temperature_c: finite(temperature_c, "temperature_c")?,
-            e_com_ma: e_com_ma.map(|e| finite(e, "e_com_ma")).transpose()?,
-            board: board.map(|b| board_of(&b, "board")).transpose()?,
-            first_corner: first_corner.map(|(i, j)| [i, j]),
-        });
+        let (e_in_ma, temperature_c, e_com_ma) = setting(e_in_ma, temperature_c, e_com_ma)?;
+        let (board, first_corner) = own_board(board, first_corner)?;
+        self.file.setting_views.push(SettingImage { image, e_in_ma, temperature_c, e_com_ma, board, first_corner });
         Ok(())
     }
 

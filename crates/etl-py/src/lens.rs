@@ -17,6 +17,7 @@ use etl_core::lens::LensError as _;
 use etl_formats::compact;
 
 use crate::errors::{invalid, invalid_value, lens_kind, raise, Kind};
+use crate::results::fields_object;
 use crate::thermal::ThermalCalibration;
 
 /// `t_c` if the lens temperature sensor can read it (-40..=125 degC), else InputError
@@ -88,14 +89,7 @@ fn hold_err(e: HoldError<HwError>) -> PyErr {
 
 /// One step of a hold as an `etlcal.results.HoldStep`.
 fn step_object<'py>(py: Python<'py>, s: &HoldStep) -> PyResult<Bound<'py, PyAny>> {
-    let d = PyDict::new(py);
-    d.set_item("index", s.index)?;
-    d.set_item("temperature_c", s.temperature_c)?;
-    d.set_item("e_in_ma", s.e_in_ma)?;
-    d.set_item("e_com_ma", s.e_com_ma)?;
-    d.set_item("error_ma", s.error_ma)?;
-    d.set_item("extrapolated", s.extrapolated)?;
-    crate::results::make(py, "HoldStep", &d)
+    fields_object!(py, "HoldStep", s, [index, temperature_c, e_in_ma, e_com_ma, error_ma, extrapolated])
 }
 
 #[pymethods]
@@ -305,14 +299,7 @@ impl VirtualLens {
     /// `e_t_ma`, `e_com_ma` (mA) and `f_com_mm` (the ETL group's focal length f_com(E_com),
     /// Eq. 10, mm).
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let s = self.device.state();
-        let d = PyDict::new(py);
-        d.set_item("e_in_ma", s.e_in_ma)?;
-        d.set_item("temperature_c", s.temperature_c)?;
-        d.set_item("e_t_ma", s.e_t_ma)?;
-        d.set_item("e_com_ma", s.e_com_ma)?;
-        d.set_item("f_com_mm", s.f_com_mm)?;
-        crate::results::make(py, "LensState", &d)
+        fields_object!(py, "LensState", self.device.state(), [e_in_ma, temperature_c, e_t_ma, e_com_ma, f_com_mm])
     }
 
     /// Heats the mount so that the lens settles at `t_c` degC, and jumps to equilibrium.

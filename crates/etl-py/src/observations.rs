@@ -52,9 +52,18 @@ pub struct Observations {
 }
 
 impl Observations {
-    /// Appends `v` to the list `list` picks, keeping it only if the file still validates
-    /// (checked in place so that the message names the view's index).
-    fn push_checked(&mut self, list: impl Fn(&mut ObsFile) -> &mut Vec<ViewObs>, v: ViewObs) -> PyResult<()> {
+    /// Appends the view of points `world_mm`, `pixels` taken at `setting` (E_in, T, E_com)
+    /// to the list `list` picks (ETL or per-setting views: the same arguments), keeping it
+    /// only if the file still validates (checked in place so that the message names the
+    /// view's index).
+    fn push_checked(
+        &mut self,
+        list: impl Fn(&mut ObsFile) -> &mut Vec<ViewObs>,
+        world_mm: &Bound<'_, PyAny>,
+        pixels: &Bound<'_, PyAny>,
+        (e_in_ma, temperature_c, e_com_ma): (f64, f64, Option<f64>),
+    ) -> PyResult<()> {
+        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: view_points(world_mm, pixels)? };
         list(&mut self.file).push(v);
         if let Err(e) = self.file.validate() {
             list(&mut self.file).pop();
@@ -177,8 +186,7 @@ impl Observations {
         temperature_c: f64,
         e_com_ma: Option<f64>,
     ) -> PyResult<()> {
-        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: view_points(world_mm, pixels)? };
-        self.push_checked(|f| &mut f.views, v)
+        self.push_checked(|f| &mut f.views, world_mm, pixels, (e_in_ma, temperature_c, e_com_ma))
     }
 
     /// Adds a lens-off view of a planar board (points with Z = 0), for A0.
@@ -217,8 +225,7 @@ impl Observations {
         temperature_c: f64,
         e_com_ma: Option<f64>,
     ) -> PyResult<()> {
-        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: view_points(world_mm, pixels)? };
-        self.push_checked(|f| &mut f.setting_views, v)
+        self.push_checked(|f| &mut f.setting_views, world_mm, pixels, (e_in_ma, temperature_c, e_com_ma))
     }
 
     /// Number of ETL views.

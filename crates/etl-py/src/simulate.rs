@@ -11,6 +11,7 @@ use pyo3::types::PyDict;
 use crate::calibration::Calibration;
 use crate::errors::{invalid, invalid_value};
 use crate::observations::{Observations, A0};
+use crate::results::fields_dict;
 
 /// A simulated data set and the truth behind it.
 #[pyclass(module = "etlcal", frozen)]
@@ -95,14 +96,7 @@ impl Simulation {
 type Reduced<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>);
 
 fn noise_dict<'py>(py: Python<'py>, m: &NoiseModel) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("xy_mm", m.xy_mm)?;
-    d.set_item("z_mm", m.z_mm)?;
-    d.set_item("e_ma", m.e_ma)?;
-    d.set_item("px", m.px)?;
-    d.set_item("kf0_rel", m.kf0_rel)?;
-    d.set_item("pp_px", m.pp_px)?;
-    Ok(d)
+    fields_dict!(py, m, [xy_mm, z_mm, e_ma, px, kf0_rel, pp_px])
 }
 
 fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {

@@ -17,6 +17,7 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::arrays::{broadcast2, map2, stacked, vec_out, Broadcast2};
 use crate::errors::{input_error, invalid, CoreResultExt};
+use crate::results::fields_object;
 
 /// The cubic surface E_T(T, E_in) of the paper (section 5.2.2), in mA.
 ///
@@ -378,10 +379,5 @@ fn compensations<'py>(
 
 /// One compensation as an `etlcal.results.Compensation`.
 fn compensation_object<'py>(py: Python<'py>, c: &Compensation) -> PyResult<Bound<'py, PyAny>> {
-    let d = PyDict::new(py);
-    d.set_item("e_in_ma", c.e_in_ma)?;
-    d.set_item("e_t_ma", c.e_t_ma)?;
-    d.set_item("e_com_ma", c.e_com_ma)?;
-    d.set_item("extrapolated", c.extrapolated)?;
-    crate::results::make(py, "Compensation", &d)
+    fields_object!(py, "Compensation", c, [e_in_ma, e_t_ma, e_com_ma, extrapolated])
 }

@@ -20,6 +20,7 @@ use etl_formats::{Error, Result};
 use plotters::prelude::*;
 
 use crate::data::{gather, Provenance};
+use crate::figure::{page, DrawResult};
 use crate::plots;
 
 const FONT_CANDIDATES: [&str; 6] = [
@@ -57,8 +58,6 @@ pub struct ReportFiles {
     pub text: bool,
 }
 
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
-
 /// Draws `$draw` as SVG and PNG into `$dir/$name.{svg,png}` (atomic writes).
 macro_rules! plot {
     ($dir:expr, $name:expr, $size:expr, $d:expr, $text:expr, $draw:path, $files:expr) => {{
@@ -68,13 +67,13 @@ macro_rules! plot {
         let mut s = String::new();
         {
             let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
-            let r: DrawResult = $draw(&root, $d, $text);
+            let r: DrawResult = page(&root, || $draw(&root, $d, $text));
             r.map_err(fail)?;
         }
         let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
-            let r: DrawResult = $draw(&root, $d, $text);
+            let r: DrawResult = page(&root, || $draw(&root, $d, $text));
             r.map_err(fail)?;
         }
         finish_plot($dir, name, size, buf, &s, $files)?;

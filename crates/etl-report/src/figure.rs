@@ -98,23 +98,40 @@ pub struct Figure {
     pub panels: Vec<Chart>,
 }
 
-/// Twelve distinct colours (Tableau 10 and two dark ones).
-const PALETTE: [RGBColor; 12] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(255, 127, 14),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(90, 90, 90),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-    RGBColor(0, 0, 128),
-    RGBColor(128, 0, 0),
-];
+/// Twelve distinct colours (Tableau 10 and two dark ones), as their hex codes.
+pub(crate) const PALETTE: [RGBColor; 12] = hex_colours([
+    0x1f77b4, 0xd62728, 0x2ca02c, 0xff7f0e, 0x9467bd, 0x8c564b, 0xe377c2, 0x5a5a5a, 0xbcbd22, 0x17becf, 0x000080,
+    0x800000,
+]);
 
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
+/// `0xRRGGBB` codes as colours.
+const fn hex_colours<const N: usize>(codes: [u32; N]) -> [RGBColor; N] {
+    let mut colours = [RGBColor(0, 0, 0); N];
+    let mut i = 0;
+    while i < N {
+        let [_, r, g, b] = codes[i].to_be_bytes();
+        colours[i] = RGBColor(r, g, b);
+        i += 1;
+    }
+    colours
+}
+
+/// What every drawing function returns: plotters' errors boxed, whatever the backend.
+pub(crate) type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
+
+/// A plotters backend whose errors can be boxed into a [`DrawResult`]: the one bound of
+/// every drawing function (SVG and bitmap alike).
+pub(crate) trait Canvas: DrawingBackend<ErrorType: 'static> {}
+
+impl<DB: DrawingBackend<ErrorType: 'static>> Canvas for DB {}
+
+/// One page: a white background, then `draw`, then the page presented (written out).
+pub(crate) fn page<DB: Canvas>(root: &DrawingArea<DB, Shift>, draw: impl FnOnce() -> DrawResult) -> DrawResult {
+    root.fill(&WHITE)?;
+    draw()?;
+    root.present()?;
+    Ok(())
+}
 
 fn y_of(c: &Chart, y: f64) -> f64 {
     if c.log_y {
@@ -174,10 +191,7 @@ fn plotted(c: &Chart, s: &Series) -> Vec<(f64, f64, f64, f64)> {
 }
 
 /// The legend in its own column: a sample of each series' line, marker or band and its name.
-fn draw_legend<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+fn draw_legend<DB: Canvas>(area: &DrawingArea<DB, Shift>, c: &Chart) -> DrawResult {
     for (k, s) in c.series.iter().enumerate() {
         let col = PALETTE[s.colour % PALETTE.len()];
         let y = 50 + 20 * k as i32;
@@ -198,10 +212,7 @@ where
     Ok(())
 }
 
-fn draw_chart<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, c: &Chart, legend: u32, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+fn draw_chart<DB: Canvas>(area: &DrawingArea<DB, Shift>, c: &Chart, legend: u32, text: bool) -> DrawResult {
     let (plot_area, legend_area) = area.split_horizontally(area.dim_in_pixel().0.saturating_sub(legend));
     let pts: Vec<Vec<(f64, f64, f64, f64)>> = c.series.iter().map(|s| plotted(c, s)).collect();
     let (mut xl, mut xh, mut yl, mut yh) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
@@ -281,15 +292,12 @@ where
 
 /// The names of a chart's categories under its x axis (whose lowest y is `y_axis`), one
 /// centred at each whole x, on two staggered rows so that neighbours never overlap.
-fn draw_x_names<DB: DrawingBackend>(
+fn draw_x_names<DB: Canvas>(
     plot_area: &DrawingArea<DB, Shift>,
     chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     c: &Chart,
     y_axis: f64,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+) -> DrawResult {
     let (base_x, base_y) = plot_area.get_base_pixel();
     let font = TextStyle::from(("sans-serif", 12).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
     for (k, name) in c.x_names.iter().enumerate() {
@@ -300,18 +308,14 @@ where
     Ok(())
 }
 
-fn draw_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, f: &Figure, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
-    let areas = root.split_evenly(f.grid);
-    let legend = legend_px(f);
-    for (area, c) in areas.iter().zip(&f.panels) {
-        draw_chart(area, c, legend, text)?;
-    }
-    root.present()?;
-    Ok(())
+fn draw_figure<DB: Canvas>(root: &DrawingArea<DB, Shift>, f: &Figure, text: bool) -> DrawResult {
+    page(root, || {
+        let legend = legend_px(f);
+        for (area, c) in root.split_evenly(f.grid).iter().zip(&f.panels) {
+            draw_chart(area, c, legend, text)?;
+        }
+        Ok(())
+    })
 }
 
 /// Writes `f` as `dir/name.svg` and `dir/name.png` (atomic writes); returns the paths.

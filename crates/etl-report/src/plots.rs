@@ -1,13 +1,12 @@
 //! The figures of the calibration report, each drawn on any plotters backend (SVG, PNG).
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::data::Data;
-use crate::figure::tick;
+use crate::figure::{tick, Canvas, DrawResult, PALETTE};
 use crate::uncertainty::{correlation, curve_names, curve_std, curve_values, CurveSet, MAX_CURVES};
-
-type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
 /// Colour of view `k` of `n`: hues spread around the wheel, so that neighbouring views
 /// differ and every view keeps its colour across the figures.
@@ -58,6 +57,45 @@ fn range_of(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// The frame of a chart on `area`: `margin` px around it, and when text is drawn its
+/// caption (`caption.0` in sans-serif of size `caption.1`) and room for the axis labels
+/// (`label_px`: below the plot, left of it).
+fn panel_frame<'a, DB: Canvas>(
+    area: &'a DrawingArea<DB, Shift>,
+    margin: u32,
+    caption: (impl AsRef<str>, u32),
+    [below, left]: [u32; 2],
+    text: bool,
+) -> ChartBuilder<'a, 'static, DB> {
+    let mut b = ChartBuilder::on(area);
+    b.margin(margin);
+    if text {
+        b.caption(caption.0, ("sans-serif", caption.1)).x_label_area_size(below).y_label_area_size(left);
+    }
+    b
+}
+
+/// The axes of a panel over the image (u to the right, v down, px; five labels each and no
+/// grid lines over the picture), when text is drawn.
+fn draw_image_axes<DB: Canvas>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    text: bool,
+) -> DrawResult {
+    if text {
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc("u (px)")
+            .y_desc("v (px)")
+            .x_labels(5)
+            .y_labels(5)
+            .x_label_formatter(&px)
+            .y_label_formatter(&px)
+            .draw()?;
+    }
+    Ok(())
+}
+
 /// A curve against the current with its 1- and 3-sigma bands and points.
 struct BandPanel {
     title: String,
@@ -68,18 +106,11 @@ struct BandPanel {
     colour: RGBColor,
 }
 
-fn draw_band<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+fn draw_band<DB: Canvas>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: bool) -> DrawResult {
     let band = |k: f64| p.curve.iter().flat_map(move |c| [c.1 - k * c.2, c.1 + k * c.2]);
     let (lo, hi) = range_of(band(3.0).chain(p.points.iter().map(|q| q.1)));
     let (e0, e1) = (p.curve.first().map_or(0.0, |c| c.0), p.curve.last().map_or(1.0, |c| c.0));
-    let mut b = ChartBuilder::on(area);
-    b.margin(12);
-    if text {
-        b.caption(&p.title, ("sans-serif", 17)).x_label_area_size(42).y_label_area_size(78);
-    }
+    let mut b = panel_frame(area, 12, (&p.title, 17), [42, 78], text);
     let mut chart = b.build_cartesian_2d(e0 - 5.0..e1 + 5.0, lo..hi)?;
     if text {
         chart
@@ -117,38 +148,68 @@ fn curves(d: &Data) -> Vec<(f64, CurveSet, CurveSet)> {
         .collect()
 }
 
+/// One curve of [`curves`] drawn as two band panels: the curve with each view's own
+/// estimate (top), and the same minus the curve (bottom: bands too narrow to see on top
+/// show there).
+struct CurvePanels<'a> {
+    /// Index of the curve ([`curve_names`]).
+    index: usize,
+    /// The curve's name and its unit after `scale`.
+    name: &'a str,
+    unit: &'a str,
+    /// The factor on every value (units that keep the tick labels short).
+    scale: f64,
+    /// Titles of the top and bottom panels.
+    titles: [String; 2],
+    /// Each view's own estimate (E, value), already scaled.
+    points: Vec<(f64, f64)>,
+    colour: RGBColor,
+}
+
+fn draw_curve_panels<DB: Canvas>(
+    [top_area, bottom_area]: [&DrawingArea<DB, Shift>; 2],
+    d: &Data,
+    c: &[(f64, CurveSet, CurveSet)],
+    p: CurvePanels<'_>,
+    text: bool,
+) -> DrawResult {
+    let (i, scale, name, unit) = (p.index, p.scale, p.name, p.unit);
+    let [top_title, bottom_title] = p.titles;
+    let top = BandPanel {
+        title: top_title,
+        y_label: format!("{name} ({unit})"),
+        curve: c.iter().map(|q| (q.0, q.1[i] * scale, q.2[i] * scale)).collect(),
+        points: p.points.clone(),
+        colour: p.colour,
+    };
+    draw_band(top_area, &top, text)?;
+    let deviation = BandPanel {
+        title: bottom_title,
+        y_label: format!("{name} − {name}(E) ({unit})"),
+        curve: c.iter().map(|q| (q.0, 0.0, q.2[i] * scale)).collect(),
+        points: p.points.iter().map(|v| (v.0, v.1 - curve_values(&d.model, v.0)[i] * scale)).collect(),
+        colour: p.colour,
+    };
+    draw_band(bottom_area, &deviation, text)
+}
+
+/// Title of a deviation panel with room for the bands' legend.
+fn deviation_title(name: &str) -> String {
+    format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)")
+}
+
 /// fx(E), fy(E) (top) and their deviations from the curve with the 1- and 3-sigma bands
 /// (bottom), with each view's own estimate.
-pub(crate) fn draw_focal<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_focal<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let c = curves(d);
     let panels = root.split_evenly((2, 2));
-    for k in 0..2 {
-        let name = ["fx", "fy"][k];
-        let colour = [RGBColor(31, 119, 180), RGBColor(214, 39, 40)][k];
+    for (k, name) in ["fx", "fy"].into_iter().enumerate() {
         let own = |v: &(f64, f64, f64)| if k == 0 { v.1 } else { v.2 };
-        let points: Vec<(f64, f64)> = d.view_focal.iter().filter(|v| own(v) > 0.0).map(|v| (v.0, own(v))).collect();
-        let top = BandPanel {
-            title: format!("{name}(E) (line) and each view's own {name} (dots)"),
-            y_label: format!("{name} (px)"),
-            curve: c.iter().map(|q| (q.0, q.1[k], q.2[k])).collect(),
-            points: points.clone(),
-            colour,
-        };
-        draw_band(&panels[k], &top, text)?;
-        let dev = BandPanel {
-            title: format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)"),
-            y_label: format!("{name} − {name}(E) (px)"),
-            curve: c.iter().map(|q| (q.0, 0.0, q.2[k])).collect(),
-            points: points.iter().map(|p| (p.0, p.1 - curve_values(&d.model, p.0)[k])).collect(),
-            colour,
-        };
-        draw_band(&panels[2 + k], &dev, text)?;
+        let points = d.view_focal.iter().filter(|v| own(v) > 0.0).map(|v| (v.0, own(v))).collect();
+        let titles = [format!("{name}(E) (line) and each view's own {name} (dots)"), deviation_title(name)];
+        let curve = CurvePanels { index: k, name, unit: "px", scale: 1.0, titles, points, colour: PALETTE[k] };
+        draw_curve_panels([&panels[k], &panels[2 + k]], d, &c, curve, text)?;
     }
-    root.present()?;
     Ok(())
 }
 
@@ -156,22 +217,14 @@ where
 /// the current with the 1- and 3-sigma bands and each view's own estimate (Eq. 23) (top),
 /// and the same minus the curve (bottom: bands too narrow to see on the top row show
 /// there).
-pub(crate) fn draw_distortion<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_distortion<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let c = curves(d);
     let names = curve_names(&d.model);
     let coefficients = &names[2..];
     let panels = root.split_evenly((2, coefficients.len()));
-    let colours = [
-        RGBColor(31, 119, 180),
-        RGBColor(214, 39, 40),
-        RGBColor(44, 160, 44),
-        RGBColor(148, 103, 189),
-        RGBColor(255, 127, 14),
-    ];
+    let colours = [PALETTE[0], PALETTE[1], PALETTE[2], PALETTE[4], PALETTE[3]];
+    // Five panels a row leave room for short titles only.
+    let narrow = coefficients.len() > 3;
     for (k, &(name, unit)) in coefficients.iter().enumerate() {
         // Scaled units keep the tick labels short (the paper's coefficients are per px).
         let (scale, unit) = match unit {
@@ -179,50 +232,27 @@ where
             "1/px" => (1e6, "1e-6 / px"),
             _ => (1.0, unit),
         };
+        let points = d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect();
+        let titles = if narrow {
+            [format!("{name}(E), views (dots)"), format!("{name} − {name}(E), ±1σ, ±3σ")]
+        } else {
+            [format!("{name}(E) (line) and each view's own (dots)"), deviation_title(name)]
+        };
         let colour = colours[k % colours.len()];
-        let points: Vec<(f64, f64)> = d.view_dist.iter().map(|(e, v)| (*e, v[k] * scale)).collect();
-        // Five panels a row leave room for short titles only.
-        let narrow = coefficients.len() > 3;
-        let top = BandPanel {
-            title: if narrow {
-                format!("{name}(E), views (dots)")
-            } else {
-                format!("{name}(E) (line) and each view's own (dots)")
-            },
-            y_label: format!("{name} ({unit})"),
-            curve: c.iter().map(|q| (q.0, q.1[2 + k] * scale, q.2[2 + k] * scale)).collect(),
-            points: points.clone(),
-            colour,
-        };
-        draw_band(&panels[k], &top, text)?;
-        let dev = BandPanel {
-            title: if narrow {
-                format!("{name} − {name}(E), ±1σ, ±3σ")
-            } else {
-                format!("{name} − {name}(E): bands ±1σ (dark), ±3σ (light)")
-            },
-            y_label: format!("{name} − {name}(E) ({unit})"),
-            curve: c.iter().map(|q| (q.0, 0.0, q.2[2 + k] * scale)).collect(),
-            points: points.iter().map(|p| (p.0, p.1 - curve_values(&d.model, p.0)[2 + k] * scale)).collect(),
-            colour,
-        };
-        draw_band(&panels[coefficients.len() + k], &dev, text)?;
+        let curve = CurvePanels { index: 2 + k, name, unit, scale, titles, points, colour };
+        draw_curve_panels([&panels[k], &panels[coefficients.len() + k]], d, &c, curve, text)?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// A vertical colour bar for values lo..hi, labelled `label`.
-fn colour_bar<DB: DrawingBackend>(
+fn colour_bar<DB: Canvas>(
     area: &DrawingArea<DB, Shift>,
     (lo, hi): (f64, f64),
     label: &str,
     map: fn(f64) -> RGBColor,
     text: bool,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
+) -> DrawResult {
     let mut b = ChartBuilder::on(area);
     b.margin_top(40).margin_bottom(50).margin_right(10);
     if text {
@@ -251,28 +281,17 @@ where
 }
 
 /// The projection-uncertainty maps at the three currents, one colour scale.
-pub(crate) fn draw_projection_std<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_projection_std<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let (maps, bar) = root.split_horizontally(root.dim_in_pixel().0 - 150);
     let top =
         d.std_maps.iter().flat_map(|m| m.cells.iter().flatten()).copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
     let top = if top > 0.0 { top } else { 1.0 };
     let [w, h] = d.cal.image_size;
     for (m, panel) in d.std_maps.iter().zip(maps.split_evenly((1, 3)).iter()) {
-        let mut b = ChartBuilder::on(panel);
-        b.margin(10).margin_top(16);
-        if text {
-            let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
-            b.caption(
-                format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max),
-                ("sans-serif", 16),
-            )
-            .x_label_area_size(35)
-            .y_label_area_size(50);
-        }
+        let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+        let caption = format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max);
+        let mut b = panel_frame(panel, 10, (caption, 16), [35, 50], text);
+        b.margin_top(16);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         let (rows, cols) = (m.cells.len(), m.cells.first().map_or(0, |r| r.len()));
         let (cw, ch) = (w as f64 / cols.max(1) as f64, h as f64 / rows.max(1) as f64);
@@ -285,21 +304,9 @@ where
                 )
             })
         }))?;
-        if text {
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc("u (px)")
-                .y_desc("v (px)")
-                .x_labels(5)
-                .y_labels(5)
-                .x_label_formatter(&px)
-                .y_label_formatter(&px)
-                .draw()?;
-        }
+        draw_image_axes(&mut chart, text)?;
     }
     colour_bar(&bar, (0.0, top), "worst-direction std (px)", sequential, text)?;
-    root.present()?;
     Ok(())
 }
 
@@ -335,29 +342,20 @@ pub(crate) fn coverage_groups(d: &Data) -> Vec<([f64; 2], Vec<usize>)> {
 }
 
 /// Where the corners were in the image, one panel per current group, coloured by view.
-pub(crate) fn draw_coverage<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_coverage<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let groups = coverage_groups(d);
     let [w, h] = d.cal.image_size;
     let n = d.views.len();
     let body = root.margin(30, 0, 0, 0);
     for (g, panel) in groups.iter().zip(body.split_evenly((groups.len().div_ceil(3), 3)).iter()) {
         let corners: usize = g.1.iter().map(|&k| d.views[k].pixels.len()).sum();
-        let mut b = ChartBuilder::on(panel);
-        b.margin(10);
-        if text {
-            let range = if g.0[1] - g.0[0] < 0.05 {
-                format!("{:.1} mA", g.0[0])
-            } else {
-                format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
-            };
-            b.caption(format!("E_com {range}: {} views, {corners} corners", g.1.len()), ("sans-serif", 16))
-                .x_label_area_size(32)
-                .y_label_area_size(50);
-        }
+        let range = if g.0[1] - g.0[0] < 0.05 {
+            format!("{:.1} mA", g.0[0])
+        } else {
+            format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
+        };
+        let caption = format!("E_com {range}: {} views, {corners} corners", g.1.len());
+        let mut b = panel_frame(panel, 10, (caption, 16), [32, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
             chart
@@ -383,27 +381,17 @@ where
             ("sans-serif", 16),
         ))?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// Residual vectors (model − observed), magnified, coloured by view.
-pub(crate) fn draw_residual_map<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_residual_map<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let [w, h] = d.cal.image_size;
     let rms = d.cal.rms_reprojection_px.max(1e-6);
     // Arrows of RMS length become 2 % of the image width.
     let gain = 0.02 * w as f64 / rms;
-    let mut b = ChartBuilder::on(root);
-    b.margin(15);
-    if text {
-        b.caption(format!("residuals (model − observed) magnified {gain:.0} times; colour: view"), ("sans-serif", 20))
-            .x_label_area_size(40)
-            .y_label_area_size(60);
-    }
+    let caption = format!("residuals (model − observed) magnified {gain:.0} times; colour: view");
+    let mut b = panel_frame(root, 15, (caption, 20), [40, 60], text);
     // Image rows grow downwards.
     let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
     if text {
@@ -437,16 +425,11 @@ where
             ("sans-serif", 14),
         )))?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// The RMS residual of each view, bars in the view's colour, with the overall RMS.
-pub(crate) fn draw_view_rms<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_view_rms<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let n = d.views.len();
     let rms: Vec<f64> = d
         .views
@@ -458,13 +441,8 @@ where
         })
         .collect();
     let top = rms.iter().copied().fold(d.cal.rms_reprojection_px, f64::max).max(1e-9) * 1.15;
-    let mut b = ChartBuilder::on(root);
-    b.margin(15);
-    if text {
-        b.caption("RMS residual per view (bars, colour as in the residual map); dashed: all views", ("sans-serif", 18))
-            .x_label_area_size(45)
-            .y_label_area_size(65);
-    }
+    let caption = "RMS residual per view (bars, colour as in the residual map); dashed: all views";
+    let mut b = panel_frame(root, 15, (caption, 18), [45, 65], text);
     let mut chart = b.build_cartesian_2d(-0.6..n as f64 - 0.4, 0.0..top)?;
     if text {
         chart
@@ -491,16 +469,11 @@ where
     )?;
     let all = d.cal.rms_reprojection_px;
     chart.draw_series(DashedLineSeries::new([(-0.6, all), (n as f64 - 0.4, all)], 8, 5, BLACK.stroke_width(2)))?;
-    root.present()?;
     Ok(())
 }
 
 /// The histogram of the residual components u and v.
-pub(crate) fn draw_histogram<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_histogram<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let vals: Vec<f64> = d.views.iter().flat_map(|v| v.residuals.iter().flat_map(|r| r.d)).collect();
     let m = vals.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-6);
     let bins = 41usize;
@@ -511,13 +484,7 @@ where
         counts[k] += 1;
     }
     let top = counts.iter().copied().max().unwrap_or(1).max(1);
-    let mut b = ChartBuilder::on(root);
-    b.margin(15);
-    if text {
-        b.caption("residual components u and v together (px)", ("sans-serif", 20))
-            .x_label_area_size(40)
-            .y_label_area_size(60);
-    }
+    let mut b = panel_frame(root, 15, ("residual components u and v together (px)", 20), [40, 60], text);
     let mut chart = b.build_cartesian_2d(-m..m, 0u32..top + top / 10 + 1)?;
     if text {
         chart.configure_mesh().x_desc("residual (px)").y_desc("count").draw()?;
@@ -526,7 +493,6 @@ where
         let x0 = -m + k as f64 * width;
         Rectangle::new([(x0, 0), (x0 + width, c)], RGBColor(31, 119, 180).mix(0.7).filled())
     }))?;
-    root.present()?;
     Ok(())
 }
 
@@ -554,15 +520,7 @@ fn field(d: &Data, e_com_ma: f64) -> Vec<([f64; 2], [f64; 2])> {
 
 /// The distortion field (distorted − ideal pixel, Eq. 17) at the three currents, one
 /// magnification for the three.
-pub(crate) fn draw_distortion_field<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    d: &Data,
-    text: bool,
-) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_distortion_field<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let fields: Vec<Vec<([f64; 2], [f64; 2])>> = d.map_currents.iter().map(|&e| field(d, e)).collect();
     let norm = |v: &[f64; 2]| v[0].hypot(v[1]);
     let max = fields.iter().flatten().map(|f| norm(&f.1)).fold(0.0, f64::max).max(1e-9);
@@ -571,26 +529,10 @@ where
     let gain = 0.08 * w as f64 / max;
     for ((f, e), panel) in fields.iter().zip(d.map_currents).zip(root.split_evenly((1, 3)).iter()) {
         let m = f.iter().map(|q| norm(&q.1)).fold(0.0, f64::max);
-        let mut b = ChartBuilder::on(panel);
-        b.margin(10);
-        if text {
-            b.caption(format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}"), ("sans-serif", 16))
-                .x_label_area_size(35)
-                .y_label_area_size(50);
-        }
+        let caption = format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}");
+        let mut b = panel_frame(panel, 10, (caption, 16), [35, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
-        if text {
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc("u (px)")
-                .y_desc("v (px)")
-                .x_labels(5)
-                .y_labels(5)
-                .x_label_formatter(&px)
-                .y_label_formatter(&px)
-                .draw()?;
-        }
+        draw_image_axes(&mut chart, text)?;
         let col = RGBColor(140, 40, 160);
         chart.draw_series(f.iter().map(|(p, v)| {
             PathElement::new(vec![(p[0], p[1]), (p[0] + gain * v[0], p[1] + gain * v[1])], col.stroke_width(2))
@@ -599,16 +541,11 @@ where
         let pp = d.model.principal_point;
         chart.draw_series(std::iter::once(Cross::new((pp[0], pp[1]), 6, RED.stroke_width(2))))?;
     }
-    root.present()?;
     Ok(())
 }
 
 /// The correlation matrix as a heat map (−1 blue, 0 white, +1 red), names on both axes.
-pub(crate) fn draw_correlation<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    root.fill(&WHITE)?;
+pub(crate) fn draw_correlation<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data, text: bool) -> DrawResult {
     let Some(c) = d.covariance else { return Ok(()) };
     let r = correlation(&c);
     let layout = d.model.layout();
@@ -645,6 +582,5 @@ where
         mat.draw(&Text::new("correlation r_ij = C_ij / sqrt(C_ii C_jj)", (left, 10), ("sans-serif", 18)))?;
     }
     colour_bar(&bar, (-1.0, 1.0), "r", |t| diverging(2.0 * t - 1.0), text)?;
-    root.present()?;
     Ok(())
 }

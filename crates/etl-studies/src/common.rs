@@ -31,6 +31,52 @@ use etl_sim::simulate::{focused_z_mm, observe_board, NoiseModel};
 /// refuse more.
 pub const MAX_TRIALS: usize = 100_000;
 
+/// What a Cramer-Rao study of a rig reports beside its numbers (both rigs' studies): how
+/// many trials calibrated, which failed, and how many corners the rig has.
+#[derive(Debug, Clone)]
+pub struct TrialCounts {
+    /// Trials that calibrated, per estimator (paper rig) or family (strong rig).
+    pub trials: [usize; 2],
+    /// Failed trials.
+    pub failures: Vec<String>,
+    /// Corners of the rig.
+    pub points: usize,
+}
+
+impl TrialCounts {
+    /// How uncertain a std observed over the first estimator's trials is, % (for Gaussian
+    /// estimates 1 / sqrt(2 (n - 1)) relative): what the markdown tells the reader an
+    /// efficiency is good to.
+    pub fn std_uncertainty_pct(&self) -> f64 {
+        100.0 / (2.0 * (self.trials[0].max(2) - 1) as f64).sqrt()
+    }
+
+    /// The JSON keys the Cramer-Rao studies share: these counts, the pixel noise
+    /// `sigma_px`, the parameter rows and the smallest efficiency with its check against
+    /// 0.9; `own` adds the study's own keys (an object).
+    pub fn efficiency_json(
+        &self,
+        sigma_px: f64,
+        parameters: &impl serde::Serialize,
+        min_efficiency: f64,
+        own: serde_json::Value,
+    ) -> serde_json::Value {
+        let mut j = serde_json::json!({
+            "points": self.points,
+            "sigma_px": sigma_px,
+            "trials": self.trials,
+            "failures": self.failures,
+            "parameters": parameters,
+            "min_efficiency": min_efficiency,
+            "checks": {"efficiency_at_least_0_9": min_efficiency >= 0.9},
+        });
+        if let (Some(shared), serde_json::Value::Object(own)) = (j.as_object_mut(), own) {
+            shared.extend(own);
+        }
+        j
+    }
+}
+
 /// How a study runs: Monte Carlo trials, the base seed, where its progress goes.
 #[derive(Clone, Copy)]
 pub struct StudyOptions<'p> {

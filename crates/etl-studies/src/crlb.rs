@@ -24,7 +24,7 @@ use serde_json::json;
 
 use super::common::{
     calibrate_pair, calibrate_paper, cov_std, fx_std_px, md_table, paper_params, param_name, run_jobs, sci, stat,
-    truth_params, Chart, Figure, Series, StudyOptions, StudyOutput, PARAMS,
+    truth_params, Chart, Figure, Series, StudyOptions, StudyOutput, TrialCounts, PARAMS,
 };
 use etl_formats::{Error, Result};
 use etl_sim::simulate::{core_points, paper_rig, NoiseModel, PAPER_E_COM_MA};
@@ -98,12 +98,9 @@ pub struct CurveRow {
 /// The result of `etlcal study crlb`.
 #[derive(Debug, Clone)]
 pub struct Crlb {
-    /// Trials per estimator that calibrated.
-    pub trials: [usize; 2],
-    /// Failed trials.
-    pub failures: Vec<String>,
-    /// Points of the rig.
-    pub points: usize,
+    /// Trials per estimator (pixel-only, per-view) that calibrated, the failed ones, the
+    /// rig's points.
+    pub counts: TrialCounts,
     /// Per parameter.
     pub parameters: Vec<ParamRow>,
     /// fx(E).
@@ -184,7 +181,7 @@ pub fn crlb(opts: &StudyOptions) -> Result<Crlb> {
             }
         })
         .collect();
-    Ok(Crlb { trials: [est[0].len(), est[1].len()], failures, points, parameters, curve })
+    Ok(Crlb { counts: TrialCounts { trials: [est[0].len(), est[1].len()], failures, points }, parameters, curve })
 }
 
 impl Crlb {
@@ -197,16 +194,7 @@ impl Crlb {
     pub fn output(&self) -> StudyOutput {
         let min = self.min_efficiency();
         let md = self.markdown(min);
-        let j = json!({
-            "points": self.points,
-            "sigma_px": SIGMA_PX,
-            "trials": self.trials,
-            "failures": self.failures,
-            "parameters": self.parameters,
-            "fx_curve": self.curve,
-            "min_efficiency": min,
-            "checks": {"efficiency_at_least_0_9": min >= 0.9},
-        });
+        let j = self.counts.efficiency_json(SIGMA_PX, &self.parameters, min, json!({"fx_curve": self.curve}));
         let fig = self.figure();
         StudyOutput { name: "crlb".into(), json: j, markdown: md, figures: vec![fig] }
     }
@@ -252,11 +240,11 @@ impl Crlb {
              priors. Efficiency = bound / observed std, ± one standard error from the trials (the observed std is \
              uncertain by about {:.0} % for Gaussian estimates).\n\n{}\n\
              Smallest efficiency (pixel only): {:.3} (the acceptance asks at least 0.9: {}).\n\n## fx(E) (px)\n\n{}",
-            self.points,
-            self.trials[0],
-            self.trials[1],
-            self.failures.len(),
-            100.0 / (2.0 * (self.trials[0].max(2) - 1) as f64).sqrt(),
+            self.counts.points,
+            self.counts.trials[0],
+            self.counts.trials[1],
+            self.counts.failures.len(),
+            self.counts.std_uncertainty_pct(),
             md_table(
                 &[
                     "parameter",

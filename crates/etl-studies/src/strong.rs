@@ -21,6 +21,7 @@ use serde_json::json;
 
 use super::common::{
     calibrate_layout, fx_std_px_in, md_table, run_jobs, sci, stat, Chart, Figure, Series, StudyOptions, StudyOutput,
+    TrialCounts,
 };
 use super::crlb::{CURVE_E_MA, PIXEL_ONLY, SIGMA_PX};
 use etl_formats::{Error, Result};
@@ -83,12 +84,9 @@ pub struct BiasRow {
 /// The result of the strong-rig study.
 #[derive(Debug, Clone)]
 pub struct StrongCrlb {
-    /// Trials that calibrated, per family (opencv, paper).
-    pub trials: [usize; 2],
-    /// Failed trials.
-    pub failures: Vec<String>,
-    /// Corners of the rig.
-    pub points: usize,
+    /// Trials that calibrated per family (opencv, paper), the failed ones, the rig's
+    /// corners.
+    pub counts: TrialCounts,
     /// The opencv family's numbers.
     pub parameters: Vec<StrongRow>,
     /// Principal point and fx(E): both families' bias.
@@ -168,7 +166,8 @@ pub fn strong_crlb(opts: &StudyOptions) -> Result<StrongCrlb> {
         }));
     }
     let mean = |k: usize| ok.iter().map(|r| if k == 0 { r.1 } else { r.3 }).sum::<f64>() / ok.len() as f64;
-    Ok(StrongCrlb { trials: [ok.len(), ok.len()], failures, points, parameters, bias, rms_px: [mean(0), mean(1)] })
+    let counts = TrialCounts { trials: [ok.len(), ok.len()], failures, points };
+    Ok(StrongCrlb { counts, parameters, bias, rms_px: [mean(0), mean(1)] })
 }
 
 impl StrongCrlb {
@@ -180,18 +179,12 @@ impl StrongCrlb {
     /// JSON, markdown and the figure.
     pub fn output(&self) -> StudyOutput {
         let min = self.min_efficiency();
-        let j = json!({
+        let own = json!({
             "rig": "strong",
-            "points": self.points,
-            "sigma_px": SIGMA_PX,
-            "trials": self.trials,
-            "failures": self.failures,
-            "parameters": self.parameters,
             "bias": self.bias,
             "rms_px": {"opencv": self.rms_px[0], "paper": self.rms_px[1]},
-            "min_efficiency": min,
-            "checks": {"efficiency_at_least_0_9": min >= 0.9},
         });
+        let j = self.counts.efficiency_json(SIGMA_PX, &self.parameters, min, own);
         StudyOutput { name: "crlb-strong".into(), json: j, markdown: self.markdown(min), figures: vec![self.figure()] }
     }
 
@@ -223,10 +216,10 @@ impl StrongCrlb {
              std is uncertain by about {:.0} %).\n\n## The opencv family (31 numbers)\n\n{}\nSmallest efficiency: {:.3} \
              (the acceptance asks at least 0.9: {}).\n\n## Principal point and fx(E): mean error ± its standard error \
              (std over the trials)\n\n{}\nMean RMS reprojection error: opencv family {:.4} px, paper family {:.4} px.\n",
-            self.points,
-            self.trials[0],
-            self.failures.len(),
-            100.0 / (2.0 * (self.trials[0].max(2) - 1) as f64).sqrt(),
+            self.counts.points,
+            self.counts.trials[0],
+            self.counts.failures.len(),
+            self.counts.std_uncertainty_pct(),
             md_table(&["number", "truth", "CRLB std", "MC std", "efficiency", "MC bias"], &rows),
             min,
             if min >= 0.9 { "yes" } else { "**no**" },

@@ -171,8 +171,8 @@ fn baseline_is_worse_at_high_current() {
 #[test]
 fn crlb_efficiency_on_a_modest_trial_count() {
     let c = crlb::crlb(&opts(150)).unwrap();
-    assert_eq!(c.points, 2311);
-    assert_eq!(c.trials, [150, 150]);
+    assert_eq!(c.counts.points, 2311);
+    assert_eq!(c.counts.trials, [150, 150]);
     // 150 trials: each observed std is uncertain by about 6 %.
     let eff: Vec<f64> = c.parameters.iter().map(|p| p.efficiency).collect();
     let eiv: Vec<f64> = c.parameters.iter().map(|p| p.eiv_efficiency).collect();
@@ -218,7 +218,7 @@ fn crlb_efficiency_on_a_modest_trial_count() {
 #[test]
 fn strong_rig_opencv_family_is_efficient_and_the_paper_family_biased() {
     let c = etl_studies::strong::strong_crlb(&opts(150)).unwrap();
-    assert_eq!((c.points, c.trials, c.failures.len()), (4085, [150, 150], 0));
+    assert_eq!((c.counts.points, c.counts.trials, c.counts.failures.len()), (4085, [150, 150], 0));
     assert_eq!(c.parameters.len(), 31);
     let eff: Vec<f64> = c.parameters.iter().map(|p| p.efficiency).collect();
     assert!(eff.iter().all(|&v| (0.8..1.25).contains(&v)), "{eff:?}");

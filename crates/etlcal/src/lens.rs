@@ -175,20 +175,10 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
         LensCommand::GetCurrent => {
-            let ma = client.current_ma().map_err(Error::lens)?;
-            if args.json {
-                print_json(&json!({ "current_ma": ma }));
-            } else {
-                outln!("{ma:.4} mA");
-            }
+            print_reading(args.json, "current_ma", client.current_ma().map_err(Error::lens)?, "mA")
         }
         LensCommand::Temperature => {
-            let t = client.temperature_c().map_err(Error::lens)?;
-            if args.json {
-                print_json(&json!({ "temperature_c": t }));
-            } else {
-                outln!("{t:.4} degC");
-            }
+            print_reading(args.json, "temperature_c", client.temperature_c().map_err(Error::lens)?, "degC")
         }
         LensCommand::Hold(h) => run_hold(&client, device.as_ref(), h, args.json)?,
     }
@@ -330,5 +320,15 @@ impl etl_core::lens::Lens for LensRef<'_> {
     }
     fn temperature_c(&mut self) -> std::result::Result<f64, Self::Error> {
         self.0.temperature_c()
+    }
+}
+
+/// One reading of the lens: `{"<key>": value}` with --json, else the value (4 decimals)
+/// and its unit.
+fn print_reading(json: bool, key: &str, value: f64, unit: &str) {
+    if json {
+        print_json(&json!({ key: value }));
+    } else {
+        outln!("{value:.4} {unit}");
     }
 }

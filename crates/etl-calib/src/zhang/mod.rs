@@ -29,7 +29,7 @@ use etl_core::model::rotation::{matrix_to_rodrigues, rotation_from_two_columns};
 use etl_core::model::{
     CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, OpenCvFlags, MAX_COEFFICIENTS,
 };
-use etl_core::pnp::homography;
+use etl_core::pnp::{homography, zhang_constraints};
 
 use etl_formats::calibration::Outlier;
 use etl_formats::{Error, Result};
@@ -118,19 +118,6 @@ impl ZhangResult {
     pub fn distortion(&self) -> Distortion {
         Distortion::from_coefficients(self.options.model, &self.coefficients, self.fx, self.fy)
     }
-}
-
-fn vij(h: &[[f64; 3]; 3], i: usize, j: usize) -> [f64; 6] {
-    // Columns of H: h_i = (H[0][i], H[1][i], H[2][i]).
-    let (a, b) = ([h[0][i], h[1][i], h[2][i]], [h[0][j], h[1][j], h[2][j]]);
-    [
-        a[0] * b[0],
-        a[0] * b[1] + a[1] * b[0],
-        a[1] * b[1],
-        a[2] * b[0] + a[0] * b[2],
-        a[2] * b[1] + a[1] * b[2],
-        a[2] * b[2],
-    ]
 }
 
 /// The most shared numbers: fx, fy, u0, v0 and OpenCV's five coefficients.
@@ -232,10 +219,7 @@ fn closed_form(views: &[PlanarView], image_size: [u32; 2]) -> Result<([f64; 4], 
     for v in views {
         let img: Vec<[f64; 2]> = v.pixels.iter().map(|p| [(p[0] - cx) / s, (p[1] - cy) / s]).collect();
         let h = homography(&v.board_mm, &img)?;
-        let v12 = vij(&h, 0, 1);
-        let (v11, v22) = (vij(&h, 0, 0), vij(&h, 1, 1));
-        let d: [f64; 6] = core::array::from_fn(|i| v11[i] - v22[i]);
-        for row in [v12, d] {
+        for row in zhang_constraints(&h) {
             for i in 0..6 {
                 for j in 0..6 {
                     vtv[i][j] += row[i] * row[j];

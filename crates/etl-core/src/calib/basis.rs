@@ -31,40 +31,18 @@
 
 use super::observations::View;
 use super::params::Layout;
+use crate::fit::basis::{BINOMIAL, CHEB_TO_MONO, MAX_BASIS_DEGREE, MONO_TO_CHEB};
 use crate::model::{FocalPoly, MAX_FOCAL_DEGREE};
 
 /// Most coefficients of one polynomial the maps handle (a focal polynomial of degree 5).
 const MAXN: usize = MAX_FOCAL_DEGREE + 1;
 
-/// Monomial coefficients (t^0..t^5) of T_0..T_5.
-const MONO_OF_CHEB: [[f64; MAXN]; MAXN] = [
-    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-    [-1.0, 0.0, 2.0, 0.0, 0.0, 0.0],
-    [0.0, -3.0, 0.0, 4.0, 0.0, 0.0],
-    [1.0, 0.0, -8.0, 0.0, 8.0, 0.0],
-    [0.0, 5.0, 0.0, -20.0, 0.0, 16.0],
-];
-/// Chebyshev coefficients (T_0..T_5) of t^0..t^5.
-const CHEB_OF_MONO: [[f64; MAXN]; MAXN] = [
-    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-    [0.5, 0.0, 0.5, 0.0, 0.0, 0.0],
-    [0.0, 0.75, 0.0, 0.25, 0.0, 0.0],
-    [0.375, 0.0, 0.5, 0.0, 0.125, 0.0],
-    [0.0, 0.625, 0.0, 0.3125, 0.0, 0.0625],
-];
+// The conversions use the fit's tables (degree 6), of which the first MAXN rows and
+// columns are those of degree MAX_FOCAL_DEGREE.
+const _: () = assert!(MAXN <= MAX_BASIS_DEGREE + 1);
 
 fn binomial(n: usize, k: usize) -> f64 {
-    const ROWS: [[f64; MAXN]; MAXN] = [
-        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-        [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-        [1.0, 2.0, 1.0, 0.0, 0.0, 0.0],
-        [1.0, 3.0, 3.0, 1.0, 0.0, 0.0],
-        [1.0, 4.0, 6.0, 4.0, 1.0, 0.0],
-        [1.0, 5.0, 10.0, 10.0, 5.0, 1.0],
-    ];
-    ROWS.get(n).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
+    BINOMIAL.get(n).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
 }
 
 /// Coefficients of a polynomial of degree < `n` (n <= 6) in x, as Chebyshev
@@ -81,7 +59,7 @@ fn mono_to_cheb(a: [f64; MAXN], n: usize, mid: f64, half: f64) -> [f64; MAXN] {
     let mut c = [0.0; MAXN];
     for j in 0..n {
         for i in 0..n {
-            c[i] += at[j] * CHEB_OF_MONO[j][i];
+            c[i] += at[j] * MONO_TO_CHEB[j][i];
         }
     }
     c
@@ -93,7 +71,7 @@ fn cheb_to_mono(c: [f64; MAXN], n: usize, mid: f64, half: f64) -> [f64; MAXN] {
     let mut at = [0.0; MAXN];
     for i in 0..n {
         for j in 0..n {
-            at[j] += c[i] * MONO_OF_CHEB[i][j];
+            at[j] += c[i] * CHEB_TO_MONO[i][j];
         }
     }
     // In x: t^j = (x - mid)^j / half^j, so a_i = sum_{j >= i} a'_j C(j, i) (-mid)^(j - i) / half^j.

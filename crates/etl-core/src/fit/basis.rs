@@ -10,7 +10,7 @@ pub const MAX_BASIS_DEGREE: usize = 6;
 
 /// Monomial coefficients of the Chebyshev polynomials: `CHEB_TO_MONO[k][j]` is the
 /// coefficient of t^j in T_k(t).
-const CHEB_TO_MONO: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = [
+pub(crate) const CHEB_TO_MONO: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = [
     [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     [-1.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0],
@@ -21,7 +21,7 @@ const CHEB_TO_MONO: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = [
 ];
 
 /// Binomial coefficients C(n, k) for n, k <= 6.
-const BINOMIAL: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = [
+pub(crate) const BINOMIAL: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = [
     [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
     [1.0, 2.0, 1.0, 0.0, 0.0, 0.0, 0.0],
@@ -30,6 +30,29 @@ const BINOMIAL: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = [
     [1.0, 5.0, 10.0, 10.0, 5.0, 1.0, 0.0],
     [1.0, 6.0, 15.0, 20.0, 15.0, 6.0, 1.0],
 ];
+
+/// Chebyshev coefficients of the monomials, the inverse of [`CHEB_TO_MONO`]:
+/// `MONO_TO_CHEB[n][k]` is the coefficient of T_k in t^n. Derived from [`BINOMIAL`] by
+/// t^n = 2^(1-n) sum_j C(n, j) T_(n-2j) (the T_0 term halved) rather than written out, so
+/// that the table cannot disagree with the other two; every entry is a small integer over
+/// a power of two, exact in f64.
+pub(crate) const MONO_TO_CHEB: [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] = mono_to_cheb();
+
+const fn mono_to_cheb() -> [[f64; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1] {
+    let mut table = [[0.0; MAX_BASIS_DEGREE + 1]; MAX_BASIS_DEGREE + 1];
+    let mut n = 0;
+    while n <= MAX_BASIS_DEGREE {
+        let mut j = 0;
+        while 2 * j <= n {
+            let k = n - 2 * j;
+            let halvings = if k == 0 { n } else { n - 1 };
+            table[n][k] = BINOMIAL[n][j] / (1u64 << halvings) as f64;
+            j += 1;
+        }
+        n += 1;
+    }
+    table
+}
 
 /// T_0(t) .. T_6(t) by the three-term recurrence T_{k+1} = 2 t T_k - T_{k-1}.
 #[inline]
@@ -95,6 +118,19 @@ pub fn horner(c: &[f64; MAX_BASIS_DEGREE + 1], x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The derived table inverts the written one exactly: their product is the identity.
+    #[test]
+    fn monomial_to_chebyshev_inverts_chebyshev_to_monomial() {
+        for n in 0..=MAX_BASIS_DEGREE {
+            for j in 0..=MAX_BASIS_DEGREE {
+                let product: f64 = (0..=MAX_BASIS_DEGREE).map(|k| MONO_TO_CHEB[n][k] * CHEB_TO_MONO[k][j]).sum();
+                assert_eq!(product, if n == j { 1.0 } else { 0.0 }, "t^{n} -> t^{j}");
+            }
+        }
+        assert_eq!(MONO_TO_CHEB[4], [0.375, 0.0, 0.5, 0.0, 0.125, 0.0, 0.0]);
+        assert_eq!(MONO_TO_CHEB[5], [0.0, 0.625, 0.0, 0.3125, 0.0, 0.0625, 0.0]);
+    }
 
     #[test]
     fn chebyshev_tables_agree_with_the_recurrence_and_cosines() {

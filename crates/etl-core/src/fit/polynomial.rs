@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::basis::{chebyshev_to_monomial, chebyshev_values, horner, scaled_to_raw, MAX_BASIS_DEGREE};
 use super::givens::GivensQr;
-use crate::error::{finite, Error, Result};
+use crate::error::{count_in_range, finite, Error, Result};
 
 /// Highest degree [`PolyFit`] accepts.
 pub const MAX_POLY_DEGREE: usize = MAX_BASIS_DEGREE;
@@ -93,14 +93,7 @@ impl PolyFit {
     /// ([`Error::NotFinite`]); min >= max or a width that overflows
     /// ([`Error::InvalidArgument`]).
     pub fn new(degree: usize, x_range: [f64; 2]) -> Result<Self> {
-        if !(1..=MAX_POLY_DEGREE).contains(&degree) {
-            return Err(Error::OutOfRange {
-                what: "polynomial degree",
-                value: degree as f64,
-                min: 1.0,
-                max: MAX_POLY_DEGREE as f64,
-            });
-        }
+        count_in_range(degree, 1, MAX_POLY_DEGREE, "polynomial degree")?;
         let [lo, hi] = x_range;
         finite(lo, "x_range min")?;
         finite(hi, "x_range max")?;

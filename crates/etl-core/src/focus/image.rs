@@ -3,7 +3,7 @@
 //! The view never copies: a camera driver's frame buffer (possibly with padding at the end
 //! of each row, or a region of interest inside a larger frame) is measured in place.
 
-use crate::error::{Error, Result};
+use crate::error::{count_in_range, Error, Result};
 
 /// Largest accepted width or height, px. It keeps every per-row sum of the measures in
 /// `u64` without overflow (a row of 2^20 16-bit Sobel energies is below 2^64).
@@ -62,15 +62,8 @@ impl<'a, T: Pixel> ImageView<'a, T> {
     /// assert_eq!(view.row(1), &[30, 40, 50]);
     /// ```
     pub fn new(data: &'a [T], width: usize, height: usize, stride: usize) -> Result<Self> {
-        let side = |what, v: usize| {
-            if v == 0 || v > MAX_SIDE_PX {
-                Err(Error::OutOfRange { what, value: v as f64, min: 1.0, max: MAX_SIDE_PX as f64 })
-            } else {
-                Ok(())
-            }
-        };
-        side("image width_px", width)?;
-        side("image height_px", height)?;
+        count_in_range(width, 1, MAX_SIDE_PX, "image width_px")?;
+        count_in_range(height, 1, MAX_SIDE_PX, "image height_px")?;
         if stride < width {
             return Err(Error::InvalidArgument { what: "image stride is smaller than its width" });
         }

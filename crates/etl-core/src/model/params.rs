@@ -11,7 +11,7 @@
 //! Per-view variables (one current E fixed): `om1 om2 om3 tx ty tz fx fy u0 v0` and the
 //! family's coefficients (`k1 p1 p2`, or `k1 k2 p1 p2 k3`): 13 or 15.
 
-use crate::error::{Error, Result};
+use crate::error::{count_in_range, Result};
 use crate::model::{CameraModel, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS, MAX_DISTORTION_A, MAX_FOCAL_DEGREE};
 
 /// A run of consecutive entries of a parameter vector: `start..start + len`.
@@ -76,16 +76,9 @@ impl Layout {
     pub const PAPER: Layout = Layout { model: DistortionModel::Paper, focal_degree: 3 };
 
     /// The layout of family `model` with focal degree `focal_degree`. Errors: a degree
-    /// outside 1..=5 ([`Error::OutOfRange`] naming `focal_degree`).
+    /// outside 1..=5 ([`Error::OutOfRange`](crate::Error::OutOfRange) naming `focal_degree`).
     pub fn new(model: DistortionModel, focal_degree: usize) -> Result<Self> {
-        if !(1..=MAX_FOCAL_DEGREE).contains(&focal_degree) {
-            return Err(Error::OutOfRange {
-                what: "focal_degree",
-                value: focal_degree as f64,
-                min: 1.0,
-                max: MAX_FOCAL_DEGREE as f64,
-            });
-        }
+        let focal_degree = count_in_range(focal_degree, 1, MAX_FOCAL_DEGREE, "focal_degree")?;
         Ok(Layout { model, focal_degree })
     }
 

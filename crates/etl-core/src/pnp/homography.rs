@@ -46,3 +46,23 @@ pub fn homography(board: &[[f64; 2]], image: &[[f64; 2]]) -> Result<[[f64; 3]; 3
     let row = |a: f64, b: f64, c: f64| [a / s, b / s, c - a * cx / s - b * cy / s];
     Ok([row(h[0], h[1], h[2]), row(h[3], h[4], h[5]), row(h[6], h[7], 1.0)])
 }
+/// The two rows Zhang's method (2000, Sec. 3.1 and Appendix B) takes from one view's
+/// homography `h`: v_12 and v_11 - v_22, with v_ij . b = h_i^T B h_j for the columns h_i of
+/// H and b = (B11, B12, B22, B13, B23, B33) of the image of the absolute conic (so that
+/// v_12 . b = 0 and (v_11 - v_22) . b = 0). Shared by the calibration and its benchmark.
+pub fn zhang_constraints(h: &[[f64; 3]; 3]) -> [[f64; 6]; 2] {
+    let column = |i: usize| [h[0][i], h[1][i], h[2][i]];
+    let v = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[0] * b[0],
+            a[0] * b[1] + a[1] * b[0],
+            a[1] * b[1],
+            a[2] * b[0] + a[0] * b[2],
+            a[2] * b[1] + a[1] * b[2],
+            a[2] * b[2],
+        ]
+    };
+    let (h1, h2) = (column(0), column(1));
+    let (v11, v22) = (v(h1, h1), v(h2, h2));
+    [v(h1, h2), core::array::from_fn(|i| v11[i] - v22[i])]
+}

@@ -16,7 +16,7 @@ mod homography;
 mod planar;
 mod uncertainty;
 
-pub use homography::homography;
+pub use homography::{homography, zhang_constraints};
 pub use planar::{displacement_mm, solve_pnp, BoardPose, MAX_PNP_POINTS};
 pub use uncertainty::{
     displacement_covariance_mm2, displacement_std_mm, pose_uncertainty, PixelNoise, PoseUncertainty,

@@ -49,25 +49,64 @@ pub fn undistort_maps(
     check_model(k, d)?;
     check_band(out, &rows, map_x.len(), map_y.len())?;
     if d.model() == DistortionModel::OpenCv {
-        super::opencv_maps::fill(k, d, out, rows, map_x, map_y);
-        return Ok(());
+        for_each_row(out.width_px, rows, map_x, map_y, &super::opencv_maps::OpenCvRow::new(k, d, out));
+    } else {
+        for_each_row(out.width_px, rows, map_x, map_y, &PaperRow::new(k, d, out));
     }
-    let w = out.width_px;
-    // u = a x + b is affine in x along a row (and v constant): one multiply-add per pixel.
-    let (ax, bx) = (k.fx / out.fx_px, -k.fx * out.cx_px / out.fx_px);
-    let (ay, by) = (k.fy / out.fy_px, -k.fy * out.cy_px / out.fy_px);
-    for (i, y) in rows.enumerate() {
+    Ok(())
+}
+
+/// The maps of one output row of a distortion family: `fill(y, row_x, row_y)` writes row
+/// `y`'s entries of each map. A trait of structs rather than closures, so that each
+/// family's loop is `#[inline(always)]` into [`undistort_maps`] and compiled for its
+/// caller's instruction set (etl-image's runtime dispatch).
+pub(super) trait FillRow {
+    /// Writes the maps of output row `y` into `row_x`, `row_y` (one entry per pixel).
+    fn fill(&self, y: usize, row_x: &mut [f32], row_y: &mut [f32]);
+}
+
+/// Runs `rows.fill` on each output row `y` of the band `rows` with that row's `width`
+/// entries of each map: the walk over a band both families' maps share.
+#[inline(always)]
+fn for_each_row(width: usize, band: Range<usize>, map_x: &mut [f32], map_y: &mut [f32], rows: &impl FillRow) {
+    for (i, y) in band.enumerate() {
         // The band was checked to fit: `get_mut` keeps it a checked fact, not a panic path.
-        let span = i * w..(i + 1) * w;
+        let span = i * width..(i + 1) * width;
         let (Some(row_x), Some(row_y)) = (map_x.get_mut(span.clone()), map_y.get_mut(span)) else { break };
-        let [cx, cy] = row_polynomials(d, ay * y as f64 + by, k.u0, k.v0);
+        rows.fill(y, row_x, row_y);
+    }
+}
+
+/// The paper family's rows (Eq. 17 by [`row_polynomials`]): along a row u = a x + b is
+/// affine in x and v constant, one multiply-add per pixel.
+struct PaperRow<'a> {
+    k: &'a Intrinsics,
+    d: &'a Distortion,
+    /// (a, b) of u = a x + b and of v = a y + b.
+    u_of_x: (f64, f64),
+    v_of_y: (f64, f64),
+}
+
+impl<'a> PaperRow<'a> {
+    #[inline(always)]
+    fn new(k: &'a Intrinsics, d: &'a Distortion, out: &OutputCamera) -> Self {
+        let u_of_x = (k.fx / out.fx_px, -k.fx * out.cx_px / out.fx_px);
+        let v_of_y = (k.fy / out.fy_px, -k.fy * out.cy_px / out.fy_px);
+        PaperRow { k, d, u_of_x, v_of_y }
+    }
+}
+
+impl FillRow for PaperRow<'_> {
+    #[inline(always)]
+    fn fill(&self, y: usize, row_x: &mut [f32], row_y: &mut [f32]) {
+        let ((ax, bx), (ay, by)) = (self.u_of_x, self.v_of_y);
+        let [cx, cy] = row_polynomials(self.d, ay * y as f64 + by, self.k.u0, self.k.v0);
         for (x, (mx, my)) in row_x.iter_mut().zip(row_y.iter_mut()).enumerate() {
             let u = ax * x as f64 + bx;
             *mx = (cx[0] + u * (cx[1] + u * (cx[2] + u * cx[3]))) as f32;
             *my = (cy[0] + u * (cy[1] + u * cy[2])) as f32;
         }
     }
-    Ok(())
 }
 
 /// Eq. 17 along a row: at fixed v, u_d + u0 is a cubic and v_d + v0 a quadratic in u,

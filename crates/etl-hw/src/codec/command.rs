@@ -200,37 +200,44 @@ pub const START: &[u8; 5] = b"Start";
 impl Command {
     /// A short name for messages (the command's ASCII header).
     pub fn name(&self) -> &'static str {
+        self.headers().0
+    }
+
+    /// The command's ASCII header and the header of the driver's reply to it (None for the
+    /// fire-and-forget commands): one row a command, so that a command cannot be given a
+    /// name without deciding its reply.
+    fn headers(&self) -> (&'static str, Option<&'static str>) {
         match self {
-            Command::Start => "Start",
-            Command::SetCurrent { .. } => "Aw",
-            Command::SetCurrentLegacy { .. } => "A",
-            Command::GetCurrent => "Ar",
-            Command::ReadMaxCurrent => "CrMA",
-            Command::ReadUpperLimit => "CrUA",
-            Command::ReadLowerLimit => "CrLA",
-            Command::SetMode(Mode::Current) => "MwDA",
-            Command::SetMode(Mode::Sinusoidal) => "MwSA",
-            Command::SetMode(Mode::Rectangular) => "MwQA",
-            Command::SetMode(Mode::Triangular) => "MwTA",
-            Command::SetMode(Mode::Analog) => "MwAA",
-            Command::SetMode(Mode::Controlled) => "MwCA",
-            Command::ReadMode => "MMA",
-            Command::SetFocalPower { .. } => "PwDA",
-            Command::GetFocalPower => "PrDA",
-            Command::SetTemperatureLimits { .. } => "PwTA",
-            Command::SetSignalUpper { .. } => "PwUA",
-            Command::SetSignalLower { .. } => "PwLA",
-            Command::SetFrequency { .. } => "PwFA",
-            Command::Temperature => "TCA",
-            Command::TemperatureLegacy => "TA",
-            Command::FirmwareType => "H",
-            Command::FirmwareBranch => "F",
-            Command::PartNumber => "J",
-            Command::FirmwareVersion => "V",
-            Command::DeviceId => "IR",
-            Command::LensSerial => "X",
-            Command::Status => "Sr",
-            Command::AnalogInput => "GAA",
+            Command::Start => ("Start", Some("Ready")),
+            Command::SetCurrent { .. } => ("Aw", None),
+            Command::SetCurrentLegacy { .. } => ("A", None),
+            Command::GetCurrent => ("Ar", Some("A")),
+            Command::ReadMaxCurrent => ("CrMA", Some("CMA")),
+            Command::ReadUpperLimit => ("CrUA", Some("CUA")),
+            Command::ReadLowerLimit => ("CrLA", Some("CLA")),
+            Command::SetMode(Mode::Current) => ("MwDA", Some("MDA")),
+            Command::SetMode(Mode::Sinusoidal) => ("MwSA", Some("MSA")),
+            Command::SetMode(Mode::Rectangular) => ("MwQA", Some("MQA")),
+            Command::SetMode(Mode::Triangular) => ("MwTA", Some("MTA")),
+            Command::SetMode(Mode::Analog) => ("MwAA", Some("MAA")),
+            Command::SetMode(Mode::Controlled) => ("MwCA", Some("MCA")),
+            Command::ReadMode => ("MMA", Some("MMA")),
+            Command::SetFocalPower { .. } => ("PwDA", None),
+            Command::GetFocalPower => ("PrDA", Some("PD")),
+            Command::SetTemperatureLimits { .. } => ("PwTA", Some("PT")),
+            Command::SetSignalUpper { .. } => ("PwUA", None),
+            Command::SetSignalLower { .. } => ("PwLA", None),
+            Command::SetFrequency { .. } => ("PwFA", None),
+            Command::Temperature => ("TCA", Some("TCA")),
+            Command::TemperatureLegacy => ("TA", Some("TA")),
+            Command::FirmwareType => ("H", Some("H")),
+            Command::FirmwareBranch => ("F", Some("F")),
+            Command::PartNumber => ("J", Some("J")),
+            Command::FirmwareVersion => ("V", Some("V")),
+            Command::DeviceId => ("IR", Some("IR")),
+            Command::LensSerial => ("X", Some("X")),
+            Command::Status => ("Sr", Some("S")),
+            Command::AnalogInput => ("GAA", Some("GAA")),
         }
     }
 
@@ -282,38 +289,7 @@ impl Command {
     /// assert_eq!(Command::SetCurrent { code: 1 }.reply_header(), None);
     /// ```
     pub fn reply_header(&self) -> Option<&'static str> {
-        Some(match self {
-            Command::SetCurrent { .. }
-            | Command::SetCurrentLegacy { .. }
-            | Command::SetFocalPower { .. }
-            | Command::SetSignalUpper { .. }
-            | Command::SetSignalLower { .. }
-            | Command::SetFrequency { .. } => return None,
-            Command::Start => "Ready",
-            Command::GetCurrent => "A",
-            Command::ReadMaxCurrent => "CMA",
-            Command::ReadUpperLimit => "CUA",
-            Command::ReadLowerLimit => "CLA",
-            Command::SetMode(Mode::Current) => "MDA",
-            Command::SetMode(Mode::Sinusoidal) => "MSA",
-            Command::SetMode(Mode::Rectangular) => "MQA",
-            Command::SetMode(Mode::Triangular) => "MTA",
-            Command::SetMode(Mode::Analog) => "MAA",
-            Command::SetMode(Mode::Controlled) => "MCA",
-            Command::ReadMode => "MMA",
-            Command::GetFocalPower => "PD",
-            Command::SetTemperatureLimits { .. } => "PT",
-            Command::Temperature => "TCA",
-            Command::TemperatureLegacy => "TA",
-            Command::FirmwareType => "H",
-            Command::FirmwareBranch => "F",
-            Command::PartNumber => "J",
-            Command::FirmwareVersion => "V",
-            Command::DeviceId => "IR",
-            Command::LensSerial => "X",
-            Command::Status => "S",
-            Command::AnalogInput => "GAA",
-        })
+        self.headers().1
     }
 
     /// Whether the driver answers this command on success (see [`Self::reply_header`]).

@@ -141,7 +141,8 @@ pub fn undistort_image<T: Sample + Send + Sync>(
         || (vec![0.0f32; BAND_ROWS * w], vec![0.0f32; BAND_ROWS * w]),
         |(scratch_x, scratch_y), (i, dst)| {
             let rows = i * BAND_ROWS..((i + 1) * BAND_ROWS).min(h);
-            arch.dispatch(FusedBand { k, d, out, rows, scratch_x, scratch_y, src, border, dst })
+            let maps = MapsBand { k, d, out, rows, map_x: scratch_x, map_y: scratch_y };
+            arch.dispatch(FusedBand { maps, src, border, dst })
         },
     )?;
     Ok(dst)

@@ -17,8 +17,24 @@
 use core::ops::Range;
 
 use etl_core::model::{Distortion, Intrinsics};
-use etl_core::undistort::{OutputCamera, Sample, SourceImage};
+use etl_core::undistort::{remap, undistort_maps, OutputCamera, Sample, SourceImage};
 use pulp::{Simd, WithSimd};
+
+/// Implements [`WithSimd`] for a band (its generic parameters in brackets): `with_simd` runs the body on the band (`$band`) with
+/// the instruction set's token (`$simd`), `#[inline(always)]` so that the body is compiled
+/// for each instruction set (see the module docs); one band's failure is etl-core's error.
+macro_rules! band {
+    ([$($generics:tt)*] $band_type:ty, |$band:ident, $simd:ident| $body:expr) => {
+        impl<$($generics)*> WithSimd for $band_type {
+            type Output = etl_core::Result<()>;
+            #[inline(always)]
+            fn with_simd<S: Simd>(self, $simd: S) -> Self::Output {
+                let $band = self;
+                $body
+            }
+        }
+    };
+}
 
 /// The maps of rows `rows` into a band of the caller's buffers
 /// ([`etl_core::undistort::undistort_maps`]).
@@ -31,13 +47,7 @@ pub(super) struct MapsBand<'a> {
     pub map_y: &'a mut [f32],
 }
 
-impl WithSimd for MapsBand<'_> {
-    type Output = etl_core::Result<()>;
-    #[inline(always)]
-    fn with_simd<S: Simd>(self, _: S) -> Self::Output {
-        etl_core::undistort::undistort_maps(self.k, self.d, self.out, self.rows, self.map_x, self.map_y)
-    }
-}
+band!([] MapsBand<'_>, |b, _simd| undistort_maps(b.k, b.d, b.out, b.rows, b.map_x, b.map_y));
 
 /// A band of output pixels resampled through stored maps ([`etl_core::undistort::remap`]).
 pub(super) struct RemapBand<'a, T: Sample> {
@@ -48,39 +58,26 @@ pub(super) struct RemapBand<'a, T: Sample> {
     pub dst: &'a mut [T],
 }
 
-impl<T: Sample> WithSimd for RemapBand<'_, T> {
-    type Output = etl_core::Result<()>;
-    #[inline(always)]
-    fn with_simd<S: Simd>(self, _: S) -> Self::Output {
-        etl_core::undistort::remap(self.src, self.map_x, self.map_y, self.border, self.dst)
-    }
-}
+band!([T: Sample] RemapBand<'_, T>, |b, _simd| remap(b.src, b.map_x, b.map_y, b.border, b.dst));
 
 /// The maps of the band's rows into scratch buffers (each thread's own), then the band's
 /// pixels through them ([`super::undistort_image`]).
 pub(super) struct FusedBand<'a, T: Sample> {
-    pub k: &'a Intrinsics,
-    pub d: &'a Distortion,
-    pub out: &'a OutputCamera,
-    pub rows: Range<usize>,
-    pub scratch_x: &'a mut [f32],
-    pub scratch_y: &'a mut [f32],
+    /// The band's rows, with the scratch buffers as its maps (longer than the band needs
+    /// for the last, shorter band).
+    pub maps: MapsBand<'a>,
     pub src: &'a SourceImage<'a, T>,
     pub border: T,
     pub dst: &'a mut [T],
 }
 
-impl<T: Sample> WithSimd for FusedBand<'_, T> {
-    type Output = etl_core::Result<()>;
-    #[inline(always)]
-    fn with_simd<S: Simd>(self, simd: S) -> Self::Output {
-        let n = self.rows.len() * self.out.width_px;
-        let got = self.scratch_x.len().min(self.scratch_y.len());
-        let (Some(map_x), Some(map_y)) = (self.scratch_x.get_mut(..n), self.scratch_y.get_mut(..n)) else {
-            return Err(etl_core::Error::BufferTooSmall { what: "band scratch maps", needed: n, got });
-        };
-        let (k, d, out, rows) = (self.k, self.d, self.out, self.rows);
-        MapsBand { k, d, out, rows, map_x: &mut *map_x, map_y: &mut *map_y }.with_simd(simd)?;
-        RemapBand { src: self.src, map_x, map_y, border: self.border, dst: self.dst }.with_simd(simd)
-    }
-}
+band!([T: Sample] FusedBand<'_, T>, |band, simd| {
+    let MapsBand { k, d, out, rows, map_x: scratch_x, map_y: scratch_y } = band.maps;
+    let n = rows.len() * out.width_px;
+    let got = scratch_x.len().min(scratch_y.len());
+    let (Some(map_x), Some(map_y)) = (scratch_x.get_mut(..n), scratch_y.get_mut(..n)) else {
+        return Err(etl_core::Error::BufferTooSmall { what: "band scratch maps", needed: n, got });
+    };
+    MapsBand { k, d, out, rows, map_x: &mut *map_x, map_y: &mut *map_y }.with_simd(simd)?;
+    RemapBand { src: band.src, map_x, map_y, border: band.border, dst: band.dst }.with_simd(simd)
+});

@@ -8295,6 +8295,7 @@ static ARUCO_MIP_36H12: [u64; 250] = [
 ];
 
 /// Every predefined dictionary, in OpenCV's enum order (`cv2.aruco.DICT_4X4_50` = 0, ...).
+#[rustfmt::skip]
 pub(super) static PREDEFINED: [Dictionary; 22] = [
     Dictionary { name: "DICT_4X4_50", marker_bits: 4, codes: ARUCO_4X4.split_at(50).0, max_correction_bits: 1 },
     Dictionary { name: "DICT_4X4_100", marker_bits: 4, codes: ARUCO_4X4.split_at(100).0, max_correction_bits: 1 },
@@ -8312,40 +8313,10 @@ pub(super) static PREDEFINED: [Dictionary; 22] = [
     Dictionary { name: "DICT_7X7_100", marker_bits: 7, codes: ARUCO_7X7.split_at(100).0, max_correction_bits: 8 },
     Dictionary { name: "DICT_7X7_250", marker_bits: 7, codes: ARUCO_7X7.split_at(250).0, max_correction_bits: 8 },
     Dictionary { name: "DICT_7X7_1000", marker_bits: 7, codes: ARUCO_7X7.split_at(1000).0, max_correction_bits: 6 },
-    Dictionary {
-        name: "DICT_ARUCO_ORIGINAL",
-        marker_bits: 5,
-        codes: ARUCO_ORIGINAL.split_at(1024).0,
-        max_correction_bits: 1,
-    },
-    Dictionary {
-        name: "DICT_APRILTAG_16h5",
-        marker_bits: 4,
-        codes: APRILTAG_16H5.split_at(30).0,
-        max_correction_bits: 2,
-    },
-    Dictionary {
-        name: "DICT_APRILTAG_25h9",
-        marker_bits: 5,
-        codes: APRILTAG_25H9.split_at(35).0,
-        max_correction_bits: 4,
-    },
-    Dictionary {
-        name: "DICT_APRILTAG_36h10",
-        marker_bits: 6,
-        codes: APRILTAG_36H10.split_at(2320).0,
-        max_correction_bits: 4,
-    },
-    Dictionary {
-        name: "DICT_APRILTAG_36h11",
-        marker_bits: 6,
-        codes: APRILTAG_36H11.split_at(587).0,
-        max_correction_bits: 5,
-    },
-    Dictionary {
-        name: "DICT_ARUCO_MIP_36h12",
-        marker_bits: 6,
-        codes: ARUCO_MIP_36H12.split_at(250).0,
-        max_correction_bits: 5,
-    },
+    Dictionary { name: "DICT_ARUCO_ORIGINAL", marker_bits: 5, codes: ARUCO_ORIGINAL.split_at(1024).0, max_correction_bits: 1 },
+    Dictionary { name: "DICT_APRILTAG_16h5", marker_bits: 4, codes: APRILTAG_16H5.split_at(30).0, max_correction_bits: 2 },
+    Dictionary { name: "DICT_APRILTAG_25h9", marker_bits: 5, codes: APRILTAG_25H9.split_at(35).0, max_correction_bits: 4 },
+    Dictionary { name: "DICT_APRILTAG_36h10", marker_bits: 6, codes: APRILTAG_36H10.split_at(2320).0, max_correction_bits: 4 },
+    Dictionary { name: "DICT_APRILTAG_36h11", marker_bits: 6, codes: APRILTAG_36H11.split_at(587).0, max_correction_bits: 5 },
+    Dictionary { name: "DICT_ARUCO_MIP_36h12", marker_bits: 6, codes: ARUCO_MIP_36H12.split_at(250).0, max_correction_bits: 5 },
 ];

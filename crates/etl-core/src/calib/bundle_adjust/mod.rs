@@ -497,31 +497,42 @@ mod tests {
         (x0, x)
     }
 
-    /// The per-view folded normal equations equal those of the streamed rows, with the
-    /// robust weights and hold rows in play.
-    fn folded_equals_streamed<const N: usize, const O: usize, const P: usize>(truth: &CameraModel) {
+    /// Runs `check(views, basis, x0, x)` on three views of `truth` with deterministic
+    /// noise, a start `x0` and a perturbed `x` (internal), the A0 numbers held and the
+    /// robust loss `robust`: the setting of both folding tests.
+    fn with_three_views<const N: usize>(
+        truth: &CameraModel,
+        robust: RobustLoss,
+        check: impl FnOnce(&[View<'_>], &Basis, [f64; N], [f64; N], &BundleAdjustOptions),
+    ) {
         let (pts, currents) = three_views(truth);
         let views: [View; 3] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
         let layout = truth.layout();
         let (x0, x) = perturbed::<N>(truth);
-        let options = BundleAdjustOptions {
-            hold: layout.a0_mask(),
-            robust: Some(RobustLoss::Huber { k_px: 1.0 }),
-            ..Default::default()
-        };
+        let options = BundleAdjustOptions { hold: layout.a0_mask(), robust: Some(robust), ..Default::default() };
         let basis = Basis::for_views(&views, layout);
-        let mut plain = Plain::<N, O, P> {
-            views: &views,
-            x0,
-            options: &options,
-            reference: Some(Projector::new(truth)),
-            basis: &basis,
-        };
-        let x = basis.to_internal(&x);
+        check(&views, &basis, x0, basis.to_internal(&x), &options);
+    }
+
+    /// The per-view folded normal equations equal those of the streamed rows, with the
+    /// robust weights and hold rows in play.
+    fn folded_equals_streamed<const N: usize, const O: usize, const P: usize>(truth: &CameraModel) {
+        with_three_views::<N>(truth, RobustLoss::Huber { k_px: 1.0 }, |views, basis, x0, x, options| {
+            let reference = Some(Projector::new(truth));
+            let mut plain = Plain::<N, O, P> { views, x0, options, reference, basis };
+            check_folded_normal_equations(&mut plain, &x);
+        });
+    }
+
+    /// The per-view folded normal equations of `plain` at `x` against its streamed rows.
+    fn check_folded_normal_equations<const N: usize, const O: usize, const P: usize>(
+        plain: &mut Plain<'_, '_, N, O, P>,
+        x: &[f64; N],
+    ) {
         let mut folded = NormalEquations::<N>::ZERO;
-        assert!(plain.normal_equations(&x, &mut folded).unwrap());
+        assert!(plain.normal_equations(x, &mut folded).unwrap());
         let mut streamed = NormalEquations::<N>::ZERO;
-        plain.eval(&x, true, &mut streamed).unwrap();
+        plain.eval(x, true, &mut streamed).unwrap();
         assert_eq!(folded.rows, streamed.rows);
         assert!((folded.cost - streamed.cost).abs() <= 1e-12 * streamed.cost);
         for i in 0..N {
@@ -543,38 +554,30 @@ mod tests {
 
     /// The same for the errors-in-variables blocks: U, g_x, W, V, g_y.
     fn folded_blocks_equal_streamed<const N: usize, const O: usize, const P: usize>(truth: &CameraModel) {
-        let (pts, currents) = three_views(truth);
-        let views: [View; 3] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
-        let layout = truth.layout();
-        let (x0, x) = perturbed::<N>(truth);
-        let options = BundleAdjustOptions {
-            hold: layout.a0_mask(),
-            robust: Some(RobustLoss::Cauchy { k_px: 1.0 }),
-            ..Default::default()
-        };
-        let basis = Basis::for_views(&views, layout);
-        let x = basis.to_internal(&x);
-        let mut eiv = Eiv::<N, O, P> {
-            views: &views,
-            basis: &basis,
-            x0,
-            options: &options,
-            sigma_px: 0.3,
-            sigma_z_mm: 0.01,
-            sigma_e_ma: 0.4,
-            reference: Some(Projector::new(truth)),
-        };
+        with_three_views::<N>(truth, RobustLoss::Cauchy { k_px: 1.0 }, |views, basis, x0, x, options| {
+            let (sigma_px, sigma_z_mm, sigma_e_ma) = (0.3, 0.01, 0.4);
+            let reference = Some(Projector::new(truth));
+            let mut eiv = Eiv::<N, O, P> { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
+            check_folded_blocks(&mut eiv, &x);
+        });
+    }
+
+    /// The folded errors-in-variables blocks of `eiv` at `x` against its streamed rows.
+    fn check_folded_blocks<const N: usize, const O: usize, const P: usize>(
+        eiv: &mut Eiv<'_, '_, N, O, P>,
+        x: &[f64; N],
+    ) {
         let y = [0.004, -0.3];
         for block in 0..3 {
             let mut s = ([[0.0; N]; N], [0.0; N], [[0.0; 2]; N], [[0.0; 2]; 2], [0.0; 2]);
             let mut f = s;
             let mut streamed =
                 BlockNormal { u: &mut s.0, gx: &mut s.1, w: &mut s.2, v: &mut s.3, gy: &mut s.4, cost: 0.0, rows: 0 };
-            eiv.eval_block(block, &x, &y, true, &mut streamed).unwrap();
+            eiv.eval_block(block, x, &y, true, &mut streamed).unwrap();
             let (sc, sr) = (streamed.cost, streamed.rows);
             let mut folded =
                 BlockNormal { u: &mut f.0, gx: &mut f.1, w: &mut f.2, v: &mut f.3, gy: &mut f.4, cost: 0.0, rows: 0 };
-            assert!(eiv.block_normal_equations(block, &x, &y, &mut folded).unwrap());
+            assert!(eiv.block_normal_equations(block, x, &y, &mut folded).unwrap());
             assert_eq!(folded.rows, sr);
             close(folded.cost, sc, sc, "cost");
             for i in 0..N {
