@@ -13,7 +13,7 @@ use etl_core::focus::FocusLaw;
 use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface, E_IN_DOMAIN_MA, T_DOMAIN_C};
 use etl_formats::calibration::{ModelStd, Outlier, ViewSummary};
-use etl_formats::dataset::{Board, Checkerboard, DatasetView, OffstateImage, SettingImage};
+use etl_formats::dataset::{Board, DatasetView, OffstateImage, SettingImage};
 use etl_formats::observations::{OffstateView, PointObs, ViewObs, MAX_IMAGE_SIDE_PX};
 use etl_formats::{A0File, Calibration, Dataset, Observations, Result, ThermalFile, ThermalRef};
 use proptest::prelude::*;
@@ -305,7 +305,7 @@ impl Format for Observations {
 /// dictionaries with enough markers.
 pub fn board() -> BoxedStrategy<Board> {
     let checkerboard = (3..100usize, 3..100usize, finite().prop_filter("a positive square", |s| *s > 0.0))
-        .prop_map(|(c, r, square_mm)| Board::Checkerboard(Checkerboard { inner_corners: [c, r], square_mm }));
+        .prop_filter_map("a pattern of finite size", |(c, r, square_mm)| Board::checkerboard([c, r], square_mm).ok());
     let names: Vec<&'static str> = etl_core::board::Dictionary::all().iter().map(|d| d.name()).collect();
     let charuco = (
         2..40u32,
