@@ -76,28 +76,9 @@ from ._etlcal import (
     thermal_calibration,
     zhang,
 )
-from .results import (
-    AutofocusResult,
-    BoardDetection,
-    Compensation,
-    CompensationArray,
-    DetectionSummary,
-    ExportResult,
-    FocusLaw,
-    HoldReport,
-    HoldStep,
-    LensInfo,
-    LensState,
-    ModelStd,
-    OffstateView,
-    OpenCvCamera,
-    StudyResult,
-    ThermalCalibrationResult,
-    View,
-    ViewSummary,
-    ZhangOpenCvResult,
-    ZhangResult,
-)
+# The result classes: every name of etlcal.results.__all__ (re-exported by the star import,
+# which type checkers follow too; listed once, there).
+from .results import *  # noqa: F401,F403
 from . import options, physics, results, simulate, studies
 
 __all__ = [
