@@ -8,7 +8,9 @@
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
+use etl_core::board::CharucoBoard;
 use etl_core::thermal::ThermalSurface;
+use etl_formats::board::Board;
 use etl_formats::observations::Observations;
 use etl_formats::{A0File, Calibration, Dataset, ThermalFile, ThermalRef};
 
@@ -37,6 +39,10 @@ pub fn json_readers(data: &[u8]) {
     if let Ok(d) = Dataset::load(&path) {
         d.save(&again).expect("a dataset the reader accepts is written");
         Dataset::load(&again).expect("a written dataset reads back");
+    }
+    if let Ok(b) = Board::load(&path) {
+        b.save(&again).expect("a board the reader accepts is written");
+        Board::load(&again).expect("a written board reads back");
     }
     let _ = A0File::load(&path);
     let _ = ThermalFile::load(&path);
@@ -72,11 +78,163 @@ pub fn image_detect(data: &[u8]) {
 /// Every corner a detection returns is a finite point inside the image.
 fn check_corners(found: etl_image::Result<etl_image::detect::Detection>, w: usize, h: usize) {
     if let Ok(d) = found {
-        for c in &d.corners_px {
-            assert!(c[0].is_finite() && c[1].is_finite(), "corner {c:?} not finite");
-            assert!(c[0] >= -0.5 && c[1] >= -0.5 && c[0] <= w as f64 - 0.5 && c[1] <= h as f64 - 0.5, "{c:?} outside");
+        check_inside(&d.corners_px, w, h);
+    }
+}
+
+/// Every point is finite and inside a `w` x `h` image ((0, 0) the top-left pixel's centre).
+fn check_inside(points: &[[f64; 2]], w: usize, h: usize) {
+    for c in points {
+        assert!(c[0].is_finite() && c[1].is_finite(), "corner {c:?} not finite");
+        assert!(c[0] >= -0.5 && c[1] >= -0.5 && c[0] <= w as f64 - 0.5 && c[1] <= h as f64 - 0.5, "{c:?} outside");
+    }
+}
+
+/// `board_parser`: the bytes as an `etlcal.board/1` file ([`Board::load`]) and as a board
+/// object inline in a dataset (the same object, `"format"` optional: serde's path, which
+/// datasets take). A board either reader accepts is written back by its writer and read
+/// again equal, and every geometry query the detectors and the pipeline make of it answers
+/// consistently with finite numbers ([`check_board`]).
+pub fn board_parser(data: &[u8]) {
+    let (path, again) = (scratch("board.json"), scratch("board-again.json"));
+    if std::fs::write(&path, data).is_ok() {
+        if let Ok(b) = Board::load(&path) {
+            check_board(&b);
+            b.save(&again).expect("a board the reader accepts is written");
+            assert_eq!(Board::load(&again).expect("a written board reads back"), b);
         }
     }
+    if let Ok(b) = serde_json::from_slice::<Board>(data) {
+        check_board(&b);
+        let text = serde_json::to_string(&b).expect("an inline board is written");
+        assert_eq!(serde_json::from_str::<Board>(&text).expect("a written inline board reads back"), b);
+    }
+}
+
+/// A valid board's geometry: the corner grid and count agree, every corner is finite, inside
+/// the printed pattern and found again by its id, nothing beyond the last id; a ChArUco
+/// board's markers and corners are checked by [`check_charuco`].
+fn check_board(b: &Board) {
+    b.validate().expect("a board a reader accepts is valid");
+    let [cols, rows] = b.corner_grid();
+    assert!(cols >= 1 && rows >= 1 && b.corner_count() == cols * rows, "grid {cols} x {rows}, {}", b.corner_count());
+    let s = b.square_mm();
+    assert!(s.is_finite() && s > 0.0, "square {s}");
+    let [x0, y0, x1, y1] = b.pattern_mm();
+    assert!([x0, y0, x1, y1].iter().all(|v| v.is_finite()) && x0 < x1 && y0 < y1, "pattern {:?}", b.pattern_mm());
+    let corners = b.corners_mm();
+    assert_eq!(corners.len(), b.corner_count(), "one position per corner id");
+    for (id, c) in corners.iter().enumerate() {
+        assert!(c[0].is_finite() && c[1].is_finite(), "corner {id} at {c:?}");
+        assert!(c[0] > x0 && c[0] < x1 && c[1] > y0 && c[1] < y1, "corner {id} at {c:?} outside {:?}", b.pattern_mm());
+    }
+    for id in [0, corners.len() / 2, corners.len() - 1] {
+        assert_eq!(b.corner_mm(id as u32), Some(corners[id]), "corner {id}");
+    }
+    assert_eq!(b.corner_mm(corners.len() as u32), None, "a corner beyond the board");
+    assert!(!b.describe().is_empty() && !b.type_name().is_empty());
+    match (b.as_charuco(), b.as_checkerboard()) {
+        (Some(c), None) => check_charuco(c, &corners),
+        (None, Some(k)) => assert_eq!(k.corners_mm(), corners, "the checkerboard's own corners"),
+        _ => panic!("a board is one type: {b:?}"),
+    }
+}
+
+/// A ChArUco board's markers: each in a white square that names it back, its four corners
+/// inside that square, the marker count the white squares; each corner's cell gives its id
+/// back and touches two distinct markers of the board.
+fn check_charuco(c: &CharucoBoard, corners: &[[f64; 2]]) {
+    let [cols, rows] = c.squares();
+    assert_eq!(c.markers(), (cols as usize * rows as usize) / 2, "markers in the white squares");
+    assert!(c.markers() <= c.dictionary().len(), "{} markers from {}", c.markers(), c.dictionary().name());
+    assert_eq!(c.corners(), corners.len());
+    let s = c.square_mm();
+    for id in 0..c.markers() as u32 {
+        let [col, row] = c.marker_square(id).unwrap_or_else(|| panic!("marker {id} has no square"));
+        assert!(!c.is_black(col, row) && c.marker_at(col, row) == Some(id), "marker {id} in square ({col}, {row})");
+        let square = [col as f64 * s, row as f64 * s, (col + 1) as f64 * s, (row + 1) as f64 * s];
+        for p in c.marker_corners_mm(id).unwrap_or_else(|| panic!("marker {id} has no corners")) {
+            assert!(
+                p[0] >= square[0] && p[0] <= square[2] && p[1] >= square[1] && p[1] <= square[3],
+                "marker {id}: {p:?}"
+            );
+        }
+    }
+    assert_eq!(c.marker_square(c.markers() as u32), None, "a marker beyond the board");
+    for id in 0..corners.len() as u32 {
+        let [col, row] = c.corner_cell(id).unwrap_or_else(|| panic!("corner {id} has no cell"));
+        assert_eq!(c.corner_id(col, row), Some(id), "corner {id} at ({col}, {row})");
+        let [a, m] = c.corner_markers(id).unwrap_or_else(|| panic!("corner {id} touches no markers"));
+        assert!(a < m && (m as usize) < c.markers(), "corner {id} touches markers {a} and {m}");
+    }
+}
+
+/// The ChArUco boards [`charuco_detect`] looks for (a byte of the input picks one): the
+/// size of etl-image's doc example, each of the OpenCV fixtures' boards
+/// (`fixtures/charuco/opencv.json`: all six dictionary families) and deepcharuco's
+/// (`fixtures/charuco/deepcharuco_7412.png`), so that the seeds find their board.
+const CHARUCO_BOARDS: [([u32; 2], f64, f64, &str); 8] = [
+    ([5, 4], 7.0, 5.0, "DICT_4X4_50"),
+    ([7, 5], 30.0, 22.0, "DICT_4X4_50"),
+    ([8, 6], 25.0, 18.0, "DICT_5X5_100"),
+    ([6, 8], 30.0, 24.0, "DICT_6X6_250"),
+    ([5, 7], 40.0, 30.0, "DICT_7X7_1000"),
+    ([9, 6], 20.0, 16.0, "DICT_APRILTAG_36h11"),
+    ([7, 6], 30.0, 21.0, "DICT_ARUCO_ORIGINAL"),
+    ([5, 5], 10.0, 7.5, "DICT_4X4_50"),
+];
+
+/// `charuco_detect`: ChArUco detection through [`etl_image::board::detect_board`], the
+/// path every board takes. The first byte picks the board ([`CHARUCO_BOARDS`], by its
+/// value / 2) and the input's kind: odd, the rest is an image file (PNG, JPEG, TIFF by
+/// content, 16-bit read at 16 bits) through the reader; even, a raw grey image of at most
+/// 255 x 255 px (its side in the next two bytes) straight into the detector.
+pub fn charuco_detect(data: &[u8]) {
+    let _ = charuco_found(data);
+}
+
+/// [`charuco_detect`]'s work: the number of corners found (the checks pass).
+pub fn charuco_found(data: &[u8]) -> usize {
+    let Some((&pick, rest)) = data.split_first() else { return 0 };
+    let (squares, square_mm, marker_mm, dictionary) = CHARUCO_BOARDS[usize::from(pick / 2) % CHARUCO_BOARDS.len()];
+    let board = Board::charuco(squares, square_mm, marker_mm, dictionary).expect("the fuzzed boards are valid");
+    let found = if pick % 2 == 0 {
+        let Some((&[w, h], pixels)) = rest.split_first_chunk::<2>() else { return 0 };
+        let (w, h) = (usize::from(w).max(1), usize::from(h).max(1));
+        let mut pixels = pixels.to_vec();
+        pixels.resize(w * h, 128);
+        let Some(img) = image::GrayImage::from_raw(w as u32, h as u32, pixels) else { return 0 };
+        (etl_image::board::detect_board(&img, &board), [w, h])
+    } else {
+        let path = scratch("charuco-image");
+        if std::fs::write(&path, rest).is_err() {
+            return 0;
+        }
+        let Ok(img) = etl_image::read_image(&path) else { return 0 };
+        let size = [img.width() as usize, img.height() as usize];
+        (etl_image::board::detect_board_dynamic(&img, &board), size)
+    };
+    match found {
+        (Ok(d), size) => check_board_detection(&d, &board, size),
+        (Err(_), _) => 0,
+    }
+}
+
+/// A detection of `board` in a `w` x `h` image: one finite corner inside the image per id,
+/// ids increasing (so each once) and on the board, markers of the board with finite
+/// corners; the number of corners.
+fn check_board_detection(d: &etl_image::board::BoardDetection, board: &Board, [w, h]: [usize; 2]) -> usize {
+    assert_eq!(d.image_size, [w as u32, h as u32], "image size");
+    assert_eq!(d.ids.len(), d.corners_px.len(), "one corner per id");
+    assert!(d.ids.windows(2).all(|p| p[0] < p[1]), "ids not increasing: {:?}", d.ids);
+    assert!(d.ids.iter().all(|&id| (id as usize) < board.corner_count()), "ids {:?} beyond the board", d.ids);
+    check_inside(&d.corners_px, w, h);
+    let markers = board.as_charuco().map_or(0, CharucoBoard::markers);
+    for m in &d.markers {
+        assert!((m.id as usize) < markers, "marker {} beyond the board's {markers}", m.id);
+        assert!(m.corners_px.iter().flatten().all(|v| v.is_finite()), "marker {}: {:?}", m.id, m.corners_px);
+    }
+    d.ids.len()
 }
 
 /// The noise-free paper rig's observations and A0, built once per process.

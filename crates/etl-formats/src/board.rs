@@ -64,7 +64,7 @@ pub struct Checkerboard {
 
 impl Checkerboard {
     /// Checks the board: 3 to [`MAX_INNER_CORNERS`] inner corners each way and a positive,
-    /// finite square.
+    /// finite square, small enough that the whole pattern's size is finite too.
     pub fn validate(&self) -> Result<()> {
         // The messages of the checkerboards of before the board format, which users match
         // on; `what` names the key.
@@ -81,6 +81,15 @@ impl Checkerboard {
             let message =
                 format!("a board has at most {MAX_INNER_CORNERS} x {MAX_INNER_CORNERS} inner corners, got {c} x {r}");
             return Err(Error::invalid_value("inner_corners", self.inner_corners, message));
+        }
+        // The pattern spans (corners + 1) squares: when that overflows, the far corners
+        // would be infinite (fuzz target `board_parser`).
+        if !((c.max(r) + 1) as f64 * self.square_mm).is_finite() {
+            let message = format!(
+                "square_mm: a board of {c} x {r} inner corners of {} mm does not fit in a number",
+                compact(self.square_mm)
+            );
+            return Err(Error::invalid_value("square_mm", self.square_mm, message));
         }
         Ok(())
     }
@@ -114,8 +123,8 @@ impl Board {
     ///
     /// Errors ([`Error::InvalidInput`], one line naming the field and the values): an
     /// unknown dictionary; fewer than 2 or more than 1000 squares on a side; a size not
-    /// positive and finite; a marker not smaller than its square; more white squares than
-    /// the dictionary has markers.
+    /// positive and finite, or squares so large that the board's side overflows; a marker
+    /// not smaller than its square; more white squares than the dictionary has markers.
     pub fn charuco(squares: [u32; 2], square_mm: f64, marker_mm: f64, dictionary: &str) -> Result<Board> {
         let dict = Dictionary::by_name(dictionary).ok_or_else(|| {
             let name: String = dictionary.chars().take(40).collect();
@@ -434,6 +443,8 @@ mod tests {
             (r#"{"type": "checkerboard", "inner_corners": [14, 0], "square_mm": 1.5}"#.into(), "a board needs at least 3 x 3 inner corners, got 14 x 0"),
             (r#"{"type": "checkerboard", "inner_corners": [14, 1000], "square_mm": 1.5}"#.into(), "at most 999 x 999 inner corners, got 14 x 1000"),
             (r#"{"type": "checkerboard", "inner_corners": [14, 12], "square_mm": -1}"#.into(), "square_mm must be a positive square size, got -1 mm"),
+            (r#"{"type": "checkerboard", "inner_corners": [999, 3], "square_mm": 1e306}"#.into(), "square_mm: a board of 999 x 3 inner corners of 1e306 mm does not fit in a number"),
+            (ch(r#""squares": [1000, 2], "square_mm": 1e306, "marker_mm": 1, "dictionary": "DICT_7X7_1000""#), "square_mm: the board (squares x square_mm) must be finite (square_mm 1e306, marker_mm 1)"),
             (r#"{"inner_corners": [14, 12], "square_mm": 1, "dictionary": "DICT_5X5_100"}"#.into(), "fields of a ChArUco board"),
             (r#"{"type": "circles", "inner_corners": [14, 12], "square_mm": 1}"#.into(), "type \"circles\" is not"),
             (r#"{"format": "etlcal.board/2", "type": "checkerboard", "inner_corners": [14, 12], "square_mm": 1}"#.into(), "format \"etlcal.board/2\""),

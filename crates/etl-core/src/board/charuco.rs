@@ -38,9 +38,9 @@ impl CharucoBoard {
     /// `marker_mm` from `dictionary`.
     ///
     /// Errors ([`Error::InvalidArgument`] naming the field): fewer than 2 or more than
-    /// [`MAX_SQUARES`] squares on a side; a size not positive and finite; a marker not
-    /// smaller than its square; a dictionary with fewer markers than the board's white
-    /// squares.
+    /// [`MAX_SQUARES`] squares on a side; a size not positive and finite, or squares so large
+    /// that the board's side overflows; a marker not smaller than its square; a dictionary
+    /// with fewer markers than the board's white squares.
     ///
     /// ```
     /// use etl_core::board::{CharucoBoard, Dictionary};
@@ -63,6 +63,12 @@ impl CharucoBoard {
         }
         if !(marker_mm < square_mm) {
             return Err(Error::InvalidArgument { what: "marker_mm must be smaller than square_mm" });
+        }
+        // Every position on the board (corners, markers, the pattern's extent) is at most
+        // the board's side: when that overflows, they would be infinite (fuzz target
+        // `board_parser`).
+        if !(f64::from(squares[0].max(squares[1])) * square_mm).is_finite() {
+            return Err(Error::InvalidArgument { what: "square_mm: the board (squares x square_mm) must be finite" });
         }
         let board = CharucoBoard { squares, square_mm, marker_mm, dictionary };
         if board.markers() > dictionary.len() {
@@ -262,5 +268,10 @@ mod tests {
         // 12 x 9 squares need 54 markers; DICT_4X4_50 has 50.
         assert!(what(CharucoBoard::new([12, 9], 1.5, 1.1, d)).starts_with("dictionary"));
         assert!(CharucoBoard::new([10, 10], 1.5, 1.1, d).is_ok());
+        // 1000 squares of 1e306 mm: a board 1e309 mm wide, whose far corners are infinite.
+        let d = Dictionary::by_name("DICT_7X7_1000").unwrap();
+        assert!(what(CharucoBoard::new([1000, 2], 1e306, 1.0, d)).starts_with("square_mm: the board"));
+        let b = CharucoBoard::new([1000, 2], 1e305, 1.0, d).unwrap();
+        assert!(b.corner_mm(b.corners() as u32 - 1).unwrap().iter().all(|v| v.is_finite()));
     }
 }
