@@ -1,6 +1,8 @@
 //! Zhang's method on the simulated lens-off views of the paper rig (docs/METHOD.md: 10 views of an
 //! 11 x 8 board with 4 mm squares, tilted up to ~25 degrees, at E = 0).
 
+mod common;
+
 use etl_calib::pipeline::a0_from_offstate;
 use etl_calib::zhang::{zhang, PlanarView};
 use etl_core::model::CameraModel;
@@ -85,13 +87,7 @@ fn too_few_or_parallel_views_are_errors() {
 /// fx != fy); end to end the difference is the detectors' (etlcal's RMS is lower).
 #[test]
 fn real_image_set_agrees_with_opencv() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/zhang");
-    let mut images: Vec<_> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "jpg"))
-        .collect();
-    images.sort();
+    let images = common::fixture_jpegs("zhang");
     assert_eq!(images.len(), 25);
     let board = etl_formats::Board::checkerboard([9, 6], 1.0).unwrap();
     let found = etl_calib::pipeline::detect_views(&images, &board, &etl_core::progress::NoProgress).unwrap();

@@ -3,6 +3,8 @@
 //! truth, OpenCV's flags, and the two public wide-lens image sets of fixtures/wide against
 //! OpenCV 5.0.0's calibrateCamera on the same corners.
 
+mod common;
+
 use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions};
 use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly, OpenCvFlags};
@@ -188,13 +190,7 @@ fn wide_lens_image_sets_reproduce_opencv_on_the_same_corners() {
         },
     ];
     for s in sets {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/wide").join(s.dir);
-        let mut images: Vec<_> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|x| x == "jpg"))
-            .collect();
-        images.sort();
+        let images = common::fixture_jpegs(&format!("wide/{}", s.dir));
         let board = etl_formats::board::Board::checkerboard(s.pattern, 1.0).unwrap();
         let found = etl_calib::pipeline::detect_views(&images, &board, &etl_core::progress::NoProgress).unwrap();
         assert_eq!((images.len(), found.views.len()), (s.images, s.images), "{}", s.dir);

@@ -17,19 +17,22 @@ fn etlcal(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// `etlcal simulate --config CONFIG --out DIR/sim FLAGS...` with `config` written to
+/// DIR/strong.json: (exit code, stderr, the output directory).
+fn simulate(dir: &Path, config: &str, flags: &[&str]) -> (i32, String, PathBuf) {
+    let path = dir.join("strong.json");
+    std::fs::write(&path, config).unwrap();
+    let sim = dir.join("sim");
+    let mut args = vec!["simulate", "--config", path.to_str().unwrap(), "--out", sim.to_str().unwrap()];
+    args.extend_from_slice(flags);
+    let (code, _, err) = etlcal(&args);
+    (code, err, sim)
+}
+
 /// The strong rig's observations (seed 4) in `dir`.
 fn strong(dir: &Path) -> PathBuf {
-    let config = dir.join("strong.json");
-    std::fs::write(&config, r#"{"format": "etlcal.simconfig/1", "rig": "strong", "seed": 4}"#).unwrap();
-    let sim = dir.join("sim");
-    let (code, _, err) = etlcal(&[
-        "simulate",
-        "--config",
-        config.to_str().unwrap(),
-        "--out",
-        sim.to_str().unwrap(),
-        "--observations-only",
-    ]);
+    let config = r#"{"format": "etlcal.simconfig/1", "rig": "strong", "seed": 4}"#;
+    let (code, err, sim) = simulate(dir, config, &["--observations-only"]);
     assert_eq!(code, 0, "{err}");
     sim.join("observations.json")
 }
@@ -106,26 +109,15 @@ fn bad_model_flags_are_refused_naming_the_flag_and_nothing_is_written() {
 #[test]
 fn the_strong_rig_is_corners_only_and_not_with_setting_views() {
     let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("strong.json");
-    std::fs::write(&config, r#"{"format": "etlcal.simconfig/1", "rig": "strong"}"#).unwrap();
-    let sim = dir.path().join("sim");
-    let (code, _, err) = etlcal(&["simulate", "--config", config.to_str().unwrap(), "--out", sim.to_str().unwrap()]);
+    let strong = r#"{"format": "etlcal.simconfig/1", "rig": "strong"}"#;
+    let (code, err, sim) = simulate(dir.path(), strong, &[]);
     assert_eq!(code, 1);
     assert!(err.contains("pass --observations-only") && err.lines().count() == 1, "{err}");
     assert!(!sim.exists());
-    let (code, _, err) = etlcal(&[
-        "simulate",
-        "--config",
-        config.to_str().unwrap(),
-        "--out",
-        sim.to_str().unwrap(),
-        "--observations-only",
-        "--setting-views",
-    ]);
+    let (code, err, _) = simulate(dir.path(), strong, &["--observations-only", "--setting-views"]);
     assert_eq!(code, 1);
     assert!(err.contains("setting_rig") && err.contains("strong"), "{err}");
-    std::fs::write(&config, r#"{"format": "etlcal.simconfig/1", "rig": "wide"}"#).unwrap();
-    let (code, _, err) = etlcal(&["simulate", "--config", config.to_str().unwrap(), "--out", sim.to_str().unwrap()]);
+    let (code, err, _) = simulate(dir.path(), r#"{"format": "etlcal.simconfig/1", "rig": "wide"}"#, &[]);
     assert_eq!(code, 1);
     assert!(err.contains("wide"), "{err}");
 }
