@@ -4,9 +4,8 @@
 //! (errors-in-variables), 20 seeds per rig:
 //! - the strong-distortion rig (k1 = -0.3, k2 = 0.15): the opencv family, every seed;
 //! - the paper rig: the paper's family, every seed; with the focal degree free as well,
-//!   paper + cubic in at least 16 of 20 seeds (issue 16 asks 19: the degree is the weaker
-//!   choice under the paper's per-view errors; docs/RESULTS.md, "Model selection", and
-//!   the select module's docs say why).
+//!   paper + cubic in at least 19 of 20 seeds (as issue 16 asks; 19 here, 98 of the 100
+//!   seeds 61..160: docs/RESULTS.md, "Model selection").
 //!
 //! Bad input: OpenCV's flags with the paper family, a candidate list that is empty.
 
@@ -54,7 +53,7 @@ fn auto_chooses_the_papers_family_and_mostly_the_cubic_on_the_paper_rig() {
     let cubic = picks.iter().filter(|p| **p == (DistortionModel::Paper, 3)).count();
     eprintln!("paper rig: paper family in {paper} of 20 seeds, paper + cubic in {cubic}: {picks:?}");
     assert!(paper >= 19, "{picks:?}");
-    assert!(cubic >= 16, "{picks:?}");
+    assert!(cubic >= 19, "{picks:?}");
     // Never a degree the data plainly refute (the cubic term is 7 sigma on this rig).
     assert!(picks.iter().all(|p| p.1 >= 2), "{picks:?}");
 }
@@ -73,4 +72,17 @@ fn opencv_flags_need_the_opencv_family_and_candidates_are_needed() {
     let none = Candidates { families: vec![], focal_degrees: vec![3] };
     let e = select(&sim.observations, &A0Source::Given(sim.a0), None, &CalibrateOptions::default(), &none).unwrap_err();
     assert!(e.to_string().contains("at least one family"), "{e}");
+}
+
+/// The rate behind the figure above, on seeds the rule was not designed on (61..=160;
+/// about 2.5 min with `--release`): `cargo test --release -p etl-calib --test select --
+/// --ignored --nocapture`. Recorded in docs/RESULTS.md ("Model selection").
+#[test]
+#[ignore = "100 auto calibrations: run with --release"]
+fn auto_chooses_the_cubic_on_100_fresh_seeds_of_the_paper_rig() {
+    let candidates = Candidates { families: DistortionModel::ALL.to_vec(), focal_degrees: (1..=5).collect() };
+    let picks: Vec<_> = (61..161).map(|s| (s, chosen(&paper_rig(&NoiseModel::PAPER, s), &candidates))).collect();
+    let others: Vec<_> = picks.iter().filter(|p| p.1 != (DistortionModel::Paper, 3)).collect();
+    eprintln!("paper rig, seeds 61..=160: paper + cubic in {} of 100; others: {others:?}", 100 - others.len());
+    assert!(others.len() <= 5, "{others:?}");
 }

@@ -11,7 +11,8 @@
 //! Each candidate: its family and focal degree, its number of model parameters, the RMS of
 //! its fit to every view, the RMS with which it predicts each view held out (fitted to the
 //! others), its held-out mean squared error above the best candidate's and the standard
-//! error of that excess (paired over the views); or `"error"`, why it could not be fitted.
+//! error of that excess (the larger of its spread over the views and its noise model's);
+//! or `"error"`, why it could not be fitted.
 //! The chosen candidate is the simplest whose excess is within one standard error
 //! (etl_calib::pipeline::select documents the method and why).
 
@@ -38,7 +39,8 @@ pub struct ModelCandidate {
     /// Held-out mean squared error above the best candidate's, px^2 (0 for the best).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub excess_mse_px2: Option<f64>,
-    /// Standard error of that excess, paired over the held-out views, px^2.
+    /// Standard error of that excess, px^2: the larger of its paired spread over the
+    /// held-out views and its value from the views' noise model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub excess_se_px2: Option<f64>,
     /// Whether this is the model of the calibration.

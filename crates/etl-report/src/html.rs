@@ -320,7 +320,8 @@ fn model_selection_html(c: &etl_formats::Calibration) -> String {
          fitted to all views (fit RMS) and, {}, to all views but one, then asked to predict the view left out from \
          its world points, recorded current and stage position (prediction RMS: the error in the estimator's noise \
          model, px). The chosen model is the simplest whose held-out mean squared error exceeds the best's by no \
-         more than one standard error of that excess (paired over the views; rule: {}).</p>\n\
+         more than one standard error of that excess (the larger of its spread over the views and its value from the \
+         views' noise model; rule: {}).</p>\n\
          <table class=\"num\"><tr><th>distortion</th><th>focal degree</th><th>numbers</th><th>fit RMS (px)</th>\
          <th>prediction RMS (px)</th><th>excess MSE (px²)</th><th>its std error (px²)</th><th></th></tr>\n{rows}\
          </table>\n",
