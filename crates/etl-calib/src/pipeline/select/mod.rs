@@ -43,7 +43,7 @@
 //!   the noise model leaves out;
 //! - the noise model's, sqrt(sum_j Var(S_mj - S_bj)) / N, each view's variance from its
 //!   residual's predictive covariance: its own noise and the uncertainty of b's numbers
-//!   fitted to the other views ([`held_out`]).
+//!   fitted to the other views (module `held_out`).
 //!
 //! Why both: the difference between two polynomials in E is carried by one or two views,
 //! the end ones, where they extrapolate; a paired spread over 15 views then measures how
