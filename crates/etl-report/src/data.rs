@@ -21,6 +21,10 @@ pub struct Provenance {
     /// The estimator's priors in words; `None`: not known to the caller (the report says
     /// so rather than guess).
     pub priors: Option<String>,
+    /// When the report was written, seconds since 1970-01-01 UTC; `None`: the system clock
+    /// now. Callers pass a fixed time for reports that must be reproducible byte for byte
+    /// (`etlcal` takes it from `SOURCE_DATE_EPOCH`, reproducible-builds.org's convention).
+    pub written_unix_s: Option<i64>,
 }
 
 impl Provenance {

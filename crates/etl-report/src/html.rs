@@ -37,9 +37,12 @@ fn sd(v: f64) -> String {
     }
 }
 
-/// Today's date (UTC) from the system clock, yyyy-mm-dd hh:mm (civil from days, H. Hinnant).
-fn utc_now() -> String {
-    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()) as i64;
+/// The time `unix_s` (seconds since 1970, UTC; `None`: the system clock now) as
+/// yyyy-mm-dd hh:mm UTC (civil from days, H. Hinnant).
+fn utc_text(unix_s: Option<i64>) -> String {
+    let secs = unix_s.unwrap_or_else(|| {
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs()) as i64
+    });
     let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
@@ -242,7 +245,7 @@ fn provenance_html(d: &Data, p: &Provenance) -> String {
          <tr><td>bundle adjustment</td><td>{} iterations, RMS {:.4} px (before: {:.4} px)</td></tr>\
          <tr><td>covariance</td><td>{}</td></tr></table>\n",
         env!("CARGO_PKG_VERSION"),
-        utc_now(),
+        utc_text(p.written_unix_s),
         esc(&d.cal.estimator),
         esc(&priors),
         esc(&thermal),

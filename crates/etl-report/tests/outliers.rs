@@ -11,7 +11,7 @@ fn the_report_lists_warnings_and_outliers() {
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/service/calibration.json");
     let mut cal = Calibration::load(&fixture).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let provenance = etl_report::Provenance { inputs: vec![], priors: None };
+    let provenance = etl_report::Provenance { inputs: vec![], priors: None, written_unix_s: None };
     etl_report::write_report(&cal, None, None, &provenance, dir.path()).unwrap();
     let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
     assert!(!html.contains("Warnings</h2>") && !html.contains("Outliers</h2>"));

@@ -67,6 +67,7 @@ fn both_estimators_show_every_figure_and_each_file_exists() {
         let provenance = Provenance {
             inputs: vec![("calibration".into(), "calibration.json".into())],
             priors: Some(Provenance::priors_of(&estimator)),
+            written_unix_s: None,
         };
         let r = write_report(&cal, Some(&sim.observations), cal.thermal.as_ref(), &provenance, dir.path()).unwrap();
         let listed = check_report(dir.path(), &r.files);

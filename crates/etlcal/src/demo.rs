@@ -99,7 +99,11 @@ pub fn run(args: Args) -> Result<()> {
         ] {
             let dir = out.join(name);
             crate::output::create_dir(&dir)?;
-            let provenance = Provenance { inputs: inputs(file), priors: Some(Provenance::priors_of(&estimator)) };
+            let provenance = Provenance {
+                inputs: inputs(file),
+                priors: Some(Provenance::priors_of(&estimator)),
+                written_unix_s: crate::output::source_date_epoch()?,
+            };
             let thermal = r.calibration.thermal.as_ref();
             etl_report::write_report(&r.calibration, Some(&demo.observations), thermal, &provenance, &dir)?;
         }

@@ -67,7 +67,7 @@ pub fn run(args: Args) -> Result<()> {
         inputs.push(("thermal".to_string(), t.display().to_string()));
     }
     // The calibration file does not record the estimator's priors: the report says so.
-    let provenance = Provenance { inputs, priors: None };
+    let provenance = Provenance { inputs, priors: None, written_unix_s: crate::output::source_date_epoch()? };
     let files = report_files();
     let names: Vec<&str> = files.iter().map(String::as_str).collect();
     // The plots and index.html of one run, swapped in whole (a kill leaves the earlier set).

@@ -11,8 +11,17 @@ use rand::{Rng, SeedableRng};
 
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
 
+/// The time every run here writes into a report (`SOURCE_DATE_EPOCH`): sets are compared
+/// byte for byte, and a report's index.html says when it was written, to the minute.
+const REPORT_TIME: (&str, &str) = ("SOURCE_DATE_EPOCH", "1796214896");
+
 fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).current_dir(ROOT).output().expect("run etlcal")
+    Command::new(env!("CARGO_BIN_EXE_etlcal"))
+        .args(args)
+        .current_dir(ROOT)
+        .env(REPORT_TIME.0, REPORT_TIME.1)
+        .output()
+        .expect("run etlcal")
 }
 
 fn ok(args: &[&str]) -> Output {
@@ -147,6 +156,7 @@ fn kill_after(args: &[&str], delay_ms: u64) -> bool {
     let mut child = Command::new(env!("CARGO_BIN_EXE_etlcal"))
         .args(args)
         .current_dir(ROOT)
+        .env(REPORT_TIME.0, REPORT_TIME.1)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()

@@ -36,3 +36,47 @@ fn report_writes_every_figure_it_lists_and_index_html_shows_them() {
     }
     assert!(html.contains(&cal) && html.contains(&obs), "provenance names the inputs");
 }
+
+/// `report` run from the repository root on a committed calibration with
+/// `SOURCE_DATE_EPOCH` set to `epoch`, into `out`.
+fn report_at(epoch: &str, out: &std::path::Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_etlcal"))
+        .args(["report", "--calibration", "fixtures/service/calibration.json", "--out", out.to_str().unwrap()])
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .env("SOURCE_DATE_EPOCH", epoch)
+        .output()
+        .expect("run etlcal")
+}
+
+/// Every file of `dir` and its bytes.
+fn files(dir: &std::path::Path) -> std::collections::BTreeMap<std::ffi::OsString, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .map(|e| (e.file_name(), std::fs::read(e.path()).unwrap()))
+        .collect()
+}
+
+#[test]
+fn source_date_epoch_fixes_the_reports_time_and_a_bad_one_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    // 2026-12-02 12:34:56 UTC: the report says the minute, and two runs write the same bytes.
+    for out in [&a, &b] {
+        let o = report_at("1796214896", out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let html = std::fs::read_to_string(a.join("index.html")).unwrap();
+    assert!(html.contains("<td>report written</td><td>2026-12-02 12:34 UTC</td>"), "{html}");
+    assert_eq!(files(&a), files(&b));
+    let before = files(&a);
+    for bad in ["", "-1", "1.5", "12 ", "+5", "253402300800", "yesterday"] {
+        let o = report_at(bad, &a);
+        let err = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(o.status.code(), Some(1), "{bad:?}: {err}");
+        assert!(err.starts_with("etlcal: error: ") && err.lines().count() == 1, "{bad:?}: {err}");
+        assert!(err.contains("SOURCE_DATE_EPOCH"), "{bad:?}: {err}");
+        assert_eq!(files(&a), before, "{bad:?}: the earlier report is kept");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary left");
+}
