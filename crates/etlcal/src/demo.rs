@@ -68,6 +68,8 @@ pub struct Args {
 /// Runs `etlcal demo`: [`run_demo`], then writes its files and prints its summary.
 pub fn run(args: Args) -> Result<()> {
     crate::output::check([], &[Output::Dir(&args.out)])?;
+    // Read before the run: a malformed SOURCE_DATE_EPOCH is refused before any work.
+    let written_unix_s = crate::output::source_date_epoch()?;
     let options = DemoOptions {
         seed: args.seed,
         stage_noise_um: args.stage_noise_um,
@@ -99,11 +101,8 @@ pub fn run(args: Args) -> Result<()> {
         ] {
             let dir = out.join(name);
             crate::output::create_dir(&dir)?;
-            let provenance = Provenance {
-                inputs: inputs(file),
-                priors: Some(Provenance::priors_of(&estimator)),
-                written_unix_s: crate::output::source_date_epoch()?,
-            };
+            let provenance =
+                Provenance { inputs: inputs(file), priors: Some(Provenance::priors_of(&estimator)), written_unix_s };
             let thermal = r.calibration.thermal.as_ref();
             etl_report::write_report(&r.calibration, Some(&demo.observations), thermal, &provenance, &dir)?;
         }

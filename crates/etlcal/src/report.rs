@@ -53,6 +53,7 @@ pub fn run(args: Args) -> Result<()> {
         [Some(args.calibration.as_path()), args.observations.as_deref(), thermal_file],
         &[Output::Dir(&args.out)],
     )?;
+    let written_unix_s = crate::output::source_date_epoch()?;
     let cal = Calibration::load(&args.calibration)?;
     let obs = args.observations.as_deref().map(Observations::load).transpose()?;
     // Views without E_com are compensated by the thermal calibration chosen here, else
@@ -67,7 +68,7 @@ pub fn run(args: Args) -> Result<()> {
         inputs.push(("thermal".to_string(), t.display().to_string()));
     }
     // The calibration file does not record the estimator's priors: the report says so.
-    let provenance = Provenance { inputs, priors: None, written_unix_s: crate::output::source_date_epoch()? };
+    let provenance = Provenance { inputs, priors: None, written_unix_s };
     let files = report_files();
     let names: Vec<&str> = files.iter().map(String::as_str).collect();
     // The plots and index.html of one run, swapped in whole (a kill leaves the earlier set).
