@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """NIST StRD: etlcal's LM against scipy.optimize.least_squares, in one run.
 
-Ours: `cargo test --release -p etl-core --test nist -- --nocapture` (exact Jacobians by
+Ours: `cargo test --release -p etl-core --test it nist:: -- --nocapture` (exact Jacobians by
 forward-mode dual numbers). Scipy: least_squares with method 'lm' (MINPACK) and 'trf',
 finite-difference Jacobians (its default), tight tolerances. Both start from NIST's
 start 1 and start 2 and are scored by the LRE of the parameters (capped at 11).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Records the golden JSON outputs of the etlcal binary that crates/etlcal/tests/golden.rs
+# Records the golden JSON outputs of the etlcal binary that crates/etlcal/tests/it/golden.rs
 # compares against (behaviour unchanged across the architecture move). Run it
 # only when a change of output is intended, and say so in the commit.
 #   usage: scripts/golden-record.sh PATH/TO/etlcal

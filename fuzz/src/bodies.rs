@@ -1,6 +1,6 @@
 //! The bodies of the fuzz targets: what each does with the fuzzer's bytes and the
 //! properties it checks beyond "no panic, no hang, bounded memory". One function per
-//! target in `fuzz_targets/`; `crates/etlcal/tests/fuzz_corpus.rs` includes this file too
+//! target in `fuzz_targets/`; `crates/etlcal/tests/it/fuzz_corpus.rs` includes this file too
 //! and replays every committed corpus input on stable.
 
 #![allow(dead_code)]

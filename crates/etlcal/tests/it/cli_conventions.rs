@@ -6,9 +6,7 @@ use std::process::{Command, Output};
 use etl_core::thermal::ThermalSurface;
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
-}
+use super::common::etlcal;
 
 /// The one stderr line of a failed run with exit status `code`.
 fn one_line_failure(args: &[&str], code: i32) -> String {

@@ -75,7 +75,7 @@ fn opencv_flags_need_the_opencv_family_and_candidates_are_needed() {
 }
 
 /// The rate behind the figure above, on seeds the rule was not designed on (61..=160;
-/// about 2.5 min with `--release`): `cargo test --release -p etl-calib --test select --
+/// about 2.5 min with `--release`): `cargo test --release -p etl-calib --test it select:: --
 /// --ignored --nocapture`. Recorded in docs/RESULTS.md ("Model selection").
 #[test]
 #[ignore = "100 auto calibrations: run with --release"]

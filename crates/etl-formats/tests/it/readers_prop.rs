@@ -3,9 +3,7 @@
 //! format, give a value or a typed one-line error, never a panic. The mutations of valid
 //! files are in readers_mutations.rs; the lens codec's properties in crates/etl-hw.
 
-mod support {
-    pub mod formats;
-}
+use super::support;
 
 use std::path::Path;
 

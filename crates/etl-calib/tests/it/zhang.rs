@@ -1,7 +1,7 @@
 //! Zhang's method on the simulated lens-off views of the paper rig (docs/METHOD.md: 10 views of an
 //! 11 x 8 board with 4 mm squares, tilted up to ~25 degrees, at E = 0).
 
-mod common;
+use super::common;
 
 use etl_calib::pipeline::a0_from_offstate;
 use etl_calib::zhang::{zhang, PlanarView};

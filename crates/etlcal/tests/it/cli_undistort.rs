@@ -9,9 +9,7 @@ use etl_core::thermal::ThermalSurface;
 use etl_formats::calibration::{Calibration, ThermalRef};
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
-}
+use super::common::etlcal;
 
 /// The one stderr line of a failed run (exit status 1), nothing on stdout.
 fn one_line_failure(args: &[&str]) -> String {

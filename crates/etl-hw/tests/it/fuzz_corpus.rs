@@ -3,7 +3,7 @@
 //! fuzz target's own checks, on stable: CI keeps every input fuzzing found interesting,
 //! crashes included once fixed.
 
-include!("../../../fuzz/fuzz_targets/lens_reply_check.rs");
+include!("../../../../fuzz/fuzz_targets/lens_reply_check.rs");
 
 #[test]
 fn the_lens_reply_corpus_decodes_without_a_panic_or_a_broken_contract() {

@@ -7,9 +7,7 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
-}
+use super::common::etlcal;
 
 const CHARUCO: &str = r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [12, 9], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#;
 

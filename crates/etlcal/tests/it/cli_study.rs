@@ -4,9 +4,7 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
-}
+use super::common::etlcal;
 
 #[test]
 fn cli_fig5_json_and_bad_input() {

@@ -6,14 +6,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use super::common::etlcal_run as etlcal;
 
 #[test]
 fn images_to_calibration_with_skipped_views_and_a_missing_image() {

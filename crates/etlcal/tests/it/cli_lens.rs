@@ -4,14 +4,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+use super::common::etlcal_run as etlcal;
 
 #[test]
 fn info_temperature_and_set_current_on_the_virtual_lens() {

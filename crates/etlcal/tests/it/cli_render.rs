@@ -6,9 +6,7 @@ use std::process::{Command, Output};
 use etl_core::model::CameraModel;
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
-}
+use super::common::etlcal;
 
 #[test]
 fn renders_an_image_whose_detected_corners_are_the_true_ones() {

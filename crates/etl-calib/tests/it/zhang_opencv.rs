@@ -3,7 +3,7 @@
 //! truth, OpenCV's flags, and the two public wide-lens image sets of fixtures/wide against
 //! OpenCV 5.0.0's calibrateCamera on the same corners.
 
-mod common;
+use super::common;
 
 use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions};
 use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};

@@ -7,14 +7,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal");
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
+use super::common::etlcal_run as etlcal;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

@@ -6,7 +6,7 @@
 //! against the Cramer-Rao bound, OpenCV's flags, PnP. Focal polynomials of degree 1, 2, 4
 //! and 5 recovered from noise-free data of a truth of that degree.
 
-mod common;
+use super::common;
 
 use common::{as_views, paper_rig_of, NO_NOISE};
 use etl_core::calib::crlb::crlb_covariance;

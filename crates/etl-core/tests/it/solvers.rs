@@ -2,7 +2,7 @@
 //! paper's noise model with the plain and the errors-in-variables bundle adjustment, and
 //! bad inputs.
 
-mod common;
+use super::common;
 
 use common::{as_views, paper_rig, Noise, NO_NOISE, PAPER_NOISE};
 use etl_core::calib::{

@@ -5,8 +5,7 @@
 
 use std::path::Path;
 
-#[path = "../../../fuzz/src/bodies.rs"]
-mod bodies;
+use super::bodies;
 
 /// Runs `body` on every file of `fuzz/corpus/<target>/`; there must be at least one.
 fn replay(target: &str, body: fn(&[u8])) {

@@ -4,10 +4,7 @@
 //! mutated key or one holding it), or the value the file now says: never a value that
 //! differs from the file but for the documented defaults of optional keys.
 
-mod support {
-    pub mod formats;
-    pub mod mutate;
-}
+use super::support;
 
 use std::path::Path;
 

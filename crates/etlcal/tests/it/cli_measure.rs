@@ -4,9 +4,7 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
-fn etlcal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal")
-}
+use super::common::etlcal;
 
 fn json_of(args: &[&str]) -> Value {
     let out = etlcal(args);

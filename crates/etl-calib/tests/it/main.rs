@@ -1,0 +1,11 @@
+//! The integration tests of etl-calib, one binary (linking one test binary per file cost
+//! more than running them): each module is one former test file.
+
+mod common;
+
+mod pipeline_baseline;
+mod robust;
+mod select;
+mod uncertainty;
+mod zhang;
+mod zhang_opencv;

@@ -1,0 +1,10 @@
+//! The integration tests of etl-core, one binary (linking one test binary per file cost
+//! more than running them): each module is one former test file.
+
+mod common;
+
+mod families;
+mod lm;
+mod nist;
+mod no_panic;
+mod solvers;

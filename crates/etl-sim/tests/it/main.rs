@@ -1,0 +1,9 @@
+//! The integration tests of etl-sim, one binary (linking one test binary per file cost
+//! more than running them): each module is one former test file.
+
+mod autofocus;
+mod focus_law;
+mod render;
+mod rig_images;
+mod simconfig_prop;
+mod thermal_calibration;
