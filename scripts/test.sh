@@ -6,6 +6,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 export CARGO_TERM_COLOR=never
+# Cargo's output directory: CARGO_TARGET_DIR when set (the binaries the Python tests run
+# are taken from there), else target/ here.
+target="${CARGO_TARGET_DIR:-$root/target}"
+case "$target" in /*) ;; *) target="$root/$target" ;; esac
 start=$SECONDS
 stage_start=$SECONDS
 # Prints how long the stage that just ended took, and the time so far.
@@ -17,9 +21,9 @@ stage_done() {
 # The Python test environment, created and installed in the background while Rust compiles
 # (network and disk, not the CPU the build needs); first, when .ci/run installs Debian
 # packages in the background too (ETLCAL_APT_STATUS), it waits for them.
-venv="$root/target/test-venv"
-rm -rf "$venv" "$root/target/wheels-test"
-mkdir -p "$root/target"
+venv="$target/test-venv"
+rm -rf "$venv" "$target/wheels-test"
+mkdir -p "$target"
 (
   if [ -n "${ETLCAL_APT_STATUS:-}" ]; then
     while [ ! -s "$ETLCAL_APT_STATUS" ]; do sleep 1; done
@@ -33,13 +37,14 @@ mkdir -p "$root/target"
     "$venv/bin/python" -m pip install --quiet --upgrade pip &&
     "$venv/bin/python" -m pip install --quiet "maturin>=1.5,<2" "pytest>=7" "numpy>=1.21" \
       opencv-python-headless mypy pyyaml types-PyYAML
-) >"$root/target/test-venv.log" 2>&1 &
+) >"$target/test-venv.log" 2>&1 &
 venv_job=$!
 
 # The no-alloc, no-panic gate (etl-core linked into a #![no_std] cdylib: no allocator,
 # panics unresolvable) is a workspace of its own with its own target directory: it builds
 # beside the Rust tests and fills the gaps of their build.
-cargo build --release --locked --manifest-path tests/no-alloc-gate/Cargo.toml >"$root/target/no-alloc-gate.log" 2>&1 &
+cargo build --release --locked --manifest-path tests/no-alloc-gate/Cargo.toml \
+  --target-dir "$root/tests/no-alloc-gate/target" >"$target/no-alloc-gate.log" 2>&1 &
 gate_job=$!
 
 echo "== Rust tests (workspace)"
@@ -48,28 +53,28 @@ stage_done "Rust tests"
 
 echo "== no-alloc, no-panic gate"
 if ! wait "$gate_job"; then
-  cat "$root/target/no-alloc-gate.log" >&2
+  cat "$target/no-alloc-gate.log" >&2
   echo "test.sh: the no-alloc, no-panic gate failed to build (log above)" >&2
   exit 1
 fi
-tail -1 "$root/target/no-alloc-gate.log"
+tail -1 "$target/no-alloc-gate.log"
 stage_done "no-alloc gate (built during the Rust tests)"
 
 echo "== Python package"
 if ! wait "$venv_job"; then
-  cat "$root/target/test-venv.log" >&2
+  cat "$target/test-venv.log" >&2
   echo "test.sh: the Python test environment could not be installed (log above)" >&2
   exit 1
 fi
 stage_done "Python test environment (installed during the Rust tests)"
 "$venv/bin/maturin" build --quiet --profile dev --manifest-path crates/etl-py/Cargo.toml \
-  --out "$root/target/wheels-test" --interpreter "$venv/bin/python"
-"$venv/bin/python" -m pip install --quiet "$root"/target/wheels-test/*.whl
+  --out "$target/wheels-test" --interpreter "$venv/bin/python"
+"$venv/bin/python" -m pip install --quiet "$target"/wheels-test/*.whl
 stage_done "Python package built and installed"
 cd crates/etl-py/tests
 # The Rust programs the Python tests compare with, as `cargo test` built them.
-export ETLCAL_TEST_RUST_REFERENCE="$root/target/debug/examples/rust_reference"
-export ETLCAL_TEST_BINARY="$root/target/debug/etlcal"
+export ETLCAL_TEST_RUST_REFERENCE="$target/debug/examples/rust_reference"
+export ETLCAL_TEST_BINARY="$target/debug/etlcal"
 "$venv/bin/python" -m pytest -q --durations=10
 stage_done "pytest"
 echo "== all tests passed in $((SECONDS - start)) s"

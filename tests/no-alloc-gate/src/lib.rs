@@ -10,7 +10,7 @@ use etl_core::thermal::{ThermalCalibration, ThermalFit, ThermalSurface};
 // The panic handler calls a function that exists nowhere. If any panic path in etl-core is
 // reachable from the exported functions after optimisation, the final link (a cdylib
 // linked with --no-undefined, see build.rs) fails naming `etl_core_can_panic`.
-extern "C" {
+unsafe extern "C" {
     fn etl_core_can_panic() -> !;
 }
 
@@ -22,7 +22,7 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 }
 
 /// Projects a world point of the paper rig; returns u + v, or NaN on error.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_project(x: f64, y: f64, z: f64, e_ma: f64) -> f64 {
     match CameraModel::paper_rig().project([x, y, z], e_ma) {
         Ok([u, v]) => u + v,
@@ -31,7 +31,7 @@ pub extern "C" fn etl_gate_project(x: f64, y: f64, z: f64, e_ma: f64) -> f64 {
 }
 
 /// Undistorts a pixel of the paper rig; returns u + v, or NaN on error.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_undistort(u: f64, v: f64, e_ma: f64) -> f64 {
     match CameraModel::paper_rig().undistort([u, v], e_ma) {
         Ok([a, b]) => a + b,
@@ -40,13 +40,13 @@ pub extern "C" fn etl_gate_undistort(u: f64, v: f64, e_ma: f64) -> f64 {
 }
 
 /// Temperature compensation with the paper's surface: E_com, or NaN on error.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_e_com(e_in_ma: f64, t_c: f64) -> f64 {
     ThermalSurface::PAPER.e_com_ma(e_in_ma, t_c).unwrap_or(f64::NAN)
 }
 
 /// The inverse of the compensation on a perturbed surface (exercises the root search).
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_e_in_for_e_com(e_com_ma: f64, t_c: f64, c9: f64) -> f64 {
     let mut s = ThermalSurface::PAPER;
     s.coefficients[9] = c9;
@@ -54,7 +54,7 @@ pub extern "C" fn etl_gate_e_in_for_e_com(e_com_ma: f64, t_c: f64, c9: f64) -> f
 }
 
 /// Flagged compensation over a calibration with a caller-chosen lower temperature bound.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_compensate(e_in_ma: f64, t_c: f64, t_lo_c: f64) -> f64 {
     let mut c = ThermalCalibration::PAPER;
     c.t_range_c[0] = t_lo_c;
@@ -65,7 +65,7 @@ pub extern "C" fn etl_gate_compensate(e_in_ma: f64, t_c: f64, t_lo_c: f64) -> f6
 }
 
 /// The streamed surface fit over `n` synthetic samples.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_thermal_fit(x0: f64, dx: f64, n: usize) -> f64 {
     let mut f = ThermalFit::new();
     for i in 0..n {
@@ -79,7 +79,7 @@ pub extern "C" fn etl_gate_thermal_fit(x0: f64, dx: f64, n: usize) -> f64 {
 }
 
 /// The streamed polynomial fit of degree `d` over `n` samples.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_poly_fit(x0: f64, dx: f64, n: usize, d: usize, lo: f64, hi: f64) -> f64 {
     let Ok(mut f) = PolyFit::new(d, [lo, hi]) else { return f64::NAN };
     for i in 0..n {
@@ -97,7 +97,7 @@ pub extern "C" fn etl_gate_poly_fit(x0: f64, dx: f64, n: usize, d: usize, lo: f6
 
 /// The focus law fitted to `n` views (E from `e0` by `de`, distance from `d0` by `dd`), then
 /// evaluated both ways at `d`.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_focus_law(e0: f64, de: f64, d0: f64, dd: f64, n: usize, d: f64) -> f64 {
     use etl_core::focus::{FocusLaw, FocusSample};
     let mut samples = [FocusSample { e_com_ma: 0.0, distance_mm: 0.0 }; 16];
@@ -112,7 +112,7 @@ pub extern "C" fn etl_gate_focus_law(e0: f64, de: f64, d0: f64, dd: f64, n: usiz
 }
 
 /// A Givens QR accumulator of caller-chosen size.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_givens(n: usize, a: f64, b: f64) -> f64 {
     let Ok(mut q) = GivensQr::<5>::new(n) else { return f64::NAN };
     let _ = q.add_row(&[a, b, a, b, a], b, a);
@@ -120,7 +120,7 @@ pub extern "C" fn etl_gate_givens(n: usize, a: f64, b: f64) -> f64 {
 }
 
 /// The lens physics (Eq. 1-10) with a caller-chosen Poisson ratio.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_physics(e_ma: f64, dp: f64, nu: f64) -> f64 {
     let mut l = LensPhysics::paper();
     l.poisson_ratio = nu;
@@ -132,7 +132,7 @@ pub extern "C" fn etl_gate_physics(e_ma: f64, dp: f64, nu: f64) -> f64 {
 /// The whole calibration chain on a small synthetic rig: 3 views of 12 points, then the
 /// linear initialisation, the bundle adjustment (plain or errors-in-variables) and PnP.
 /// Returns the refined kf1x (or NaN on error).
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
     use etl_core::calib::{bundle_adjust, initialise, BundleAdjustOptions, Estimator, Point, View, ViewScratch, A0};
     let cam = CameraModel::paper_rig();
@@ -178,7 +178,7 @@ pub extern "C" fn etl_gate_calibrate(noise_px: f64, eiv: bool) -> f64 {
 /// camera: focal degree `degree` (1..=5), the opencv family (with OpenCV's flags) or the
 /// paper's, plain or errors-in-variables, with the Cramer-Rao bound at the result.
 /// Returns kf0x + the bound of u0 (or NaN on error).
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_calibrate_family(noise_px: f64, degree: usize, opencv: bool, flags: u8, eiv: bool) -> f64 {
     use etl_core::calib::crlb::crlb_covariance_eiv;
     use etl_core::calib::{bundle_adjust, initialise_model, BundleAdjustOptions, Estimator, Layout, Point, View, ViewScratch, A0};
@@ -211,7 +211,7 @@ pub extern "C" fn etl_gate_calibrate_family(noise_px: f64, degree: usize, opencv
 
 /// The strong-distortion camera (opencv family): a projection, its undistortion, the
 /// exact OpenCV export and a band of undistortion maps; their sum, or NaN on error.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_opencv_family(x: f64, y: f64, z: f64, e_ma: f64, maps: &mut [f32; 128]) -> f64 {
     use etl_core::undistort::{undistort_maps, OutputCamera};
     let cam = CameraModel::strong_distortion_rig();
@@ -228,7 +228,7 @@ pub extern "C" fn etl_gate_opencv_family(x: f64, y: f64, z: f64, e_ma: f64, maps
 }
 
 /// The four sharpness measures on a caller's 8-bit frame with stride; their sum, or NaN.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_sharpness_u8(data: &[u8; 64], width: usize, height: usize, stride: usize) -> f64 {
     use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView};
     let Ok(v) = ImageView::new(data, width, height, stride) else { return f64::NAN };
@@ -240,7 +240,7 @@ pub extern "C" fn etl_gate_sharpness_u8(data: &[u8; 64], width: usize, height: u
 }
 
 /// The same on a 16-bit frame.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_sharpness_u16(data: &[u16; 64], width: usize, height: usize, stride: usize) -> f64 {
     use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView};
     let Ok(v) = ImageView::new(data, width, height, stride) else { return f64::NAN };
@@ -252,7 +252,7 @@ pub extern "C" fn etl_gate_sharpness_u16(data: &[u16; 64], width: usize, height:
 }
 
 /// Autofocus on a caller-positioned peak with caller-chosen options; best current or NaN.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_autofocus(centre_ma: f64, lo: f64, hi: f64, coarse: usize, budget: usize, tol: f64) -> f64 {
     use etl_core::focus::{autofocus, AutofocusOptions};
     let opts = AutofocusOptions { range_ma: [lo, hi], coarse_points: coarse, max_evaluations: budget, tolerance_ma: tol };
@@ -262,7 +262,7 @@ pub extern "C" fn etl_gate_autofocus(centre_ma: f64, lo: f64, hi: f64, coarse: u
 
 /// The run-time camera at (E_in, T) with a caller's policy, then a projection and a ray
 /// through it, and the OpenCV fit of its distortion; u + v + fit RMS, or NaN on error.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, w: u32, h: u32) -> f64 {
     use etl_core::camera::{Camera, ThermalTrust, Trust};
     let thermal = ThermalTrust::from_calibration(&ThermalCalibration::PAPER);
@@ -277,7 +277,7 @@ pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, 
 
 /// Undistortion maps of a caller's band of rows at a current, then a remap of a 1- or
 /// 3-channel image of each sample type through them; the sum of the outputs, or NaN.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_undistort_remap(
     e_com_ma: f64,
     width: usize,
@@ -313,7 +313,7 @@ pub extern "C" fn etl_gate_undistort_remap(
 
 /// Looks up a dictionary by a name given as bytes, decodes `observed` with it and builds a
 /// ChArUco board from it; returns a checksum of what it found, or NaN on error.
-#[no_mangle]
+#[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_board(name: &[u8; 16], len: usize, observed: u64, cols: u32, rows: u32, id: u32) -> f64 {
     use etl_core::board::{CharucoBoard, Dictionary};
     let Some(bytes) = name.get(..len) else { return f64::NAN };

@@ -194,7 +194,7 @@ fn calibration_of(
         .zip(&solved.distances_px)
         .zip(&solved.used)
         .map(|(((v, c), d), used)| {
-            let (s, n) = d.iter().zip(used).filter(|(_, &u)| u).fold((0.0, 0usize), |(s, n), (d, _)| {
+            let (s, n) = d.iter().zip(used).filter(|&(_, &u)| u).fold((0.0, 0usize), |(s, n), (d, _)| {
                 if d.is_finite() {
                     (s + d * d, n + 1)
                 } else {
@@ -202,7 +202,7 @@ fn calibration_of(
                 }
             });
             // The view's own focal lengths from its points in the solve, not its outliers.
-            let kept: Vec<_> = v.points.iter().zip(used).filter(|(_, &u)| u).map(|(p, _)| *p).collect();
+            let kept: Vec<_> = v.points.iter().zip(used).filter(|&(_, &u)| u).map(|(p, _)| *p).collect();
             let kept_view = View { e_com_ma: v.e_com_ma, points: &kept };
             let (fx_px, fy_px) = view_focal(&m, &kept_view, c.dz_mm).unwrap_or((0.0, 0.0));
             ViewSummary {

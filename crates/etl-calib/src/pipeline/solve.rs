@@ -54,7 +54,11 @@ pub(super) struct Rounds {
 
 /// The points of `views` where `used` says so.
 pub(super) fn subset(views: &[View<'_>], used: &[Vec<bool>]) -> Vec<Vec<Point>> {
-    views.iter().zip(used).map(|(v, u)| v.points.iter().zip(u).filter(|(_, &k)| k).map(|(p, _)| *p).collect()).collect()
+    views
+        .iter()
+        .zip(used)
+        .map(|(v, u)| v.points.iter().zip(u).filter(|&(_, &k)| k).map(|(p, _)| *p).collect())
+        .collect()
 }
 
 /// Each point's reprojection distance, px, under `model` with its view's correction

@@ -336,7 +336,7 @@ fn kept(views: &[PlanarView], used: &[Vec<bool>]) -> Vec<PlanarView> {
         .zip(used)
         .map(|(v, u)| {
             let (board_mm, pixels) =
-                v.board_mm.iter().zip(&v.pixels).zip(u).filter(|(_, &k)| k).map(|((b, p), _)| (*b, *p)).unzip();
+                v.board_mm.iter().zip(&v.pixels).zip(u).filter(|&(_, &k)| k).map(|((b, p), _)| (*b, *p)).unzip();
             PlanarView { board_mm, pixels }
         })
         .collect()

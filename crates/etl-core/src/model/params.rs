@@ -283,7 +283,7 @@ impl ParamMask {
     }
 
     /// The held indices, ascending.
-    pub fn indices(&self) -> impl Iterator<Item = usize> {
+    pub fn indices(&self) -> impl Iterator<Item = usize> + use<> {
         let bits = self.0;
         (0..64).filter(move |&i| bits & (1u64 << i) != 0)
     }

@@ -319,7 +319,7 @@ impl Rendered {
             .iter()
             .zip(&self.corners_in_image)
             .enumerate()
-            .filter(|(_, (_, &inside))| inside)
+            .filter(|&(_, (_, &inside))| inside)
             .map(|(id, (&p, _))| (id as u32, p))
             .unzip()
     }

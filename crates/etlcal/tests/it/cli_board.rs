@@ -3,7 +3,6 @@
 //! bad input (one line, non-zero exit, nothing written). The comparison with OpenCV's
 //! `CharucoBoard.generateImage` is crates/etl-py/tests/test_board.py.
 use std::path::Path;
-use std::process::{Command, Output};
 
 use serde_json::Value;
 

@@ -3,7 +3,6 @@
 //! written or overwritten).
 
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
 

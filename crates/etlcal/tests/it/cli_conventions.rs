@@ -1,7 +1,6 @@
 //! Conventions every verb shares, run as the built binary: output directories
 //! are created, global flags go before or after the verb, and every failure (clap's
 //! included) is one line on stderr with the documented exit status.
-use std::process::{Command, Output};
 
 use etl_core::thermal::ThermalSurface;
 use serde_json::Value;

@@ -2,7 +2,6 @@
 //! paper rig, `etlcal calibrate --dataset` detects and calibrates; views whose board is
 //! not found are reported and skipped; a missing image fails the run before any work and
 //! writes nothing.
-use std::process::Command;
 
 use serde_json::Value;
 

@@ -4,7 +4,6 @@
 //! nothing written or overwritten).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value;
 

@@ -3,7 +3,6 @@
 //! law's range, a temperature outside the thermal surface's domain, a calibration without a
 //! focus law. Each is one line on stderr and exit status 1.
 use std::path::Path;
-use std::process::{Command, Output};
 
 use serde_json::Value;
 

@@ -1,6 +1,5 @@
 //! `etlcal measure` as the built binary: a 2 mm stage move between two rendered images of
 //! the paper rig, measured with the demo's calibration, and a refused image.
-use std::process::{Command, Output};
 
 use serde_json::Value;
 

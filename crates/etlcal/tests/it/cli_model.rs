@@ -3,7 +3,6 @@
 //! file written).
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use etl_core::model::CameraModel;
 use etl_core::physics::LensPhysics;

@@ -1,7 +1,6 @@
 //! `etlcal render` run as the built binary: the image and its corners file, the corners
 //! against the model and against `etlcal detect` on the written image, and bad input (one
 //! line, non-zero exit, nothing written).
-use std::process::{Command, Output};
 
 use etl_core::model::CameraModel;
 use serde_json::Value;

@@ -3,7 +3,6 @@
 //! mrcal. Bad input: one-line error, exit 1, nothing written.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value;
 

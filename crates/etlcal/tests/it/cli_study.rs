@@ -1,6 +1,5 @@
 //! `etlcal study`: fig5's JSON and files, and its bad input.
 
-use std::process::{Command, Output};
 
 use serde_json::Value;
 

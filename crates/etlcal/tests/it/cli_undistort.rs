@@ -2,7 +2,6 @@
 //! the paper rig's own model) come back as the scene; bad inputs are refused in one line
 //! with exit status 1 and nothing written.
 use std::path::Path;
-use std::process::{Command, Output};
 
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface;

@@ -63,7 +63,7 @@ impl HeldOut {
             covariance: fold.covariance,
             noise,
         };
-        for (p, _) in view.points.iter().zip(scored).filter(|(_, &k)| k) {
+        for (p, _) in view.points.iter().zip(scored).filter(|&(_, &k)| k) {
             let (r, s, d) = match projector.project(p.world_mm, view.e_com_ma, true) {
                 Ok(q) => (
                     [p.pixel[0] - q.pixel[0], p.pixel[1] - q.pixel[1]],
