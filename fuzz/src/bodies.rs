@@ -53,14 +53,14 @@ pub fn json_readers(data: &[u8]) {
 /// reader and the checkerboard detector; with a leading 0 byte, as a raw grey image of at
 /// most 255 x 255 px (its side in the next two bytes) straight into the detector.
 pub fn image_detect(data: &[u8]) {
-    let Ok(pattern) = etl_image::detect::Pattern::new(4, 3) else { return };
+    let Ok(pattern) = etl_image::checkerboard::Pattern::new(4, 3) else { return };
     match data.split_first() {
         Some((0, rest)) if rest.len() >= 2 => {
             let (w, h) = (usize::from(rest[0]).max(1), usize::from(rest[1]).max(1));
             let mut pixels = rest[2..].to_vec();
             pixels.resize(w * h, 128);
             if let Some(img) = image::GrayImage::from_raw(w as u32, h as u32, pixels) {
-                check_corners(etl_image::detect::detect_corners(&img, pattern), w, h);
+                check_corners(etl_image::checkerboard::detect_corners(&img, pattern), w, h);
             }
         }
         _ => {
@@ -68,7 +68,7 @@ pub fn image_detect(data: &[u8]) {
             if std::fs::write(&path, data).is_ok() {
                 if let Ok(img) = etl_image::read_image(&path) {
                     let (w, h) = (img.width() as usize, img.height() as usize);
-                    check_corners(etl_image::detect::detect_dynamic(&img, pattern), w, h);
+                    check_corners(etl_image::checkerboard::detect_dynamic(&img, pattern), w, h);
                 }
             }
         }
@@ -76,7 +76,7 @@ pub fn image_detect(data: &[u8]) {
 }
 
 /// Every corner a detection returns is a finite point inside the image.
-fn check_corners(found: etl_image::Result<etl_image::detect::Detection>, w: usize, h: usize) {
+fn check_corners(found: etl_image::Result<etl_image::checkerboard::Detection>, w: usize, h: usize) {
     if let Ok(d) = found {
         check_inside(&d.corners_px, w, h);
     }

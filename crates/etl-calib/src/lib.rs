@@ -1,10 +1,12 @@
 //! etl-calib: calibration. Zhang's method for the lens-off (monofocal) intrinsics
 //! ([`zhang`]), the pipeline from a dataset or observations to a calibration file
 //! ([`pipeline`]), the per-setting baseline of the paper's section 5.2.3 ([`baseline`]) and
-//! the temperature-calibration procedure ([`thermal_calibration`]).
+//! the temperature-calibration procedure ([`thermal_calibration`]); the one request per
+//! verb that the CLI and Python parse their options into ([`request`]).
 
 pub mod baseline;
 pub mod pipeline;
+pub mod request;
 pub mod robust;
 pub mod thermal_calibration;
 pub mod zhang;

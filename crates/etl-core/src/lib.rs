@@ -29,7 +29,6 @@
 
 pub mod board;
 pub mod calib;
-pub mod camera;
 pub mod error;
 pub mod fit;
 pub mod focus;
@@ -40,7 +39,13 @@ pub mod model;
 pub mod physics;
 pub mod pnp;
 pub mod progress;
+pub mod runtime;
 pub mod thermal;
 pub mod undistort;
 
 pub use error::{Error, Result};
+
+// The paths before issue 26 named modules for what they held: kept so that code written
+// against them still compiles, hidden from the documentation.
+#[doc(hidden)]
+pub use runtime as camera;

@@ -1,4 +1,4 @@
-//! `etlcal.calibration/1`: the result of a calibration (README, "File formats").
+//! `etlcal.calibration/1`: the result of a calibration (docs/FORMATS.md).
 //!
 //! The model's numbers under the names of [`etl_core::model::CameraModel`] (the paper's 25:
 //! cubic `kf_x`, `kf_y` and `distortion_a` of 9; or focal polynomials of degree 1..=5 and,
@@ -7,13 +7,20 @@
 //! produced it (estimator, iterations, per-view residuals and, for the errors-in-variables
 //! estimator, each view's stage and current corrections). A file of the paper's model is
 //! written exactly as before the families existed: no `"distortion_model"` field.
+//!
+//! A calibration made from views with a recorded E_com and no thermal calibration has no
+//! temperature compensation and says so: `"temperature_compensation": "none"`
+//! ([`TemperatureCompensation`]; the field is absent when there is a `"thermal"` part,
+//! and in files written before it existed, which read and write byte for byte as before).
+//! Such a calibration is used at a known E_com ([`Calibration::at_e_com`]); `at(E_in, T)`
+//! is refused.
 
 use std::path::Path;
 
 use etl_core::calib::jacobian::{from_params, to_params};
 use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
-use etl_core::camera::{Camera, CameraAt, ThermalTrust, Trust};
+use etl_core::runtime::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::focus::FocusLaw;
 use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
@@ -131,7 +138,7 @@ fn model_of(
 /// thermal calibration (surface, the ranges it was fitted over, its RMS) and where it came
 /// from. Files written before the ranges were kept hold `coefficients` only; they stay
 /// readable, and the run-time camera then treats every setting as outside the ranges
-/// ([`etl_core::camera::ThermalTrust`]).
+/// ([`etl_core::runtime::ThermalTrust`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ThermalRef {
@@ -209,7 +216,7 @@ impl ThermalRef {
     }
 
     /// E_com of a view at (`e_in_ma`, `temperature_c`), refused outside the calibrated
-    /// ranges (with their margins, [`etl_core::camera`]): a calibration must not be built
+    /// ranges (with their margins, [`etl_core::runtime`]): a calibration must not be built
     /// on extrapolated currents.
     pub fn e_com_ma(&self, e_in_ma: f64, temperature_c: f64) -> Result<f64> {
         let (e_t, _) = self.trust().e_t_ma(e_in_ma, temperature_c, Trust::Refuse)?;
@@ -248,6 +255,31 @@ fn distortion_model_field(model: DistortionModel) -> Option<String> {
     }
 }
 
+/// What a calibration says about its temperature compensation when it has none
+/// (`"temperature_compensation"`; a calibration with a thermal part has the field absent).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TemperatureCompensation {
+    /// `"none"`: the views' recorded E_com were used as they are and no thermal
+    /// calibration was given, so E_com cannot be had from (E_in, T): the camera is used at
+    /// a known E_com only ([`Calibration::at_e_com`]).
+    None,
+}
+
+impl TemperatureCompensation {
+    /// What a calibration made with `thermal` records: [`TemperatureCompensation::None`]
+    /// without one (its views carried E_com), nothing with one.
+    pub fn of(thermal: Option<&ThermalRef>) -> Option<Self> {
+        thermal.is_none().then_some(TemperatureCompensation::None)
+    }
+}
+
+/// The warning a calibration recorded as `"temperature_compensation": "none"` gets, said
+/// once by `calibrate` (the front ends name their own way to give E_com).
+pub const NO_TEMPERATURE_COMPENSATION: &str = "no thermal calibration was given and the views carry E_com: the \
+     calibration has no temperature compensation (recorded as \"temperature_compensation\": \"none\") and is used at \
+     a known E_com only";
+
 /// Which way [`Calibration::focus_thermal`] converts.
 #[derive(Debug, Clone, Copy)]
 enum Direction {
@@ -282,6 +314,12 @@ pub struct Calibration {
     /// The thermal surface (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thermal: Option<ThermalRef>,
+    /// `"none"` when the calibration was made from views with a recorded E_com and no
+    /// thermal calibration ([`TemperatureCompensation::None`]): it is used at a known
+    /// E_com only. Absent in files with a thermal part and in files written before it
+    /// existed (which read and write as before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature_compensation: Option<TemperatureCompensation>,
     /// The range of E_com the calibration saw, mA.
     pub e_com_range_ma: [f64; 2],
     /// RMS reprojection error, px (sqrt of the mean squared point distance).
@@ -369,6 +407,7 @@ impl Calibration {
             distortion_model: distortion_model_field(model.distortion_model()),
             distortion_a: model.distortion_a.as_slice().to_vec(),
             thermal: None,
+            temperature_compensation: None,
             e_com_range_ma,
             rms_reprojection_px: 0.0,
             std: ModelStd::zero(&layout),
@@ -562,6 +601,20 @@ impl Calibration {
         Ok(self.camera()?.at_with(e_in_ma, temperature_c, trust)?)
     }
 
+    /// The camera at a known compensated current `e_com_ma` (a calibration without a
+    /// thermal part, or E_com compensated elsewhere), refused outside the calibrated E_com
+    /// range (margin [`etl_core::runtime::E_COM_MARGIN_MA`]) unless `trust` is
+    /// [`Trust::Extrapolate`] ([`Camera::at_e_com`]); E_in and T of the result are NaN.
+    pub fn at_e_com(&self, e_com_ma: f64, trust: Trust) -> Result<CameraAt> {
+        Ok(self.camera()?.at_e_com(e_com_ma, trust)?)
+    }
+
+    /// The warning of a calibration that has no temperature compensation
+    /// ([`NO_TEMPERATURE_COMPENSATION`]), or None.
+    pub fn temperature_compensation_warning(&self) -> Option<&'static str> {
+        self.temperature_compensation.map(|TemperatureCompensation::None| NO_TEMPERATURE_COMPENSATION)
+    }
+
     /// The one check of a calibration, made by every reader and writer (CLI and Python):
     /// a valid camera model, an image size within `check_image_size`, an ordered current
     /// range within the driver's `E_IN_DOMAIN_MA`, a
@@ -597,6 +650,9 @@ impl Calibration {
             if !t.rms_ma.is_none_or(|r| r.is_finite() && r >= 0.0) {
                 return bad(format!("thermal.rms_ma = {:?} must be a finite number >= 0", t.rms_ma));
             }
+        }
+        if self.thermal.is_some() && self.temperature_compensation.is_some() {
+            return bad("temperature_compensation = \"none\" but the calibration has a thermal part: remove one".into());
         }
         if !(self.rms_reprojection_px.is_finite() && self.rms_reprojection_px >= 0.0) {
             return bad(format!("rms_reprojection_px = {} must be a finite number >= 0", self.rms_reprojection_px));

@@ -1,5 +1,5 @@
 //! `etlcal.dataset/1`: the images of a calibration and what was recorded with each
-//! (README, "File formats"): the observations' shape with an image per view instead of points.
+//! (docs/FORMATS.md): the observations' shape with an image per view instead of points.
 //!
 //! ```json
 //! {"format": "etlcal.dataset/1", "image_size": [1936, 1458],

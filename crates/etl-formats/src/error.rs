@@ -223,6 +223,20 @@ impl Error {
         self.map_what(|what| join_what(prefix, &what))
     }
 
+    /// A library's option under the name a front end gives it: bad input about `from` (a
+    /// field of an options struct, `"search_half_width_ma"`) becomes bad input about `to`
+    /// (the flag `"--search-ma"`, the Python argument `"search_ma"`), in its `what` and in
+    /// its message, which names `from` for this to work; any other error is returned as it
+    /// is. So the library writes a message once and each front end names its own option.
+    pub fn rename_input(self, from: &str, to: &str) -> Self {
+        match self {
+            Error::InvalidInput { what, value, message } if what == from => {
+                Error::InvalidInput { what: to.to_owned(), value, message: message.replace(from, to) }
+            }
+            other => other,
+        }
+    }
+
     /// This error with the `what` of an [`Error::InvalidInput`] rewritten by `rename`
     /// (a solver's `"views[2].pixels"` as the caller's `"offstate_views[2].pixels"`), its
     /// message and value unchanged; other errors are returned as they are.

@@ -17,7 +17,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::str::FromStr;
 
-use etl_core::camera::CameraAt;
+use etl_core::runtime::CameraAt;
 use etl_core::model::{fit_opencv5, DistortionModel, OpenCvFit};
 
 use crate::calibration::Calibration;
@@ -177,7 +177,7 @@ mod tests {
     /// error 0, and says it is exact.
     #[test]
     fn an_opencv_family_export_is_exact() {
-        use etl_core::camera::Trust;
+        use etl_core::runtime::Trust;
         use etl_core::model::CameraModel;
         let model = CameraModel::strong_distortion_rig();
         let cal = Calibration::from_model(&model, [1936, 1458], [80.0, 225.0]);

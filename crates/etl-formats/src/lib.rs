@@ -28,7 +28,7 @@
 //! # }
 //! ```
 //!
-//! File formats (README, "File formats"): JSON with a `"format"` field naming format and version
+//! File formats (docs/FORMATS.md): JSON with a `"format"` field naming format and version
 //! (`etlcal.<name>/<version>`); lengths in mm, currents in mA, temperatures in degC.
 //!
 //! Readers refuse an unknown format or version with a message naming it. Unknown fields
@@ -55,6 +55,7 @@ mod input_value;
 mod json_path;
 pub mod model_selection;
 pub mod observations;
+pub mod optics;
 pub mod output;
 pub mod thermal;
 
@@ -67,7 +68,7 @@ pub use a0::A0File;
 pub use board::{Board, Checkerboard};
 pub use calibration::{Calibration, ThermalRef};
 pub use dataset::Dataset;
-pub use etl_core::camera::{Camera, CameraAt, Extrapolated, Trust};
+pub use etl_core::runtime::{Camera, CameraAt, Extrapolated, Trust};
 pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
 pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use observations::Observations;
@@ -337,3 +338,10 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&p).unwrap(), "old");
     }
 }
+
+/// The README's Rust example, compiled and run with the doctests (its other code blocks
+/// are marked `sh` and `python`, which rustdoc leaves alone; the Python one runs in
+/// `crates/etl-py/tests/test_readme.py`).
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeDoctests;

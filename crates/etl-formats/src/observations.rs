@@ -1,4 +1,4 @@
-//! `etlcal.observations/1`: corners of the calibration views (README, "File formats").
+//! `etlcal.observations/1`: corners of the calibration views (docs/FORMATS.md).
 //!
 //! ```json
 //! {"format": "etlcal.observations/1", "image_size": [1936, 1458],

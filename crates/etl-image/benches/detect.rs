@@ -6,7 +6,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
 use etl_core::model::CameraModel;
-use etl_image::detect::{detect_corners, Pattern};
+use etl_image::checkerboard::{detect_corners, Pattern};
 use etl_sim::render::{render, BitDepth, Board, Checkerboard, Optics, Photometry, RenderOptions, Scene};
 
 fn view(blur: f64) -> image::GrayImage {

@@ -3,7 +3,7 @@
 //! `RAYON_NUM_THREADS=1 valgrind --tool=callgrind target/release/examples/detect_profile IMAGE.png [N] [CxR]`
 //!
 //! The `detect` bench writes its views as `target/criterion/detect_view_blur_*.png`.
-use etl_image::detect::{detect_corners, Pattern};
+use etl_image::checkerboard::{detect_corners, Pattern};
 
 fn main() {
     let mut args = std::env::args().skip(1);

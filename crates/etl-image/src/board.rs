@@ -1,6 +1,6 @@
 //! Detection of any calibration target an `etlcal.board/1` file describes: a ChArUco board
 //! ([`crate::charuco`]: the corners seen, each with its id, partial views welcome) or a
-//! plain checkerboard ([`crate::detect`]: the whole board, ids the row-major corner index
+//! plain checkerboard ([`crate::checkerboard`]: the whole board, ids the row-major corner index
 //! `row * cols + col`). One result type for both, so that `etlcal detect`, the calibration
 //! pipeline and Python treat every board alike: corner `ids[k]` at `corners_px[k]`, its
 //! board position from [`Board::corner_mm`].
@@ -13,7 +13,8 @@ use image::{DynamicImage, GrayImage};
 use rayon::prelude::*;
 
 use crate::charuco::{detect_charuco_view, DetectedMarker};
-use crate::detect::{detect_view, GrayView, Pattern, Sample};
+use crate::checkerboard::{detect_view, Pattern};
+use crate::grey::{view_of, with_grey_view, GrayView, Sample};
 
 /// A board found in an image.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,13 +54,13 @@ impl BoardDetection {
 /// # Ok::<(), etl_formats::Error>(())
 /// ```
 pub fn detect_board(image: &GrayImage, board: &Board) -> Result<BoardDetection> {
-    detect_board_view(crate::detect::view_of(image)?, board)
+    detect_board_view(view_of(image)?, board)
 }
 
 /// Finds `board` in a decoded image of any type: 16-bit images are read at 16 bits,
 /// everything else as 8-bit grey.
 pub fn detect_board_dynamic(image: &DynamicImage, board: &Board) -> Result<BoardDetection> {
-    crate::detect::with_grey_view(image, |v| detect_board_view(v, board), |v| detect_board_view(v, board))
+    with_grey_view(image, |v| detect_board_view(v, board), |v| detect_board_view(v, board))
 }
 
 /// Reads an image file (PNG, JPEG, TIFF) and finds `board`. An unreadable file is

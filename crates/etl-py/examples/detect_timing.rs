@@ -9,7 +9,7 @@
 
 use std::time::Instant;
 
-use etl_image::detect::{detect_corners, Pattern};
+use etl_image::checkerboard::{detect_corners, Pattern};
 
 fn main() {
     let mut args = std::env::args().skip(1);

@@ -244,3 +244,24 @@ pub fn stacked<'py>(
     let a = ArrayD::from_shape_vec(IxDyn(&full), values).map_err(|e| input_error(e.to_string()))?;
     Ok(a.into_pyarray(py).into_any())
 }
+
+/// The parts of a per-current function as Python values: part p is a float when the
+/// current was a scalar and the part of shape () (`part_shapes[p]` empty), else a float64
+/// array of shape `shape` + `part_shapes[p]` from the row-major `blocks[p]` (`shape` is
+/// that of the array of currents; empty for a scalar).
+pub fn parts_out<'py, const P: usize>(
+    py: Python<'py>,
+    shape: &[usize],
+    scalar: bool,
+    blocks: [Vec<f64>; P],
+    part_shapes: [&[usize]; P],
+) -> PyResult<[Bound<'py, PyAny>; P]> {
+    let mut out = Vec::with_capacity(P);
+    for (block, inner) in blocks.into_iter().zip(part_shapes) {
+        out.push(match (scalar, inner.is_empty()) {
+            (true, true) => PyFloat::new(py, block.first().copied().unwrap_or(f64::NAN)).into_any(),
+            _ => stacked(py, shape, inner, block)?,
+        });
+    }
+    out.try_into().map_err(|_| input_error("parts_out: part count mismatch"))
+}

@@ -5,24 +5,18 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use etl_core::calib::projection_uncertainty;
-use etl_core::camera::Trust;
+use etl_core::runtime::{Camera, Trust};
 use etl_core::model::{CameraModel, DistortionA, FocalPoly};
-use etl_core::pnp::{pose_uncertainty, PixelNoise};
 use etl_core::thermal::ThermalSurface as CoreSurface;
 use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::arrays::{mat3_out, points, points_out, vec_out, Points};
-use crate::camera::{trust, CameraAt};
+use crate::arrays::{mat3_out, vec_out};
+use crate::camera::{self, trust, CameraAt};
 use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::pose::BoardPose;
 use crate::thermal::{ThermalCalibration, ThermalSurface};
-
-/// Points above which `project` / `undistort` release the GIL (below it the release
-/// costs more than it lets other threads gain).
-const DETACH_POINTS: usize = 4096;
 
 /// Parses and checks `etlcal.calibration/1` text (the format's one validator).
 fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
@@ -55,7 +49,8 @@ fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
 #[pyclass(module = "etlcal", frozen, eq, from_py_object)]
 #[derive(Clone, PartialEq)]
 pub struct Calibration {
-    pub(crate) file: CalFile,
+    /// Shared with every `CameraAt` of it (the file never changes once wrapped).
+    pub(crate) file: Arc<CalFile>,
     /// `file.model()`, kept to avoid rebuilding it on every call.
     pub(crate) model: CameraModel,
 }
@@ -64,14 +59,48 @@ impl Calibration {
     /// A calibration of `model` with no thermal part, zero standard deviations and zero
     /// RMS (an exact model, not an estimate).
     pub fn from_model(model: CameraModel, image_size: [u32; 2], e_com_range_ma: [f64; 2]) -> Self {
-        Calibration { file: CalFile::from_model(&model, image_size, e_com_range_ma), model }
+        Calibration { file: Arc::new(CalFile::from_model(&model, image_size, e_com_range_ma)), model }
     }
 
     /// Wraps a calibration file's content. Errors: a file whose model is invalid (an
     /// unknown distortion model, numbers of the wrong lengths), naming the field.
     pub fn from_file(file: CalFile) -> PyResult<Self> {
         let model = file.model().py()?;
-        Ok(Calibration { file, model })
+        Ok(Calibration { file: Arc::new(file), model })
+    }
+
+    /// The file, to change before it is wrapped for Python (it is shared afterwards).
+    pub(crate) fn file_mut(&mut self) -> &mut CalFile {
+        Arc::make_mut(&mut self.file)
+    }
+
+    /// The camera of `slf` at driver current `e_in_ma` and temperature `temperature_c`
+    /// (the calibration's range policy). A calibration without a thermal part is refused,
+    /// naming `at_e_com`.
+    pub(crate) fn camera_at_setting(
+        slf: &Bound<'_, Self>,
+        e_in_ma: f64,
+        temperature_c: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<CameraAt> {
+        let cal = slf.get();
+        if cal.file.thermal.is_none() {
+            return Err(invalid(
+                "thermal",
+                "this calibration has no temperature compensation (thermal): use at_e_com(e_com_ma) with a known E_com",
+            ));
+        }
+        let inner = cal.camera()?.at_with(e_in_ma, temperature_c, trust(allow_extrapolation)).py()?;
+        Ok(CameraAt::new(inner, slf.clone().into_any().unbind(), cal.file.clone()))
+    }
+
+    /// The camera of `slf` at a known compensated current `e_com_ma`, refused outside the
+    /// calibrated E_com range (margin 5 mA) unless `allow_extrapolation`: the one range
+    /// check of every method taking `e_com_ma`.
+    pub(crate) fn camera_at_e_com(slf: &Bound<'_, Self>, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
+        let cal = slf.get();
+        let inner = cal.camera()?.at_e_com(e_com_ma, trust(allow_extrapolation)).py()?;
+        Ok(CameraAt::new(inner, slf.clone().into_any().unbind(), cal.file.clone()))
     }
 }
 
@@ -107,8 +136,8 @@ impl Calibration {
         model.validate().py()?;
         etl_core::error::finite(rms_px, "rms_px").py()?;
         let mut c = Calibration::from_model(model, [image_size.0, image_size.1], [e_com_range_ma.0, e_com_range_ma.1]);
-        c.file.thermal = thermal.map(thermal_ref).transpose()?;
-        c.file.rms_reprojection_px = rms_px;
+        c.file_mut().thermal = thermal.map(thermal_ref).transpose()?;
+        c.file_mut().rms_reprojection_px = rms_px;
         c.file.validate(Path::new("<Calibration>")).py()?;
         Ok(c)
     }
@@ -119,7 +148,7 @@ impl Calibration {
     fn paper_rig() -> Self {
         let [w, h] = CameraModel::PAPER_IMAGE_SIZE;
         let mut c = Calibration::from_model(CameraModel::paper_rig(), [w, h], [80.0, 225.0]);
-        c.file.thermal = Some(ThermalRef::paper());
+        c.file_mut().thermal = Some(ThermalRef::paper());
         c
     }
 
@@ -148,7 +177,7 @@ impl Calibration {
 
     /// The `etlcal.calibration/1` JSON text.
     fn to_json(&self) -> PyResult<String> {
-        serde_json::to_string_pretty(&self.file).map_err(|e| input_error(e.to_string()))
+        serde_json::to_string_pretty(&*self.file).map_err(|e| input_error(e.to_string()))
     }
 
     /// Parses `etlcal.calibration/1` JSON text.
@@ -301,7 +330,8 @@ impl Calibration {
     }
 
     /// The camera at driver current `e_in_ma` and lens temperature `temperature_c`
-    /// (E_com = E_in - E_T(T, E_in), then K and distortion at E_com).
+    /// (E_com = E_in - E_T(T, E_in), then K and distortion at E_com): a CameraAt, which
+    /// projects, undistorts, casts rays, solves PnP and exports at that setting.
     ///
     /// Args:
     ///     e_in_ma: driver current, mA.
@@ -310,12 +340,36 @@ impl Calibration {
     ///         E_in and E_com ranges too (then `extrapolated` is True).
     ///
     /// Raises: InputError naming the quantity outside its calibrated range (margins:
-    /// 1 degC, 5 mA, 5 mA), or when the calibration has no thermal part.
+    /// 1 degC, 5 mA, 5 mA), or when the calibration has no thermal part (then use
+    /// `at_e_com` with a known E_com).
     #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
-    fn at(&self, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
-        let inner =
-            self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
-        Ok(CameraAt { inner, calibration_covariance: self.file.covariance_matrix().map(Arc::new) })
+    fn at(slf: &Bound<'_, Self>, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
+        Self::camera_at_setting(slf, e_in_ma, temperature_c, allow_extrapolation)
+    }
+
+    /// The camera at a known compensated current `e_com_ma` (a calibration without
+    /// temperature compensation, `temperature_compensation == "none"`, or E_com
+    /// compensated elsewhere): a CameraAt, whose `e_in_ma` and `temperature_c` are None.
+    /// Every method of Calibration taking `e_com_ma` is this camera's.
+    ///
+    /// Args:
+    ///     e_com_ma: compensated current, mA.
+    ///     allow_extrapolation: return the camera outside the calibrated E_com range too
+    ///         (then `extrapolated` is True; keyword only).
+    ///
+    /// Raises: InputError for a current outside the calibrated E_com range (margin 5 mA)
+    /// or not finite.
+    #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
+    fn at_e_com(slf: &Bound<'_, Self>, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)
+    }
+
+    /// "none" when the calibration was made from views with a recorded E_com and no
+    /// thermal calibration (it is used at a known E_com only, `at_e_com`); None otherwise
+    /// (a thermal part, or a file that does not say).
+    #[getter]
+    fn temperature_compensation(&self) -> Option<&'static str> {
+        self.file.temperature_compensation.map(|etl_formats::calibration::TemperatureCompensation::None| "none")
     }
 
     /// RMS reprojection error of the calibration, px (0 for a model given, not estimated).
@@ -496,7 +550,8 @@ impl Calibration {
         })
     }
 
-    /// (fx, fy) at the compensated current, px (Eq. 16: fx(E) = sum kf_x[k] E^k).
+    /// (fx, fy) at the compensated current, px (Eq. 16: fx(E) = sum kf_x[k] E^k;
+    /// `CameraAt.focal_lengths` at each current).
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA: a number, or an array of any shape S
@@ -510,14 +565,12 @@ impl Calibration {
         e_com_ma: &Bound<'py, PyAny>,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let [fx, fy] = self.per_current(e_com_ma, allow_extrapolation, [&[], &[]], |at, _| {
-            let k = at.intrinsics();
-            Ok([vec![k.fx], vec![k.fy]])
-        })?;
-        Ok(PyTuple::new(e_com_ma.py(), [fx, fy])?.into_any())
+        let parts = self.per_current(e_com_ma, allow_extrapolation, [&[], &[]], camera::focal_parts)?;
+        Ok(PyTuple::new(e_com_ma.py(), parts)?.into_any())
     }
 
-    /// The intrinsic matrix A(E) = [[fx, 0, u0], [0, fy, v0], [0, 0, 1]] (Eq. 15), px.
+    /// The intrinsic matrix A(E) = [[fx, 0, u0], [0, fy, v0], [0, 0, 1]] (Eq. 15), px
+    /// (`CameraAt.camera_matrix` at each current).
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA: a number, or an array of shape S
@@ -527,30 +580,34 @@ impl Calibration {
     /// Returns: a 3 x 3 float64 array (S + (3, 3) for an array of currents).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
     fn intrinsics<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
-        let [k] = self.per_current(e_com_ma, allow_extrapolation, [&[3, 3]], |at, _| {
-            Ok([at.intrinsics().matrix().into_iter().flatten().collect()])
-        })?;
+        let [k] = self.per_current(e_com_ma, allow_extrapolation, [&[3, 3]], camera::intrinsics_parts)?;
         Ok(k)
     }
 
-    /// The distortion coefficients (k1 in 1/px^2, p1 and p2 in 1/px) at the compensated
-    /// current (Eq. 18), acting in pixel coordinates centred on the principal point
-    /// (Eq. 17, with Weng's decentering term).
+    /// The distortion coefficients at the compensated current (Eq. 18), named for the
+    /// calibration's family (`CameraAt.distortion` at each current):
+    ///
+    /// - "paper" (Eq. 17, pixel coordinates centred on the principal point, with Weng's
+    ///   decentering term): a PaperDistortion (k1 in 1/px^2, p1 and p2 in 1/px), the tuple
+    ///   (k1, p1, p2) as before (`k1, p1, p2 = cal.distortion(E)`);
+    /// - "opencv" (OpenCV's model in normalised coordinates): an OpenCvDistortion, the
+    ///   tuple (k1, k2, p1, p2, k3) in OpenCV's order, dimensionless.
+    ///
+    /// Each has one attribute per coefficient, `model` (the family), `names` and
+    /// `to_dict()`.
     ///
     /// Args:
     ///     e_com_ma: compensated current, mA: a number, or an array of shape S
-    ///         (vectorised: then k1, p1, p2 are float64 arrays of shape S).
+    ///         (vectorised: then each coefficient is a float64 array of shape S).
     ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
     fn distortion<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
-        let parts = self.per_current(e_com_ma, allow_extrapolation, [&[], &[], &[]], |at, _| {
-            let c = at.distortion().padded();
-            Ok([vec![c[0]], vec![c[1]], vec![c[2]]])
-        })?;
-        Ok(PyTuple::new(e_com_ma.py(), parts)?.into_any())
+        let parts =
+            self.per_current(e_com_ma, allow_extrapolation, camera::DISTORTION_SHAPES, camera::distortion_parts)?;
+        camera::distortion_out(e_com_ma.py(), self.model.distortion_model(), parts)
     }
 
-    /// Projects world points to observed pixels (Eq. 13-18).
+    /// Projects world points to observed pixels (Eq. 13-18): `at_e_com(e_com_ma).project`.
     ///
     /// Args:
     ///     world_mm: world points, mm: an (N, 3) array (or one point of shape (3,)).
@@ -563,24 +620,17 @@ impl Calibration {
     /// the focal length is not positive.
     #[pyo3(signature = (world_mm, e_com_ma, *, allow_extrapolation=false))]
     fn project<'py>(
-        &self,
+        slf: &Bound<'py, Self>,
         world_mm: &Bound<'py, PyAny>,
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let p = self.points_at::<3>(world_mm, "world_mm", e_com_ma, allow_extrapolation)?;
-        let (py, model) = (world_mm.py(), self.model);
-        let mut out = vec![[0.0; 2]; p.points.len()];
-        if p.points.len() > DETACH_POINTS {
-            py.detach(|| model.project_many(&p.points, e_com_ma, &mut out)).py()?;
-        } else {
-            model.project_many(&p.points, e_com_ma, &mut out).py()?;
-        }
-        points_out(py, out, p.single)
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.project(world_mm)
     }
 
     /// Removes the distortion from observed pixels: the pixels they would have without
-    /// distortion, in the same image frame (Eq. 17 inverted; accurate to 1e-9 px).
+    /// distortion, in the same image frame (Eq. 17 inverted; accurate to 1e-9 px):
+    /// `at_e_com(e_com_ma).undistort`.
     ///
     /// Args:
     ///     pixels: observed pixels, px: an (N, 2) array (or (2,)).
@@ -592,21 +642,15 @@ impl Calibration {
     /// NotConvergedError if the inversion misses its tolerance.
     #[pyo3(signature = (pixels, e_com_ma, *, allow_extrapolation=false))]
     fn undistort<'py>(
-        &self,
+        slf: &Bound<'py, Self>,
         pixels: &Bound<'py, PyAny>,
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let p = self.points_at::<2>(pixels, "pixels", e_com_ma, allow_extrapolation)?;
-        let (py, model) = (pixels.py(), self.model);
-        let run = |pts: &[[f64; 2]]| -> etl_core::Result<Vec<[f64; 2]>> {
-            pts.iter().map(|px| model.undistort(*px, e_com_ma)).collect()
-        };
-        let out = if p.points.len() > DETACH_POINTS { py.detach(|| run(&p.points)) } else { run(&p.points) }.py()?;
-        points_out(py, out, p.single)
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.undistort(pixels)
     }
 
-    /// The viewing ray of a pixel in world coordinates.
+    /// The viewing ray of a pixel in world coordinates: `at_e_com(e_com_ma).ray`.
     ///
     /// Args:
     ///     pixel: observed pixel (u, v), px.
@@ -616,20 +660,18 @@ impl Calibration {
     /// (mm) and the unit direction, float64 arrays of shape (3,).
     #[pyo3(signature = (pixel, e_com_ma, *, allow_extrapolation=false))]
     fn ray<'py>(
-        &self,
-        py: Python<'py>,
+        slf: &Bound<'py, Self>,
         pixel: (f64, f64),
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let r = self.at_e_com(e_com_ma, allow_extrapolation)?.ray([pixel.0, pixel.1]).py()?;
-        Ok((vec_out(py, &r.origin_mm), vec_out(py, &r.direction)))
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.ray(slf.py(), pixel)
     }
 
     /// The pose of a planar board from its observed corners (plane-based PnP: a
     /// closed-form start from the homography, then Levenberg-Marquardt through the full
-    /// model, distortion included), with its uncertainty. The calibration's own R, T are
-    /// not used.
+    /// model, distortion included), with its uncertainty: `at_e_com(e_com_ma).solve_pnp`.
+    /// The calibration's own R, T are not used.
     ///
     /// The uncertainty (`BoardPose.covariance`, `BoardPose.displacement_std_mm`) is first
     /// order: the pixel noise's sigma^2 (J^T J)^-1, and the calibration's covariance C
@@ -650,27 +692,14 @@ impl Calibration {
     /// allow_extrapolation); NotConvergedError if the solver fails.
     #[pyo3(signature = (board_mm, pixels, e_com_ma, sigma_px=None, *, allow_extrapolation=false))]
     fn solve_pnp(
-        &self,
-        py: Python<'_>,
+        slf: &Bound<'_, Self>,
         board_mm: &Bound<'_, PyAny>,
         pixels: &Bound<'_, PyAny>,
         e_com_ma: f64,
         sigma_px: Option<f64>,
         allow_extrapolation: bool,
     ) -> PyResult<BoardPose> {
-        let b = self.points_at::<3>(board_mm, "board_mm", e_com_ma, allow_extrapolation)?;
-        let p = points::<2>(pixels, "pixels")?;
-        let model = self.model;
-        let noise = sigma_px.map_or(PixelNoise::FromResidual, PixelNoise::Known);
-        let (pose, u) = py
-            .detach(|| {
-                let pose = etl_core::pnp::solve_pnp(&model, e_com_ma, &b.points, &p.points)?;
-                let u = pose_uncertainty(&model, e_com_ma, &b.points, &p.points, &pose, noise)?;
-                Ok::<_, etl_core::Error>((pose, u))
-            })
-            .py()?;
-        let calibration_covariance = self.file.covariance_matrix().map(Arc::new);
-        Ok(BoardPose { inner: pose, uncertainty: Some(u), calibration_covariance })
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.solve_pnp(slf.py(), board_mm, pixels, sigma_px)
     }
 
     /// The covariance of the 25 calibrated numbers, a 25 x 25 float64 array in the order
@@ -684,7 +713,8 @@ impl Calibration {
 
     /// The standard deviation of projected pixels due to the calibration's uncertainty:
     /// sqrt of the diagonal of J_p C J_p^T, with J_p the Jacobian of the projection
-    /// (Eq. 13-18) with respect to the 25 numbers and C `covariance` (first order).
+    /// (Eq. 13-18) with respect to the 25 numbers and C `covariance` (first order):
+    /// `at_e_com(e_com_ma).projection_std`.
     ///
     /// Args:
     ///     world_mm: world points, mm: an (N, 3) array (or one point of shape (3,)).
@@ -698,28 +728,17 @@ impl Calibration {
     /// allow_extrapolation).
     #[pyo3(signature = (world_mm, e_com_ma, *, allow_extrapolation=false))]
     fn projection_std<'py>(
-        &self,
+        slf: &Bound<'py, Self>,
         world_mm: &Bound<'py, PyAny>,
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let p = self.points_at::<3>(world_mm, "world_mm", e_com_ma, allow_extrapolation)?;
-        let py = world_mm.py();
-        let cov = self.file.require_covariance().py()?;
-        let model = self.model;
-        let out = py
-            .detach(|| {
-                p.points
-                    .iter()
-                    .map(|w| projection_uncertainty(&model, &cov, *w, e_com_ma).map(|u| u.std_px))
-                    .collect::<etl_core::Result<Vec<[f64; 2]>>>()
-            })
-            .py()?;
-        points_out(py, out, p.single)
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.projection_std(world_mm)
     }
 
     /// The camera at one current in OpenCV's conventions, for `cv2.projectPoints`,
-    /// `cv2.undistortPoints`, `cv2.initUndistortRectifyMap`, `cv2.solvePnP`.
+    /// `cv2.undistortPoints`, `cv2.initUndistortRectifyMap`, `cv2.solvePnP`
+    /// (`CameraAt.to_opencv` at each current).
     ///
     /// The opencv family (`distortion_model == "opencv"`) is OpenCV's model: K and its own
     /// coefficients at that current, exact (`cv2.projectPoints` reproduces `project`;
@@ -742,22 +761,13 @@ impl Calibration {
     /// (px; shape S for an array), exact.
     #[pyo3(signature = (e_com_ma, *, allow_extrapolation=false))]
     fn to_opencv<'py>(&self, e_com_ma: &Bound<'py, PyAny>, allow_extrapolation: bool) -> PyResult<Bound<'py, PyAny>> {
-        let [k, dist, rms, max] =
-            self.per_current(e_com_ma, allow_extrapolation, [&[3, 3], &[5], &[], &[]], |at, image_size| {
-                let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), image_size).py()?;
-                Ok([
-                    at.intrinsics().matrix().into_iter().flatten().collect(),
-                    fit.dist_coeffs.to_vec(),
-                    vec![fit.rms_px],
-                    vec![fit.max_px],
-                ])
-            })?;
-        let exact = self.model.distortion_model() == etl_core::model::DistortionModel::OpenCv;
-        let py = e_com_ma.py();
-        py.import("etlcal.results")?.getattr("OpenCvCamera")?.call1((k, dist, rms, max, exact))
+        let parts = self.per_current(e_com_ma, allow_extrapolation, camera::OPENCV_SHAPES, camera::opencv_parts)?;
+        camera::opencv_out(e_com_ma.py(), self.model.distortion_model(), parts)
     }
 
-    /// Writes the camera at one setting for another tool (atomically; nothing on error).
+    /// Writes the camera at one setting for another tool (atomically; nothing on error):
+    /// `at(e_in_ma, temperature_c).export(path, format)` (at a known E_com:
+    /// `at_e_com(e_com_ma).export(path, format)`).
     ///
     /// Args:
     ///     path: the file to write.
@@ -773,32 +783,21 @@ impl Calibration {
     /// fit's error "fit_rms_px", "fit_max_px" (also written into the file).
     #[pyo3(signature = (path, e_in_ma, temperature_c, format, *, allow_extrapolation=false))]
     fn export<'py>(
-        &self,
-        py: Python<'py>,
+        slf: &Bound<'py, Self>,
         path: PathBuf,
         e_in_ma: f64,
         temperature_c: f64,
         format: &str,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        use etl_formats::export::{export, ExportFormat};
-        let format: ExportFormat = format.parse().map_err(crate::errors::calib_err)?;
-        let at = self.file.at(e_in_ma, temperature_c, trust(allow_extrapolation)).map_err(crate::errors::calib_err)?;
-        let e = export(&self.file, &at, format, &path).map_err(crate::errors::calib_err)?;
-        let d = PyDict::new(py);
-        d.set_item("e_com_ma", at.e_com_ma())?;
-        d.set_item("extrapolated", at.extrapolated())?;
-        d.set_item("camera_matrix", mat3_out(py, e.camera_matrix))?;
-        d.set_item("dist_coeffs", vec_out(py, &e.fit.dist_coeffs))?;
-        d.set_item("fit_rms_px", e.fit.rms_px)?;
-        d.set_item("fit_max_px", e.fit.max_px)?;
-        crate::results::make(py, "ExportResult", &d)
+        Self::camera_at_setting(slf, e_in_ma, temperature_c, allow_extrapolation)?.export(slf.py(), path, format)
     }
 
     /// The undistortion maps at the compensated current, in cv2.remap's convention: for
     /// every output pixel (x, y) (pixel centres at integer coordinates), the pixel of the
     /// distorted image it sees: `cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR)` (or
-    /// `undistort_image`) undistorts an image taken at that current.
+    /// `undistort_image`) undistorts an image taken at that current
+    /// (`at_e_com(e_com_ma).undistort_maps`).
     ///
     /// Exact for the model: map = the model's projection (Eq. 15, 17) of the output
     /// pixel's ray ((x - cx) / fx, (y - cy) / fy, 1), computed in float64 and rounded once
@@ -818,23 +817,19 @@ impl Calibration {
     /// matrix that is not a camera matrix.
     #[pyo3(signature = (e_com_ma, new_camera_matrix=None, size=None, *, allow_extrapolation=false))]
     fn undistort_maps<'py>(
-        &self,
-        py: Python<'py>,
+        slf: &Bound<'py, Self>,
         e_com_ma: f64,
         new_camera_matrix: Option<&Bound<'py, PyAny>>,
         size: Option<&Bound<'py, PyAny>>,
         allow_extrapolation: bool,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
-        let (k, d) = crate::undistort::model_at(&self.model, e_com_ma)?;
-        let out = crate::undistort::output_camera(&k, new_camera_matrix, size, self.file.image_size)?;
-        crate::undistort::maps_out(py, &k, &d, &out)
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.undistort_maps(slf.py(), new_camera_matrix, size)
     }
 
     /// The undistorted image: the image taken at the compensated current as the camera
     /// K(E) without distortion sees it (same size), by the exact maps of
     /// `undistort_maps` and bilinear interpolation (pixels whose source lies outside the
-    /// image are 0, as cv2.remap's default BORDER_CONSTANT).
+    /// image are 0, as cv2.remap's default BORDER_CONSTANT): `at_e_com(e_com_ma).undistort_image`.
     ///
     /// Args:
     ///     image: a numpy array of dtype uint8, uint16 or float32, of shape (h, w) or
@@ -848,13 +843,12 @@ impl Calibration {
     /// calibration's, a current outside the calibrated range.
     #[pyo3(signature = (image, e_com_ma, *, allow_extrapolation=false))]
     fn undistort_image<'py>(
-        &self,
+        slf: &Bound<'py, Self>,
         image: &Bound<'py, PyAny>,
         e_com_ma: f64,
         allow_extrapolation: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
-        crate::undistort::image_out(image, &self.model, e_com_ma, self.file.image_size)
+        Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.undistort_image(image)
     }
 
     fn __repr__(&self) -> String {
@@ -880,63 +874,40 @@ impl Calibration {
 }
 
 impl Calibration {
-    /// A per-current model function at one current or elementwise over an array of them:
-    /// `f(camera at E_com, image size)` gives the result's `P` parts, part p a row-major
-    /// block of shape `part_shapes[p]`. For a scalar current, a part of shape () is a
-    /// float and any other an array of its shape; for an array of shape S, part p is an
-    /// array of shape S + `part_shapes[p]` (every current range-checked as for a scalar).
+    /// The run-time camera of this calibration (the model kept, not rebuilt from the file):
+    /// model, thermal part with its ranges, calibrated E_com range.
+    pub(crate) fn camera(&self) -> PyResult<Camera> {
+        Camera::new(self.model, self.file.thermal.as_ref().map(ThermalRef::trust), self.file.e_com_range_ma).py()
+    }
+
+    /// A per-current model function `f` (`crate::camera`'s `*_parts`, the ones `CameraAt`
+    /// uses) at one current or elementwise over an array of them: its `P` parts, part p a
+    /// row-major block of shape `part_shapes[p]`. For a scalar current, a part of shape ()
+    /// is a float and any other an array of its shape; for an array of shape S, part p is
+    /// an array of shape S + `part_shapes[p]` (every current range-checked as for a
+    /// scalar).
     fn per_current<'py, const P: usize>(
         &self,
         e_com_ma: &Bound<'py, PyAny>,
         allow_extrapolation: bool,
         part_shapes: [&[usize]; P],
-        f: impl Fn(&etl_core::camera::CameraAt, [u32; 2]) -> PyResult<[Vec<f64>; P]>,
+        f: camera::PerCurrent<P>,
     ) -> PyResult<[Bound<'py, PyAny>; P]> {
-        use crate::arrays::{currents, stacked, Currents};
-        let py = e_com_ma.py();
+        use crate::arrays::{currents, parts_out, Currents};
         let (shape, values, scalar) = match currents(e_com_ma, "e_com_ma")? {
             Currents::Scalar(e) => (Vec::new(), vec![e], true),
             Currents::Array { shape, values } => (shape, values, false),
         };
         let mut blocks: [Vec<f64>; P] = core::array::from_fn(|_| Vec::new());
-        // The camera once, not per current (`at_e_com` rebuilds it on every call).
-        let camera = self.file.camera().map_err(crate::errors::calib_err)?;
+        // The camera once, not per current.
+        let camera = self.camera()?;
         for e in values {
             let at = camera.at_e_com(e, trust(allow_extrapolation)).py()?;
             for (block, part) in blocks.iter_mut().zip(f(&at, self.file.image_size)?) {
                 block.extend(part);
             }
         }
-        let mut out = Vec::with_capacity(P);
-        for (block, inner) in blocks.into_iter().zip(part_shapes) {
-            out.push(match (scalar, inner.is_empty()) {
-                (true, true) => pyo3::types::PyFloat::new(py, block.first().copied().unwrap_or(f64::NAN)).into_any(),
-                _ => stacked(py, &shape, inner, block)?,
-            });
-        }
-        out.try_into().map_err(|_| input_error("per_current: part count mismatch"))
-    }
-
-    /// The camera at a known E_com, refused outside the calibrated E_com range (margin
-    /// 5 mA) unless `allow_extrapolation`: the one range check of every method taking
-    /// `e_com_ma`.
-    fn at_e_com(&self, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<etl_core::camera::CameraAt> {
-        let camera = self.file.camera().map_err(crate::errors::calib_err)?;
-        camera.at_e_com(e_com_ma, trust(allow_extrapolation)).py()
-    }
-
-    /// The points `what` (an (N, K) array, or one point) of a method at the compensated
-    /// current `e_com_ma`, the current checked first ([`Self::at_e_com`]): how every
-    /// per-point method starts, so that all refuse a bad current before a bad array.
-    fn points_at<const K: usize>(
-        &self,
-        array: &Bound<'_, PyAny>,
-        what: &str,
-        e_com_ma: f64,
-        allow_extrapolation: bool,
-    ) -> PyResult<Points<K>> {
-        self.at_e_com(e_com_ma, allow_extrapolation)?;
-        points::<K>(array, what)
+        parts_out(e_com_ma.py(), &shape, scalar, blocks, part_shapes)
     }
 }
 

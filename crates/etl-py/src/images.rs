@@ -7,7 +7,8 @@
 use etl_core::focus::{brenner, laplacian_variance, normalised_variance, tenengrad, ImageView, Pixel};
 use etl_core::model::CameraModel;
 use etl_image::board::detect_board_view;
-use etl_image::detect::{detect_view, GrayView, Pattern};
+use etl_image::checkerboard::{detect_view, Pattern};
+use etl_image::grey::GrayView;
 use etl_image::sharpness::cpbd::cpbd;
 use etl_image::sharpness::{sharpness_u16, Gray16Image, Metric};
 use etl_sim::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};

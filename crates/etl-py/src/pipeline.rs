@@ -1,19 +1,45 @@
 //! `calibrate`: the calibration pipeline from observations (E_com -> RAC -> focal
-//! polynomial -> distortion -> bundle adjustment), run without the GIL.
+//! polynomial -> distortion -> bundle adjustment), run without the GIL. The keywords only
+//! parse into etl-calib's `CalibrationRequest` (its defaults, refusals and run), which
+//! `etlcal calibrate` parses its flags into too: the same names, the same file.
 
-use etl_calib::pipeline::select::{refuse_opencv_flags, select, A0Source, Candidates};
-use etl_calib::pipeline::{calibrate as run_pipeline, CalibrateOptions};
-use etl_core::calib::{Estimator, Layout, RobustLoss};
-use etl_core::model::{DistortionModel, OpenCvFlags};
+use etl_calib::request::{
+    CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method, RequestOption,
+    Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
+};
+use etl_core::calib::RobustLoss;
+use etl_core::model::DistortionModel;
 use pyo3::prelude::*;
 
 use crate::calibration::Calibration;
 use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 use crate::observations::{Observations, A0};
 
+/// Python's words for the options of a request: the keyword (`hold_a0`), a word as a
+/// string literal (`"auto"`), `distortion="opencv"`, `fix_k3=True`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Keywords;
+
+impl Spelling for Keywords {
+    fn name(&self, option: RequestOption) -> String {
+        option.key().to_owned()
+    }
+    fn word(&self, word: &str) -> String {
+        format!("{word:?}")
+    }
+    fn with_word(&self, option: RequestOption, word: &str) -> String {
+        format!("{}={word:?}", option.key())
+    }
+    fn switched_on(&self, option: RequestOption) -> String {
+        format!("{}=True", option.key())
+    }
+}
+
 /// Calibrates an ETL camera from observations (paper section 4): E_com of each view
 /// through the thermal surface (unless recorded), RAC (Eq. 19-20), the focal polynomial
-/// and tz (Eq. 21-22), the distortion (Eq. 23), then bundle adjustment (Eq. 24).
+/// and tz (Eq. 21-22), the distortion (Eq. 23), then bundle adjustment (Eq. 24). Every
+/// keyword has a flag of `etlcal calibrate` of the same name (`hold_a0`: `--hold-a0`), and
+/// the same request gives the same calibration through both.
 ///
 /// Args:
 ///     observations: the corners of the ETL views (an `Observations`; >= 3 distinct
@@ -31,10 +57,11 @@ use crate::observations::{Observations, A0};
 ///         and currents exact). None (the default): "eiv".
 ///     hold_a0: hold kf0x, kf0y, u0, v0 at A0 in the bundle adjustment.
 ///     robust: None, "huber" or "cauchy" (a robust loss on each point's error).
-///     robust_k_px: threshold / scale of the robust loss, px.
-///     sigma_z_mm: "eiv" prior on the stage position, mm (paper: 0.010).
-///     sigma_e_ma: "eiv" prior on the current, mA (paper: 0.4).
-///     sigma_px: "eiv" pixel noise, px (default: estimated from a plain solution).
+///     robust_k_px: threshold / scale of the robust loss, px (> 0; used with robust;
+///         None: 1 px).
+///     sigma_z_mm: "eiv" prior on the stage position, mm (None: the paper's 0.010).
+///     sigma_e_ma: "eiv" prior on the current, mA (None: the paper's 0.4).
+///     sigma_px: "eiv" pixel noise, px (None: estimated from a plain solution).
 ///     method: "proposed" (the paper's method, above) or "per-setting" (the paper's
 ///         baseline of section 5.2.3: Zhang at each current of the observations'
 ///         setting views, >= 3 views at each of >= 3 currents, then a cubic through
@@ -51,6 +78,7 @@ use crate::observations::{Observations, A0};
 ///         "auto" (as distortion="auto").
 ///     fix_k3: hold k3 = 0 (cv2.CALIB_FIX_K3); distortion "opencv" or "auto" only.
 ///     zero_tangent: hold p1 = p2 = 0 (cv2.CALIB_ZERO_TANGENT_DIST); likewise.
+///     sigma_z_um: the stage prior in um instead (as `--sigma-z-um`); not with sigma_z_mm.
 ///
 /// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
 /// error (`rms_px`), per-view summaries (`views`), the corners left out as gross outliers
@@ -58,13 +86,13 @@ use crate::observations::{Observations, A0};
 ///
 /// Warns: UserWarning for each of `warnings` (and when there is no focus law).
 ///
-/// Raises: InputError naming the unmet precondition (e.g. fewer than 3 distinct
-/// currents, no lens-off views when a0 is None); NotConvergedError when the bundle
-/// adjustment fails.
+/// Raises: InputError naming the argument or the unmet precondition (e.g. fewer than 3
+/// distinct currents, no lens-off views when a0 is None); NotConvergedError when the
+/// bundle adjustment fails.
 #[pyfunction]
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
-    robust_k_px=1.0, sigma_z_mm=0.010, sigma_e_ma=0.4, sigma_px=None, method="proposed", distortion=None,
-    focal_degree=None, fix_k3=false, zero_tangent=false))]
+    robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
+    distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -74,164 +102,105 @@ pub fn calibrate(
     estimator: Option<&str>,
     hold_a0: bool,
     robust: Option<&str>,
-    robust_k_px: f64,
-    sigma_z_mm: f64,
-    sigma_e_ma: f64,
+    robust_k_px: Option<f64>,
+    sigma_z_mm: Option<f64>,
+    sigma_e_ma: Option<f64>,
     sigma_px: Option<f64>,
     method: &str,
     distortion: Option<&str>,
     focal_degree: Option<&Bound<'_, PyAny>>,
     fix_k3: bool,
     zero_tangent: bool,
+    sigma_z_um: Option<f64>,
 ) -> PyResult<Calibration> {
-    let thermal = thermal.map(crate::calibration::thermal_ref).transpose()?;
-    let model_given = [
-        ("distortion", distortion.is_some()),
-        ("focal_degree", focal_degree.is_some()),
-        ("fix_k3", fix_k3),
-        ("zero_tangent", zero_tangent),
-    ];
-    let choice = ModelChoice::parse(distortion, focal_degree, OpenCvFlags { fix_k3, zero_tangent })?;
-    match method {
-        "proposed" => {}
-        "per-setting" => {
-            // An estimator given at all is refused, "eiv" and "paper" alike: the baseline
-            // has no bundle adjustment.
-            etl_calib::baseline::refuse_bundle_adjust_options(
-                "method=\"per-setting\"",
-                [
-                    ("a0", a0.is_some()),
-                    ("estimator", estimator.is_some()),
-                    ("hold_a0", hold_a0),
-                    ("robust", robust.is_some()),
-                ],
-            )
-            .py()?;
-            if let Some((name, _)) = model_given.iter().find(|(_, given)| *given) {
-                return Err(invalid(
-                    name,
-                    format!(
-                        "method=\"per-setting\" takes no {name}: the baseline fits the paper's model (cubic, paper distortion)"
-                    ),
-                ));
-            }
-            let obs = observations.file.clone();
-            let result = py.detach(|| etl_calib::baseline::per_setting(&obs, thermal.as_ref())).py()?;
-            return Calibration::from_file(result.calibration);
-        }
-        other => {
-            return Err(invalid_value(
-                "method",
-                other,
-                format!("method must be \"proposed\" or \"per-setting\", got {other:?}"),
-            ))
-        }
-    }
-    let estimator = match estimator.unwrap_or("eiv") {
-        "paper" => Estimator::Paper,
-        "eiv" => Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px },
-        other => {
-            return Err(invalid_value(
-                "estimator",
-                other,
-                format!("estimator must be \"paper\" or \"eiv\", got {other:?}"),
-            ))
-        }
+    let sigma_z = match (sigma_z_mm, sigma_z_um) {
+        (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
+        (mm, um) => mm.map(StageSigma::Mm).or(um.map(StageSigma::Um)),
     };
-    let robust = match robust {
-        None => None,
-        Some("huber") => Some(RobustLoss::Huber { k_px: robust_k_px }),
-        Some("cauchy") => Some(RobustLoss::Cauchy { k_px: robust_k_px }),
-        Some(other) => {
-            return Err(invalid_value(
-                "robust",
-                other,
-                format!("robust must be None, \"huber\" or \"cauchy\", got {other:?}"),
-            ))
-        }
+    let request = CalibrationRequest {
+        method: parse_method(method)?,
+        a0: a0.map(|a| a.inner),
+        thermal: thermal.map(crate::calibration::thermal_ref).transpose()?,
+        estimator: estimator.map(parse_estimator).transpose()?,
+        priors: EivPriors { sigma_z, sigma_e_ma, sigma_px },
+        hold_a0,
+        robust: robust.map(|r| parse_robust(r, robust_k_px.unwrap_or(DEFAULT_ROBUST_K_PX))).transpose()?,
+        distortion: distortion.map(parse_distortion).transpose()?,
+        focal_degree: focal_degree.map(parse_focal_degree).transpose()?,
+        fix_k3,
+        zero_tangent,
     };
-    let options = CalibrateOptions { estimator, hold_a0, robust, layout: Layout::PAPER, flags: choice.flags };
+    request.validate(&Keywords).py()?;
     let obs = observations.file.clone();
-    let a0 = a0.map(|a| a.inner);
-    let result = py.detach(|| choice.run(&obs, a0, thermal.as_ref(), &options)).py()?;
+    let calibrated = py.detach(|| request.run(&obs, &Keywords)).py()?;
     // Said, not silent: a calibration without a focus law, and implausible data (also in
     // Calibration.warnings).
-    for why in result.focus_law_warning.iter().chain(&result.calibration.warnings) {
-        let message = std::ffi::CString::new(why.as_str()).map_err(|e| input_error(e.to_string()))?;
+    // Also said once: no temperature compensation (views with E_com, no thermal=).
+    let uncompensated = calibrated
+        .calibration()
+        .temperature_compensation_warning()
+        .map(|why| format!("{why}: use it with at_e_com(e_com_ma)"));
+    for why in calibrated.warnings().into_iter().chain(uncompensated.as_deref()) {
+        let message = std::ffi::CString::new(why).map_err(|e| input_error(e.to_string()))?;
         PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
     }
-    Calibration::from_file(result.calibration)
+    Calibration::from_file(calibrated.into_calibration())
 }
 
-/// The model `calibrate` is asked for: a family and a degree, each given or chosen by the
-/// data (None), and OpenCV's flags.
-struct ModelChoice {
-    family: Option<DistortionModel>,
-    degree: Option<usize>,
-    flags: OpenCvFlags,
-}
-
-impl ModelChoice {
-    /// From `distortion=` ("paper" | "opencv" | "auto"; None: "paper"), `focal_degree=`
-    /// (1..5 | "auto"; None: 3) and the flags, refused with the paper family.
-    fn parse(distortion: Option<&str>, focal_degree: Option<&Bound<'_, PyAny>>, flags: OpenCvFlags) -> PyResult<Self> {
-        let family = match distortion.unwrap_or("paper") {
-            "auto" => None,
-            name => Some(DistortionModel::from_name(name).ok_or_else(|| {
-                invalid_value(
-                    "distortion",
-                    name,
-                    format!("distortion must be \"paper\", \"opencv\" or \"auto\", got {name:?}"),
-                )
-            })?),
-        };
-        let degree = match focal_degree {
-            None => Some(etl_core::model::PAPER_FOCAL_DEGREE),
-            Some(d) if d.extract::<String>().is_ok_and(|s| s == "auto") => None,
-            Some(d) => match d.extract::<usize>() {
-                Ok(n) if (1..=etl_core::model::MAX_FOCAL_DEGREE).contains(&n) => Some(n),
-                _ => {
-                    return Err(invalid_value(
-                        "focal_degree",
-                        d.to_string(),
-                        format!("focal_degree must be 1..5 or \"auto\", got {d}"),
-                    ))
-                }
-            },
-        };
-        refuse_opencv_flags(family, flags, ["fix_k3=True", "zero_tangent=True"], "distortion=\"opencv\" or \"auto\"")
-            .map_err(crate::errors::calib_err)?;
-        Ok(ModelChoice { family, degree, flags })
+/// `method=`: "proposed" or "per-setting".
+fn parse_method(method: &str) -> PyResult<Method> {
+    match method {
+        "proposed" => Ok(Method::Proposed),
+        "per-setting" => Ok(Method::PerSetting),
+        other => Err(invalid_value(
+            "method",
+            other,
+            format!("method must be \"proposed\" or \"per-setting\", got {other:?}"),
+        )),
     }
+}
 
-    /// Calibrates: the given model, or [`select`] among the candidates. A0 given, or from
-    /// Zhang's method on the lens-off views with the (candidate's) family.
-    fn run(
-        &self,
-        obs: &etl_formats::Observations,
-        a0: Option<etl_core::calib::A0>,
-        thermal: Option<&etl_formats::ThermalRef>,
-        options: &CalibrateOptions,
-    ) -> etl_formats::Result<etl_calib::pipeline::CalibrationResult> {
-        match (self.family, self.degree) {
-            (Some(model), Some(degree)) => {
-                let layout = Layout::new(model, degree).map_err(etl_formats::Error::Core)?;
-                let a0 = match a0 {
-                    Some(a0) => a0,
-                    None => {
-                        let zhang = etl_calib::zhang::ZhangOptions { model, flags: self.flags };
-                        etl_calib::pipeline::a0_from_offstate_with(obs, &zhang)?.a0()
-                    }
-                };
-                run_pipeline(obs, &a0, thermal, &CalibrateOptions { layout, ..*options })
-            }
-            _ => {
-                let candidates = Candidates {
-                    families: self.family.map_or(DistortionModel::ALL.to_vec(), |f| vec![f]),
-                    focal_degrees: self.degree.map_or((1..=etl_core::model::MAX_FOCAL_DEGREE).collect(), |d| vec![d]),
-                };
-                select(obs, &a0.map_or(A0Source::Offstate, A0Source::Given), thermal, options, &candidates)
-            }
+/// `estimator=`: "paper" or "eiv".
+fn parse_estimator(estimator: &str) -> PyResult<EstimatorChoice> {
+    match estimator {
+        "paper" => Ok(EstimatorChoice::Paper),
+        "eiv" => Ok(EstimatorChoice::Eiv),
+        other => {
+            Err(invalid_value("estimator", other, format!("estimator must be \"paper\" or \"eiv\", got {other:?}")))
+        }
+    }
+}
+
+/// `robust=` ("huber" or "cauchy") with `robust_k_px=`.
+fn parse_robust(robust: &str, k_px: f64) -> PyResult<RobustLoss> {
+    match robust {
+        "huber" => Ok(RobustLoss::Huber { k_px }),
+        "cauchy" => Ok(RobustLoss::Cauchy { k_px }),
+        other => {
+            Err(invalid_value("robust", other, format!("robust must be None, \"huber\" or \"cauchy\", got {other:?}")))
+        }
+    }
+}
+
+/// `distortion=`: "paper", "opencv" or "auto".
+fn parse_distortion(name: &str) -> PyResult<DistortionChoice> {
+    if name == "auto" {
+        return Ok(DistortionChoice::Auto);
+    }
+    DistortionModel::from_name(name).map(DistortionChoice::Family).ok_or_else(|| {
+        invalid_value("distortion", name, format!("distortion must be \"paper\", \"opencv\" or \"auto\", got {name:?}"))
+    })
+}
+
+/// `focal_degree=`: 1..5 or "auto".
+fn parse_focal_degree(d: &Bound<'_, PyAny>) -> PyResult<FocalDegreeChoice> {
+    if d.extract::<String>().is_ok_and(|s| s == "auto") {
+        return Ok(FocalDegreeChoice::Auto);
+    }
+    match d.extract::<usize>() {
+        Ok(n) if (1..=etl_core::model::MAX_FOCAL_DEGREE).contains(&n) => Ok(FocalDegreeChoice::Degree(n)),
+        _ => {
+            Err(invalid_value("focal_degree", d.to_string(), format!("focal_degree must be 1..5 or \"auto\", got {d}")))
         }
     }
 }

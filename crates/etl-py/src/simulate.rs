@@ -43,7 +43,7 @@ impl Simulation {
     fn truth(&self) -> Calibration {
         let [w, h] = self.inner.observations.image_size;
         let mut c = Calibration::from_model(self.inner.truth, [w, h], [80.0, 225.0]);
-        c.file.thermal = Some(etl_formats::calibration::ThermalRef::paper());
+        c.file_mut().thermal = Some(etl_formats::calibration::ThermalRef::paper());
         c
     }
 

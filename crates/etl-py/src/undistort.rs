@@ -1,7 +1,8 @@
-//! `Calibration.undistort_maps` and `Calibration.undistort_image`: numpy in and out over
+//! `CameraAt.undistort_maps` and `CameraAt.undistort_image` (and `Calibration`'s, which
+//! are those): numpy in and out over
 //! etl-image's parallel undistortion (the GIL released while it runs).
 
-use etl_core::model::{CameraModel, Distortion, Intrinsics};
+use etl_core::model::{Distortion, Intrinsics};
 use etl_image::undistort::{undistort_image, undistort_maps, OutputCamera, Sample, SourceImage};
 use numpy::ndarray::{Array2, ArrayD, IxDyn};
 use numpy::{Element, IntoPyArray, PyReadonlyArrayDyn, PyUntypedArrayMethods};
@@ -11,11 +12,6 @@ use crate::errors::{input_error, invalid, invalid_value, CoreResultExt};
 
 /// What `image` must be, said once for every refusal.
 const IMAGE_KINDS: &str = "image must be a numpy array of dtype uint8, uint16 or float32 of shape (h, w) or (h, w, 3)";
-
-/// The model at `e_com_ma`.
-pub(crate) fn model_at(model: &CameraModel, e_com_ma: f64) -> PyResult<(Intrinsics, Distortion)> {
-    Ok((model.intrinsics(e_com_ma).py()?, model.distortion(e_com_ma).py()?))
-}
 
 /// The output camera: `new_camera_matrix` (3 x 3, no skew, last row 0 0 1) or K(E), of
 /// `size` (width, height) or `default_size`.
@@ -68,8 +64,8 @@ pub(crate) fn maps_out<'py>(
 /// `image` is not of dtype T.
 fn try_dtype<'py, T: Sample + Element + Send + Sync>(
     image: &Bound<'py, PyAny>,
-    model: &CameraModel,
-    e_com_ma: f64,
+    k: &Intrinsics,
+    d: &Distortion,
     image_size: [u32; 2],
 ) -> PyResult<Option<Bound<'py, PyAny>>> {
     let Ok(a) = image.extract::<PyReadonlyArrayDyn<'py, T>>() else { return Ok(None) };
@@ -86,8 +82,7 @@ fn try_dtype<'py, T: Sample + Element + Send + Sync>(
             format!("image is {w} x {h} px, the calibration is for {} x {} px", image_size[0], image_size[1]),
         ));
     }
-    let (k, d) = model_at(model, e_com_ma)?;
-    let out = OutputCamera::of_intrinsics(&k, w, h).py()?;
+    let out = OutputCamera::of_intrinsics(k, w, h).py()?;
     let py = image.py();
     // A C-ordered array is read in place; anything else is copied once, row-major.
     let owned: Vec<T>;
@@ -102,27 +97,28 @@ fn try_dtype<'py, T: Sample + Element + Send + Sync>(
     let pixels = py
         .detach(|| -> etl_image::Result<Vec<T>> {
             let src = SourceImage::new(data, w, h, c)?;
-            undistort_image(&k, &d, &out, &src, zero)
+            undistort_image(k, d, &out, &src, zero)
         })
         .py()?;
     let arr = ArrayD::from_shape_vec(IxDyn(&shape), pixels).map_err(|e| input_error(e.to_string()))?;
     Ok(Some(arr.into_pyarray(py).into_any()))
 }
 
-/// `Calibration.undistort_image`: dispatch on the dtype.
+/// `CameraAt.undistort_image` of the camera K `k` with distortion `d`: dispatch on the
+/// dtype.
 pub(crate) fn image_out<'py>(
     image: &Bound<'py, PyAny>,
-    model: &CameraModel,
-    e_com_ma: f64,
+    k: &Intrinsics,
+    d: &Distortion,
     image_size: [u32; 2],
 ) -> PyResult<Bound<'py, PyAny>> {
-    if let Some(r) = try_dtype::<u8>(image, model, e_com_ma, image_size)? {
+    if let Some(r) = try_dtype::<u8>(image, k, d, image_size)? {
         return Ok(r);
     }
-    if let Some(r) = try_dtype::<u16>(image, model, e_com_ma, image_size)? {
+    if let Some(r) = try_dtype::<u16>(image, k, d, image_size)? {
         return Ok(r);
     }
-    if let Some(r) = try_dtype::<f32>(image, model, e_com_ma, image_size)? {
+    if let Some(r) = try_dtype::<f32>(image, k, d, image_size)? {
         return Ok(r);
     }
     let what = match image.getattr("dtype") {

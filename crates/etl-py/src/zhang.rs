@@ -1,30 +1,24 @@
 //! `zhang(views, image_size, model="paper", fix_k3=False, zero_tangent=False)`: Zhang's
-//! monofocal calibration of a fixed-focus camera (etl-calib's `zhang_with`), e.g. the
-//! lens-off views that give A0, or any camera in OpenCV's model.
+//! monofocal calibration of a fixed-focus camera, e.g. the lens-off views that give A0, or
+//! any camera in OpenCV's model. The keywords only parse into etl-calib's `ZhangRequest`,
+//! as `etlcal zhang --model --fix-k3 --zero-tangent` does.
 
-use etl_calib::zhang::{PlanarView, ZhangOptions, ZhangResult};
-use etl_core::model::{DistortionModel, OpenCvFlags};
+use etl_calib::request::ZhangRequest;
+use etl_calib::zhang::{PlanarView, ZhangResult};
+use etl_core::model::DistortionModel;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::arrays::{mat3_out, vec_out};
 use crate::errors::{invalid, invalid_value, CoreResultExt};
+use crate::pipeline::Keywords;
 
-/// The options of `model`, `fix_k3`, `zero_tangent`; an OpenCV flag with the paper model is
-/// refused naming it.
-fn options(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangOptions> {
+/// The request of `model`, `fix_k3`, `zero_tangent` (an unknown model refused naming it).
+fn request(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangRequest> {
     let model = DistortionModel::from_name(model).ok_or_else(|| {
         invalid_value("model", model, format!("model must be \"paper\" or \"opencv\", got {model:?}"))
     })?;
-    let flags = OpenCvFlags { fix_k3, zero_tangent };
-    etl_calib::pipeline::select::refuse_opencv_flags(
-        Some(model),
-        flags,
-        ["fix_k3=True", "zero_tangent=True"],
-        "model=\"opencv\"",
-    )
-    .map_err(crate::errors::calib_err)?;
-    Ok(ZhangOptions { model, flags })
+    Ok(ZhangRequest { model, fix_k3, zero_tangent })
 }
 
 /// The (board_mm, pixels) pairs as planar views.
@@ -53,7 +47,9 @@ fn planar_views(views: &[(Bound<'_, PyAny>, Bound<'_, PyAny>)]) -> PyResult<Vec<
 
 /// Zhang's monofocal calibration of a fixed-focus camera from views of a planar board:
 /// homographies, the closed form, then Levenberg-Marquardt over the intrinsics, the
-/// distortion and every view's pose. Gives A0 from lens-off views.
+/// distortion and every view's pose. Gives A0 from lens-off views. The keywords are those
+/// of `etlcal zhang` (`--model`, `--fix-k3`, `--zero-tangent`): the same request gives the
+/// same result through both.
 ///
 /// Args:
 ///     views: a list of (board_mm, pixels) pairs: (N, 2) board coordinates, mm (or (N, 3)
@@ -85,9 +81,10 @@ pub fn zhang<'py>(
     fix_k3: bool,
     zero_tangent: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let opts = options(model, fix_k3, zero_tangent)?;
+    let request = request(model, fix_k3, zero_tangent)?;
+    request.validate(&Keywords).py()?;
     let planar = planar_views(&views)?;
-    let r = py.detach(|| etl_calib::zhang::zhang_with(&planar, [image_size.0, image_size.1], &opts)).py()?;
+    let r = py.detach(|| request.run(&planar, [image_size.0, image_size.1], &Keywords)).py()?;
     result(py, &r)
 }
 

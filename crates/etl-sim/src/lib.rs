@@ -3,6 +3,7 @@
 //! ([`rig`], [`simulate`]) and the virtual rig of the temperature procedure
 //! ([`virtual_rig`]); the printable board ([`print`]: SVG at true size, exact raster).
 
+pub mod optics;
 pub mod print;
 pub mod render;
 pub mod rig;

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use etl_core::calib::Estimator;
+use etl_core::calib::{Estimator, A0};
 use etl_core::model::CameraModel;
 use etl_core::pnp::{displacement_mm, solve_pnp};
 use etl_core::progress::Progress;
@@ -74,6 +74,9 @@ pub struct Demo {
     pub observations: Observations,
     /// Views whose board was found (all views without `images`).
     pub views_detected: usize,
+    /// A0 by Zhang's method on the lens-off views of `observations`: where both
+    /// calibrations start (`etlcal demo` writes it as `a0.json`).
+    pub a0: A0,
     /// The paper's estimator (Eq. 24).
     pub paper: CalibrationResult,
     /// Errors-in-variables.
@@ -129,6 +132,7 @@ pub fn run_demo(options: &DemoOptions, image_dir: &Path, progress: &dyn Progress
         dataset,
         observations,
         views_detected,
+        a0,
         paper,
         eiv,
         eiv_estimator: eiv_est,
@@ -175,40 +179,77 @@ pub fn parameter_table(truth: &CameraModel, paper: &CalibrationResult, eiv: &Cal
     table
 }
 
+/// The errors users feel, one row each: (figure, paper's estimator, errors-in-variables),
+/// as [`figures_table`] and [`index_html`] print them.
+fn figure_rows(vp: &Validation, ve: &Validation) -> Vec<[String; 3]> {
+    let pct = |x: f64| format!("{:.3} %", 100.0 * x);
+    let mut rows = vec![
+        ["max rel. error of fx(E)".to_owned(), pct(vp.fx_curve_max_rel_err), pct(ve.fx_curve_max_rel_err)],
+        ["max rel. error of fy(E)".to_owned(), pct(vp.fy_curve_max_rel_err), pct(ve.fy_curve_max_rel_err)],
+        [
+            "principal point error".to_owned(),
+            format!("{:.2} px", vp.principal_point_err_px),
+            format!("{:.2} px", ve.principal_point_err_px),
+        ],
+        [
+            "RMS reprojection".to_owned(),
+            format!("{:.3} px", vp.rms_reprojection_px),
+            format!("{:.3} px", ve.rms_reprojection_px),
+        ],
+    ];
+    let um = |v: &serde_json::Value| format!("{:.1} um", v["err_um"].as_f64().unwrap_or(f64::NAN));
+    for (a, b) in vp.pnp_displacement_err_um.iter().zip(&ve.pnp_displacement_err_um) {
+        rows.push([format!("2 mm move at {} mA", a["e_com_ma"]), um(a), um(b)]);
+    }
+    rows
+}
+
 /// The markdown table of the errors users feel, paper's estimator against
 /// errors-in-variables.
 pub fn figures_table(vp: &Validation, ve: &Validation) -> String {
     let mut figures = String::new();
     let _ = writeln!(figures, "| figure | paper BA | eiv BA |\n|---|---|---|");
-    let _ = writeln!(
-        figures,
-        "| max rel. error of fx(E) | {:.3} % | {:.3} % |",
-        100.0 * vp.fx_curve_max_rel_err,
-        100.0 * ve.fx_curve_max_rel_err
-    );
-    let _ = writeln!(
-        figures,
-        "| max rel. error of fy(E) | {:.3} % | {:.3} % |",
-        100.0 * vp.fy_curve_max_rel_err,
-        100.0 * ve.fy_curve_max_rel_err
-    );
-    let _ = writeln!(
-        figures,
-        "| principal point error | {:.2} px | {:.2} px |",
-        vp.principal_point_err_px, ve.principal_point_err_px
-    );
-    let _ =
-        writeln!(figures, "| RMS reprojection | {:.3} px | {:.3} px |", vp.rms_reprojection_px, ve.rms_reprojection_px);
-    for (a, b) in vp.pnp_displacement_err_um.iter().zip(&ve.pnp_displacement_err_um) {
-        let _ = writeln!(
-            figures,
-            "| 2 mm move at {} mA | {:.1} um | {:.1} um |",
-            a["e_com_ma"],
-            a["err_um"].as_f64().unwrap_or(f64::NAN),
-            b["err_um"].as_f64().unwrap_or(f64::NAN)
-        );
+    for [figure, paper, eiv] in figure_rows(vp, ve) {
+        let _ = writeln!(figures, "| {figure} | {paper} | {eiv} |");
     }
     figures
+}
+
+/// The demo directory's `index.html`: what was done, the errors users feel, and a link to
+/// every file the demo writes (the names `etlcal demo` gives them).
+pub fn index_html(demo: &Demo, options: &DemoOptions) -> String {
+    let mut rows = String::new();
+    for [figure, paper, eiv] in figure_rows(&demo.paper_validation, &demo.eiv_validation) {
+        let _ = write!(rows, "<tr><td>{figure}</td><td>{eiv}</td><td>{paper}</td></tr>\n");
+    }
+    let link = |file: &str, what: &str| format!("<li><a href=\"{file}\">{file}</a>: {what}</li>\n");
+    let mut files = link("report/index.html", "the report of calibration.json: plots, parameters, views")
+        + &link("report-paper/index.html", "the report of calibration-paper.json")
+        + &link("summary.md", "every parameter against the truth, with its standard deviation")
+        + &link("calibration.json", "the calibration by the recommended estimator, errors-in-variables")
+        + &link("calibration-paper.json", "the calibration by the paper's estimator (Eq. 24)")
+        + &link("a0.json", "the lens-off intrinsics A0 Zhang's method found, where both calibrations start")
+        + &link("truth.json", "the simulated rig's true model and each view's true stage and current errors")
+        + &link("observations.json", "the corners calibrated from");
+    if options.images {
+        files += &link("dataset.json", "the rendered images (views/, offstate/) and what was recorded with each");
+    }
+    let points: usize = demo.observations.views.iter().map(|v| v.points.len()).sum();
+    let source = if options.images { "detected in rendered images" } else { "simulated" };
+    format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>etlcal demo</title></head><body>\n\
+         <h1>etlcal demo (seed {}, stage noise {} um)</h1>\n\
+         <p>The paper's rig simulated with its noise model: {} views, {points} corners {source}; A0 by Zhang's \
+         method from {} lens-off views; calibrated with the errors-in-variables estimator and with the paper's, \
+         then validated on fresh views against the truth ({:.2} s).</p>\n\
+         <table>\n<tr><th>figure</th><th>errors-in-variables BA</th><th>paper BA</th></tr>\n{rows}</table>\n\
+         <h2>Files</h2>\n<ul>\n{files}</ul>\n</body></html>\n",
+        options.seed,
+        options.stage_noise_um,
+        demo.views_detected,
+        demo.observations.offstate_views.len(),
+        demo.seconds,
+    )
 }
 
 /// Validates `result` against `truth` with fresh PnP measurements (same seed for every

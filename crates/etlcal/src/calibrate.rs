@@ -1,5 +1,7 @@
 //! `etlcal calibrate (--dataset FILE | --observations FILE) --out calibration.json
-//! [--method proposed|per-setting] [--a0 A0.json] [--estimator paper|eiv] [--hold-a0]
+//! [--method proposed|per-setting] [--a0 A0.json] [--estimator paper|eiv]
+//! [--sigma-z-um UM | --sigma-z-mm MM] [--sigma-e-ma MA] [--sigma-px PX] [--hold-a0]
+//! [--robust huber|cauchy [--robust-k-px PX] | --huber-px PX]
 //! [--distortion paper|opencv|auto] [--focal-degree 1..5|auto] [--fix-k3] [--zero-tangent]
 //! [--thermal FILE] [--observations-out FILE] [--json]`.
 //!
@@ -11,29 +13,35 @@
 //! The calibration holds the focus law (the distance in focus against E_com, fitted to the
 //! views; `etlcal focus` uses it) when the views allow one (>= 4 distinct currents);
 //! otherwise a warning on stderr says why it is left out.
-//! `--json` prints the object written. Without `--a0`, A0 comes from the lens-off views
-//! by Zhang's method with the calibration's distortion family. The model is the paper's
-//! (its distortion, cubic fx(E), fy(E)) unless `--distortion` / `--focal-degree` say
-//! otherwise; `auto` chooses among the families (and degrees 1..5) by the error with
-//! which each predicts every view held out (`etl_calib::pipeline::select`), and writes
-//! the comparison into the file's `"model_selection"`. The bundle adjustment is errors-in-variables unless `--estimator
-//! paper` asks for the paper's Eq. 24. `--method per-setting` is the paper's baseline (Zhang
-//! at each current, a cubic through fx(E), fy(E); needs `setting_views`); it refuses the
-//! flags of the bundle adjustment (`--a0`, `--estimator`, `--hold-a0`, `--huber-px`).
+//! `--json` prints the object written.
+//!
+//! The flags only parse into an [`etl_calib::request::CalibrationRequest`], which holds
+//! every option's default, its refusals and the run; Python's `etlcal.calibrate(...)`
+//! parses its keywords into the same request (the same names: `--hold-a0` is `hold_a0`),
+//! so the two give the same file. Without `--a0`, A0 comes from the lens-off views by
+//! Zhang's method with the calibration's distortion family. The model is the paper's (its
+//! distortion, cubic fx(E), fy(E)) unless `--distortion` / `--focal-degree` say otherwise;
+//! `auto` chooses among the families (and degrees 1..5) by the error with which each
+//! predicts every view held out (`etl_calib::pipeline::select`), and writes the comparison
+//! into the file's `"model_selection"`. The bundle adjustment is errors-in-variables
+//! unless `--estimator paper` asks for the paper's Eq. 24. `--method per-setting` is the
+//! paper's baseline (Zhang at each current, a cubic through fx(E), fy(E); needs
+//! `setting_views`); it refuses the flags of the bundle adjustment (`--a0`, `--estimator`,
+//! `--hold-a0`, `--robust` / `--huber-px`) and of the model.
 
 use std::path::{Path, PathBuf};
 
-use etl_core::calib::{Estimator, Layout, RobustLoss};
-use etl_core::model::{DistortionModel, OpenCvFlags};
+use etl_core::calib::RobustLoss;
+use etl_core::model::DistortionModel;
 
 use super::print_json;
-use etl_calib::baseline::refuse_bundle_adjust_options;
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
-use etl_calib::pipeline::select::{refuse_opencv_flags, select, A0Source, Candidates};
-use etl_calib::pipeline::{a0_from_offstate_with, calibrate, CalibrateOptions};
-use etl_calib::zhang::ZhangOptions;
+use etl_calib::request::{
+    CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method, RequestOption,
+    Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
+};
 use etl_formats::a0::A0File;
-use etl_formats::calibration::{Calibration, ThermalRef};
+use etl_formats::calibration::ThermalRef;
 use etl_formats::dataset::Dataset;
 use etl_formats::observations::Observations;
 use etl_formats::output::{write_file_set, Output};
@@ -89,6 +97,15 @@ fn parse_focal_degree(s: &str) -> std::result::Result<FocalDegreeArg, String> {
     }
 }
 
+/// The robust loss of `--robust`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RobustArg {
+    /// Huber: quadratic up to k px, linear beyond.
+    Huber,
+    /// Cauchy: k^2 ln(1 + s / k^2), s the squared error: bounded influence.
+    Cauchy,
+}
+
 /// Arguments of `etlcal calibrate`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -118,17 +135,35 @@ pub struct Args {
     // estimator the user gave (the baseline has no bundle adjustment), as Python does.
     #[arg(long, value_enum)]
     pub estimator: Option<EstimatorArg>,
-    /// Prior standard deviation of the stage position for --estimator eiv, um.
-    #[arg(long, default_value_t = 10.0)]
-    pub sigma_z_um: f64,
-    /// Prior standard deviation of the current for --estimator eiv, mA.
-    #[arg(long, default_value_t = 0.4)]
-    pub sigma_e_ma: f64,
+    /// Prior standard deviation of the stage position for --estimator eiv, um
+    /// [default: 10, the paper's].
+    // The sigmas are Options: their defaults are the request's (defined once, in etl-calib).
+    #[arg(long, value_name = "UM")]
+    pub sigma_z_um: Option<f64>,
+    /// The same prior in mm [default: 0.010] (Python's `sigma_z_mm`); not with --sigma-z-um.
+    #[arg(long, value_name = "MM", conflicts_with = "sigma_z_um")]
+    pub sigma_z_mm: Option<f64>,
+    /// Prior standard deviation of the current for --estimator eiv, mA [default: 0.4, the
+    /// paper's].
+    #[arg(long, value_name = "MA")]
+    pub sigma_e_ma: Option<f64>,
+    /// Pixel noise standard deviation for --estimator eiv, px [default: estimated from a
+    /// plain solution].
+    #[arg(long, value_name = "PX")]
+    pub sigma_px: Option<f64>,
     /// Hold A0 (kf0x, kf0y, u0, v0) fixed in the bundle adjustment.
     #[arg(long)]
     pub hold_a0: bool,
-    /// Huber loss with this threshold (px) for bad corners.
-    #[arg(long, value_name = "PX")]
+    /// A robust loss on each corner's error, against bad corners (threshold / scale
+    /// --robust-k-px).
+    #[arg(long, value_enum)]
+    pub robust: Option<RobustArg>,
+    /// Threshold (huber) or scale (cauchy) of --robust, px [default: 1].
+    #[arg(long, value_name = "PX", requires = "robust")]
+    pub robust_k_px: Option<f64>,
+    /// Huber loss with this threshold, px: an alias of `--robust huber --robust-k-px PX`,
+    /// kept for existing scripts; not with --robust or --robust-k-px.
+    #[arg(long, value_name = "PX", conflicts_with_all = ["robust", "robust_k_px"])]
     pub huber_px: Option<f64>,
     /// Distortion family [default: paper]; `auto` chooses by held-out views and records
     /// the comparison in the file's "model_selection".
@@ -151,6 +186,83 @@ pub struct Args {
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
+}
+
+/// The CLI's words for the options of a request ([`Spelling`]): `--hold-a0`,
+/// `--distortion opencv`. `huber_alias`: the robust loss was given as `--huber-px`, which
+/// its refusals then name.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FlagSpelling {
+    /// `--huber-px` was given (for `--robust huber --robust-k-px`).
+    pub huber_alias: bool,
+}
+
+impl Spelling for FlagSpelling {
+    fn name(&self, option: RequestOption) -> String {
+        match option {
+            RequestOption::Robust | RequestOption::RobustKPx if self.huber_alias => "--huber-px".to_owned(),
+            _ => format!("--{}", option.key().replace('_', "-")),
+        }
+    }
+    fn word(&self, word: &str) -> String {
+        word.to_owned()
+    }
+    fn with_word(&self, option: RequestOption, word: &str) -> String {
+        format!("{} {word}", self.name(option))
+    }
+    fn switched_on(&self, option: RequestOption) -> String {
+        self.name(option)
+    }
+}
+
+impl Args {
+    /// The spelling of this command line's refusals.
+    fn spelling(&self) -> FlagSpelling {
+        FlagSpelling { huber_alias: self.huber_px.is_some() }
+    }
+
+    /// The request the flags ask for (reading the `--a0` and `--thermal` files, not the
+    /// input).
+    pub fn request(&self) -> Result<CalibrationRequest> {
+        let robust = match (self.robust, self.huber_px) {
+            (_, Some(k_px)) => Some(RobustLoss::Huber { k_px }),
+            (Some(loss), None) => {
+                let k_px = self.robust_k_px.unwrap_or(DEFAULT_ROBUST_K_PX);
+                Some(match loss {
+                    RobustArg::Huber => RobustLoss::Huber { k_px },
+                    RobustArg::Cauchy => RobustLoss::Cauchy { k_px },
+                })
+            }
+            (None, None) => None,
+        };
+        let sigma_z = self.sigma_z_mm.map(StageSigma::Mm).or(self.sigma_z_um.map(StageSigma::Um));
+        Ok(CalibrationRequest {
+            method: match self.method {
+                MethodArg::Proposed => Method::Proposed,
+                MethodArg::PerSetting => Method::PerSetting,
+            },
+            a0: self.a0.as_deref().map(|p| A0File::load(p).map(|f| f.a0())).transpose()?,
+            thermal: self.thermal.as_deref().map(ThermalRef::choose).transpose()?,
+            estimator: self.estimator.map(|e| match e {
+                EstimatorArg::Paper => EstimatorChoice::Paper,
+                EstimatorArg::Eiv => EstimatorChoice::Eiv,
+            }),
+            priors: EivPriors { sigma_z, sigma_e_ma: self.sigma_e_ma, sigma_px: self.sigma_px },
+            hold_a0: self.hold_a0,
+            robust,
+            distortion: self.distortion.map(|d| match d {
+                DistortionArg::Paper => DistortionChoice::Family(DistortionModel::Paper),
+                DistortionArg::Opencv => DistortionChoice::Family(DistortionModel::OpenCv),
+                DistortionArg::Auto => DistortionChoice::Auto,
+            }),
+            focal_degree: self.focal_degree.map(|d| match d {
+                FocalDegreeArg::Degree(d) => FocalDegreeChoice::Degree(d),
+                FocalDegreeArg::Auto => FocalDegreeChoice::Auto,
+            }),
+            fix_k3: self.fix_k3,
+            zero_tangent: self.zero_tangent,
+        })
+    }
 }
 
 /// The observations of `--observations`, or detected in the images of `--dataset`.
@@ -188,40 +300,20 @@ pub fn run(args: Args) -> Result<()> {
         [args.observations.as_deref(), args.dataset.as_deref(), args.a0.as_deref(), thermal_file],
         &outputs,
     )?;
-    let sigmas = [("--sigma-z-um", args.sigma_z_um), ("--sigma-e-ma", args.sigma_e_ma)];
-    if let Some((flag, x)) = sigmas.into_iter().find(|(_, x)| !(*x > 0.0)) {
-        return Err(Error::invalid_value(flag, x, "--sigma-z-um and --sigma-e-ma must be positive"));
-    }
-    if args.method == MethodArg::PerSetting {
-        refuse_bundle_adjust_options(
-            "--method per-setting",
-            [
-                ("--a0", args.a0.is_some()),
-                ("--estimator", args.estimator.is_some()),
-                ("--hold-a0", args.hold_a0),
-                ("--huber-px", args.huber_px.is_some()),
-            ],
-        )?;
-        let model = [
-            ("--distortion", args.distortion.is_some()),
-            ("--focal-degree", args.focal_degree.is_some()),
-            ("--fix-k3", args.fix_k3),
-            ("--zero-tangent", args.zero_tangent),
-        ];
-        if let Some((flag, _)) = model.iter().find(|(_, given)| *given) {
-            return Err(Error::invalid(
-                *flag,
-                format!("--method per-setting takes no {flag}: the baseline fits the paper's model (cubic, paper distortion)"),
-            ));
-        }
-    }
-    model_choice(&args)?;
-    let thermal = args.thermal.as_deref().map(ThermalRef::choose).transpose()?;
+    let spelling = args.spelling();
+    let request = args.request()?;
+    request.validate(&spelling)?;
     let obs = load_input(args.observations.as_deref(), args.dataset.as_deref(), !args.json)?;
-    let calibration = match args.method {
-        MethodArg::PerSetting => etl_calib::baseline::per_setting(&obs, thermal.as_ref())?.calibration,
-        MethodArg::Proposed => calibrate_proposed(&args, &obs, thermal.as_ref())?,
-    };
+    let calibrated = request.run(&obs, &spelling)?;
+    // Said on stderr as well as kept in the file: no focus law, implausible data (outliers
+    // left out, an RMS far above the noise, corrections far beyond their priors).
+    for why in calibrated.warnings() {
+        eprintln!("etlcal: warning: {why}");
+    }
+    let calibration = calibrated.into_calibration();
+    if let Some(why) = calibration.temperature_compensation_warning() {
+        eprintln!("etlcal: warning: {why}: use it with --e-com MA");
+    }
     let files: Vec<&Path> = std::iter::once(&args.out).chain(&args.observations_out).map(PathBuf::as_path).collect();
     for out in &files {
         crate::output::create_parent(out)?;
@@ -262,65 +354,4 @@ pub fn run(args: Args) -> Result<()> {
         outln!("wrote {}", args.out.display());
     }
     Ok(())
-}
-
-/// The model the flags ask for: the family and the degree (None: chosen by the data) and
-/// OpenCV's flags, refused with the paper's family (naming the flag).
-fn model_choice(args: &Args) -> Result<(Option<DistortionModel>, Option<usize>, OpenCvFlags)> {
-    let family = match args.distortion.unwrap_or(DistortionArg::Paper) {
-        DistortionArg::Paper => Some(DistortionModel::Paper),
-        DistortionArg::Opencv => Some(DistortionModel::OpenCv),
-        DistortionArg::Auto => None,
-    };
-    let degree = match args.focal_degree.unwrap_or(FocalDegreeArg::Degree(etl_core::model::PAPER_FOCAL_DEGREE)) {
-        FocalDegreeArg::Degree(d) => Some(d),
-        FocalDegreeArg::Auto => None,
-    };
-    let flags = OpenCvFlags { fix_k3: args.fix_k3, zero_tangent: args.zero_tangent };
-    refuse_opencv_flags(family, flags, ["--fix-k3", "--zero-tangent"], "--distortion opencv or auto")?;
-    Ok((family, degree, flags))
-}
-
-fn calibrate_proposed(args: &Args, obs: &Observations, thermal: Option<&ThermalRef>) -> Result<Calibration> {
-    let (family, degree, flags) = model_choice(args)?;
-    let given_a0 = args.a0.as_deref().map(|p| A0File::load(p).map(|f| f.a0())).transpose()?;
-    let robust = match args.huber_px {
-        Some(k) if k > 0.0 => Some(RobustLoss::Huber { k_px: k }),
-        Some(k) => return Err(Error::invalid_value("--huber-px", k, "--huber-px must be positive")),
-        None => None,
-    };
-    let estimator = match args.estimator.unwrap_or(EstimatorArg::Eiv) {
-        EstimatorArg::Paper => Estimator::Paper,
-        EstimatorArg::Eiv => {
-            Estimator::Eiv { sigma_z_mm: args.sigma_z_um / 1000.0, sigma_e_ma: args.sigma_e_ma, sigma_px: None }
-        }
-    };
-    let opts = CalibrateOptions { estimator, hold_a0: args.hold_a0, robust, layout: Layout::PAPER, flags };
-    let result = match (family, degree) {
-        (Some(family), Some(degree)) => {
-            let layout = Layout::new(family, degree).map_err(Error::Core)?;
-            let a0 = match given_a0 {
-                Some(a0) => a0,
-                None => a0_from_offstate_with(obs, &ZhangOptions { model: family, flags })?.a0(),
-            };
-            calibrate(obs, &a0, thermal, &CalibrateOptions { layout, ..opts })?
-        }
-        _ => {
-            let candidates = Candidates {
-                families: family.map_or(DistortionModel::ALL.to_vec(), |f| vec![f]),
-                focal_degrees: degree.map_or((1..=etl_core::model::MAX_FOCAL_DEGREE).collect(), |d| vec![d]),
-            };
-            let source = given_a0.map_or(A0Source::Offstate, A0Source::Given);
-            select(obs, &source, thermal, &opts, &candidates)?
-        }
-    };
-    if let Some(why) = &result.focus_law_warning {
-        eprintln!("etlcal: warning: {why}");
-    }
-    // Implausible data (outliers left out, an RMS far above the noise, corrections far
-    // beyond their priors) are said on stderr as well as kept in the file's "warnings".
-    for why in &result.calibration.warnings {
-        eprintln!("etlcal: warning: {why}");
-    }
-    Ok(result.calibration)
 }

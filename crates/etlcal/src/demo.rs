@@ -7,9 +7,13 @@
 //! estimator and with errors-in-variables, validates on freshly rendered views not used in
 //! calibration (the fx(E), fy(E) curves against the truth, the principal point, and a PnP
 //! measurement of a 2 mm stage move at several currents, from detected corners), prints a
-//! table of every parameter against the truth, and writes the images, dataset.json,
-//! observations.json (the detected corners), a0.json (the simulation's), truth.json,
-//! calibration.json (paper), calibration-eiv.json, summary.md and the reports into DIR.
+//! table of every parameter against the truth, and writes into DIR: the images,
+//! dataset.json, observations.json (the detected corners), a0.json (A0 by Zhang's method on
+//! the lens-off views, where both calibrations start), truth.json (the true model: its
+//! `kf_x[0]`, `kf_y[0]` and `principal_point` are the true A0), calibration.json (the
+//! recommended estimator's, errors-in-variables), calibration-paper.json (the paper's
+//! estimator, Eq. 24), summary.md, the reports of both (report/, report-paper/) and
+//! index.html, the page to open first: the figures and a link to each of these files.
 //!
 //! `--no-images` skips rendering and detection: the simulated corner observations (with
 //! the paper's pixel noise) go straight to the calibration, as in the paper's own
@@ -24,6 +28,7 @@ use crate::output::write_dir_set;
 use etl_core::calib::Estimator;
 use etl_formats::output::Output;
 use etl_formats::write_atomic;
+use etl_formats::A0File;
 
 /// The names `demo` writes into its directory.
 const DEMO_FILES: &[&str] = &[
@@ -34,16 +39,17 @@ const DEMO_FILES: &[&str] = &[
     "a0.json",
     "truth.json",
     "calibration.json",
-    "calibration-eiv.json",
+    "calibration-paper.json",
     "summary.md",
+    "index.html",
     "report",
-    "report-eiv",
+    "report-paper",
 ];
 use etl_formats::{Error, Result};
 use etl_report::Provenance;
 use etl_sim::simulate::images::RigBoard;
-use etl_sim::simulate::{write_simulation, write_truth};
-use etl_studies::demo::{run_demo, DemoOptions};
+use etl_sim::simulate::write_truth;
+use etl_studies::demo::{index_html, run_demo, DemoOptions};
 
 /// Arguments of `etlcal demo`.
 #[derive(clap::Args, Debug)]
@@ -86,18 +92,21 @@ pub fn run(args: Args) -> Result<()> {
     // Everything of one run in a temporary sibling directory, swapped in whole.
     let demo = write_dir_set(&args.out, DEMO_FILES, |out| {
         let demo = run_demo(&options, out, &crate::progress::Bar::new(!args.json))?;
-        write_simulation(&demo.sim, out)?;
+        // The true model in the frame of the observations calibrated from (with images,
+        // the ChArUco board's as well); the A0 calibrated from, not the simulation's.
+        write_truth(&demo.sim, demo.dataset.as_ref().map(|_| &demo.truth), out)?;
         if let Some(dataset) = &demo.dataset {
-            write_truth(&demo.sim, Some(&demo.truth), out)?;
             dataset.save(&out.join("dataset.json"))?;
-            demo.observations.save(&out.join("observations.json"))?;
         }
-        demo.paper.calibration.save(&out.join("calibration.json"))?;
-        demo.eiv.calibration.save(&out.join("calibration-eiv.json"))?;
+        demo.observations.save(&out.join("observations.json"))?;
+        A0File::new(&demo.a0).save(&out.join("a0.json"))?;
+        demo.eiv.calibration.save(&out.join("calibration.json"))?;
+        demo.paper.calibration.save(&out.join("calibration-paper.json"))?;
         write_atomic(&out.join("summary.md"), demo.summary_md.as_bytes())?;
+        write_atomic(&out.join("index.html"), index_html(&demo, &options).as_bytes())?;
         for (name, file, r, estimator) in [
-            ("report", "calibration.json", &demo.paper, Estimator::Paper),
-            ("report-eiv", "calibration-eiv.json", &demo.eiv, demo.eiv_estimator),
+            ("report", "calibration.json", &demo.eiv, demo.eiv_estimator),
+            ("report-paper", "calibration-paper.json", &demo.paper, Estimator::Paper),
         ] {
             let dir = out.join(name);
             crate::output::create_dir(&dir)?;
@@ -120,8 +129,8 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         outln!("{}", demo.summary_md);
         outln!(
-            "wrote {}observations.json, a0.json, truth.json, calibration.json, calibration-eiv.json, summary.md, \
-             report/index.html, report-eiv/index.html to {}",
+            "wrote {}observations.json, a0.json (Zhang's), truth.json, calibration.json (errors-in-variables), \
+             calibration-paper.json, summary.md, index.html, report/index.html, report-paper/index.html to {}",
             if options.images { "views/*.png, offstate/*.png, dataset.json, " } else { "" },
             args.out.display()
         );

@@ -22,7 +22,7 @@ use super::print_json;
 use etl_formats::board::Board;
 use etl_formats::{Error, Result};
 use etl_image::board::detect_board_many;
-use etl_image::detect::Pattern;
+use etl_image::checkerboard::Pattern;
 
 /// Arguments of `etlcal detect`.
 #[derive(clap::Args, Debug)]

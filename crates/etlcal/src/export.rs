@@ -1,5 +1,6 @@
-//! `etlcal export --calibration FILE --e-in MA --t C --format opencv|ros|mrcal --out FILE
-//! [--allow-extrapolation] [--json]`: the camera at one setting as an OpenCV FileStorage
+//! `etlcal export --calibration FILE (--e-in MA --t C | --e-com MA) --format
+//! opencv|ros|mrcal --out FILE [--allow-extrapolation] [--json]`: the camera at one setting
+//! (a driver current and temperature, or a known E_com) as an OpenCV FileStorage
 //! YAML, a ROS camera_info YAML or an mrcal .cameramodel (etl_formats::export). The
 //! distortion is OpenCV's five coefficients fitted to etlcal's model; the fit error is
 //! printed and written into the file.
@@ -38,18 +39,14 @@ pub fn run(args: Args) -> Result<()> {
     crate::output::create_parent(&args.out)?;
     let e = export(&cal, &camera, format, &args.out)?;
     if args.json {
-        print_json(&json!({
-            "format": args.format,
-            "out": args.out.display().to_string(),
-            "e_in_ma": args.setting.e_in_ma,
-            "temperature_c": args.setting.temperature_c,
-            "e_com_ma": camera.e_com_ma(),
-            "extrapolated": camera.extrapolated(),
-            "camera_matrix": e.camera_matrix,
-            "dist_coeffs": e.fit.dist_coeffs,
-            "fit_rms_px": e.fit.rms_px,
-            "fit_max_px": e.fit.max_px,
-        }));
+        let mut j = args.setting.json(&camera);
+        j["format"] = json!(args.format);
+        j["out"] = json!(args.out.display().to_string());
+        j["camera_matrix"] = json!(e.camera_matrix);
+        j["dist_coeffs"] = json!(e.fit.dist_coeffs);
+        j["fit_rms_px"] = json!(e.fit.rms_px);
+        j["fit_max_px"] = json!(e.fit.max_px);
+        print_json(&j);
     } else {
         outln!(
             "wrote {} ({} at E_com {:.3} mA{}); OpenCV distortion fit: rms {:.4} px, max {:.4} px",

@@ -7,7 +7,8 @@
 //! from the camera's centre, mm (docs/METHOD.md, "The focus law"). A distance outside the
 //! law's calibrated distances (+- 2 % of their span), a setting outside the calibrated
 //! temperature and current ranges (unless `--allow-extrapolation`), or a calibration
-//! without a focus law is a one-line error (exit status 1).
+//! without a focus law is a one-line error (exit status 1); so is a calibration without
+//! temperature compensation, whose message gives the E_com in focus (for `--e-com`).
 //! `--json` prints `{"e_in_ma", "e_com_ma", "distance_mm"}`.
 
 use std::path::PathBuf;
@@ -44,6 +45,20 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let cal = Calibration::load(&args.calibration)?;
     let trust = crate::trust(args.allow_extrapolation);
+    if cal.thermal.is_none() {
+        // No E_in can be had without the thermal part; the E_com in focus still can, and
+        // is what the run-time verbs take.
+        let e_com_ma = cal.focus_law()?.e_com_ma(args.distance_mm)?;
+        return Err(etl_formats::Error::invalid(
+            "--t",
+            format!(
+                "{} has no temperature compensation (thermal): no driver current can be given; the E_com in focus at \
+                 {} mm is {e_com_ma:.3} mA (give it to export, measure, undistort as --e-com)",
+                args.calibration.display(),
+                args.distance_mm
+            ),
+        ));
+    }
     let e_in_ma = cal.focus_e_in(args.distance_mm, args.temperature_c, trust)?;
     let extrapolated = cal.at(e_in_ma, args.temperature_c, trust)?.extrapolated();
     let e_com_ma = cal.focus_law()?.e_com_ma(args.distance_mm)?;

@@ -45,9 +45,21 @@ pub mod thermal;
 pub mod undistort;
 pub mod zhang;
 
-/// Calibrate and run cameras focused by an electrically tunable lens.
+/// Calibrate a camera focused by an electrically tunable lens, then use it at any lens
+/// current and temperature.
 #[derive(Parser)]
-#[command(name = "etlcal", version, about, propagate_version = true)]
+#[command(
+    name = "etlcal",
+    version,
+    propagate_version = true,
+    about = "Calibrate a camera focused by an electrically tunable lens (ETL), then use it at any lens current and temperature.",
+    long_about = "Calibrate a camera focused by an electrically tunable lens (ETL), then use it at any lens current and \
+temperature: the method of \"Calibration method for the electrically tunable lens based on shape-changing polymer\" \
+(Optics Express 2020), with an errors-in-variables bundle adjustment by default.\n\n\
+New here? etlcal demo runs everything on a simulated rig and writes etlcal-demo/ (open \
+etlcal-demo/index.html). A real rig: etlcal board, then etlcal calibrate --dataset, then \
+export, measure, undistort or focus at the lens's setting (docs/RIG.md, docs/CLI.md)."
+)]
 pub struct Cli {
     /// Print one JSON object on stdout (accepted before or after the verb).
     #[arg(long, global = true)]
@@ -91,7 +103,8 @@ enum Command {
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
     Sharpness(sharpness::Args),
-    /// Find the checkerboard's corners in images (sub-pixel, stable order).
+    /// Find a board's corners in images, sub-pixel: a ChArUco board's with their ids (partial views
+    /// welcome) or a whole checkerboard's.
     Detect(detect::Args),
     /// A synthetic image of a board through the paper rig's camera, and its true corners.
     Render(render::Args),

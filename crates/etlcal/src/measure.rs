@@ -1,8 +1,9 @@
-//! `etlcal measure --calibration FILE --e-in MA --t C IMAGE_A IMAGE_B (--pattern CxR
-//! --square MM | --board FILE) [--allow-extrapolation] [--json]`: the board's pose in both
-//! images (a ChArUco board from the corners each image shows) at the
-//! compensated current (E_com from E_in and T through the calibration's thermal part;
-//! refused outside its calibrated ranges unless extrapolation is asked for) by plane-based PnP,
+//! `etlcal measure --calibration FILE (--e-in MA --t C | --e-com MA) IMAGE_A IMAGE_B
+//! (--pattern CxR --square MM | --board FILE) [--allow-extrapolation] [--json]`: the board's
+//! pose in both images (a ChArUco board from the corners each image shows) at the
+//! compensated current (E_com from E_in and T through the calibration's thermal part, or
+//! given; refused outside the calibrated ranges unless extrapolation is asked for) by
+//! plane-based PnP,
 //! and the displacement of the board between them, mm (the paper's measurement of a
 //! stage move, section 5.2.3), with one standard deviation per component from the pixel
 //! noise (estimated from each PnP's residual) and the calibration's covariance together
@@ -20,7 +21,6 @@ use crate::board::BoardArgs;
 use crate::setting::SettingArgs;
 use etl_calib::pipeline::dataset::default_detector;
 use etl_calib::pipeline::measure::measure_displacement;
-use etl_formats::calibration::Calibration;
 use etl_formats::Result;
 
 /// Arguments of `etlcal measure`.
@@ -51,9 +51,9 @@ fn pose_json(p: &BoardPose, u: &PoseUncertainty) -> serde_json::Value {
 pub fn run(args: Args) -> Result<()> {
     let board = args.board.board()?;
     let at = &args.setting;
-    let cal = Calibration::load(&at.calibration)?;
+    let (cal, camera) = at.camera()?;
     let images = [args.image_a.as_path(), args.image_b.as_path()];
-    let m = measure_displacement(&cal, at.e_in_ma, at.temperature_c, at.trust(), &board, images, &default_detector())?;
+    let m = measure_displacement(&cal, &camera, &board, images, &default_detector())?;
     let (d, dist, e_com, s) = (m.displacement_mm, m.distance_mm, m.e_com_ma, m.displacement_std_mm);
     if !m.std_includes_calibration {
         eprintln!(

@@ -27,7 +27,7 @@ use etl_formats::board::Board;
 use etl_formats::output::{write_file_set, Output};
 use etl_formats::{check_range, Error, Result};
 use etl_formats::{write_atomic, write_json};
-use etl_image::detect::Pattern;
+use etl_image::checkerboard::Pattern;
 use etl_sim::render::{render, BitDepth, Optics, Photometry, RenderOptions, Scene};
 use etl_sim::simulate::focused_z_mm;
 

@@ -1,27 +1,55 @@
 //! The flags shared by the verbs that use a calibration at one lens setting (`measure`,
-//! `export`, `undistort`): `--calibration FILE --e-in MA --t C [--allow-extrapolation]`.
+//! `export`, `undistort`): `--calibration FILE (--e-in MA --t C | --e-com MA)
+//! [--allow-extrapolation]`.
+//!
+//! The setting is given in exactly one of two forms (clap's group `setting`: anything else
+//! is a one-line usage error, exit 2): the driver current and the lens temperature, turned
+//! into E_com by the calibration's thermal part, or a known compensated current E_com
+//! (a calibration without temperature compensation, or E_com compensated elsewhere).
 
 use std::path::PathBuf;
 
 use etl_formats::calibration::Calibration;
-use etl_formats::{CameraAt, Result, Trust};
+use etl_formats::{CameraAt, Error, Result, Trust};
 
-/// `--calibration FILE --e-in MA --t C [--allow-extrapolation]`.
+/// `--calibration FILE (--e-in MA --t C | --e-com MA) [--allow-extrapolation]`.
 #[derive(clap::Args, Debug, Clone)]
+#[command(group(clap::ArgGroup::new("setting").required(true).args(["e_in_ma", "e_com_ma"])))]
 pub struct SettingArgs {
     /// The calibration (etlcal.calibration/1).
     #[arg(long, value_name = "FILE")]
     pub calibration: PathBuf,
-    /// Driver current, mA.
-    #[arg(long = "e-in", value_name = "MA")]
-    pub e_in_ma: f64,
-    /// Lens temperature, degC.
-    #[arg(long = "t", value_name = "C")]
-    pub temperature_c: f64,
+    /// Driver current, mA (with --t; E_com through the calibration's thermal part).
+    #[arg(long = "e-in", value_name = "MA", requires = "temperature_c")]
+    pub e_in_ma: Option<f64>,
+    /// Lens temperature, degC (with --e-in).
+    #[arg(long = "t", value_name = "C", requires = "e_in_ma")]
+    pub temperature_c: Option<f64>,
+    /// A known compensated current E_com, mA (instead of --e-in and --t): for a calibration
+    /// without temperature compensation ("temperature_compensation": "none").
+    #[arg(long = "e-com", value_name = "MA", conflicts_with = "temperature_c")]
+    pub e_com_ma: Option<f64>,
     /// Go on outside the calibrated temperature, current and E_com ranges (the result is
     /// marked `"extrapolated": true`); refused otherwise.
     #[arg(long)]
     pub allow_extrapolation: bool,
+}
+
+/// The lens setting the flags give.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Setting {
+    /// `--e-in MA --t C`.
+    DriverCurrent {
+        /// Driver current, mA.
+        e_in_ma: f64,
+        /// Lens temperature, degC.
+        temperature_c: f64,
+    },
+    /// `--e-com MA`.
+    Compensated {
+        /// Compensated current, mA.
+        e_com_ma: f64,
+    },
 }
 
 impl SettingArgs {
@@ -30,11 +58,44 @@ impl SettingArgs {
         crate::trust(self.allow_extrapolation)
     }
 
-    /// The calibration, and the camera at the setting (`Calibration::at`: the one range
-    /// policy).
+    /// The setting (clap's groups have made sure exactly one form is given).
+    pub fn setting(&self) -> Result<Setting> {
+        match (self.e_in_ma, self.temperature_c, self.e_com_ma) {
+            (Some(e_in_ma), Some(temperature_c), None) => Ok(Setting::DriverCurrent { e_in_ma, temperature_c }),
+            (None, None, Some(e_com_ma)) => Ok(Setting::Compensated { e_com_ma }),
+            _ => Err(Error::invalid("--e-com", "give the setting as --e-in MA --t C or as --e-com MA")),
+        }
+    }
+
+    /// The calibration, and the camera at the setting (`Calibration::at` or
+    /// `Calibration::at_e_com`: the one range policy). A driver current given to a
+    /// calibration without temperature compensation is refused, naming `--e-com`.
     pub fn camera(&self) -> Result<(Calibration, CameraAt)> {
         let cal = Calibration::load(&self.calibration)?;
-        let camera = cal.at(self.e_in_ma, self.temperature_c, self.trust())?;
+        let camera = match self.setting()? {
+            Setting::DriverCurrent { .. } if cal.thermal.is_none() => {
+                return Err(Error::invalid(
+                    "--e-in",
+                    format!(
+                        "{} has no temperature compensation (thermal): give the setting as --e-com MA, not --e-in/--t",
+                        self.calibration.display()
+                    ),
+                ))
+            }
+            Setting::DriverCurrent { e_in_ma, temperature_c } => cal.at(e_in_ma, temperature_c, self.trust())?,
+            Setting::Compensated { e_com_ma } => cal.at_e_com(e_com_ma, self.trust())?,
+        };
         Ok((cal, camera))
+    }
+
+    /// The `--json` keys of the setting: `e_in_ma` and `temperature_c` as given (null for
+    /// `--e-com`), `e_com_ma` of the camera, `extrapolated`.
+    pub fn json(&self, camera: &CameraAt) -> serde_json::Value {
+        serde_json::json!({
+            "e_in_ma": self.e_in_ma,
+            "temperature_c": self.temperature_c,
+            "e_com_ma": camera.e_com_ma(),
+            "extrapolated": camera.extrapolated(),
+        })
     }
 }

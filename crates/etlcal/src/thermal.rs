@@ -16,7 +16,7 @@
 
 use std::path::PathBuf;
 
-use etl_core::camera::ThermalTrust;
+use etl_core::runtime::ThermalTrust;
 use etl_core::thermal::Compensation;
 use serde_json::json;
 
@@ -133,8 +133,8 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
         options.temperatures_c = vec![27.0, 29.5, 32.0, 34.5, 37.0];
     }
     let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &crate::progress::Bar::new(!args.json))
-        // The option the user sets is the flag.
-        .map_err(|e| e.map_what(|w| if w == "search_half_width_ma" { "--search-ma".into() } else { w }))?;
+        // The option the user sets is the flag, in `what` and in the message.
+        .map_err(|e| e.rename_input("search_half_width_ma", "--search-ma"))?;
     let (r, t0) = (&v.result, v.t_ref_c);
     let (referenced, absolute) = (v.surface_error_ma, v.surface_error_absolute_ma);
     let file = ThermalFile::new(&r.calibration, r.rms_ma);

@@ -1,6 +1,7 @@
-//! `etlcal undistort IMAGE... --calibration F --e-in MA --t C --out DIR [--json]`: each
-//! image, taken at the driver current E_in and lens temperature T, undistorted at the
-//! compensated current E_com (the calibration's thermal surface) as the camera K(E_com)
+//! `etlcal undistort IMAGE... --calibration F (--e-in MA --t C | --e-com MA) --out DIR
+//! [--json]`: each image, taken at the driver current E_in and lens temperature T (or at a
+//! known compensated current), undistorted at the compensated current E_com (the
+//! calibration's thermal surface, or `--e-com`) as the camera K(E_com)
 //! without distortion sees it, written into DIR under its own file name and in its own
 //! format (PNG, JPEG, TIFF; 8- or 16-bit grey or RGB, 32-bit float RGB).
 //!
@@ -24,7 +25,7 @@ use super::print_json;
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// The images to undistort (taken at --e-in and --t).
+    /// The images to undistort (taken at the setting: --e-in and --t, or --e-com).
     #[arg(required = true, value_name = "IMAGE")]
     pub images: Vec<PathBuf>,
     /// The calibration and the setting the images were taken at.

@@ -13,6 +13,10 @@
 //! deviation of fx, fy, u0, v0, k1, k2, p1, p2, k3, as `calibrateCameraExtended`; 0 for a
 //! held one), "fix_k3", "zero_tangent", "outliers"?}`.
 //!
+//! The flags only parse into an [`etl_calib::request::ZhangRequest`] (its default, its
+//! refusal, its run), as Python's `etlcal.zhang(model=..., fix_k3=..., zero_tangent=...)`
+//! does: the same names, the same result.
+//!
 //! Images whose board is not found are named on stderr and skipped; at least 3 views must
 //! remain. `outliers` (absent when there are none, as in a calibration file) lists the
 //! corners Zhang's method left out as gross outliers: `view` (the index of the IMAGE
@@ -27,10 +31,11 @@ use serde_json::{json, Value};
 
 use super::print_json;
 use crate::board::BoardArgs;
-use etl_calib::pipeline::select::refuse_opencv_flags;
+use crate::calibrate::FlagSpelling;
 use etl_calib::pipeline::{detect_views, PlanarViews};
-use etl_calib::zhang::{zhang_with, ZhangOptions, ZhangResult};
-use etl_core::model::{DistortionModel, OpenCvFlags};
+use etl_calib::request::ZhangRequest;
+use etl_calib::zhang::ZhangResult;
+use etl_core::model::DistortionModel;
 use etl_formats::board::Board;
 use etl_formats::calibration::Outlier;
 use etl_formats::{Error, Result};
@@ -68,16 +73,15 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The options of `--model`, `--fix-k3`, `--zero-tangent`; an OpenCV flag with the paper's
-/// model is refused, naming the flag.
-fn options(args: &Args) -> Result<ZhangOptions> {
-    let model = match args.model {
-        ModelArg::Paper => DistortionModel::Paper,
-        ModelArg::Opencv => DistortionModel::OpenCv,
-    };
-    let flags = OpenCvFlags { fix_k3: args.fix_k3, zero_tangent: args.zero_tangent };
-    refuse_opencv_flags(Some(model), flags, ["--fix-k3", "--zero-tangent"], "--model opencv")?;
-    Ok(ZhangOptions { model, flags })
+impl Args {
+    /// The request the flags ask for.
+    pub fn request(&self) -> ZhangRequest {
+        let model = match self.model {
+            ModelArg::Paper => DistortionModel::Paper,
+            ModelArg::Opencv => DistortionModel::OpenCv,
+        };
+        ZhangRequest { model, fix_k3: self.fix_k3, zero_tangent: self.zero_tangent }
+    }
 }
 
 /// The `--json` object of an opencv-family result.
@@ -95,7 +99,9 @@ fn opencv_json(z: &ZhangResult, images: &[&PathBuf]) -> Value {
 
 /// Runs `etlcal zhang`.
 pub fn run(args: Args) -> Result<()> {
-    let opts = options(&args)?;
+    let request = args.request();
+    // Refused before any image is read.
+    request.validate(&FlagSpelling::default())?;
     let board = args.board.board()?;
     let found = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
     for m in &found.skipped {
@@ -109,9 +115,9 @@ pub fn run(args: Args) -> Result<()> {
             args.images.len()
         )));
     }
-    let z = zhang_with(views, size, &opts)?;
+    let z = request.run(views, size, &FlagSpelling::default())?;
     let [c0, c1, c2, c3, c4] = z.coefficients;
-    let mut j = match opts.model {
+    let mut j = match request.model {
         DistortionModel::Paper => json!({"fx": z.fx, "fy": z.fy, "u0": z.u0, "v0": z.v0, "k1": c0, "p1": c1,
             "p2": c2, "rms_px": z.rms_px, "views_used": z.views_used}),
         DistortionModel::OpenCv => {
@@ -139,7 +145,7 @@ pub fn run(args: Args) -> Result<()> {
         z.std[3]
     );
     let (rms, n) = (z.rms_px, z.views_used);
-    match opts.model {
+    match request.model {
         DistortionModel::Paper => outln!("k1 {c0:.4e}, p1 {c1:.4e}, p2 {c2:.4e}; rms {rms:.4} px over {n} views"),
         DistortionModel::OpenCv => {
             outln!("dist_coeffs (k1, k2, p1, p2, k3) {c0:.6}, {c1:.6}, {c2:.6}, {c3:.6}, {c4:.6}; rms {rms:.4} px over {n} views")
@@ -174,7 +180,7 @@ fn outliers_json(outliers: &[Outlier], found: &PlanarViews, images: &[PathBuf], 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use etl_calib::zhang::PlanarView;
+    use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions};
     use etl_sim::simulate::{paper_rig, NoiseModel};
 
     /// Zhang's outliers are named by the image they are in (its index among the IMAGE

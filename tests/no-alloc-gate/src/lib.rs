@@ -264,7 +264,7 @@ pub extern "C" fn etl_gate_autofocus(centre_ma: f64, lo: f64, hi: f64, coarse: u
 /// through it, and the OpenCV fit of its distortion; u + v + fit RMS, or NaN on error.
 #[unsafe(no_mangle)]
 pub extern "C" fn etl_gate_camera_at(e_in_ma: f64, t_c: f64, extrapolate: bool, w: u32, h: u32) -> f64 {
-    use etl_core::camera::{Camera, ThermalTrust, Trust};
+    use etl_core::runtime::{Camera, ThermalTrust, Trust};
     let thermal = ThermalTrust::from_calibration(&ThermalCalibration::PAPER);
     let Ok(cam) = Camera::new(CameraModel::paper_rig(), Some(thermal), [80.0, 225.0]) else { return f64::NAN };
     let trust = if extrapolate { Trust::Extrapolate } else { Trust::Refuse };

@@ -14,7 +14,7 @@
 use etl_core::linalg::svd::sym_pinv;
 
 use crate::zhang::{zhang, PlanarView, ZhangResult};
-use etl_formats::calibration::{Calibration, ModelStd, Outlier, ThermalRef, ViewSummary, FORMAT};
+use etl_formats::calibration::{Calibration, ModelStd, Outlier, TemperatureCompensation, ThermalRef, ViewSummary, FORMAT};
 use etl_formats::observations::{Observations, SETTING_TOLERANCE_MA};
 use etl_formats::{Error, Result};
 
@@ -100,38 +100,6 @@ fn poly_fit(x: &[f64], y: &[f64], sd: &[f64], deg: usize) -> Result<([f64; 4], [
     Ok((raw, cov))
 }
 
-/// The proposed method's options that the baseline has no use for, as a front end got
-/// them: `(the option's name as that front end spells it, whether it was given)`, in the
-/// order a0, estimator, hold-a0, robust loss.
-pub type BundleAdjustOptionsGiven<'a> = [(&'a str, bool); 4];
-
-/// Refuses the bundle adjustment's options for the baseline (one rule for the CLI and
-/// Python): the baseline is Zhang at each current, with no bundle adjustment, so an
-/// estimator or an A0 given would be silently ignored. `method` names the baseline as the
-/// front end spells it.
-///
-/// ```
-/// use etl_calib::baseline::refuse_bundle_adjust_options;
-/// let given = [("a0", false), ("estimator", true), ("hold_a0", false), ("robust", false)];
-/// let e = refuse_bundle_adjust_options("method=\"per-setting\"", given).unwrap_err();
-/// assert!(e.to_string().contains("takes no a0, estimator, hold_a0 or robust"));
-/// assert!(refuse_bundle_adjust_options("x", given.map(|(n, _)| (n, false))).is_ok());
-/// ```
-pub fn refuse_bundle_adjust_options(method: &str, given: BundleAdjustOptionsGiven<'_>) -> Result<()> {
-    if !given.iter().any(|&(_, g)| g) {
-        return Ok(());
-    }
-    let first_given = given.iter().find(|&&(_, g)| g).map_or("", |&(name, _)| name);
-    let [a, b, c, d] = given.map(|(name, _)| name);
-    Err(Error::invalid(
-        first_given,
-        format!(
-            "{method} takes no {a}, {b}, {c} or {d}: the baseline is Zhang at each current, with no bundle \
-             adjustment; drop them or use the proposed method"
-        ),
-    ))
-}
-
 /// Runs the baseline on `obs.setting_views` (see the module docs).
 ///
 /// Errors: no setting views; a setting with fewer than 3 views; fewer than 3 settings;
@@ -211,6 +179,29 @@ fn setting_outliers(settings: &[SettingEstimate]) -> Vec<Outlier> {
     all
 }
 
+/// Eq. 18: k1, p1, p2 of the per-setting estimates as quadratics in w = 1 / f_mean,
+/// weighted by their stds; returns a_1..a_9 and their stds.
+fn distortion_a_of(settings: &[SettingEstimate]) -> Result<([f64; 9], [f64; 9])> {
+    let ws: Vec<f64> = settings.iter().map(|s| 2.0 / (s.zhang.fx + s.zhang.fy)).collect();
+    let mut a = [0.0; 9];
+    let mut sa = [0.0; 9];
+    for (k, idx) in [4usize, 5, 6].into_iter().enumerate() {
+        let (y, sd): (Vec<f64>, Vec<f64>) = settings
+            .iter()
+            .map(|s| (s.zhang.coefficients[k], s.zhang.std[idx].max(1e-12)))
+            .unzip();
+        let (c, cov) = poly_fit(&ws, &y, &sd, 2)?;
+        // Eq. 18 order: a_(3k+1) w^2 + a_(3k+2) w + a_(3k+3).
+        a[3 * k] = c[2];
+        a[3 * k + 1] = c[1];
+        a[3 * k + 2] = c[0];
+        sa[3 * k] = cov[2][2].max(0.0).sqrt();
+        sa[3 * k + 1] = cov[1][1].max(0.0).sqrt();
+        sa[3 * k + 2] = cov[0][0].max(0.0).sqrt();
+    }
+    Ok((a, sa))
+}
+
 /// The calibration the per-setting estimates give: fx, fy as weighted polynomials of
 /// E_com (cubic, or of degree settings - 1), (u0, v0) as weighted means, k1, p1, p2 as
 /// quadratics in w = 1 / f_mean (Eq. 18). Precondition: `settings` sorted by E_com, not
@@ -241,24 +232,7 @@ fn calibration_of(
     };
     let (u0, su0) = wmean(&|z| (z.u0, z.std[2]));
     let (v0, sv0) = wmean(&|z| (z.v0, z.std[3]));
-    // Eq. 18: k1, p1, p2 as quadratics in w = 1 / f_mean.
-    let ws: Vec<f64> = settings.iter().map(|s| 2.0 / (s.zhang.fx + s.zhang.fy)).collect();
-    let mut a = [0.0; 9];
-    let mut sa = [0.0; 9];
-    for (k, idx) in [4usize, 5, 6].into_iter().enumerate() {
-        let (y, sd) = col(&|z| {
-            let v = z.coefficients[k];
-            (v, z.std[idx])
-        });
-        let (c, cov) = poly_fit(&ws, &y, &sd, 2)?;
-        // Eq. 18 order: a_(3k+1) w^2 + a_(3k+2) w + a_(3k+3).
-        a[3 * k] = c[2];
-        a[3 * k + 1] = c[1];
-        a[3 * k + 2] = c[0];
-        sa[3 * k] = cov[2][2].max(0.0).sqrt();
-        sa[3 * k + 1] = cov[1][1].max(0.0).sqrt();
-        sa[3 * k + 2] = cov[0][0].max(0.0).sqrt();
-    }
+    let (a, sa) = distortion_a_of(settings)?;
     let sd4 = |c: &[[f64; 4]; 4]| -> [f64; 4] { core::array::from_fn(|i| c[i][i].max(0.0).sqrt()) };
     let n_points: usize = settings.iter().map(|s| s.points).sum();
     let rms = (settings.iter().map(|s| s.zhang.rms_px.powi(2) * s.points as f64).sum::<f64>() / n_points.max(1) as f64)
@@ -274,6 +248,7 @@ fn calibration_of(
         distortion_model: None,
         distortion_a: a.to_vec(),
         thermal: thermal.cloned(),
+        temperature_compensation: TemperatureCompensation::of(thermal),
         e_com_range_ma: [es[0], es[es.len() - 1]],
         rms_reprojection_px: rms,
         std: ModelStd {

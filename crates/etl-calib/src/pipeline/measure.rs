@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use etl_core::camera::Trust;
+use etl_core::runtime::CameraAt;
 use etl_core::pnp::{
     displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, BoardPose, PixelNoise,
     PoseUncertainty,
@@ -23,7 +23,7 @@ use etl_formats::{Error, Result};
 pub struct Measurement {
     /// The compensated current both poses were solved at, mA.
     pub e_com_ma: f64,
-    /// The setting lies outside a calibrated range (only with [`Trust::Extrapolate`]).
+    /// The setting lies outside a calibrated range (only with `Trust::Extrapolate`).
     pub extrapolated: bool,
     /// The board's pose in the first and in the second image.
     pub poses: [BoardPose; 2],
@@ -44,27 +44,23 @@ pub struct Measurement {
     pub std_includes_calibration: bool,
 }
 
-/// Measures the move of `board` between `images` at the driver current `e_in_ma` and the
-/// lens temperature `temperature_c`: E_com = E_in - E_T(T, E_in) through the calibration's
-/// thermal surface, the corners found by `detector` (at their board coordinates,
+/// Measures the move of `board` between `images` with the calibration `cal` at the
+/// setting `camera` (from [`Calibration::at`], E_com = E_in - E_T(T, E_in) through the
+/// calibration's thermal surface, or [`Calibration::at_e_com`] at a known E_com: the range
+/// policy was applied there): the corners found by `detector` (at their board coordinates,
 /// [`Board::corner_mm`], Z = 0), each pose by PnP with the calibrated model at E_com, and
 /// the displacement t_b - t_a, with its covariance (module docs).
 ///
-/// Errors: a setting outside the calibrated ranges (temperature, E_in, E_com, with the
-/// margins of [`etl_core::camera`]) unless `trust` is [`Trust::Extrapolate`]; an image
-/// missing, unreadable, of another size than the calibration's, or without the board; a
-/// PnP failure.
+/// Errors: an image missing, unreadable, of another size than the calibration's, or
+/// without the board; a PnP failure.
 pub fn measure_displacement(
     cal: &Calibration,
-    e_in_ma: f64,
-    temperature_c: f64,
-    trust: Trust,
+    camera: &CameraAt,
     board: &Board,
     images: [&Path; 2],
     detector: &dyn CornerDetector,
 ) -> Result<Measurement> {
     board.validate()?;
-    let camera = cal.at(e_in_ma, temperature_c, trust)?;
     let mut poses = Vec::with_capacity(2);
     let mut uncertainty = Vec::with_capacity(2);
     for path in images {

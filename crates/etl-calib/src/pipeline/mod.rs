@@ -21,7 +21,7 @@ pub use view_focal::view_focal;
 use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, Layout, ParamMask, RobustLoss, View, A0};
 use etl_core::model::{CameraModel, OpenCvFlags};
 
-use etl_formats::calibration::{Calibration, ModelStd, ThermalRef, ViewSummary};
+use etl_formats::calibration::{Calibration, ModelStd, TemperatureCompensation, ThermalRef, ViewSummary};
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
 
@@ -224,6 +224,7 @@ fn calibration_of(
     let hi = views.iter().map(|v| v.e_com_ma).fold(f64::NEG_INFINITY, f64::max);
     let mut calibration = Calibration {
         thermal: thermal.cloned(),
+        temperature_compensation: TemperatureCompensation::of(thermal),
         rms_reprojection_px: report.rms_px,
         std: ModelStd::from_params(&m.layout(), &report.std),
         estimator: match options.estimator {

@@ -4,6 +4,7 @@
 mod common;
 
 mod pipeline_baseline;
+mod request;
 mod robust;
 mod select;
 mod uncertainty;

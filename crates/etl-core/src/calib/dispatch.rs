@@ -5,37 +5,54 @@
 //! families existed). [`with_layout!`] runs a body with `N` (the layout's length) and `P`
 //! (the padded row length of a view's reduced normal equations: the per-view variables but
 //! u0, v0, rounded up to a multiple of 4 so that their accumulation vectorises) bound as
-//! constants, with `O` the number of those per-view variables, for each of the ten
-//! layouts.
+//! constants, with `O` the number of those per-view variables, for each layout of the
+//! one table of distortion families and focal degrees ([`layout_table!`]).
+
+/// The layouts the solvers are compiled for, one row per distortion family: the
+/// [`DistortionModel`](crate::model::DistortionModel) variant and, for each focal degree
+/// 1..=5, the name of its storage in [`ViewScratch`](super::ViewScratch). Every size comes
+/// from the layout itself ([`Layout::len`](super::params::Layout::len),
+/// [`Layout::reduced_len`](super::params::Layout::reduced_len)), so a new family is one
+/// row here. Expands `$callback! { $args TABLE }` (the callback given as a path in
+/// brackets), so that [`with_layout!`] and the bundle adjustment's per-view storage are
+/// both made from this one table.
+macro_rules! layout_table {
+    ([$($callback:tt)+] $($args:tt)*) => {
+        $($callback)+! {
+            $($args)*
+            Paper: [1 => Paper1, 2 => Paper2, 3 => Paper3, 4 => Paper4, 5 => Paper5],
+            OpenCv: [1 => OpenCv1, 2 => OpenCv2, 3 => OpenCv3, 4 => OpenCv4, 5 => OpenCv5],
+        }
+    };
+}
 
 /// Runs `$body` (an expression of type `Result<_>`) with the constants `$n` = the layout's
 /// length, `$o` = the per-view variables other than u0, v0 (11 for the paper family, 13
-/// for opencv) and `$p` = their row length padded to a multiple of 4 (12, 16).
+/// for opencv) and `$p` = their row length padded to a multiple of 4 (12, 16), for each
+/// layout of [`layout_table!`].
 macro_rules! with_layout {
-    ($layout:expr, $n:ident, $o:ident, $p:ident, $body:expr) => {{
-        use $crate::model::DistortionModel::{OpenCv, Paper};
+    ($layout:expr, $n:ident, $o:ident, $p:ident, $body:expr) => {
+        $crate::calib::dispatch::layout_table!(
+            [$crate::calib::dispatch::with_layout] @arms ($layout, $n, $o, $p, $body)
+        )
+    };
+    (@arms ($layout:expr, $n:ident, $o:ident, $p:ident, $body:expr)
+        $($family:ident: [$($degree:literal => $name:ident),*],)*) => {{
+        use $crate::model::DistortionModel;
         match ($layout.model(), $layout.focal_degree()) {
-            (Paper, 1) => with_layout!(@ $n = 21, $o = 11, $p = 12, $body),
-            (Paper, 2) => with_layout!(@ $n = 23, $o = 11, $p = 12, $body),
-            (Paper, 3) => with_layout!(@ $n = 25, $o = 11, $p = 12, $body),
-            (Paper, 4) => with_layout!(@ $n = 27, $o = 11, $p = 12, $body),
-            (Paper, 5) => with_layout!(@ $n = 29, $o = 11, $p = 12, $body),
-            (OpenCv, 1) => with_layout!(@ $n = 27, $o = 13, $p = 16, $body),
-            (OpenCv, 2) => with_layout!(@ $n = 29, $o = 13, $p = 16, $body),
-            (OpenCv, 3) => with_layout!(@ $n = 31, $o = 13, $p = 16, $body),
-            (OpenCv, 4) => with_layout!(@ $n = 33, $o = 13, $p = 16, $body),
-            (OpenCv, 5) => with_layout!(@ $n = 35, $o = 13, $p = 16, $body),
+            $($((DistortionModel::$family, $degree) => {
+                const $n: usize = $crate::calib::params::Layout::of_table(DistortionModel::$family, $degree).len();
+                const $o: usize =
+                    $crate::calib::params::Layout::of_table(DistortionModel::$family, $degree).reduced_len() - 2;
+                const $p: usize = $o.div_ceil(4) * 4;
+                $body
+            })*)*
             _ => Err($crate::Error::InvalidArgument { what: "focal degree outside 1..=5" }),
         }
     }};
-    (@ $n:ident = $nv:literal, $o:ident = $ov:literal, $p:ident = $pv:literal, $body:expr) => {{
-        const $n: usize = $nv;
-        const $o: usize = $ov;
-        const $p: usize = $pv;
-        $body
-    }};
 }
 
+pub(crate) use layout_table;
 pub(crate) use with_layout;
 
 #[cfg(test)]
@@ -43,6 +60,20 @@ mod tests {
     use crate::calib::params::Layout;
     use crate::model::{DistortionModel, MAX_FOCAL_DEGREE};
     use crate::Result;
+
+    /// The sizes of today's layouts, as they were kept by hand before the table: the
+    /// paper family 19 + 2 d numbers (11 per-view variables but u0, v0, padded to 12),
+    /// opencv 25 + 2 d (13, padded to 16).
+    #[test]
+    fn the_table_gives_the_sizes_of_before() {
+        for d in 1..=MAX_FOCAL_DEGREE {
+            let paper = Layout::new(DistortionModel::Paper, d).unwrap();
+            let opencv = Layout::new(DistortionModel::OpenCv, d).unwrap();
+            let sizes = |l: Layout| with_layout!(l, N, O, P, Result::Ok((N, O, P))).unwrap();
+            assert_eq!(sizes(paper), (19 + 2 * d, 11, 12));
+            assert_eq!(sizes(opencv), (25 + 2 * d, 13, 16));
+        }
+    }
 
     /// Every layout gets its own length, the count of its per-view variables but u0, v0,
     /// and a padded row that holds them.
@@ -55,6 +86,7 @@ mod tests {
                 assert_eq!(n, l.len());
                 assert_eq!(o, l.reduced_len() - 2);
                 assert!(p >= o && p % 4 == 0 && p < o + 4, "{l:?}");
+                assert_eq!(Layout::of_table(model, d), l);
             }
         }
     }

@@ -25,7 +25,7 @@
 use super::observations::{validate, View};
 use crate::error::{Error, Result};
 use crate::fit::{GivensQr, PolyFit};
-use crate::model::camera::project_camera_point;
+use crate::model::projection::project_camera_point;
 use crate::model::distortion::opencv_rows;
 use crate::model::{CameraModel, Distortion, DistortionA, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS};
 

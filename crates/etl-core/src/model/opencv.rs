@@ -14,7 +14,7 @@
 //! least-squares ones over the image and states the fit error; the error is that of the
 //! export, never hidden.
 
-use super::camera::Intrinsics;
+use super::projection::Intrinsics;
 use super::distortion::Distortion;
 use super::family::DistortionModel;
 use crate::error::{Error, Result};

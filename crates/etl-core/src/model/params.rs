@@ -82,6 +82,13 @@ impl Layout {
         Ok(Layout { model, focal_degree })
     }
 
+    /// The layout of family `model` with focal degree `focal_degree`, unchecked: for the
+    /// table of the layouts the solvers are compiled for (`calib::dispatch`), whose
+    /// degrees are 1..=5. Everywhere else use [`Layout::new`], which checks the degree.
+    pub(crate) const fn of_table(model: DistortionModel, focal_degree: usize) -> Self {
+        Layout { model, focal_degree }
+    }
+
     /// The layout of `model`'s numbers (its family, and kf_x's degree).
     pub const fn of(model: &CameraModel) -> Self {
         Layout { model: model.distortion_a.model(), focal_degree: model.kf_x.degree() }
@@ -298,6 +305,15 @@ impl core::ops::BitOr for ParamMask {
     type Output = ParamMask;
     fn bitor(self, rhs: ParamMask) -> ParamMask {
         self.union(rhs)
+    }
+}
+
+// Here rather than beside the model's fields: the layout is this module's, and the model
+// (`super::projection`) does not depend on it.
+impl CameraModel {
+    /// The layout of this model's parameter vector (family and focal degree).
+    pub fn layout(&self) -> Layout {
+        Layout::of(self)
     }
 }
 

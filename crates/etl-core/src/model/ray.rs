@@ -1,6 +1,6 @@
 //! The viewing ray of a pixel.
 
-use super::camera::CameraModel;
+use super::projection::CameraModel;
 use nalgebra::Vector3;
 
 use super::rotation::to_matrix3;

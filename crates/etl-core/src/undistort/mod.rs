@@ -29,12 +29,15 @@
 //! # Ok::<(), etl_core::Error>(())
 //! ```
 
-mod bilinear;
-pub mod camera;
 pub mod maps;
-mod opencv_maps;
+pub mod pinhole;
 pub mod remap;
 
-pub use camera::{OutputCamera, MAX_SIDE_PX};
+pub use pinhole::{OutputCamera, MAX_SIDE_PX};
 pub use maps::undistort_maps;
 pub use remap::{remap, Sample, SourceImage};
+
+// The path before issue 26 (`camera` held the output image's pinhole camera): kept so that
+// code written against it still compiles.
+#[doc(hidden)]
+pub use pinhole as camera;

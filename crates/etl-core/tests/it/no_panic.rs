@@ -5,7 +5,7 @@
 use etl_core::error::{all_finite, finite};
 use etl_core::fit::basis::{chebyshev_to_monomial, chebyshev_values, horner, scaled_power_in_raw, scaled_to_raw};
 use etl_core::fit::{GivensQr, PolyFit, Polynomial};
-use etl_core::model::camera::project_camera_point;
+use etl_core::model::projection::project_camera_point;
 use etl_core::model::rotation::{mat_t_vec, mat_vec, matrix_to_rodrigues, rodrigues_to_matrix};
 use etl_core::model::{CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, Intrinsics, Ray};
 use etl_core::physics::LensPhysics;

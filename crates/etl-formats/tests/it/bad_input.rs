@@ -193,6 +193,16 @@ fn the_shared_checkers_and_constructors_fill_the_fields() {
     let renamed = Error::invalid("views[2].pixels", "m").map_what(|w| w.replacen("views", "offstate_views", 1));
     assert_eq!(renamed.input_what(), Some("offstate_views[2].pixels"));
     assert_eq!(Error::invalid("[4]", "m").under("views").input_what(), Some("views[4]"));
+    // A library option under a front end's name, in `what` and in the message; another
+    // input's error is left alone.
+    let edge = Error::invalid_value("search_half_width_ma", 20.0, "window edge: widen the search (search_half_width_ma)");
+    let flag = edge.rename_input("search_half_width_ma", "--search-ma");
+    assert_eq!((flag.input_what(), flag.input_value()), (Some("--search-ma"), Some("20".to_owned())));
+    assert_eq!(flag.to_string(), "invalid input: window edge: widen the search (--search-ma)");
+    let other = Error::invalid("tolerance_ma", "search_half_width_ma and tolerance_ma must be positive");
+    let other = other.rename_input("search_half_width_ma", "search_ma");
+    assert_eq!(other.input_what(), Some("tolerance_ma"));
+    assert!(other.to_string().contains("search_half_width_ma and"), "{other}");
     let io = Error::Io { path: "x".into(), source: std::io::Error::other("gone") };
     let io = io.under("views");
     assert_eq!((io.kind(), io.input_what(), io.to_string()), (ErrorKind::Io, None, "x: gone".to_owned()));

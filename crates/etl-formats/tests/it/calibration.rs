@@ -324,3 +324,56 @@ fn a_bad_family_or_length_is_refused_naming_the_field() {
         assert_eq!(Calibration::parse(&json, &out).unwrap_err().kind(), ErrorKind::Parse, "{name}");
     }
 }
+
+/// Issue 26: `"temperature_compensation": "none"` says a calibration has no temperature
+/// compensation. Absent (older files, files with a thermal part) nothing changes, byte for
+/// byte; present, it round-trips; beside a thermal part, or another word, it is refused.
+#[test]
+fn temperature_compensation_none_is_optional_and_checked() {
+    use etl_formats::calibration::{TemperatureCompensation, NO_TEMPERATURE_COMPENSATION};
+    let text = std::fs::read_to_string(fixture()).unwrap();
+    assert!(!text.contains("temperature_compensation"));
+    let dir = tempfile::tempdir().unwrap();
+    // An older file without a thermal part reads and writes as it was.
+    let mut old = Calibration::load(&fixture()).unwrap();
+    old.thermal = None;
+    let old_path = dir.path().join("old.json");
+    etl_formats::write_json(&old_path, &old).unwrap();
+    let old_text = std::fs::read_to_string(&old_path).unwrap();
+    let read = Calibration::load(&old_path).unwrap();
+    assert_eq!(read.temperature_compensation, None);
+    assert_eq!(read.temperature_compensation_warning(), None);
+    read.save(&old_path).unwrap();
+    assert_eq!(std::fs::read_to_string(&old_path).unwrap(), old_text);
+    // "none" round-trips, and is used at a known E_com only.
+    let mut none = old.clone();
+    none.temperature_compensation = TemperatureCompensation::of(None);
+    assert_eq!(TemperatureCompensation::of(old.thermal.as_ref()), Some(TemperatureCompensation::None));
+    let path = dir.path().join("none.json");
+    none.save(&path).unwrap();
+    let written = std::fs::read_to_string(&path).unwrap();
+    assert!(written.contains("\"temperature_compensation\": \"none\""), "{written}");
+    let back = Calibration::load(&path).unwrap();
+    assert_eq!(back, none);
+    assert_eq!(back.temperature_compensation_warning(), Some(NO_TEMPERATURE_COMPENSATION));
+    let at = back.at_e_com(150.0, etl_formats::Trust::Refuse).unwrap();
+    let model = back.model().unwrap();
+    assert_eq!(at.project([3.0, 4.5, 60.0]).unwrap(), model.project([3.0, 4.5, 60.0], 150.0).unwrap());
+    assert!(at.e_in_ma().is_nan() && !at.extrapolated());
+    let e = back.at_e_com(240.0, etl_formats::Trust::Refuse).unwrap_err().to_string();
+    assert!(e.contains("e_com_ma = 240 is outside [75, 230]"), "{e}");
+    assert!(back.at_e_com(240.0, etl_formats::Trust::Extrapolate).unwrap().extrapolated());
+    assert!(back.at(150.0, 30.0, etl_formats::Trust::Refuse).unwrap_err().to_string().contains("at_e_com"));
+    // Beside a thermal part: refused by the writer and by the reader.
+    let mut both = Calibration::load(&fixture()).unwrap();
+    both.temperature_compensation = Some(TemperatureCompensation::None);
+    let bad = dir.path().join("both.json");
+    let e = both.save(&bad).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Parse);
+    assert!(e.to_string().contains("temperature_compensation = \"none\" but the calibration has a thermal part"), "{e}");
+    assert!(!bad.exists());
+    // Another word is not a value of the field.
+    let word = written.replace("\"temperature_compensation\": \"none\"", "\"temperature_compensation\": \"partial\"");
+    let e = Calibration::parse(&word, &bad).unwrap_err().to_string();
+    assert!(e.contains("partial") && e.contains("none"), "{e}");
+}

@@ -9,5 +9,6 @@ mod support {
 mod bad_input;
 mod calibration;
 mod focus_law;
+mod optics;
 mod readers_mutations;
 mod readers_prop;

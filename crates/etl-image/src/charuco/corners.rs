@@ -6,7 +6,7 @@
 //! and 2 px.
 //!
 //! The prediction is refined by the checkerboard detector's point-symmetry refinement
-//! (`detect::refine`: `I(c + d) = I(c - d)`, unbiased under blur and perspective for two
+//! (`crate::subpixel`: `I(c + d) = I(c - d)`, unbiased under blur and perspective for two
 //! straight edges crossing at `c`) over a window masked to where a ChArUco board really is
 //! point-symmetric about its corner: the two black squares, and in the two white squares
 //! only the white margin between the corner's edges and the markers (within `margin - delta`
@@ -30,8 +30,8 @@ use rayon::prelude::*;
 
 use super::homography::inverse2;
 use super::layout::Placed;
-use crate::detect::plane::{GrayView, Sample};
-use crate::detect::refine::{self, Window};
+use crate::grey::{GrayView, Sample};
+use crate::subpixel::{self, Window};
 
 /// Refinement window radius: fraction of the local square size (as the checkerboard's).
 const WINDOW_FRACTION: f64 = 0.4;
@@ -120,7 +120,7 @@ impl Corner<'_> {
         let room = p[0].min(p[1]).min(w - 3.0 - p[0]).min(h - 3.0 - p[1]).floor();
         let radius = (WINDOW_FRACTION * self.spacing).min(MAX_RADIUS).min(room);
         let window = self.window(radius, blur_px)?;
-        let refined = refine::refine_smoothed(img, &window, p, 0.1 * self.spacing + 2.0)?;
+        let refined = subpixel::refine_smoothed(img, &window, p, 0.1 * self.spacing + 2.0)?;
         let margin_mm = 0.5 * (self.board.square_mm() - self.board.marker_mm());
         self.is_saddle(img, refined, margin_mm.min(0.25 * self.board.square_mm()), contrast).then_some(refined)
     }

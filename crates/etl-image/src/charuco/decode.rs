@@ -12,7 +12,7 @@
 use etl_core::board::Dictionary;
 
 use super::homography::Homography;
-use crate::detect::plane::{GrayView, Sample};
+use crate::grey::{GrayView, Sample};
 
 /// Samples per cell and direction.
 const SAMPLES: usize = 3;

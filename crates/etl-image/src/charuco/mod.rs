@@ -51,8 +51,8 @@ use etl_core::board::{CharucoBoard, Dictionary};
 use image::{DynamicImage, GrayImage, ImageBuffer, Luma};
 use rayon::prelude::*;
 
-use crate::detect::plane::{self, GrayView, Sample};
-use crate::detect::{view_of, with_grey_view};
+use crate::grey::{self, GrayView, Sample};
+use crate::grey::{view_of, with_grey_view};
 use etl_formats::{Error, Result};
 
 /// A marker found in the image.
@@ -232,7 +232,7 @@ struct Found {
 /// border dark across its width, the small one separates a small marker from the black
 /// squares when the white margin between them is a pixel or two.
 fn markers_at_level<T: Sample>(img: &GrayView<'_, T>, factor: usize, dict: &Dictionary) -> (Vec<Found>, usize) {
-    let level = plane::downsample(*img, factor);
+    let level = grey::downsample(*img, factor);
     let f = factor as f64;
     let min_side_px = MIN_CELL_PX * (dict.marker_bits() + 2) as f64;
     let min_side = ((min_side_px / f).floor() as usize).max(4);

@@ -6,7 +6,7 @@
 //! is at the step, whatever the blur); a straight line through these points, fitted by total
 //! least squares, is the side, and the corners are where consecutive sides cross.
 
-use crate::detect::plane::{GrayView, Sample};
+use crate::grey::{GrayView, Sample};
 
 /// The polygon tolerance as a fraction of the contour's length (OpenCV's default).
 const POLY_RATE: f64 = 0.03;

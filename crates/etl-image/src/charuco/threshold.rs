@@ -8,7 +8,7 @@
 
 use rayon::prelude::*;
 
-use crate::detect::plane::Plane;
+use crate::grey::Plane;
 
 /// A binary image: `data[y * width + x]` is true for a dark pixel.
 pub(crate) struct Mask {

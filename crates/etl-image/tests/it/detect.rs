@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use etl_formats::Error;
-use etl_image::detect::{detect_corners, detect_corners_u16, detect_file, detect_many, Pattern};
+use etl_image::checkerboard::{detect_corners, detect_corners_u16, detect_file, detect_many, Pattern};
 use image::{GrayImage, ImageBuffer, Luma};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -217,7 +217,7 @@ fn pat(s: &str) -> Pattern {
     s.parse().unwrap()
 }
 
-fn not_found(r: etl_formats::Result<etl_image::detect::Detection>) -> String {
+fn not_found(r: etl_formats::Result<etl_image::checkerboard::Detection>) -> String {
     match r {
         Err(Error::BoardNotFound(m)) => m,
         Err(e) => panic!("expected BoardNotFound, got {e}"),
@@ -265,7 +265,7 @@ fn accuracy_on_rendered_boards_at_three_blurs() {
             let r = rendered_view(rot, 66.0, blur, 7 + k as u64);
             assert!(r.corners_in_image.iter().all(|&b| b));
             let img = r.image.to_dynamic();
-            let det = etl_image::detect::detect_dynamic(&img, pat("14x12"))
+            let det = etl_image::checkerboard::detect_dynamic(&img, pat("14x12"))
                 .unwrap_or_else(|e| panic!("blur {blur} pose {k}: {e}"));
             let truth = r.corners_px.clone();
             // Symmetric board: corner 0 is the one nearest the top-left; compare either way.

@@ -6,7 +6,10 @@ points, (N, 2) pixels, 3 x 3 matrices.
 
 Main nouns:
 - `Calibration`: a calibrated camera (load / save / e_com / intrinsics / distortion /
-  project / undistort / ray / solve_pnp / to_opencv).
+  project / undistort / ray / solve_pnp / to_opencv), and `CameraAt`, the camera at one
+  setting (`cal.at(e_in_ma, temperature_c)`, or `cal.at_e_com(e_com_ma)` at a known E_com,
+  e.g. for a calibration without temperature compensation), which holds the run-time
+  operations; `Calibration`'s methods taking `e_com_ma` are `at_e_com(e_com_ma)`'s.
 - `Observations`, `A0`: the input of `calibrate(...)`.
 - `ThermalSurface`, `ThermalCalibration`: temperature compensation (E_com = E_in - E_T).
 - `LensPhysics` and `etlcal.physics`: the lens's physical model.
@@ -29,6 +32,7 @@ Main nouns:
   (also `study(name)`): the paper's simulation studies.
 
 Results are typed objects (`etlcal.results`: `ZhangResult`, `AutofocusResult`,
+`PaperDistortion` / `OpenCvDistortion` (what `distortion` gives, by family),
 `Compensation`, `ModelStd`, `View`, `StudyResult`, `LensInfo`, `HoldReport`, ...):
 attributes with a short repr, and read-only mappings too (`r["key"]`, `"key" in r`,
 `r.keys()`), as the dicts they replace. `etlcal.options` names the words each option accepts (`typing.Literal`).

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, ClassVar, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -24,6 +24,7 @@ __all__ = [
     "Compensation",
     "CompensationArray",
     "DetectionSummary",
+    "Distortion",
     "ExportResult",
     "FocusLaw",
     "HoldReport",
@@ -33,6 +34,8 @@ __all__ = [
     "ModelStd",
     "OffstateView",
     "OpenCvCamera",
+    "OpenCvDistortion",
+    "PaperDistortion",
     "StudyResult",
     "ThermalCalibrationResult",
     "View",
@@ -405,3 +408,103 @@ class OpenCvCamera(Tuple[_F64, _F64]):
         how = "exact" if self.exact else f"least-squares fit, error {_short(self.fit_rms_px)} px RMS"
         return (f"OpenCvCamera(camera_matrix={_short(self.camera_matrix)}, "
                 f"dist_coeffs={_short(self.dist_coeffs)}, {how})")
+
+
+class Distortion(Tuple[Any, ...]):
+    """`Calibration.distortion(e_com_ma)`, `CameraAt.distortion`: the distortion
+    coefficients at one current, named for their family (`model`: "paper" or "opencv",
+    the calibration's `distortion_model`). A tuple of the coefficients in the family's
+    order (`names`), as the paper family's (k1, p1, p2) always was (`k1, p1, p2 =
+    cal.distortion(E)`), with one attribute per coefficient and `to_dict()`. Over an array
+    of currents each coefficient is an array of that shape. Frozen (a tuple)."""
+
+    __slots__ = ()
+    model: ClassVar[str] = ""
+    names: ClassVar[Tuple[str, ...]] = ()
+
+    def __new__(cls, *coefficients: Any) -> "Distortion":
+        if not cls.names:
+            raise TypeError("Distortion is abstract: use Distortion.of(model, ...) or a family's class")
+        if len(coefficients) != len(cls.names):
+            raise TypeError(f"{cls.__name__} takes {len(cls.names)} coefficients ({', '.join(cls.names)}), "
+                            f"got {len(coefficients)}")
+        return super().__new__(cls, coefficients)
+
+    @staticmethod
+    def of(model: str, *coefficients: Any) -> "Distortion":
+        """The result of family `model` ("paper" or "opencv") with its coefficients."""
+        for family in Distortion.__subclasses__():
+            if family.model == model:
+                return family(*coefficients)
+        raise ValueError(f"no distortion family {model!r}: use \"paper\" or \"opencv\"")
+
+    def __getnewargs__(self) -> Tuple[Any, ...]:
+        # Pickling: the coefficients as __new__'s arguments (a tuple would pass one).
+        return tuple(self)
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The coefficients as a plain dict, keyed by their names (arrays stay arrays)."""
+        return dict(zip(self.names, self))
+
+    def __repr__(self) -> str:
+        inner = ", ".join(f"{k}={_short(v)}" for k, v in zip(self.names, self))
+        return f"{type(self).__name__}({inner})"
+
+
+class PaperDistortion(Distortion):
+    """The paper's family (Eq. 17-18), acting on pixel coordinates centred on the
+    principal point: radial `k1` (1/px^2) and decentering `p1`, `p2` (1/px; Weng's term)."""
+
+    __slots__ = ()
+    model = "paper"
+    names = ("k1", "p1", "p2")
+
+    @property
+    def k1(self) -> Any:
+        """Radial k1, 1/px^2."""
+        return self[0]
+
+    @property
+    def p1(self) -> Any:
+        """Decentering p1 (paired with 3u^2 + v^2 in u_d), 1/px."""
+        return self[1]
+
+    @property
+    def p2(self) -> Any:
+        """Decentering p2 (paired with u^2 + 3v^2 in v_d), 1/px."""
+        return self[2]
+
+
+class OpenCvDistortion(Distortion):
+    """OpenCV's family in normalised coordinates (x = (u - u0) / fx), OpenCV's order and
+    meaning: radial `k1`, `k2`, `k3` and tangential `p1`, `p2`, dimensionless (the
+    `dist_coeffs` cv2 takes, exactly)."""
+
+    __slots__ = ()
+    model = "opencv"
+    names = ("k1", "k2", "p1", "p2", "k3")
+
+    @property
+    def k1(self) -> Any:
+        """Radial k1 (r^2), dimensionless."""
+        return self[0]
+
+    @property
+    def k2(self) -> Any:
+        """Radial k2 (r^4), dimensionless."""
+        return self[1]
+
+    @property
+    def p1(self) -> Any:
+        """Tangential p1, dimensionless."""
+        return self[2]
+
+    @property
+    def p2(self) -> Any:
+        """Tangential p2, dimensionless."""
+        return self[3]
+
+    @property
+    def k3(self) -> Any:
+        """Radial k3 (r^6), dimensionless."""
+        return self[4]

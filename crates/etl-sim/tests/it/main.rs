@@ -3,6 +3,7 @@
 
 mod autofocus;
 mod focus_law;
+mod optics;
 mod render;
 mod rig_images;
 mod simconfig_prop;

@@ -138,15 +138,51 @@ fn demo_meets_the_acceptance_figures() {
     let last = pnp.last().unwrap();
     assert_eq!(last["e_com_ma"].as_f64().unwrap(), 225.0);
     assert!(last["err_um"].as_f64().unwrap() < 20.0, "{last}");
-    for f in ["observations.json", "a0.json", "truth.json", "calibration.json", "calibration-eiv.json", "summary.md"] {
+    for f in ["observations.json", "a0.json", "truth.json", "calibration.json", "calibration-paper.json", "summary.md"]
+    {
         assert!(d.join(f).is_file(), "{f} not written");
     }
+    demo_files_are_named_for_what_they_hold(&d, &j);
     readme_demo_table_is(&j);
     // With a better stage the paper estimator's curve error falls accordingly.
     let (code, stdout, _) = etlcal(&["demo", "--out", d.to_str().unwrap(), "--json", "--stage-noise-um", "1"]);
     assert_eq!(code, 0);
     let j1: Value = serde_json::from_str(&stdout).unwrap();
     assert!(j1["fx_curve_max_rel_err"].as_f64().unwrap() < 0.5 * j["fx_curve_max_rel_err"].as_f64().unwrap());
+}
+
+/// calibration.json is the recommended estimator's (errors-in-variables, the `"eiv"`
+/// figures of `--json`), calibration-paper.json the paper's; a0.json is Zhang's A0 from
+/// the lens-off views: close to the true A0 (truth.json's `kf_x[0]`, `kf_y[0]`,
+/// `principal_point`) and not equal to it; report/ is the recommended calibration's.
+fn demo_files_are_named_for_what_they_hold(d: &Path, j: &Value) {
+    let read = |f: &str| -> Value { serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap() };
+    let (cal, paper) = (read("calibration.json"), read("calibration-paper.json"));
+    assert_eq!(cal["estimator"], "eiv");
+    assert_eq!(paper["estimator"], "paper");
+    let rms = |v: &Value| v["rms_reprojection_px"].as_f64().unwrap();
+    assert_eq!(rms(&cal), j["eiv"]["rms_reprojection_px"].as_f64().unwrap());
+    assert_eq!(rms(&paper), j["rms_reprojection_px"].as_f64().unwrap());
+    let (a0, truth) = (read("a0.json"), read("truth.json"));
+    let truth = &truth["dataset_model"];
+    let f = |v: &Value, k: &str, i: usize| v[k][i].as_f64().unwrap();
+    let (kf0x, kf0y) = (f(truth, "kf_x", 0), f(truth, "kf_y", 0));
+    let (u0, v0) = (f(truth, "principal_point", 0), f(truth, "principal_point", 1));
+    let got = |k: &str| a0[k].as_f64().unwrap();
+    assert!((got("kf0x") / kf0x - 1.0).abs() < 0.01 && (got("kf0y") / kf0y - 1.0).abs() < 0.01, "{a0} vs {truth}");
+    assert!((got("u0") - u0).hypot(got("v0") - v0) < 10.0, "{a0} vs {truth}");
+    assert!(got("u0") != u0 && got("kf0x") != kf0x, "a0.json is the truth's, not Zhang's: {a0}");
+    // The page to open first names the recommended calibration first and links every file.
+    let page = std::fs::read_to_string(d.join("index.html")).unwrap();
+    for file in ["report/index.html", "report-paper/index.html", "calibration.json", "a0.json", "dataset.json"] {
+        assert!(page.contains(&format!("<a href=\"{file}\">")), "index.html links no {file}");
+    }
+    let eiv_fx = format!("{:.3} %", 100.0 * j["eiv"]["fx_curve_max_rel_err"].as_f64().unwrap());
+    let paper_fx = format!("{:.3} %", 100.0 * j["fx_curve_max_rel_err"].as_f64().unwrap());
+    assert!(page.contains(&format!("<td>max rel. error of fx(E)</td><td>{eiv_fx}</td><td>{paper_fx}</td>")), "{page}");
+    let index = std::fs::read_to_string(d.join("report/index.html")).unwrap();
+    assert!(index.contains("calibration.json") && !index.contains("calibration-paper.json"));
+    assert!(std::fs::read_to_string(d.join("report-paper/index.html")).unwrap().contains("calibration-paper.json"));
 }
 
 /// The README's demo table states what `etlcal demo --json` (seed 1, images) prints, rounded
@@ -292,4 +328,91 @@ fn outliers_are_reported_in_the_json_and_warned_on_stderr() {
     assert!(j["warnings"][0].as_str().unwrap().starts_with("3 of 2311 corners"), "{}", j["warnings"]);
     assert!(err.contains("etlcal: warning: 3 of 2311 corners"), "{err}");
     assert!((j["principal_point"][0].as_f64().unwrap() - 900.0).abs() < 2.0, "{}", j["principal_point"]);
+}
+
+/// Runs a failing calibrate and checks: exit `code`, one line containing every one of
+/// `needles`, and the earlier output file left exactly as it was.
+fn fails_with(args: &[&str], out: &Path, code: i32, needles: &[&str]) {
+    std::fs::write(out, "earlier output").unwrap();
+    let (got, stdout, err) = etlcal(args);
+    assert_eq!(got, code, "{args:?}: stdout {stdout} stderr {err}");
+    assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+    for needle in needles {
+        assert!(err.contains(needle), "{args:?}: expected {needle:?} in {err}");
+    }
+    assert_eq!(std::fs::read_to_string(out).unwrap(), "earlier output");
+}
+
+#[test]
+fn robust_and_sigma_flags_match_python_and_the_alias_is_the_same_request() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate(dir.path());
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    let (obs, a0) = (p("observations.json"), p("a0.json"));
+    let calibrate = |out: &str, extra: &[&str]| {
+        let mut args = vec!["calibrate", "--observations", &obs, "--a0", &a0, "--out", out];
+        args.extend_from_slice(extra);
+        let (code, _, err) = etlcal(&args);
+        assert_eq!(code, 0, "{extra:?}: {err}");
+        serde_json::from_str::<Value>(&std::fs::read_to_string(out).unwrap()).unwrap()
+    };
+    // --huber-px K is --robust huber --robust-k-px K, number for number.
+    let alias = calibrate(&p("alias.json"), &["--huber-px", "0.8"]);
+    assert_eq!(alias, calibrate(&p("robust.json"), &["--robust", "huber", "--robust-k-px", "0.8"]));
+    let plain = calibrate(&p("plain.json"), &[]);
+    assert_ne!(alias["kf_x"], plain["kf_x"], "the loss reached the solver");
+    // Cauchy, with the documented default k of 1 px.
+    let cauchy = calibrate(&p("cauchy.json"), &["--robust", "cauchy"]);
+    assert_eq!(cauchy, calibrate(&p("cauchy1.json"), &["--robust", "cauchy", "--robust-k-px", "1"]));
+    assert_ne!(cauchy["kf_x"], plain["kf_x"]);
+    // The stage prior in either unit; the pixel noise given instead of estimated.
+    let um = calibrate(&p("um.json"), &["--sigma-z-um", "20"]);
+    assert_eq!(um, calibrate(&p("mm.json"), &["--sigma-z-mm", "0.02"]));
+    assert_ne!(um["kf_x"], plain["kf_x"]);
+    let px = calibrate(&p("px.json"), &["--sigma-px", "0.25"]);
+    assert_ne!(px["kf_x"], plain["kf_x"]);
+    let (code, help, _) = etlcal(&["calibrate", "--help"]);
+    assert_eq!(code, 0);
+    for words in ["an alias of `--robust huber --robust-k-px PX`", "--sigma-z-mm", "--sigma-px", "[default: 10"] {
+        assert!(help.contains(words), "{words:?} not in {help}");
+    }
+}
+
+#[test]
+fn bad_robust_and_sigma_flags_fail_naming_the_flag_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate(dir.path());
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    let (obs, a0, out) = (p("observations.json"), p("a0.json"), p("cal.json"));
+    // Command lines that do not parse: exit 2, the parser's one line naming the flags.
+    let usage: [(&[&str], &[&str]); 6] = [
+        (&["--robust", "huber", "--huber-px", "1"], &["--huber-px", "--robust"]),
+        (&["--robust", "cauchy", "--robust-k-px", "2", "--huber-px", "1"], &["--huber-px", "--robust"]),
+        (&["--robust-k-px", "2"], &["--robust"]),
+        (&["--robust", "l1"], &["l1", "--robust"]),
+        (&["--sigma-z-um", "10", "--sigma-z-mm", "0.01"], &["--sigma-z-mm", "--sigma-z-um"]),
+        (&["--sigma-px", "wide"], &["--sigma-px", "wide"]),
+    ];
+    // Values the request refuses: exit 1 (the CLI's bad input value), the flag as given.
+    let refused: [(&[&str], &[&str]); 9] = [
+        (&["--robust", "cauchy", "--robust-k-px", "-1"], &["--robust-k-px must be positive and finite"]),
+        (&["--robust", "huber", "--robust-k-px", "inf"], &["--robust-k-px must be positive and finite"]),
+        (&["--huber-px", "-1"], &["--huber-px must be positive"]),
+        (&["--sigma-z-um", "-1"], &["--sigma-z-um must be positive"]),
+        (&["--sigma-z-mm", "0"], &["--sigma-z-mm must be positive"]),
+        (&["--sigma-e-ma", "-0.4"], &["--sigma-e-ma must be positive"]),
+        (&["--sigma-px", "nan"], &["--sigma-px must be positive"]),
+        (
+            &["--method", "per-setting", "--robust", "cauchy"],
+            &["--method per-setting takes no --a0, --estimator, --hold-a0 or --robust:"],
+        ),
+        (&["--method", "per-setting", "--huber-px", "1"], &["takes no --a0, --estimator, --hold-a0 or --huber-px:"]),
+    ];
+    for (code, cases) in [(2, &usage[..]), (1, &refused[..])] {
+        for (extra, needles) in cases {
+            let mut args = vec!["calibrate", "--observations", &obs, "--a0", &a0, "--out", &out];
+            args.extend_from_slice(extra);
+            fails_with(&args, Path::new(&out), code, needles);
+        }
+    }
 }

@@ -16,7 +16,7 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
     json_of(&["demo", "--no-images", "--out", &p("demo"), "--json"]);
-    let cal = p("demo/calibration-eiv.json");
+    let cal = p("demo/calibration.json");
     // The board must stay in the image: at this current and 2 mm nearer it does.
     // The compensated current of (E_in, T) = (153 mA, 30 degC) through the paper's surface,
     // which the demo's calibration records.

@@ -26,3 +26,18 @@ fn the_virtual_procedure_recovers_the_true_surface_and_writes_both_files() {
     assert_eq!(table.lines().next(), Some("temperature_c,e_in_ma,e_t_ma"));
     assert_eq!(table.lines().count(), 26);
 }
+
+/// A search window too narrow for the lens's drift: the refocus ends at its edge, and the
+/// one-line error names the flag to widen (not the library's field), nothing written.
+#[test]
+fn a_refocus_at_the_edge_of_its_window_names_the_flag_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("thermal.json");
+    let args = ["thermal", "calibrate", "--virtual", "--quick", "--search-ma", "0.5", "--out", out.to_str().unwrap()];
+    let (code, stdout, err) = super::common::etlcal_run(&args);
+    assert_eq!((code, stdout.as_str()), (1, ""), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("ended at the edge of its window") && err.contains("widen the search (--search-ma)"), "{err}");
+    assert!(!err.contains("search_half_width_ma"), "{err}");
+    assert!(!out.exists() && !out.with_extension("csv").exists());
+}

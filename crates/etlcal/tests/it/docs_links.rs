@@ -1,6 +1,7 @@
-//! Everything the README, docs/ and the generated reports refer to is in the repository:
-//! `scripts/check-links.py` (links, repository paths, no reference to material outside the
-//! repository) over the documents and over a demo's and a study's freshly written output.
+//! Everything the README, the changelog, docs/ and the generated reports refer to is in the
+//! repository: `scripts/check-links.py` (links, repository paths, no reference to material
+//! outside the repository) over the documents and over a demo's and a study's freshly
+//! written output.
 
 use std::path::Path;
 use std::process::Command;
@@ -19,7 +20,7 @@ fn documents_and_generated_reports_refer_only_to_files_in_the_repository() {
     }
     let out = Command::new("python3")
         .arg(root.join("scripts/check-links.py"))
-        .args([root.join("README.md"), root.join("docs"), demo, study])
+        .args([root.join("README.md"), root.join("CHANGELOG.md"), root.join("docs"), demo, study])
         .output()
         .expect("python3 runs the link checker");
     assert!(

@@ -24,6 +24,7 @@ mod cli_study;
 mod cli_thermal;
 mod cli_undistort;
 mod cli_zhang;
+mod docs_cli;
 mod docs_links;
 mod fuzz_corpus;
 mod golden;

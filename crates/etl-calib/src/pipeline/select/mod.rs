@@ -197,28 +197,3 @@ pub fn select(
     result.calibration.model_selection = Some(table);
     Ok(result)
 }
-
-/// Refuses OpenCV's flags where they mean nothing: `flags` set while the family is the
-/// paper's (`family` None: chosen by the data, which may pick opencv: allowed). The error
-/// names the flag as the front end spells it (`names`: fix-k3's, zero-tangent's) and what
-/// it needs (`needs`, e.g. `--distortion opencv or auto`).
-pub fn refuse_opencv_flags(
-    family: Option<DistortionModel>,
-    flags: OpenCvFlags,
-    names: [&str; 2],
-    needs: &str,
-) -> Result<()> {
-    if family != Some(DistortionModel::Paper) {
-        return Ok(());
-    }
-    match [flags.fix_k3, flags.zero_tangent].iter().position(|&set| set) {
-        Some(k) => Err(Error::invalid(
-            names[k],
-            format!(
-                "{} is an OpenCV flag: it needs {needs} (the paper's distortion has no k3 and keeps its decentering terms)",
-                names[k]
-            ),
-        )),
-        None => Ok(()),
-    }
-}

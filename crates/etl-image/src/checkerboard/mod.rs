@@ -1,5 +1,10 @@
 //! Checkerboard detection with sub-pixel refinement.
 //!
+//! Named `checkerboard` for the board it finds (ChArUco boards are [`crate::charuco`]'s);
+//! the primitives both detectors share are modules of their own, as OpenCV shares
+//! `cornerSubPix`: grey images ([`crate::grey`]) and sub-pixel refinement
+//! ([`crate::subpixel`]).
+//!
 //! [`detect_corners`] finds a board of `cols` x `rows` inner corners ([`Pattern`]) in a grey
 //! image (8- or 16-bit) and returns every corner in a stable order (see below), refined to
 //! a few hundredths of a pixel. A board that is not found, or found only in part, or of
@@ -38,8 +43,6 @@
 mod candidates;
 mod grid;
 mod order;
-pub(crate) mod plane;
-pub(crate) mod refine;
 mod response;
 
 use std::collections::HashMap;
@@ -50,7 +53,9 @@ use std::str::FromStr;
 use image::{DynamicImage, GrayImage, ImageBuffer, Luma};
 use rayon::prelude::*;
 
-pub use plane::{GrayView, Sample};
+pub use crate::grey::{GrayView, Sample};
+use crate::grey::{self, view_of, with_grey_view};
+use crate::subpixel;
 
 use etl_formats::{Error, Result};
 
@@ -142,7 +147,7 @@ const MIN_WINDOW: usize = 2;
 /// Finds the board in an 8-bit image.
 ///
 /// ```
-/// use etl_image::detect::{detect_corners, Pattern};
+/// use etl_image::checkerboard::{detect_corners, Pattern};
 /// // A sharp 5 x 4 board (inner corners) of 20 px squares, dark square at the first corner.
 /// let img = image::GrayImage::from_fn(160, 140, |x, y| {
 ///     let (i, j) = ((x as i32 - 20) / 20, (y as i32 - 20) / 20);
@@ -171,29 +176,6 @@ pub fn detect_dynamic(image: &DynamicImage, pattern: Pattern) -> Result<Detectio
     with_grey_view(image, |v| detect_view(v, pattern), |v| detect_view(v, pattern))
 }
 
-/// The grey view of an image buffer; `InvalidInput` when the buffer is shorter than its size.
-pub(crate) fn view_of<T: Sample + image::Primitive>(image: &ImageBuffer<Luma<T>, Vec<T>>) -> Result<GrayView<'_, T>> {
-    GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
-        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))
-}
-
-/// Calls `at8` on the 8-bit grey view of a decoded image, or `at16` on its 16-bit one when
-/// the image has 16-bit samples (converting colour to grey first).
-pub(crate) fn with_grey_view<R>(
-    image: &DynamicImage,
-    at8: impl FnOnce(GrayView<'_, u8>) -> Result<R>,
-    at16: impl FnOnce(GrayView<'_, u16>) -> Result<R>,
-) -> Result<R> {
-    match image {
-        DynamicImage::ImageLuma8(g) => at8(view_of(g)?),
-        DynamicImage::ImageLuma16(g) => at16(view_of(g)?),
-        DynamicImage::ImageLumaA16(_) | DynamicImage::ImageRgb16(_) | DynamicImage::ImageRgba16(_) => {
-            at16(view_of(&image.to_luma16())?)
-        }
-        _ => at8(view_of(&image.to_luma8())?),
-    }
-}
-
 /// Reads an image file (PNG, JPEG, TIFF) and finds the board. An unreadable file is
 /// [`Error::Image`]; a board not found is [`Error::BoardNotFound`].
 pub fn detect_file(path: &Path, pattern: Pattern) -> Result<Detection> {
@@ -220,8 +202,8 @@ pub fn detect_view<T: Sample>(img: GrayView<'_, T>, pattern: Pattern) -> Result<
     while w / (2 * factor) >= 640 && h / (2 * factor) >= 400 {
         factor *= 2;
     }
-    let level = plane::downsample(img, factor);
-    let smooth = plane::gaussian(&level, SMOOTH_SIGMA);
+    let level = grey::downsample(img, factor);
+    let smooth = grey::gaussian(&level, SMOOTH_SIGMA);
     let saddles = response::saddles(&smooth);
     let corners = candidates::corners(&smooth, &saddles, &RING_RADII, 12 * pattern.len() + 1000);
     if corners.len() < pattern.len() {
@@ -300,10 +282,10 @@ fn refine_all<T: Sample>(img: &GrayView<'_, T>, coarse: &[[f64; 2]], pattern: Pa
         let room = p[0].min(p[1]).min(w - 3.0 - p[0]).min(h - 3.0 - p[1]).floor().max(0.0) as usize;
         ((WINDOW_FRACTION * perp).floor() as usize).clamp(MIN_WINDOW, MAX_WINDOW).min(room.max(MIN_WINDOW))
     };
-    let mut windows: HashMap<usize, refine::Window> = HashMap::new();
+    let mut windows: HashMap<usize, subpixel::Window> = HashMap::new();
     for (&(perp, _), &p) in spacing.iter().zip(coarse) {
         let r = radius(perp, p);
-        windows.entry(r).or_insert_with(|| refine::Window::new(r, 1));
+        windows.entry(r).or_insert_with(|| subpixel::Window::new(r, 1));
     }
     coarse
         .par_iter()
@@ -311,7 +293,7 @@ fn refine_all<T: Sample>(img: &GrayView<'_, T>, coarse: &[[f64; 2]], pattern: Pa
         .enumerate()
         .map(|(k, (&p, &(perp, side)))| {
             let win = &windows[&radius(perp, p)];
-            refine::refine_smoothed(img, win, p, 0.25 * side + 1.0).ok_or_else(|| {
+            subpixel::refine_smoothed(img, win, p, 0.25 * side + 1.0).ok_or_else(|| {
                 Error::BoardNotFound(format!(
                     "corner ({}, {}) near ({:.1}, {:.1}) px could not be refined (too close to the image border?)",
                     k % cols,

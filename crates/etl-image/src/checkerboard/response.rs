@@ -7,7 +7,7 @@
 
 use rayon::prelude::*;
 
-use super::plane::Plane;
+use crate::grey::Plane;
 
 /// A local maximum of the saddle response, at sub-pixel position (detection-level pixels).
 #[derive(Debug, Clone, Copy)]

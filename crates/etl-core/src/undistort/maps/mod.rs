@@ -1,9 +1,11 @@
 //! [`undistort_maps`]: for every pixel of the undistorted image, where it is in the
 //! distorted one.
 
+mod opencv;
+
 use core::ops::Range;
 
-use super::camera::OutputCamera;
+use super::pinhole::OutputCamera;
 use crate::error::{all_finite, Error, Result};
 use crate::model::{Distortion, DistortionModel, Intrinsics};
 
@@ -49,7 +51,7 @@ pub fn undistort_maps(
     check_model(k, d)?;
     check_band(out, &rows, map_x.len(), map_y.len())?;
     if d.model() == DistortionModel::OpenCv {
-        for_each_row(out.width_px, rows, map_x, map_y, &super::opencv_maps::OpenCvRow::new(k, d, out));
+        for_each_row(out.width_px, rows, map_x, map_y, &opencv::OpenCvRow::new(k, d, out));
     } else {
         for_each_row(out.width_px, rows, map_x, map_y, &PaperRow::new(k, d, out));
     }
@@ -162,7 +164,7 @@ pub(crate) fn check_band(out: &OutputCamera, rows: &Range<usize>, len_x: usize, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::camera::project_camera_point;
+    use crate::model::projection::project_camera_point;
     use crate::model::CameraModel;
 
     const W: usize = 1936;

@@ -1,4 +1,5 @@
-//! Sub-pixel refinement by point symmetry.
+//! Sub-pixel refinement of a corner by point symmetry, for every board's corners (the
+//! checkerboard's and ChArUco's, as OpenCV's `cornerSubPix` serves both).
 //!
 //! Two straight edges crossing at `c` make an image that is point-symmetric about `c`:
 //! `I(c + d) = I(c - d)`. This holds after any isotropic blur (Gaussian defocus, the pixel's
@@ -14,7 +15,7 @@
 //! steps. The window must not reach the next edges: its radius is a fraction of the local
 //! square size.
 
-use super::plane::{GrayView, Sample};
+use crate::grey::{GrayView, Sample};
 
 /// The offsets (half disc: `d` and `-d` are the same pair) and weights of a window.
 pub(crate) struct Window {

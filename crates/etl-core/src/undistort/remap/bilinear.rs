@@ -1,6 +1,10 @@
 //! The bilinear kernel behind [`super::remap`], written so that the compiler vectorises
 //! what can be vectorised, without `unsafe` or intrinsics.
 //!
+//! A child of [`super`] rather than its sibling: it reads the parent's [`Sample`] and
+//! [`SourceImage`], and the parent runs it (siblings importing each other would be a
+//! cycle).
+//!
 //! Output pixels go through in blocks of [`BLOCK`], each in three passes over small arrays
 //! on the stack:
 //! 1. positions ([`Positions::locate`], a branch-free vector loop): every pixel's fractions
@@ -17,7 +21,7 @@
 //! of the one-pass scalar loop it replaces, bit for bit: the same f32 operations in the
 //! same order.
 
-use super::remap::{Sample, SourceImage};
+use super::{Sample, SourceImage};
 
 /// Output pixels per block: small enough that the block's arrays (at most 6 KB, for three
 /// f32 channels) stay in L1, large enough that the vector loops run long.

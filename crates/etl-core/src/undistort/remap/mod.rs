@@ -1,7 +1,9 @@
 //! [`remap`]: bilinear resampling of an image at the source pixels the maps name.
 
-use super::bilinear::{remap_block, remap_block_grey_u8, remap_pixel, Geometry, Positions, Taps, BLOCK, ROUNDER};
-use super::camera::check_side;
+mod bilinear;
+
+use bilinear::{remap_block, remap_block_grey_u8, remap_pixel, Geometry, Positions, Taps, BLOCK, ROUNDER};
+use super::pinhole::check_side;
 use crate::error::{Error, Result};
 
 /// A sample type [`remap`] reads and writes: u8, u16 (grey levels) or f32.

@@ -1,4 +1,8 @@
-//! [`OutputCamera`]: the pinhole camera (no distortion) an undistorted image is seen by.
+//! [`OutputCamera`]: the pinhole camera (no distortion) an undistorted image is seen by,
+//! and the image sides every undistortion buffer is checked against ([`MAX_SIDE_PX`]).
+//!
+//! Named `pinhole` for the camera it holds: the ideal pinhole of the output image, not the
+//! ETL camera ([`crate::model::projection`], [`crate::runtime`]).
 
 use crate::error::{Error, Result};
 use crate::model::Intrinsics;

@@ -1,10 +1,15 @@
-//! Grey-level image views (8- and 16-bit) and the small float planes the detector works on.
+//! Grey-level image views (8- and 16-bit), the grey view of a decoded image, and the small
+//! float planes the detectors work on (the checkerboard's, [`crate::checkerboard`], and
+//! ChArUco's, [`crate::charuco`]).
 //!
 //! Grey levels are kept on the 8-bit scale (0..255) whatever the input depth, so that the
 //! detector's absolute thresholds (a few grey levels of contrast) mean the same thing for
 //! 8- and 16-bit images: a 16-bit value is divided by 257.
 
+use image::{DynamicImage, ImageBuffer, Luma};
 use rayon::prelude::*;
+
+use etl_formats::{Error, Result};
 
 /// A pixel type the detector reads.
 pub trait Sample: Copy + Send + Sync + 'static {
@@ -219,4 +224,27 @@ pub(crate) fn gaussian(p: &Plane, sigma: f32) -> Plane {
         }
     });
     Plane { width: w, height: h, data }
+}
+
+/// The grey view of an image buffer; `InvalidInput` when the buffer is shorter than its size.
+pub(crate) fn view_of<T: Sample + image::Primitive>(image: &ImageBuffer<Luma<T>, Vec<T>>) -> Result<GrayView<'_, T>> {
+    GrayView::new(image.width() as usize, image.height() as usize, image.as_raw())
+        .ok_or_else(|| Error::invalid("image", "image buffer shorter than its size"))
+}
+
+/// Calls `at8` on the 8-bit grey view of a decoded image, or `at16` on its 16-bit one when
+/// the image has 16-bit samples (converting colour to grey first).
+pub(crate) fn with_grey_view<R>(
+    image: &DynamicImage,
+    at8: impl FnOnce(GrayView<'_, u8>) -> Result<R>,
+    at16: impl FnOnce(GrayView<'_, u16>) -> Result<R>,
+) -> Result<R> {
+    match image {
+        DynamicImage::ImageLuma8(g) => at8(view_of(g)?),
+        DynamicImage::ImageLuma16(g) => at16(view_of(g)?),
+        DynamicImage::ImageLumaA16(_) | DynamicImage::ImageRgb16(_) | DynamicImage::ImageRgba16(_) => {
+            at16(view_of(&image.to_luma16())?)
+        }
+        _ => at8(view_of(&image.to_luma8())?),
+    }
 }

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::candidates::{line_diff, Corner};
-use super::plane::Plane;
+use crate::grey::Plane;
 
 /// A complete grid at the detection level: `pts[j * nc + i]` is grid corner (i, j), in an
 /// arbitrary (but right-handed) orientation.

@@ -8,7 +8,7 @@
 
 use std::f32::consts::PI;
 
-use super::plane::Plane;
+use crate::grey::Plane;
 use super::response::Saddle;
 
 /// A corner candidate at the detection level.

@@ -2,8 +2,13 @@
 //! second. Read the lens current and temperature, get the camera at that setting
 //! ([`Camera::at`]), then project, undistort, cast rays or solve PnP on it.
 //!
+//! Named `runtime` for when it is used: [`crate::model`] holds the camera model being
+//! calibrated (its numbers and projection), this module the calibrated camera at run time,
+//! with the ranges it can be trusted over ([`Trust`]) and its state at one lens setting
+//! ([`CameraAt`]).
+//!
 //! ```
-//! use etl_core::camera::{Camera, ThermalTrust, Trust};
+//! use etl_core::runtime::{Camera, ThermalTrust, Trust};
 //! use etl_core::model::CameraModel;
 //! use etl_core::thermal::ThermalCalibration;
 //!

@@ -1,8 +1,12 @@
 //! Undistortion maps of the opencv distortion family: OpenCV's distortion of each output
 //! ray's normalised point, as `cv2.initUndistortRectifyMap` evaluates it.
+//!
+//! A child of [`super`] rather than its sibling: it fills rows through the parent's
+//! `FillRow`, and the parent dispatches to it (siblings importing each other would be a
+//! cycle).
 
-use super::camera::OutputCamera;
-use super::maps::FillRow;
+use crate::undistort::pinhole::OutputCamera;
+use super::FillRow;
 use crate::model::{Distortion, Intrinsics};
 
 /// The opencv family's rows (the band is checked by the caller: it fits the image and the
@@ -40,7 +44,7 @@ impl FillRow for OpenCvRow<'_> {
 
 #[cfg(test)]
 mod tests {
-    use crate::model::camera::project_camera_point;
+    use crate::model::projection::project_camera_point;
     use crate::model::CameraModel;
     use crate::undistort::{undistort_maps, OutputCamera};
 

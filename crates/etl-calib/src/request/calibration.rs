@@ -1,0 +1,362 @@
+//! [`CalibrationRequest`]: every option of a calibration, its defaults, its validation and
+//! its run.
+
+use etl_core::calib::{Estimator, Layout, RobustLoss, A0};
+use etl_core::model::{DistortionModel, OpenCvFlags, MAX_FOCAL_DEGREE, PAPER_FOCAL_DEGREE};
+use etl_formats::calibration::{Calibration, ThermalRef};
+use etl_formats::observations::Observations;
+use etl_formats::{Error, Result};
+
+use super::option::{RequestOption, Spelling};
+use super::refusal::{positive, Refusal};
+use crate::baseline::{per_setting, BaselineResult};
+use crate::pipeline::select::{select, A0Source, Candidates};
+use crate::pipeline::{a0_from_offstate_with, calibrate, CalibrateOptions, CalibrationResult};
+use crate::zhang::ZhangOptions;
+
+/// The threshold / scale of the robust loss when the front end is given the loss without
+/// one, px: one pixel, about five times the paper rig's corner noise (0.2 px), so that
+/// clean corners stay in the quadratic part.
+pub const DEFAULT_ROBUST_K_PX: f64 = 1.0;
+
+/// The calibration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// The paper's method (section 4): RAC, focal polynomial, distortion, bundle adjustment.
+    #[default]
+    Proposed,
+    /// The paper's baseline (section 5.2.3): Zhang at each current of the observations'
+    /// setting views, then a cubic through fx(E), fy(E).
+    PerSetting,
+}
+
+/// The bundle adjustment's estimator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EstimatorChoice {
+    /// The paper's Eq. 24: recorded stage positions and currents exact.
+    Paper,
+    /// Errors-in-variables: a stage and a current correction per view with Gaussian priors
+    /// ([`EivPriors`]); under the paper's noise model it reaches the Cramer-Rao bound.
+    Eiv,
+}
+
+/// The stage-position prior of errors-in-variables in the unit it was given in (the CLI
+/// took um, Python mm; both now take both), so that a refusal names what was given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StageSigma {
+    /// In mm.
+    Mm(f64),
+    /// In um.
+    Um(f64),
+}
+
+impl StageSigma {
+    /// The standard deviation, mm (um / 1000).
+    pub fn mm(self) -> f64 {
+        match self {
+            StageSigma::Mm(mm) => mm,
+            StageSigma::Um(um) => um / 1000.0,
+        }
+    }
+
+    /// The option it was given as, and its value there.
+    fn given(self) -> (RequestOption, f64) {
+        match self {
+            StageSigma::Mm(mm) => (RequestOption::SigmaZMm, mm),
+            StageSigma::Um(um) => (RequestOption::SigmaZUm, um),
+        }
+    }
+}
+
+/// The noise levels of errors-in-variables; each `None` takes the paper's
+/// ([`Estimator::EIV_PAPER`]: 10 um, 0.4 mA, sigma_px estimated from a plain solution).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EivPriors {
+    /// The stage position's prior standard deviation.
+    pub sigma_z: Option<StageSigma>,
+    /// The current's prior standard deviation, mA.
+    pub sigma_e_ma: Option<f64>,
+    /// The pixel noise, px; `None`: estimated (the default).
+    pub sigma_px: Option<f64>,
+}
+
+/// A distortion family, or the choice left to the data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DistortionChoice {
+    /// This family.
+    Family(DistortionModel),
+    /// Chosen by how well each family predicts the views held out one at a time
+    /// ([`crate::pipeline::select`]).
+    Auto,
+}
+
+/// A degree of fx(E), fy(E), or the choice left to the data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FocalDegreeChoice {
+    /// This degree, 1..=[`MAX_FOCAL_DEGREE`].
+    Degree(usize),
+    /// Chosen by held-out views, as [`DistortionChoice::Auto`].
+    Auto,
+}
+
+/// Every option of a calibration: what `etlcal calibrate` and Python's
+/// `etlcal.calibrate(...)` parse their arguments into, so that the two give the same file
+/// for the same request. An option left `None` (or `false`) was not given and takes its
+/// default, defined here once: the proposed method, A0 by Zhang's method on the lens-off
+/// views, errors-in-variables with the paper's noise levels, no robust loss, A0 free, the
+/// paper's distortion family and cubic fx(E), fy(E), no OpenCV flag. "Not given" is kept
+/// apart from "given the default" because the per-setting baseline refuses an option given
+/// at all (an explicit `eiv` too): it would be silently ignored.
+///
+/// [`CalibrationRequest::check`] refuses what no run can honour (cheap, before any input is
+/// read); [`CalibrationRequest::run`] checks again and calibrates. Refusals name the option
+/// in the caller's words ([`Spelling`]).
+///
+/// ```
+/// use etl_calib::request::{CalibrationRequest, EstimatorChoice, KeySpelling, Refusal, RequestOption};
+/// use etl_formats::ThermalRef;
+/// use etl_sim::simulate::{paper_rig, NoiseModel};
+///
+/// let sim = paper_rig(&NoiseModel::PAPER, 1);
+/// let request = CalibrationRequest {
+///     a0: Some(sim.a0),
+///     thermal: Some(ThermalRef::paper()),
+///     estimator: Some(EstimatorChoice::Paper),
+///     ..CalibrationRequest::default()
+/// };
+/// let calibrated = request.run(&sim.observations, &KeySpelling)?;
+/// let cal = calibrated.calibration();
+/// assert_eq!((cal.estimator.as_str(), cal.views.len()), ("paper", 15));
+/// let fx = cal.kf_x.iter().rev().fold(0.0, |acc, k| acc * 150.0 + k);
+/// assert!((fx / sim.truth.focal_lengths(150.0).0 - 1.0).abs() < 0.02);
+///
+/// // An OpenCV flag with the paper's distortion is refused, naming the flag.
+/// let bad = CalibrationRequest { fix_k3: true, ..CalibrationRequest::default() };
+/// let refusal = bad.check().unwrap_err();
+/// assert_eq!(refusal.option(), RequestOption::FixK3);
+/// assert!(matches!(refusal, Refusal::OpenCvFlagNeedsOpenCv { .. }));
+/// assert!(refusal.message(&KeySpelling).starts_with("fix_k3 = true is an OpenCV flag"));
+/// # Ok::<(), etl_calib::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CalibrationRequest {
+    /// The method (default: proposed).
+    pub method: Method,
+    /// The lens-off intrinsics; `None`: Zhang's method on the lens-off views with the
+    /// calibration's distortion family (a strongly distorting lens would otherwise bias A0).
+    pub a0: Option<A0>,
+    /// The temperature compensation of views without a recorded E_com; none is assumed.
+    pub thermal: Option<ThermalRef>,
+    /// The estimator; `None`: errors-in-variables.
+    pub estimator: Option<EstimatorChoice>,
+    /// The noise levels of errors-in-variables (checked whatever the estimator).
+    pub priors: EivPriors,
+    /// Hold kf0x, kf0y, u0, v0 at A0 in the bundle adjustment.
+    pub hold_a0: bool,
+    /// A robust loss on each point's error (threshold / scale in px).
+    pub robust: Option<RobustLoss>,
+    /// The distortion family; `None`: the paper's.
+    pub distortion: Option<DistortionChoice>,
+    /// The degree of fx(E), fy(E); `None`: 3, the paper's cubic.
+    pub focal_degree: Option<FocalDegreeChoice>,
+    /// Hold k3 = 0 (OpenCV's `CALIB_FIX_K3`; the opencv family, or `auto`).
+    pub fix_k3: bool,
+    /// Hold p1 = p2 = 0 (OpenCV's `CALIB_ZERO_TANGENT_DIST`; likewise).
+    pub zero_tangent: bool,
+}
+
+/// What a run gives: the proposed method's result or the baseline's.
+#[derive(Debug, Clone)]
+pub enum Calibrated {
+    /// The proposed method (a given model or the one [`select`] chose).
+    Proposed(Box<CalibrationResult>),
+    /// The per-setting baseline.
+    PerSetting(BaselineResult),
+}
+
+impl Calibrated {
+    /// The calibration file's content.
+    pub fn calibration(&self) -> &Calibration {
+        match self {
+            Calibrated::Proposed(r) => &r.calibration,
+            Calibrated::PerSetting(r) => &r.calibration,
+        }
+    }
+
+    /// The calibration file's content, owned.
+    pub fn into_calibration(self) -> Calibration {
+        match self {
+            Calibrated::Proposed(r) => r.calibration,
+            Calibrated::PerSetting(r) => r.calibration,
+        }
+    }
+
+    /// What front ends say as warnings: why there is no focus law, then why the data look
+    /// implausible (the calibration's `warnings`, also kept in the file).
+    pub fn warnings(&self) -> Vec<&str> {
+        let focus_law = match self {
+            Calibrated::Proposed(r) => r.focus_law_warning.as_deref(),
+            Calibrated::PerSetting(_) => None,
+        };
+        focus_law.into_iter().chain(self.calibration().warnings.iter().map(String::as_str)).collect()
+    }
+}
+
+impl CalibrationRequest {
+    /// The OpenCV flags asked for.
+    pub fn flags(&self) -> OpenCvFlags {
+        OpenCvFlags { fix_k3: self.fix_k3, zero_tangent: self.zero_tangent }
+    }
+
+    /// The family asked for: `Some` a family (the paper's by default), `None` chosen by the
+    /// data.
+    pub fn family(&self) -> Option<DistortionModel> {
+        match self.distortion {
+            None => Some(DistortionModel::Paper),
+            Some(DistortionChoice::Family(f)) => Some(f),
+            Some(DistortionChoice::Auto) => None,
+        }
+    }
+
+    /// The focal degree asked for: `Some` a degree (3 by default), `None` chosen by the data.
+    pub fn degree(&self) -> Option<usize> {
+        match self.focal_degree {
+            None => Some(PAPER_FOCAL_DEGREE),
+            Some(FocalDegreeChoice::Degree(d)) => Some(d),
+            Some(FocalDegreeChoice::Auto) => None,
+        }
+    }
+
+    /// The estimator run: the paper's, or errors-in-variables with each prior given or the
+    /// paper's ([`Estimator::EIV_PAPER`]).
+    pub fn estimator(&self) -> Estimator {
+        if self.estimator == Some(EstimatorChoice::Paper) {
+            return Estimator::Paper;
+        }
+        let mut eiv = Estimator::EIV_PAPER;
+        if let Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px } = &mut eiv {
+            let p = &self.priors;
+            *sigma_z_mm = p.sigma_z.map_or(*sigma_z_mm, StageSigma::mm);
+            *sigma_e_ma = p.sigma_e_ma.unwrap_or(*sigma_e_ma);
+            *sigma_px = p.sigma_px.or(*sigma_px);
+        }
+        eiv
+    }
+
+    /// The bundle adjustment's options (the layout is the paper's until a model is fixed).
+    pub fn options(&self) -> CalibrateOptions {
+        CalibrateOptions {
+            estimator: self.estimator(),
+            hold_a0: self.hold_a0,
+            robust: self.robust,
+            layout: Layout::PAPER,
+            flags: self.flags(),
+        }
+    }
+
+    /// Refuses what no run can honour, in this order: the baseline's unused options (the
+    /// bundle adjustment's, then the model's), a focal degree outside 1..=5, an OpenCV
+    /// flag with the paper's family, a standard deviation or robust threshold that is not
+    /// a finite number > 0. Reads no input.
+    pub fn check(&self) -> std::result::Result<(), Refusal> {
+        if self.method == Method::PerSetting {
+            let bundle_adjustment = [
+                (RequestOption::A0, self.a0.is_some()),
+                (RequestOption::Estimator, self.estimator.is_some()),
+                (RequestOption::HoldA0, self.hold_a0),
+                (RequestOption::Robust, self.robust.is_some()),
+            ];
+            if let Some(&(given, _)) = bundle_adjustment.iter().find(|(_, g)| *g) {
+                return Err(Refusal::PerSettingTakesNoBundleAdjustment { given });
+            }
+            let model = [
+                (RequestOption::Distortion, self.distortion.is_some()),
+                (RequestOption::FocalDegree, self.focal_degree.is_some()),
+                (RequestOption::FixK3, self.fix_k3),
+                (RequestOption::ZeroTangent, self.zero_tangent),
+            ];
+            if let Some(&(given, _)) = model.iter().find(|(_, g)| *g) {
+                return Err(Refusal::PerSettingTakesNoModelOption { given });
+            }
+        }
+        if let Some(FocalDegreeChoice::Degree(degree)) = self.focal_degree {
+            if !(1..=MAX_FOCAL_DEGREE).contains(&degree) {
+                return Err(Refusal::FocalDegreeOutOfRange { degree });
+            }
+        }
+        if self.family() == Some(DistortionModel::Paper) {
+            let flags = [(RequestOption::FixK3, self.fix_k3), (RequestOption::ZeroTangent, self.zero_tangent)];
+            if let Some(&(flag, _)) = flags.iter().find(|(_, set)| *set) {
+                return Err(Refusal::OpenCvFlagNeedsOpenCv {
+                    flag,
+                    family: RequestOption::Distortion,
+                    auto_allowed: true,
+                });
+            }
+        }
+        self.check_numbers()
+    }
+
+    /// The standard deviations and the robust threshold given: finite numbers > 0.
+    fn check_numbers(&self) -> std::result::Result<(), Refusal> {
+        let p = &self.priors;
+        let given = [
+            p.sigma_z.map(StageSigma::given),
+            p.sigma_e_ma.map(|s| (RequestOption::SigmaEMa, s)),
+            p.sigma_px.map(|s| (RequestOption::SigmaPx, s)),
+            self.robust.map(|r| match r {
+                RobustLoss::Huber { k_px } | RobustLoss::Cauchy { k_px } => (RequestOption::RobustKPx, k_px),
+            }),
+        ];
+        for (option, value) in given.into_iter().flatten() {
+            positive(option, value)?;
+        }
+        Ok(())
+    }
+
+    /// [`Self::check`], its refusal as bad input in `spelling`'s words.
+    pub fn validate(&self, spelling: &dyn Spelling) -> Result<()> {
+        self.check().map_err(|r| r.to_error(spelling))
+    }
+
+    /// Calibrates `obs` as asked: the per-setting baseline, the proposed method with the
+    /// model given, or the model chosen by held-out views (`auto`, with the comparison in
+    /// the file's `"model_selection"`).
+    ///
+    /// Errors: the refusals of [`Self::check`] and those of the data (no lens-off views
+    /// with A0 not given, no setting views for the baseline), in `spelling`'s words; then
+    /// those of the pipeline (e.g. fewer than 3 distinct currents).
+    pub fn run(&self, obs: &Observations, spelling: &dyn Spelling) -> Result<Calibrated> {
+        self.validate(spelling)?;
+        let thermal = self.thermal.as_ref();
+        if self.method == Method::PerSetting {
+            if obs.setting_views.is_empty() {
+                return Err(Refusal::NoSettingViews.to_error(spelling));
+            }
+            return per_setting(obs, thermal).map(Calibrated::PerSetting);
+        }
+        if self.a0.is_none() && obs.offstate_views.is_empty() {
+            return Err(Refusal::NoLensOffViews.to_error(spelling));
+        }
+        let options = self.options();
+        let result = match (self.family(), self.degree()) {
+            (Some(family), Some(degree)) => {
+                let layout = Layout::new(family, degree).map_err(Error::Core)?;
+                let a0 = match self.a0 {
+                    Some(a0) => a0,
+                    None => a0_from_offstate_with(obs, &ZhangOptions { model: family, flags: self.flags() })?.a0(),
+                };
+                calibrate(obs, &a0, thermal, &CalibrateOptions { layout, ..options })?
+            }
+            (family, degree) => {
+                let candidates = Candidates {
+                    families: family.map_or(DistortionModel::ALL.to_vec(), |f| vec![f]),
+                    focal_degrees: degree.map_or((1..=MAX_FOCAL_DEGREE).collect(), |d| vec![d]),
+                };
+                let source = self.a0.map_or(A0Source::Offstate, A0Source::Given);
+                select(obs, &source, thermal, &options, &candidates)?
+            }
+        };
+        Ok(Calibrated::Proposed(Box::new(result)))
+    }
+}

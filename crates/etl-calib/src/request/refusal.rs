@@ -1,0 +1,142 @@
+//! Why a request is refused: one rule per refusal, its message written once and spelled
+//! by the front end ([`Spelling`]).
+
+use etl_formats::Error;
+
+use super::option::{RequestOption, Spelling};
+
+/// The options of the bundle adjustment, which the per-setting baseline has no use for,
+/// in the order its message lists them.
+const BUNDLE_ADJUSTMENT: [RequestOption; 4] =
+    [RequestOption::A0, RequestOption::Estimator, RequestOption::HoldA0, RequestOption::Robust];
+
+/// A refused request: the rule broken and the option at fault.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Refusal {
+    /// The per-setting baseline is Zhang at each current, with no bundle adjustment: an A0,
+    /// an estimator (even the default one, given explicitly), hold-A0 or a robust loss
+    /// would be silently ignored. `given`: the first of them given.
+    PerSettingTakesNoBundleAdjustment {
+        /// The option given.
+        given: RequestOption,
+    },
+    /// The per-setting baseline fits the paper's model: a model option would be ignored.
+    PerSettingTakesNoModelOption {
+        /// The option given.
+        given: RequestOption,
+    },
+    /// An OpenCV flag with the paper's distortion family, which has no k3 and keeps its
+    /// decentering terms.
+    OpenCvFlagNeedsOpenCv {
+        /// The flag given ([`RequestOption::FixK3`] or [`RequestOption::ZeroTangent`]).
+        flag: RequestOption,
+        /// The option choosing the family ([`RequestOption::Distortion`],
+        /// [`RequestOption::Model`]).
+        family: RequestOption,
+        /// Whether the family may also be chosen by the data (`auto`).
+        auto_allowed: bool,
+    },
+    /// A standard deviation or a robust threshold that is not a finite number > 0.
+    NotPositive {
+        /// The option.
+        option: RequestOption,
+        /// Its value as given.
+        value: f64,
+    },
+    /// A focal degree outside 1..=[`etl_core::model::MAX_FOCAL_DEGREE`].
+    FocalDegreeOutOfRange {
+        /// The degree given.
+        degree: usize,
+    },
+    /// A0 from Zhang's method on the lens-off views, and the observations have none.
+    NoLensOffViews,
+    /// The per-setting baseline, and the observations have no setting views.
+    NoSettingViews,
+}
+
+impl Refusal {
+    /// The option the user must change.
+    pub fn option(&self) -> RequestOption {
+        match *self {
+            Refusal::PerSettingTakesNoBundleAdjustment { given } | Refusal::PerSettingTakesNoModelOption { given } => {
+                given
+            }
+            Refusal::OpenCvFlagNeedsOpenCv { flag, .. } => flag,
+            Refusal::NotPositive { option, .. } => option,
+            Refusal::FocalDegreeOutOfRange { .. } => RequestOption::FocalDegree,
+            Refusal::NoLensOffViews => RequestOption::A0,
+            Refusal::NoSettingViews => RequestOption::Method,
+        }
+    }
+
+    /// The one-line message in `spelling`'s vocabulary.
+    pub fn message(&self, spelling: &dyn Spelling) -> String {
+        let s = spelling;
+        let per_setting = || s.with_word(RequestOption::Method, "per-setting");
+        match *self {
+            Refusal::PerSettingTakesNoBundleAdjustment { .. } => {
+                let [a, b, c, d] = BUNDLE_ADJUSTMENT.map(|o| s.name(o));
+                format!(
+                    "{} takes no {a}, {b}, {c} or {d}: the baseline is Zhang at each current, with no bundle \
+                     adjustment; drop them or use the proposed method",
+                    per_setting()
+                )
+            }
+            Refusal::PerSettingTakesNoModelOption { given } => format!(
+                "{} takes no {}: the baseline fits the paper's model (cubic, paper distortion)",
+                per_setting(),
+                s.name(given)
+            ),
+            Refusal::OpenCvFlagNeedsOpenCv { flag, family, auto_allowed } => {
+                let mut needs = s.with_word(family, "opencv");
+                if auto_allowed {
+                    needs = format!("{needs} or {}", s.word("auto"));
+                }
+                format!(
+                    "{} is an OpenCV flag: it needs {needs} (the paper's distortion has no k3 and keeps its \
+                     decentering terms)",
+                    s.switched_on(flag)
+                )
+            }
+            Refusal::NotPositive { option, .. } => format!("{} must be positive and finite", s.name(option)),
+            Refusal::FocalDegreeOutOfRange { degree } => format!(
+                "{} must be 1..{} or {}, got {degree}",
+                s.name(RequestOption::FocalDegree),
+                etl_core::model::MAX_FOCAL_DEGREE,
+                s.word("auto")
+            ),
+            Refusal::NoLensOffViews => format!(
+                "no lens-off views (offstate_views) in the observations: pass {} (the lens-off intrinsics)",
+                s.name(RequestOption::A0)
+            ),
+            Refusal::NoSettingViews => {
+                format!("{} needs setting_views (several board views at each current)", per_setting())
+            }
+        }
+    }
+
+    /// The refusal as bad input: `what` the option as `spelling` names it (the
+    /// observations' key for the two refusals of data), the value when there is one, and
+    /// [`Refusal::message`].
+    pub fn to_error(&self, spelling: &dyn Spelling) -> Error {
+        let message = self.message(spelling);
+        match *self {
+            Refusal::NotPositive { option, value } => Error::invalid_value(spelling.name(option), value, message),
+            Refusal::FocalDegreeOutOfRange { degree } => {
+                Error::invalid_value(spelling.name(RequestOption::FocalDegree), degree, message)
+            }
+            Refusal::NoLensOffViews => Error::invalid("offstate_views", message),
+            Refusal::NoSettingViews => Error::invalid("setting_views", message),
+            _ => Error::invalid(spelling.name(self.option()), message),
+        }
+    }
+}
+
+/// `value` if it is a finite number > 0, else the refusal naming `option`.
+pub(super) fn positive(option: RequestOption, value: f64) -> Result<f64, Refusal> {
+    if value > 0.0 && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Refusal::NotPositive { option, value })
+    }
+}

@@ -1,0 +1,140 @@
+//! The paper's procedure traced through a rig ([`super::OpticalRig`]): the ETL views (one
+//! per current, the board on the stage at the position in focus), the lens-off views for
+//! A0 (the ETL left in at 0 mA, at its zero-current power: the model's A0 is the camera at
+//! E = 0), tilted views per current for a monofocal calibration at each current
+//! (`setting_views`); pixels are traced spot centroids plus Gaussian pixel noise of the
+//! procedure's `pixel_noise_px`, seeded.
+
+use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
+use etl_core::model::CameraModel;
+use etl_core::thermal::ThermalSurface;
+use etl_formats::observations::{Observations, OffstateView, PointObs, ViewObs};
+use etl_formats::optics::BoardSpec;
+use etl_formats::Result;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+
+use super::ray::V3;
+use super::rig::{board_centre_mm, OpticalRig, Setting};
+use crate::simulate::{lens_off_poses_of, LensOff};
+
+/// A board pose, board frame to camera frame: (Rodrigues, translation mm).
+pub type Pose = ([f64; 3], [f64; 3]);
+
+fn gauss(sigma: f64, rng: &mut ChaCha8Rng) -> f64 {
+    match Normal::new(0.0, sigma) {
+        Ok(n) if sigma > 0.0 => n.sample(rng),
+        _ => 0.0,
+    }
+}
+
+/// The corners of `board` (its frame: first inner corner at the origin, Z = `z_mm`) seen
+/// at `setting` through `pose`: every corner whose traced centroid lies inside the image
+/// (a corner whose chief ray a surface's aperture stops is not seen), noise-free.
+/// `world_mm` of each point is the board-frame (X, Y, `z_mm`).
+pub fn board_view(rig: &OpticalRig, setting: &Setting, board: &BoardSpec, pose: &Pose, z_mm: f64) -> Vec<PointObs> {
+    let [cols, rows] = board.inner_corners;
+    let r = rodrigues_to_matrix(pose.0);
+    let [w, h] = rig.file.sensor.size_px.map(|n| n as f64 - 1.0);
+    let corners: Vec<V3> = (0..rows)
+        .flat_map(|j| (0..cols).map(move |i| [i as f64 * board.square_mm, j as f64 * board.square_mm, z_mm]))
+        .collect();
+    let pixels: Vec<Option<[f64; 2]>> = corners
+        .par_iter()
+        .map(|&p| {
+            let c = mat_vec(&r, p);
+            let px = setting.pixel([c[0] + pose.1[0], c[1] + pose.1[1], c[2] + pose.1[2]]).ok()?;
+            ((0.0..=w).contains(&px[0]) && (0.0..=h).contains(&px[1])).then_some(px)
+        })
+        .collect();
+    corners.iter().zip(pixels).filter_map(|(&world_mm, px)| Some(PointObs { world_mm, pixel: px? })).collect()
+}
+
+/// `obs` with Gaussian noise of `sigma_px` on every pixel, seeded (views, lens-off views,
+/// setting views in turn): the traced pixels do not depend on the seed, so one trace
+/// serves every noise seed.
+pub fn with_pixel_noise(obs: &Observations, sigma_px: f64, seed: u64) -> Observations {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = obs.clone();
+    let views = out.views.iter_mut().chain(out.setting_views.iter_mut()).map(|v| &mut v.points);
+    for points in out.offstate_views.iter_mut().map(|v| &mut v.points).chain(views) {
+        for p in points.iter_mut() {
+            p.pixel = [p.pixel[0] + gauss(sigma_px, &mut rng), p.pixel[1] + gauss(sigma_px, &mut rng)];
+        }
+    }
+    out
+}
+
+/// The view record of current `e_ma` at the procedure's temperature: E_com recorded, the
+/// E_in that gives it through the paper's thermal surface commanded (as the simulated
+/// paper rig does).
+fn view_obs(e_ma: f64, temperature_c: f64, points: Vec<PointObs>) -> ViewObs {
+    let e_in = ThermalSurface::PAPER.e_in_for_e_com(e_ma, temperature_c).unwrap_or(e_ma);
+    ViewObs { e_in_ma: e_in, temperature_c, e_com_ma: Some(e_ma), points }
+}
+
+/// The stage board at stage position `z_mm` (world frame) at `setting`, noise-free.
+pub fn stage_view(rig: &OpticalRig, setting: &Setting, z_mm: f64) -> Vec<PointObs> {
+    board_view(rig, setting, &rig.file.procedure.board, &rig.stage_pose(), z_mm)
+}
+
+/// The poses of the tilted views at one current: the board's centre `distance_mm` in
+/// front on the axis, tilted about axes spread evenly around it by the full, two thirds
+/// and one third of `tilt_deg` in turn, turned a little in its plane, shifted a little.
+pub fn setting_poses(board: &BoardSpec, distance_mm: f64, views: usize, tilt_deg: f64) -> Vec<Pose> {
+    let centre = board_centre_mm(board);
+    (0..views)
+        .map(|k| {
+            let phi = 2.0 * std::f64::consts::PI * k as f64 / views as f64;
+            let amount = tilt_deg.to_radians() * [1.0, 2.0 / 3.0, 1.0 / 3.0][k % 3];
+            let om = [amount * phi.cos(), amount * phi.sin(), 0.1 * ((k % 5) as f64 - 2.0) / 2.0];
+            let c = mat_vec(&rodrigues_to_matrix(om), centre);
+            let shift = [0.5 * ((k % 3) as f64 - 1.0), 0.4 * ((k % 2) as f64 - 0.5), distance_mm];
+            (om, [shift[0] - c[0], shift[1] - c[1], shift[2] - c[2]])
+        })
+        .collect()
+}
+
+/// The observations of the procedure with the procedure's pixel noise, seeded
+/// ([`traced`], then [`with_pixel_noise`]).
+pub fn observations(rig: &OpticalRig, seed: u64) -> Result<Observations> {
+    Ok(with_pixel_noise(&traced(rig)?, rig.file.procedure.pixel_noise_px, seed))
+}
+
+/// The procedure's views traced, noise-free: the ETL views, the lens-off views (the 10
+/// poses of [`lens_off_poses_of`] about the distance in focus at 0 mA) and the tilted
+/// views per current. Errors: a current at which the focus cannot be found.
+pub fn traced(rig: &OpticalRig) -> Result<Observations> {
+    let p = &rig.file.procedure;
+    let mut obs = Observations::new(rig.file.sensor.size_px);
+    for &e in &p.e_com_ma {
+        let setting = rig.at(e)?;
+        let z = rig.stage_z_mm(e)?;
+        obs.views.push(view_obs(e, p.temperature_c, stage_view(rig, &setting, z)));
+    }
+    let off = rig.at(0.0)?;
+    let design = LensOff {
+        board: (p.lens_off_board.inner_corners, p.lens_off_board.square_mm),
+        distance_mm: rig.focus_distance_mm(0.0)?,
+    };
+    // Only the poses of the lens-off cameras are used (the traced optics are the camera).
+    for cam in lens_off_poses_of(&CameraModel::paper_rig(), &design) {
+        let pose = (cam.rotation_rodrigues, cam.translation_mm);
+        let points = board_view(rig, &off, &p.lens_off_board, &pose, 0.0);
+        obs.offstate_views.push(OffstateView { points });
+    }
+    for &e in &p.e_com_ma {
+        if p.setting_views_per_current == 0 {
+            break;
+        }
+        let setting = rig.at(e)?;
+        let d = rig.focus_distance_mm(e)?;
+        for pose in setting_poses(&p.board, d, p.setting_views_per_current, p.setting_tilt_deg) {
+            let points = board_view(rig, &setting, &p.board, &pose, 0.0);
+            obs.setting_views.push(view_obs(e, p.temperature_c, points));
+        }
+    }
+    Ok(obs)
+}
