@@ -48,7 +48,17 @@ cargo build --release --locked --manifest-path tests/no-alloc-gate/Cargo.toml \
 gate_job=$!
 
 echo "== Rust tests (workspace)"
-cargo test --workspace --locked
+# etl-py is built here too: the features it unifies into the crates it shares are then
+# those of the wheel's build below (crates/etl-py/Cargo.toml), which reuses them.
+if cargo nextest --version >/dev/null 2>&1; then
+  # nextest runs the tests of every binary in one pool, so no binary waits for another's
+  # slowest test; it does not run doctests: cargo does, after.
+  cargo nextest run --workspace --locked --no-fail-fast --status-level fail \
+    --final-status-level slow
+  cargo test --workspace --locked --doc
+else
+  cargo test --workspace --locked
+fi
 stage_done "Rust tests"
 
 echo "== no-alloc, no-panic gate"

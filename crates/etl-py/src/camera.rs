@@ -125,7 +125,7 @@ impl CameraAt {
     }
 
     /// Whether the setting was given as a known E_com (E_in and T unknown).
-    fn from_e_com(&self) -> bool {
+    fn given_e_com(&self) -> bool {
         self.inner.e_in_ma().is_nan()
     }
 }
@@ -135,12 +135,12 @@ impl CameraAt {
     /// Driver current, mA (None for a camera at a known E_com, `Calibration.at_e_com`).
     #[getter]
     fn e_in_ma(&self) -> Option<f64> {
-        (!self.from_e_com()).then(|| self.inner.e_in_ma())
+        (!self.given_e_com()).then(|| self.inner.e_in_ma())
     }
     /// Lens temperature, degC (None for a camera at a known E_com).
     #[getter]
     fn temperature_c(&self) -> Option<f64> {
-        (!self.from_e_com()).then(|| self.inner.temperature_c())
+        (!self.given_e_com()).then(|| self.inner.temperature_c())
     }
     /// Compensated current E_com, mA.
     #[getter]
@@ -306,7 +306,7 @@ impl CameraAt {
     }
     fn __repr__(&self) -> String {
         let k = self.inner.intrinsics();
-        let setting = if self.from_e_com() {
+        let setting = if self.given_e_com() {
             String::new()
         } else {
             format!("e_in_ma={:?}, temperature_c={:?}, ", self.inner.e_in_ma(), self.inner.temperature_c())

@@ -142,6 +142,15 @@ def test_missing_data_is_refused_in_python_words(rigs: Dict[str, pathlib.Path]) 
     del doc["offstate_views"]
     with pytest.raises(etlcal.InputError, match=r"no lens-off views .*: pass a0 \(the lens-off intrinsics\)"):
         etlcal.calibrate(etlcal.Observations.from_json(json.dumps(doc)))
+    # A view without E_com and no thermal calibration: Python's argument, not the CLI's flag.
+    doc = json.loads(obs.to_json())
+    del doc["views"][2]["e_com_ma"]
+    with pytest.raises(etlcal.InputError) as e:
+        etlcal.calibrate(etlcal.Observations.from_json(json.dumps(doc)))
+    message = str(e.value)
+    assert "view 2 has no e_com_ma and no thermal calibration was chosen" in message, message
+    assert 'thermal="paper"' in message and "--" not in message, message
+    assert e.value.what == "views[2].e_com_ma"
 
 
 @pytest.fixture(scope="module")

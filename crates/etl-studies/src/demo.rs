@@ -220,7 +220,7 @@ pub fn figures_table(vp: &Validation, ve: &Validation) -> String {
 pub fn index_html(demo: &Demo, options: &DemoOptions) -> String {
     let mut rows = String::new();
     for [figure, paper, eiv] in figure_rows(&demo.paper_validation, &demo.eiv_validation) {
-        let _ = write!(rows, "<tr><td>{figure}</td><td>{eiv}</td><td>{paper}</td></tr>\n");
+        let _ = writeln!(rows, "<tr><td>{figure}</td><td>{eiv}</td><td>{paper}</td></tr>");
     }
     let link = |file: &str, what: &str| format!("<li><a href=\"{file}\">{file}</a>: {what}</li>\n");
     let mut files = link("report/index.html", "the report of calibration.json: plots, parameters, views")

@@ -171,7 +171,7 @@ pub enum Calibrated {
     /// The proposed method (a given model or the one [`select`] chose).
     Proposed(Box<CalibrationResult>),
     /// The per-setting baseline.
-    PerSetting(BaselineResult),
+    PerSetting(Box<BaselineResult>),
 }
 
 impl Calibrated {
@@ -324,16 +324,24 @@ impl CalibrationRequest {
     /// the file's `"model_selection"`).
     ///
     /// Errors: the refusals of [`Self::check`] and those of the data (no lens-off views
-    /// with A0 not given, no setting views for the baseline), in `spelling`'s words; then
+    /// with A0 not given, no setting views for the baseline, a view without E_com and no
+    /// thermal calibration), in `spelling`'s words; then
     /// those of the pipeline (e.g. fewer than 3 distinct currents).
     pub fn run(&self, obs: &Observations, spelling: &dyn Spelling) -> Result<Calibrated> {
         self.validate(spelling)?;
         let thermal = self.thermal.as_ref();
+        if thermal.is_none() {
+            let without = |views: &[etl_formats::observations::ViewObs]| views.iter().position(|v| v.e_com_ma.is_none());
+            let missing = without(&obs.views).map(|view| (false, view));
+            if let Some((setting, view)) = missing.or_else(|| without(&obs.setting_views).map(|view| (true, view))) {
+                return Err(Refusal::NoThermal { setting, view }.to_error(spelling));
+            }
+        }
         if self.method == Method::PerSetting {
             if obs.setting_views.is_empty() {
                 return Err(Refusal::NoSettingViews.to_error(spelling));
             }
-            return per_setting(obs, thermal).map(Calibrated::PerSetting);
+            return per_setting(obs, thermal).map(|r| Calibrated::PerSetting(Box::new(r)));
         }
         if self.a0.is_none() && obs.offstate_views.is_empty() {
             return Err(Refusal::NoLensOffViews.to_error(spelling));

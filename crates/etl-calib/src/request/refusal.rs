@@ -52,6 +52,14 @@ pub enum Refusal {
     NoLensOffViews,
     /// The per-setting baseline, and the observations have no setting views.
     NoSettingViews,
+    /// A view without a recorded E_com, and no thermal calibration chosen (no surface is
+    /// assumed). `setting`: a setting view (else an ETL view); `view`: its index.
+    NoThermal {
+        /// Whether the view is one of `setting_views` (else of `views`).
+        setting: bool,
+        /// Its index there.
+        view: usize,
+    },
 }
 
 impl Refusal {
@@ -66,6 +74,7 @@ impl Refusal {
             Refusal::FocalDegreeOutOfRange { .. } => RequestOption::FocalDegree,
             Refusal::NoLensOffViews => RequestOption::A0,
             Refusal::NoSettingViews => RequestOption::Method,
+            Refusal::NoThermal { .. } => RequestOption::Thermal,
         }
     }
 
@@ -112,6 +121,13 @@ impl Refusal {
             Refusal::NoSettingViews => {
                 format!("{} needs setting_views (several board views at each current)", per_setting())
             }
+            Refusal::NoThermal { setting, view } => format!(
+                "{} {view} has no e_com_ma and no thermal calibration was chosen: give one ({} with a thermal \
+                 calibration, or {} for the paper's surface)",
+                if setting { "setting view" } else { "view" },
+                s.name(RequestOption::Thermal),
+                s.with_word(RequestOption::Thermal, "paper")
+            ),
         }
     }
 
@@ -127,6 +143,10 @@ impl Refusal {
             }
             Refusal::NoLensOffViews => Error::invalid("offstate_views", message),
             Refusal::NoSettingViews => Error::invalid("setting_views", message),
+            Refusal::NoThermal { setting, view } => {
+                let key = if setting { "setting_views" } else { "views" };
+                Error::invalid(format!("{key}[{view}].e_com_ma"), message)
+            }
             _ => Error::invalid(spelling.name(self.option()), message),
         }
     }

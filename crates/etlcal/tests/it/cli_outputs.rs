@@ -169,9 +169,10 @@ fn kill_after(args: &[&str], delay_ms: u64) -> bool {
 }
 
 /// `kills` runs of `args_of(k)` (k alternates between 0 and 1 once a run completed) over a
-/// directory holding a whole set, each killed at a random moment of a run's duration;
-/// after every kill the directory holds exactly one of the two complete sets. Returns how
-/// many runs were killed before they finished.
+/// directory holding a whole set, kill i at a random moment of the i-th of `kills` equal
+/// slices of a run's duration (every phase of the run is hit, whatever the draws); after
+/// every kill the directory holds exactly one of the two complete sets. Returns how many
+/// runs were killed before they finished.
 fn kill_test(name: &str, kills: usize, args_of: impl Fn(usize, &Path) -> Vec<String>) -> usize {
     let d = tempfile::tempdir().unwrap();
     let mut sets = vec![];
@@ -192,7 +193,8 @@ fn kill_test(name: &str, kills: usize, args_of: impl Fn(usize, &Path) -> Vec<Str
     for i in 0..kills {
         let next = 1 - current;
         let args = args_of(next, &out);
-        let finished = kill_after(&args.iter().map(String::as_str).collect::<Vec<_>>(), rng.random_range(0..=millis));
+        let slice = (millis * i as u64 / kills as u64)..=(millis * (i as u64 + 1) / kills as u64);
+        let finished = kill_after(&args.iter().map(String::as_str).collect::<Vec<_>>(), rng.random_range(slice));
         let now = tree(&out);
         // Temporaries of the killed run may remain beside `out`; never inside it.
         let whole = sets.iter().position(|s| *s == now);
@@ -213,7 +215,7 @@ fn killed_simulate_and_report_leave_one_whole_set() {
         let seed = (k + 1).to_string();
         ["simulate", "--out", s(out), "--seed", &seed].map(String::from).to_vec()
     };
-    let killed = kill_test("simulate", 20, simulate);
+    let killed = kill_test("simulate", 8, simulate);
     assert!(killed > 0, "no simulate run was killed before finishing");
     let report = |k: usize, out: &Path| -> Vec<String> {
         let mut a = ["report", "--calibration", "fixtures/service/calibration.json", "--out", s(out)]
@@ -224,7 +226,7 @@ fn killed_simulate_and_report_leave_one_whole_set() {
         }
         a
     };
-    let killed = kill_test("report", 20, report);
+    let killed = kill_test("report", 8, report);
     assert!(killed > 0, "no report run was killed before finishing");
 }
 

@@ -28,3 +28,4 @@ mod docs_cli;
 mod docs_links;
 mod fuzz_corpus;
 mod golden;
+mod wheel_features;

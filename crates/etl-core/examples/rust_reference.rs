@@ -1,6 +1,6 @@
 //! Prints, as one JSON line, the Rust results that the Python tests compare `etlcal` with
 //! (to 1e-12): projections and undistortions of the paper rig at several currents, and
-//! the thermal compensation on a grid. Run: `cargo run -p etl-py --example rust_reference`.
+//! the thermal compensation on a grid. Run: `cargo run -p etl-core --example rust_reference`.
 
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface;
