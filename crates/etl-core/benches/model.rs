@@ -2,8 +2,8 @@
 //! (the targets: < 2 us for 168 projections, < 20 ns per E_com, on one core), and
 //! the run-time camera at a setting (target: `Camera::at` under 100 ns).
 use criterion::{criterion_group, criterion_main, Criterion};
-use etl_core::runtime::{Camera, ThermalTrust};
 use etl_core::model::CameraModel;
+use etl_core::runtime::{Camera, ThermalTrust};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use std::hint::black_box;
 

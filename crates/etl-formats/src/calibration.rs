@@ -20,9 +20,9 @@ use std::path::Path;
 use etl_core::calib::jacobian::{from_params, to_params};
 use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
-use etl_core::runtime::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::focus::FocusLaw;
 use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly};
+use etl_core::runtime::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use serde::{Deserialize, Serialize};
 

@@ -17,8 +17,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::str::FromStr;
 
-use etl_core::runtime::CameraAt;
 use etl_core::model::{fit_opencv5, DistortionModel, OpenCvFit};
+use etl_core::runtime::CameraAt;
 
 use crate::calibration::Calibration;
 use crate::{write_atomic, Error, Result};
@@ -177,8 +177,8 @@ mod tests {
     /// error 0, and says it is exact.
     #[test]
     fn an_opencv_family_export_is_exact() {
-        use etl_core::runtime::Trust;
         use etl_core::model::CameraModel;
+        use etl_core::runtime::Trust;
         let model = CameraModel::strong_distortion_rig();
         let cal = Calibration::from_model(&model, [1936, 1458], [80.0, 225.0]);
         let at = cal.camera().unwrap().at_e_com(150.0, Trust::Refuse).unwrap();

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use etl_core::runtime::{Camera, Trust};
 use etl_core::model::{CameraModel, DistortionA, FocalPoly};
+use etl_core::runtime::{Camera, Trust};
 use etl_core::thermal::ThermalSurface as CoreSurface;
 use etl_formats::calibration::{Calibration as CalFile, ModelStd, ThermalRef};
 use pyo3::prelude::*;
@@ -97,7 +97,11 @@ impl Calibration {
     /// The camera of `slf` at a known compensated current `e_com_ma`, refused outside the
     /// calibrated E_com range (margin 5 mA) unless `allow_extrapolation`: the one range
     /// check of every method taking `e_com_ma`.
-    pub(crate) fn camera_at_e_com(slf: &Bound<'_, Self>, e_com_ma: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
+    pub(crate) fn camera_at_e_com(
+        slf: &Bound<'_, Self>,
+        e_com_ma: f64,
+        allow_extrapolation: bool,
+    ) -> PyResult<CameraAt> {
         let cal = slf.get();
         let inner = cal.camera()?.at_e_com(e_com_ma, trust(allow_extrapolation)).py()?;
         Ok(CameraAt::new(inner, slf.clone().into_any().unbind(), cal.file.clone()))

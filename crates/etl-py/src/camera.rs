@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use etl_core::calib::projection_uncertainty;
-use etl_formats::calibration::Calibration as CalFile;
-use etl_core::runtime::{CameraAt as CoreAt, Trust};
 use etl_core::model::DistortionModel;
 use etl_core::pnp::{pose_uncertainty, PixelNoise};
+use etl_core::runtime::{CameraAt as CoreAt, Trust};
+use etl_formats::calibration::Calibration as CalFile;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -58,9 +58,12 @@ pub(crate) fn distortion_parts(at: &CoreAt, _: [u32; 2]) -> PyResult<[Vec<f64>; 
 /// OpenCV's K, its five coefficients, and the fit's RMS and maximum error (px).
 pub(crate) fn opencv_parts(at: &CoreAt, image_size: [u32; 2]) -> PyResult<[Vec<f64>; 4]> {
     let fit = etl_core::model::fit_opencv5(at.intrinsics(), at.distortion(), image_size).py()?;
-    Ok([at.intrinsics().matrix().into_iter().flatten().collect(), fit.dist_coeffs.to_vec(), vec![fit.rms_px], vec![
-        fit.max_px,
-    ]])
+    Ok([
+        at.intrinsics().matrix().into_iter().flatten().collect(),
+        fit.dist_coeffs.to_vec(),
+        vec![fit.rms_px],
+        vec![fit.max_px],
+    ])
 }
 
 /// The shapes of [`opencv_parts`], [`distortion_parts`], [`intrinsics_parts`].
@@ -218,7 +221,11 @@ impl CameraAt {
     }
     /// The viewing ray of a pixel in world coordinates: (origin_mm, direction), float64
     /// arrays of shape (3,) (`Calibration.ray`).
-    pub(crate) fn ray<'py>(&self, py: Python<'py>, pixel: (f64, f64)) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    pub(crate) fn ray<'py>(
+        &self,
+        py: Python<'py>,
+        pixel: (f64, f64),
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let r = self.inner.ray([pixel.0, pixel.1]).py()?;
         Ok((vec_out(py, &r.origin_mm), vec_out(py, &r.direction)))
     }

@@ -25,6 +25,7 @@ pub mod demo;
 pub mod fig5;
 pub mod fig6;
 pub mod model;
+pub mod optics;
 mod run;
 pub mod strong;
 pub mod subsets;

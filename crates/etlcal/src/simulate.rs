@@ -11,6 +11,16 @@
 //! strong-distortion rig, corners only), noise and setting rig in one file; flags given on
 //! the command line override it.
 //!
+//! `--optics FILE` (`etlcal.optics/1`) traces the paper's procedure through a physical rig
+//! instead (`etl_sim::optics`: an ETL in front of a published prime lens, real refraction,
+//! each corner the centroid of its traced spot, the file's pixel noise or
+//! `--pixel-noise-px`, seeded by `--seed`): observations.json (the ETL views with their
+//! E_com, the lens-off views, the file's tilted views per current as setting views) and
+//! truth.json (`etlcal.optics-truth/1`: per current the paraxial focal length, the
+//! entrance pupil, the distance in focus). It writes corners only: images of traced rigs
+//! are not rendered, and the flags of the model's simulation (`--config`, the stage and
+//! current noises, `--setting-views`) are refused beside it.
+//!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
 
@@ -25,6 +35,8 @@ use etl_formats::{Error, Result};
 
 /// The names `simulate` writes into its directory.
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
+use etl_sim::optics::truth::{setting_truths, TRUTH_FORMAT};
+use etl_sim::optics::{procedure, OpticalRig};
 use etl_sim::simulate::images::{dataset_truth, render_rig, ImageOptions};
 use etl_sim::simulate::{simulate, write_simulation, write_truth, SettingRig, SimConfig, SimRig};
 
@@ -41,6 +53,11 @@ pub struct Args {
     /// Simulation configuration (etlcal.simconfig/1).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// Trace the procedure through a physical rig (etlcal.optics/1) instead of the camera
+    /// model: corners only, with the file's pixel noise unless --pixel-noise-px.
+    #[arg(long, value_name = "FILE",
+        conflicts_with_all = ["config", "stage_noise_um", "current_noise_ma", "setting_views"])]
+    pub optics: Option<PathBuf>,
     /// Random seed [default: 1].
     #[arg(long)]
     pub seed: Option<u64>,
@@ -97,6 +114,9 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 
 /// Runs `etlcal simulate`.
 pub fn run(args: Args) -> Result<()> {
+    if let Some(optics) = &args.optics {
+        return run_optics(&args, optics);
+    }
     crate::output::check([args.config.as_deref()], &[Output::Dir(&args.out)])?;
     let config = config_from(&args)?;
     if !args.observations_only && config.rig == SimRig::Strong {
@@ -136,6 +156,44 @@ pub fn run(args: Args) -> Result<()> {
             "wrote {rendered}observations.json, a0.json, truth.json ({} views, {points} points, {} setting views) to {}",
             sim.observations.views.len(),
             sim.observations.setting_views.len(),
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// The names `simulate --optics` writes into its directory.
+const OPTICS_FILES: &[&str] = &["observations.json", "truth.json"];
+
+/// `etlcal simulate --optics FILE`: the procedure traced through the rig of FILE.
+fn run_optics(args: &Args, optics: &std::path::Path) -> Result<()> {
+    crate::output::check([Some(optics)], &[Output::Dir(&args.out)])?;
+    let mut file = etl_formats::optics::OpticsFile::load(optics)?;
+    if let Some(px) = args.pixel_noise_px {
+        etl_formats::check_range("--pixel-noise-px", px, [0.0, 100.0], "px")?;
+        file.procedure.pixel_noise_px = px;
+    }
+    let rig = OpticalRig::new(file)?;
+    let seed = args.seed.unwrap_or(1);
+    let obs = procedure::observations(&rig, seed)?;
+    let truth = json!({"format": TRUTH_FORMAT, "optics": rig.file.name, "seed": seed,
+        "pixel_noise_px": rig.file.procedure.pixel_noise_px, "settings": setting_truths(&rig)?});
+    write_dir_set(&args.out, OPTICS_FILES, |staging| {
+        obs.save(&staging.join("observations.json"))?;
+        etl_formats::write_json(&staging.join("truth.json"), &truth)?;
+        Ok(())
+    })?;
+    let points: usize = obs.views.iter().map(|v| v.points.len()).sum();
+    if args.json {
+        print_json(&json!({"views": obs.views.len(), "points": points, "setting_views": obs.setting_views.len(),
+            "offstate_views": obs.offstate_views.len(), "images": 0, "out": args.out}));
+    } else {
+        outln!(
+            "wrote observations.json, truth.json of {} ({} views, {points} points, {} lens-off views, {} setting views) to {}",
+            rig.file.name,
+            obs.views.len(),
+            obs.offstate_views.len(),
+            obs.setting_views.len(),
             args.out.display()
         );
     }

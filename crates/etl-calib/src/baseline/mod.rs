@@ -14,7 +14,9 @@
 use etl_core::linalg::svd::sym_pinv;
 
 use crate::zhang::{zhang, PlanarView, ZhangResult};
-use etl_formats::calibration::{Calibration, ModelStd, Outlier, TemperatureCompensation, ThermalRef, ViewSummary, FORMAT};
+use etl_formats::calibration::{
+    Calibration, ModelStd, Outlier, TemperatureCompensation, ThermalRef, ViewSummary, FORMAT,
+};
 use etl_formats::observations::{Observations, SETTING_TOLERANCE_MA};
 use etl_formats::{Error, Result};
 
@@ -186,10 +188,8 @@ fn distortion_a_of(settings: &[SettingEstimate]) -> Result<([f64; 9], [f64; 9])>
     let mut a = [0.0; 9];
     let mut sa = [0.0; 9];
     for (k, idx) in [4usize, 5, 6].into_iter().enumerate() {
-        let (y, sd): (Vec<f64>, Vec<f64>) = settings
-            .iter()
-            .map(|s| (s.zhang.coefficients[k], s.zhang.std[idx].max(1e-12)))
-            .unzip();
+        let (y, sd): (Vec<f64>, Vec<f64>) =
+            settings.iter().map(|s| (s.zhang.coefficients[k], s.zhang.std[idx].max(1e-12))).unzip();
         let (c, cov) = poly_fit(&ws, &y, &sd, 2)?;
         // Eq. 18 order: a_(3k+1) w^2 + a_(3k+2) w + a_(3k+3).
         a[3 * k] = c[2];

@@ -7,11 +7,11 @@
 
 use std::path::Path;
 
-use etl_core::runtime::CameraAt;
 use etl_core::pnp::{
     displacement_covariance_mm2, displacement_mm, displacement_std_mm, pose_uncertainty, BoardPose, PixelNoise,
     PoseUncertainty,
 };
+use etl_core::runtime::CameraAt;
 
 use super::dataset::CornerDetector;
 use etl_formats::calibration::Calibration;

@@ -331,7 +331,8 @@ impl CalibrationRequest {
         self.validate(spelling)?;
         let thermal = self.thermal.as_ref();
         if thermal.is_none() {
-            let without = |views: &[etl_formats::observations::ViewObs]| views.iter().position(|v| v.e_com_ma.is_none());
+            let without =
+                |views: &[etl_formats::observations::ViewObs]| views.iter().position(|v| v.e_com_ma.is_none());
             let missing = without(&obs.views).map(|view| (false, view));
             if let Some((setting, view)) = missing.or_else(|| without(&obs.setting_views).map(|view| (true, view))) {
                 return Err(Refusal::NoThermal { setting, view }.to_error(spelling));

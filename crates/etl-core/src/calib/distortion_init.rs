@@ -25,8 +25,8 @@
 use super::observations::{validate, View};
 use crate::error::{Error, Result};
 use crate::fit::{GivensQr, PolyFit};
-use crate::model::projection::project_camera_point;
 use crate::model::distortion::opencv_rows;
+use crate::model::projection::project_camera_point;
 use crate::model::{CameraModel, Distortion, DistortionA, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS};
 
 /// Pixel scale used inside the paper family's per-view solve (coefficients of size 1).

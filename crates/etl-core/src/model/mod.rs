@@ -14,11 +14,11 @@ pub mod projection;
 pub mod ray;
 pub mod rotation;
 
-pub use projection::{CameraModel, Intrinsics};
 pub use distortion::Distortion;
 pub use family::{DistortionA, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS, MAX_DISTORTION_A};
 pub use focal::{FocalPoly, MAX_FOCAL_DEGREE, PAPER_FOCAL_DEGREE};
 pub use opencv::{fit_opencv5, OpenCvFit};
+pub use projection::{CameraModel, Intrinsics};
 pub use ray::Ray;
 
 // The paths before issue 26 (`camera` held the model's projection, `undistort` the

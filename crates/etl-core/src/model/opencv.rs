@@ -14,9 +14,9 @@
 //! least-squares ones over the image and states the fit error; the error is that of the
 //! export, never hidden.
 
-use super::projection::Intrinsics;
 use super::distortion::Distortion;
 use super::family::DistortionModel;
+use super::projection::Intrinsics;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky::psd_inverse;
 

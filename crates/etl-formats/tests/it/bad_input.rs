@@ -195,7 +195,8 @@ fn the_shared_checkers_and_constructors_fill_the_fields() {
     assert_eq!(Error::invalid("[4]", "m").under("views").input_what(), Some("views[4]"));
     // A library option under a front end's name, in `what` and in the message; another
     // input's error is left alone.
-    let edge = Error::invalid_value("search_half_width_ma", 20.0, "window edge: widen the search (search_half_width_ma)");
+    let edge =
+        Error::invalid_value("search_half_width_ma", 20.0, "window edge: widen the search (search_half_width_ma)");
     let flag = edge.rename_input("search_half_width_ma", "--search-ma");
     assert_eq!((flag.input_what(), flag.input_value()), (Some("--search-ma"), Some("20".to_owned())));
     assert_eq!(flag.to_string(), "invalid input: window edge: widen the search (--search-ma)");

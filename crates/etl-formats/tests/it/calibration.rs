@@ -370,7 +370,10 @@ fn temperature_compensation_none_is_optional_and_checked() {
     let bad = dir.path().join("both.json");
     let e = both.save(&bad).unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Parse);
-    assert!(e.to_string().contains("temperature_compensation = \"none\" but the calibration has a thermal part"), "{e}");
+    assert!(
+        e.to_string().contains("temperature_compensation = \"none\" but the calibration has a thermal part"),
+        "{e}"
+    );
     assert!(!bad.exists());
     // Another word is not a value of the field.
     let word = written.replace("\"temperature_compensation\": \"none\"", "\"temperature_compensation\": \"partial\"");

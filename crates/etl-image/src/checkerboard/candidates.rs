@@ -8,8 +8,8 @@
 
 use std::f32::consts::PI;
 
-use crate::grey::Plane;
 use super::response::Saddle;
+use crate::grey::Plane;
 
 /// A corner candidate at the detection level.
 #[derive(Debug, Clone, Copy)]

@@ -53,8 +53,8 @@ use std::str::FromStr;
 use image::{DynamicImage, GrayImage, ImageBuffer, Luma};
 use rayon::prelude::*;
 
-pub use crate::grey::{GrayView, Sample};
 use crate::grey::{self, view_of, with_grey_view};
+pub use crate::grey::{GrayView, Sample};
 use crate::subpixel;
 
 use etl_formats::{Error, Result};

@@ -18,7 +18,8 @@
 //! - [`tolerance`]: the toleranced system (decentred, tilted ETL and sensor);
 //! - [`rig`]: the camera on its stage: world points to pixels, the distance in focus per
 //!   current;
-//! - [`procedure`]: the paper's procedure traced, as `etlcal.observations/1`.
+//! - [`procedure`]: the paper's procedure traced, as `etlcal.observations/1`;
+//! - [`truth`]: what the rig is at each current (focal length, entrance pupil, focus).
 //!
 //! All numbers are f64, lengths in mm.
 
@@ -33,6 +34,7 @@ pub mod spot;
 pub mod surface;
 pub mod tolerance;
 pub mod trace;
+pub mod truth;
 
 pub use rig::OpticalRig;
 

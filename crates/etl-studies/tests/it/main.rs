@@ -1,4 +1,5 @@
 //! The integration tests of etl-studies, one binary (linking one test binary per file cost
 //! more than running them): each module is one former test file.
 
+mod optics;
 mod study;

@@ -106,7 +106,11 @@ fn modules_of(sources: &[(PathBuf, String)]) -> Vec<Module> {
     }
     sources
         .iter()
-        .map(|(rel, text)| Module { path: module_path(rel), file: rel.display().to_string(), code: code_lines(text).join("\n") })
+        .map(|(rel, text)| Module {
+            path: module_path(rel),
+            file: rel.display().to_string(),
+            code: code_lines(text).join("\n"),
+        })
         .filter(|m| !test_only.contains(&m.path))
         .collect()
 }
@@ -202,7 +206,8 @@ fn named_paths(m: &Module) -> Vec<(Vec<String>, usize)> {
     let code: Vec<char> = m.code.chars().collect();
     let (mut out, mut i) = (vec![], 0);
     while i < code.len() {
-        let starts = ["crate::", "super::", "self::"].iter().any(|p| code[i..].starts_with(&p.chars().collect::<Vec<_>>()));
+        let starts =
+            ["crate::", "super::", "self::"].iter().any(|p| code[i..].starts_with(&p.chars().collect::<Vec<_>>()));
         if !starts || (i > 0 && is_ident(code[i - 1])) {
             i += 1;
             continue;
@@ -227,7 +232,8 @@ fn re_exports(modules: &[Module]) -> Exports {
             let at = m.code[..k].chars().count() + m.code[k..].find("use ").unwrap() + 4;
             for (p, alias) in parse_tree(&code, at).0 {
                 let child: Vec<String> = m.path.iter().chain(p.first()).cloned().collect();
-                let abs = absolute(&m.path, &p).or_else(|| known.contains(&child).then(|| [&m.path[..], &p[..]].concat()));
+                let abs =
+                    absolute(&m.path, &p).or_else(|| known.contains(&child).then(|| [&m.path[..], &p[..]].concat()));
                 if let (Some(abs), Some(name)) = (abs, alias.or_else(|| p.last().cloned())) {
                     if name != "*" {
                         out.entry(m.path.clone()).or_default().insert(name, abs);
@@ -241,12 +247,7 @@ fn re_exports(modules: &[Module]) -> Exports {
 
 /// The module an absolute path lands in: the longest prefix that is a module, following
 /// re-exports (`crate::undistort::Sample` is `undistort::remap`'s `Sample`).
-fn resolve(
-    path: &[String],
-    known: &BTreeSet<&Vec<String>>,
-    exports: &Exports,
-    depth: usize,
-) -> Vec<String> {
+fn resolve(path: &[String], known: &BTreeSet<&Vec<String>>, exports: &Exports, depth: usize) -> Vec<String> {
     let mut cur: Vec<String> = vec![];
     for (k, seg) in path.iter().enumerate() {
         let mut next = cur.clone();
@@ -284,7 +285,13 @@ fn sibling_cycles(modules: &[Module]) -> Vec<String> {
     let mut cycles = vec![];
     for ((a, b), at) in &edges {
         if let Some(back) = edges.get(&(b.clone(), a.clone())).filter(|_| a < b) {
-            cycles.push(format!("{} -> {} ({at}), {} -> {} ({back})", a.join("::"), b.join("::"), b.join("::"), a.join("::")));
+            cycles.push(format!(
+                "{} -> {} ({at}), {} -> {} ({back})",
+                a.join("::"),
+                b.join("::"),
+                b.join("::"),
+                a.join("::")
+            ));
         }
     }
     cycles
@@ -472,7 +479,10 @@ fn the_cycle_check_sees_the_sibling_cycles_of_before() {
         ("undistort/pinhole.rs", "use crate::model::Intrinsics;\n"),
         ("undistort/remap/mod.rs", "mod bilinear;\nuse bilinear::{remap_block};\nuse super::pinhole::check_side;\n"),
         ("undistort/remap/bilinear.rs", "use super::{Sample, SourceImage};\n"),
-        ("undistort/maps/mod.rs", "mod opencv;\nuse super::pinhole::OutputCamera;\nlet r = opencv::OpenCvRow::new();\n"),
+        (
+            "undistort/maps/mod.rs",
+            "mod opencv;\nuse super::pinhole::OutputCamera;\nlet r = opencv::OpenCvRow::new();\n",
+        ),
         ("undistort/maps/opencv.rs", "use crate::undistort::pinhole::OutputCamera;\nuse super::FillRow;\n"),
     ]);
     assert_eq!(sibling_cycles(&after), Vec::<String>::new());

@@ -307,10 +307,26 @@ fn every_runtime_verb_at_e_com_is_the_verb_at_the_setting_of_that_e_com() {
     // measure and undistort on rendered images of the rig at that E_com.
     let r = json_ok(&["render", "--out", &p("a.png"), "--e-com", &e, "--pattern", "9x7", "--seed", "1", "--json"]);
     let z_b = format!("{}", r["z_w_mm"].as_f64().unwrap() - 2.0);
-    json_ok(&["render", "--out", &p("b.png"), "--e-com", &e, "--z-mm", &z_b, "--pattern", "9x7", "--seed", "2", "--json"]);
+    json_ok(&[
+        "render",
+        "--out",
+        &p("b.png"),
+        "--e-com",
+        &e,
+        "--z-mm",
+        &z_b,
+        "--pattern",
+        "9x7",
+        "--seed",
+        "2",
+        "--json",
+    ]);
     let measure = |cal: &str, s: &[&str]| {
         let (a, b) = (p("a.png"), p("b.png"));
-        json_ok(&[&["measure", "--calibration", cal, &a, &b, "--pattern", "9x7", "--square", "1.5", "--json"][..], s].concat())
+        json_ok(
+            &[&["measure", "--calibration", cal, &a, &b, "--pattern", "9x7", "--square", "1.5", "--json"][..], s]
+                .concat(),
+        )
     };
     let m = measure(&with, &setting);
     assert!((m["distance_mm"].as_f64().unwrap() - 2.0).abs() < 0.02, "{m}");

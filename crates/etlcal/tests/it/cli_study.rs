@@ -1,6 +1,5 @@
 //! `etlcal study`: fig5's JSON and files, and its bad input.
 
-
 use serde_json::Value;
 
 use super::common::etlcal;

@@ -16,6 +16,7 @@ mod cli_focus;
 mod cli_lens;
 mod cli_measure;
 mod cli_model;
+mod cli_optics;
 mod cli_outputs;
 mod cli_render;
 mod cli_report;

@@ -5,9 +5,9 @@
 //! `FillRow`, and the parent dispatches to it (siblings importing each other would be a
 //! cycle).
 
-use crate::undistort::pinhole::OutputCamera;
 use super::FillRow;
 use crate::model::{Distortion, Intrinsics};
+use crate::undistort::pinhole::OutputCamera;
 
 /// The opencv family's rows (the band is checked by the caller: it fits the image and the
 /// buffers, the model and `out` are valid): the output pixel (x, y) sees the normalised

@@ -2,9 +2,9 @@
 
 mod bilinear;
 
-use bilinear::{remap_block, remap_block_grey_u8, remap_pixel, Geometry, Positions, Taps, BLOCK, ROUNDER};
 use super::pinhole::check_side;
 use crate::error::{Error, Result};
+use bilinear::{remap_block, remap_block_grey_u8, remap_pixel, Geometry, Positions, Taps, BLOCK, ROUNDER};
 
 /// A sample type [`remap`] reads and writes: u8, u16 (grey levels) or f32.
 pub trait Sample: Copy + private::Sealed {

@@ -1,0 +1,196 @@
+//! A 2 mm stage move measured by PnP on a ray-traced rig (`etl_sim::optics`): what the
+//! paper's model (one projection centre for every current) makes of physical optics,
+//! against a per-current OpenCV calibration of the same traced views.
+//!
+//! Per noise seed: the procedure of the rig's file traced once (noise-free) and given the
+//! seed's pixel noise; the fixed-centre model calibrated from it as `etlcal calibrate`
+//! does by default (errors-in-variables, A0 by Zhang on the lens-off views, the paper's
+//! distortion and cubic), with A0 held and with the paper's estimator ([`CAMERAS`]); at
+//! each current, Zhang's method in OpenCV's family on that
+//! current's tilted views (`setting_views`) as the per-current calibration. At each current
+//! the board is traced on the stage 1 mm before and 1 mm behind the ETL view's position (a
+//! 2.000 mm move along the stage axis, exactly), given its own pixel noise, and its pose
+//! solved by planar PnP with each camera; the error is |t_b - t_a| - 2 mm. Reported per
+//! current: the mean over seeds (the bias) and the RMS.
+//!
+//! Run: `cargo run --release -p etl-studies --example optics_pnp -- SEEDS` (docs/RESULTS.md).
+
+use etl_calib::request::{CalibrationRequest, EstimatorChoice, KeySpelling};
+use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions};
+use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly, OpenCvFlags};
+use etl_core::pnp::{displacement_mm, solve_pnp};
+use etl_formats::observations::{Observations, PointObs};
+use etl_formats::{Error, Result};
+use etl_sim::optics::procedure::{stage_view, traced, with_pixel_noise};
+use etl_sim::optics::truth::setting_truths;
+use etl_sim::optics::OpticalRig;
+
+/// The stage move measured, mm.
+pub const MOVE_MM: f64 = 2.0;
+
+/// The cameras compared, in the order of [`MoveErrors::bias_rms_um`]: the fixed-centre
+/// model as `etlcal calibrate` makes it by default (errors-in-variables), with A0 held
+/// (`--hold-a0`), with the paper's estimator (`--estimator paper`), and the per-current
+/// OpenCV calibration.
+pub const CAMERAS: [&str; 4] =
+    ["fixed centre (default)", "fixed centre, --hold-a0", "fixed centre, --estimator paper", "per-current OpenCV"];
+
+/// The errors at one current, um.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MoveErrors {
+    /// The current, mA.
+    pub e_com_ma: f64,
+    /// For each of [`CAMERAS`]: the mean error over seeds (the bias) and its RMS, um.
+    pub bias_rms_um: [(f64, f64); 4],
+}
+
+/// The study on one rig.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpticsPnp {
+    /// The rig's name (its optics file's).
+    pub rig: String,
+    /// Noise seeds run.
+    pub seeds: usize,
+    /// The pixel noise, px.
+    pub pixel_noise_px: f64,
+    /// How far the entrance pupil moves over the procedure's currents, mm.
+    pub pupil_shift_mm: f64,
+    /// The errors at each current measured.
+    pub rows: Vec<MoveErrors>,
+}
+
+/// The camera of a Zhang calibration in OpenCV's family as a model with a constant focal
+/// length and constant coefficients (each a_i's w^0 term), for [`solve_pnp`] at any current.
+fn monofocal(z: &etl_calib::zhang::ZhangResult) -> Result<CameraModel> {
+    let dist =
+        z.dist_coeffs().ok_or_else(|| Error::invalid("model", "the per-current calibration is OpenCV's family"))?;
+    let mut a = [0.0; 15];
+    for (k, c) in dist.into_iter().enumerate() {
+        a[3 * k + 2] = c;
+    }
+    Ok(CameraModel {
+        rotation_rodrigues: [0.0; 3],
+        translation_mm: [0.0; 3],
+        kf_x: FocalPoly::new(&[z.fx, 0.0])?,
+        kf_y: FocalPoly::new(&[z.fy, 0.0])?,
+        principal_point: [z.u0, z.v0],
+        distortion_a: DistortionA::opencv(a),
+    })
+}
+
+/// The setting views of `obs` at `e_ma` as Zhang's planar views.
+fn views_at(obs: &Observations, e_ma: f64) -> Vec<PlanarView> {
+    obs.setting_views
+        .iter()
+        .filter(|v| v.e_com_ma.is_some_and(|e| (e - e_ma).abs() < 1e-6))
+        .map(|v| PlanarView {
+            board_mm: v.points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect(),
+            pixels: v.points.iter().map(|p| p.pixel).collect(),
+        })
+        .collect()
+}
+
+/// The measured length of the move between the two views, mm, by PnP with `model` at
+/// `e_ma` (board points at Z = 0 of the board frame).
+fn measured_mm(model: &CameraModel, e_ma: f64, views: &[Vec<PointObs>; 2]) -> Result<f64> {
+    let pose = |v: &Vec<PointObs>| {
+        let board: Vec<[f64; 3]> = v.iter().map(|p| [p.world_mm[0], p.world_mm[1], 0.0]).collect();
+        let pixels: Vec<[f64; 2]> = v.iter().map(|p| p.pixel).collect();
+        solve_pnp(model, e_ma, &board, &pixels)
+    };
+    let d = displacement_mm(&pose(&views[0])?, &pose(&views[1])?);
+    Ok((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt())
+}
+
+/// The two traced views of the move at each current of `currents`, noise-free.
+fn move_views(rig: &OpticalRig, currents: &[f64]) -> Result<Vec<[Vec<PointObs>; 2]>> {
+    currents
+        .iter()
+        .map(|&e| {
+            let setting = rig.at(e)?;
+            let z = rig.stage_z_mm(e)?;
+            let half = MOVE_MM / 2.0;
+            Ok([stage_view(rig, &setting, z - half), stage_view(rig, &setting, z + half)])
+        })
+        .collect()
+}
+
+/// `views` with the seed's pixel noise (an observations record carries them through
+/// [`with_pixel_noise`], as the procedure's own views).
+fn noisy(views: &[Vec<PointObs>; 2], sigma_px: f64, seed: u64, image_size: [u32; 2]) -> [Vec<PointObs>; 2] {
+    let mut obs = Observations::new(image_size);
+    obs.offstate_views = views.iter().map(|v| etl_formats::observations::OffstateView { points: v.clone() }).collect();
+    let out = with_pixel_noise(&obs, sigma_px, seed);
+    [out.offstate_views[0].points.clone(), out.offstate_views[1].points.clone()]
+}
+
+/// Bias and RMS of `errors` (um).
+fn bias_rms(errors: &[f64]) -> (f64, f64) {
+    let n = errors.len().max(1) as f64;
+    (errors.iter().sum::<f64>() / n, (errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt())
+}
+
+/// The study on `rig` over noise seeds 1..=`seeds`, at `currents` (each one of the
+/// procedure's, which has tilted views there). Errors: a failed trace, calibration or PnP.
+pub fn optics_pnp(rig: &OpticalRig, seeds: u64, currents: &[f64]) -> Result<OpticsPnp> {
+    let clean = traced(rig)?;
+    let moves = move_views(rig, currents)?;
+    let sigma = rig.file.procedure.pixel_noise_px;
+    let size = rig.file.sensor.size_px;
+    let requests = [
+        CalibrationRequest::default(),
+        CalibrationRequest { hold_a0: true, ..CalibrationRequest::default() },
+        CalibrationRequest { estimator: Some(EstimatorChoice::Paper), ..CalibrationRequest::default() },
+    ];
+    let mut errors = vec![[(); 4].map(|_| Vec::new()); currents.len()];
+    for seed in 1..=seeds {
+        let obs = with_pixel_noise(&clean, sigma, seed);
+        let mut models = vec![];
+        for request in &requests {
+            models.push(request.run(&obs, &KeySpelling)?.into_calibration().model()?);
+        }
+        for (k, &e) in currents.iter().enumerate() {
+            let options = ZhangOptions { model: DistortionModel::OpenCv, flags: OpenCvFlags::NONE };
+            models.truncate(requests.len());
+            models.push(monofocal(&zhang_with(&views_at(&obs, e), size, &options)?)?);
+            let views = noisy(&moves[k], sigma, 1_000_000 + 1000 * seed + k as u64, size);
+            for (c, model) in models.iter().enumerate() {
+                errors[k][c].push((measured_mm(model, e, &views)? - MOVE_MM) * 1000.0);
+            }
+        }
+    }
+    let pupils: Vec<f64> = setting_truths(rig)?.iter().map(|t| t.entrance_pupil_z_mm).collect();
+    let (lo, hi) = pupils.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &p| (l.min(p), h.max(p)));
+    let rows = currents
+        .iter()
+        .enumerate()
+        .map(|(k, &e)| MoveErrors { e_com_ma: e, bias_rms_um: core::array::from_fn(|c| bias_rms(&errors[k][c])) })
+        .collect();
+    Ok(OpticsPnp {
+        rig: rig.file.name.clone(),
+        seeds: seeds as usize,
+        pixel_noise_px: sigma,
+        pupil_shift_mm: hi - lo,
+        rows,
+    })
+}
+
+impl OpticsPnp {
+    /// The table as Markdown: one row per current.
+    pub fn markdown(&self) -> String {
+        let mut s = format!(
+            "{} ({} seeds, {} px, entrance pupil moving {:.2} mm): error of a {MOVE_MM:.3} mm move, um, \
+             bias (RMS)\n\n| E_com (mA) | {} |\n|---|---|---|---|---|\n",
+            self.rig,
+            self.seeds,
+            self.pixel_noise_px,
+            self.pupil_shift_mm,
+            CAMERAS.join(" | ")
+        );
+        for r in &self.rows {
+            let cells: Vec<String> = r.bias_rms_um.iter().map(|(b, rms)| format!("{b:+.2} ({rms:.2})")).collect();
+            s += &format!("| {:.0} | {} |\n", r.e_com_ma, cells.join(" | "));
+        }
+        s
+    }
+}
