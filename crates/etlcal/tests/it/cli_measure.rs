@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-use super::common::etlcal;
+use super::common::{etlcal, render_move_pair};
 
 fn json_of(args: &[&str]) -> Value {
     let out = etlcal(args);
@@ -24,22 +24,8 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
         .as_f64()
         .unwrap();
     let e = format!("{e_com}");
-    let a = json_of(&["render", "--out", &p("a.png"), "--e-com", &e, "--pattern", "9x7", "--seed", "1", "--json"]);
-    let z_b = format!("{}", a["z_w_mm"].as_f64().unwrap() - 2.0);
-    json_of(&[
-        "render",
-        "--out",
-        &p("b.png"),
-        "--e-com",
-        &e,
-        "--z-mm",
-        &z_b,
-        "--pattern",
-        "9x7",
-        "--seed",
-        "2",
-        "--json",
-    ]);
+    let z_a_mm = render_move_pair(&p("a.png"), &p("b.png"), &e);
+    let z_b = format!("{}", z_a_mm - 2.0);
     let measure_at = |t: &str, a: &str, b: &str, extra: &[&str]| {
         let mut args = vec!["measure", "--calibration", &cal, "--e-in", "153", "--t", t, a, b];
         args.extend(["--pattern", "9x7", "--square", "1.5"]);
@@ -84,7 +70,7 @@ fn measures_a_2_mm_stage_move_in_rendered_images() {
         r#"{"format": "etlcal.board/1", "type": "charuco", "squares": [15, 13], "square_mm": 1.5, "marker_mm": 1.1, "dictionary": "DICT_5X5_100"}"#,
     )
     .unwrap();
-    let z_a = a["z_w_mm"].as_f64().unwrap().to_string();
+    let z_a = z_a_mm.to_string();
     let render_charuco = |out: &str, z: &str, seed: &str| {
         json_of(&["render", "--out", out, "--e-com", &e, "--z-mm", z, "--board", &board, "--seed", seed, "--json"])
     };

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use super::common::etlcal_run as etlcal;
+use super::common::{etlcal_run as etlcal, render_move_pair};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -305,22 +305,7 @@ fn every_runtime_verb_at_e_com_is_the_verb_at_the_setting_of_that_e_com() {
         assert_eq!(body("a.cameramodel"), body("b.cameramodel"));
     }
     // measure and undistort on rendered images of the rig at that E_com.
-    let r = json_ok(&["render", "--out", &p("a.png"), "--e-com", &e, "--pattern", "9x7", "--seed", "1", "--json"]);
-    let z_b = format!("{}", r["z_w_mm"].as_f64().unwrap() - 2.0);
-    json_ok(&[
-        "render",
-        "--out",
-        &p("b.png"),
-        "--e-com",
-        &e,
-        "--z-mm",
-        &z_b,
-        "--pattern",
-        "9x7",
-        "--seed",
-        "2",
-        "--json",
-    ]);
+    render_move_pair(&p("a.png"), &p("b.png"), &e);
     let measure = |cal: &str, s: &[&str]| {
         let (a, b) = (p("a.png"), p("b.png"));
         json_ok(

@@ -16,3 +16,19 @@ pub fn etlcal_run(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into(),
     )
 }
+
+/// Renders the 9 x 7 pattern at E_com `e_com` (mA, as given on the command line) into `a`,
+/// in focus, and into `b`, 2 mm nearer: the two images of a measured stage move. Returns
+/// the stage position of `a`, mm.
+pub fn render_move_pair(a: &str, b: &str, e_com: &str) -> f64 {
+    let render = |out: &str, seed: &str, extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["render", "--out", out, "--e-com", e_com, "--pattern", "9x7", "--seed", seed, "--json"];
+        args.extend_from_slice(extra);
+        let (code, stdout, stderr) = etlcal_run(&args);
+        assert_eq!(code, 0, "{args:?}: {stderr}");
+        serde_json::from_str(&stdout).unwrap()
+    };
+    let z_a = render(a, "1", &[])["z_w_mm"].as_f64().unwrap();
+    render(b, "2", &["--z-mm", &format!("{}", z_a - 2.0)]);
+    z_a
+}
