@@ -444,7 +444,6 @@ impl Calibration {
     /// Args:
     ///     e_in_ma: driver current, mA (a float or an array).
     ///     temperature_c: lens temperature, degC (a float or an array; broadcast).
-    ///
     ///     allow_extrapolation: evaluate outside the calibrated temperature and E_in
     ///         ranges too (keyword only).
     ///
