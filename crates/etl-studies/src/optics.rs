@@ -145,16 +145,15 @@ pub fn optics_pnp(rig: &OpticalRig, seeds: u64, currents: &[f64]) -> Result<Opti
     let mut errors = vec![[(); 4].map(|_| Vec::new()); currents.len()];
     for seed in 1..=seeds {
         let obs = with_pixel_noise(&clean, sigma, seed);
-        let mut models = vec![];
+        let mut fixed = vec![];
         for request in &requests {
-            models.push(request.run(&obs, &KeySpelling)?.into_calibration().model()?);
+            fixed.push(request.run(&obs, &KeySpelling)?.into_calibration().model()?);
         }
+        let options = ZhangOptions { model: DistortionModel::OpenCv, flags: OpenCvFlags::NONE };
         for (k, &e) in currents.iter().enumerate() {
-            let options = ZhangOptions { model: DistortionModel::OpenCv, flags: OpenCvFlags::NONE };
-            models.truncate(requests.len());
-            models.push(monofocal(&zhang_with(&views_at(&obs, e), size, &options)?)?);
+            let direct = monofocal(&zhang_with(&views_at(&obs, e), size, &options)?)?;
             let views = noisy(&moves[k], sigma, 1_000_000 + 1000 * seed + k as u64, size);
-            for (c, model) in models.iter().enumerate() {
+            for (c, model) in fixed.iter().chain([&direct]).enumerate() {
                 errors[k][c].push((measured_mm(model, e, &views)? - MOVE_MM) * 1000.0);
             }
         }

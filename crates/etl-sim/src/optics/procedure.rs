@@ -109,10 +109,13 @@ pub fn observations(rig: &OpticalRig, seed: u64) -> Result<Observations> {
 pub fn traced(rig: &OpticalRig) -> Result<Observations> {
     let p = &rig.file.procedure;
     let mut obs = Observations::new(rig.file.sensor.size_px);
+    // The focus search is the costly part of a setting: once per current.
+    let mut settings = Vec::with_capacity(p.e_com_ma.len());
     for &e in &p.e_com_ma {
-        let setting = rig.at(e)?;
-        let z = rig.stage_z_mm(e)?;
-        obs.views.push(view_obs(e, p.temperature_c, stage_view(rig, &setting, z)));
+        settings.push((e, rig.at(e)?, rig.focus_distance_mm(e)?));
+    }
+    for (e, setting, d) in &settings {
+        obs.views.push(view_obs(*e, p.temperature_c, stage_view(rig, setting, rig.stage_z_at_distance_mm(*d))));
     }
     let off = rig.at(0.0)?;
     let design = LensOff {
@@ -125,15 +128,10 @@ pub fn traced(rig: &OpticalRig) -> Result<Observations> {
         let points = board_view(rig, &off, &p.lens_off_board, &pose, 0.0);
         obs.offstate_views.push(OffstateView { points });
     }
-    for &e in &p.e_com_ma {
-        if p.setting_views_per_current == 0 {
-            break;
-        }
-        let setting = rig.at(e)?;
-        let d = rig.focus_distance_mm(e)?;
-        for pose in setting_poses(&p.board, d, p.setting_views_per_current, p.setting_tilt_deg) {
-            let points = board_view(rig, &setting, &p.board, &pose, 0.0);
-            obs.setting_views.push(view_obs(e, p.temperature_c, points));
+    for (e, setting, d) in &settings {
+        for pose in setting_poses(&p.board, *d, p.setting_views_per_current, p.setting_tilt_deg) {
+            let points = board_view(rig, setting, &p.board, &pose, 0.0);
+            obs.setting_views.push(view_obs(*e, p.temperature_c, points));
         }
     }
     Ok(obs)

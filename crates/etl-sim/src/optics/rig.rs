@@ -119,8 +119,14 @@ impl OpticalRig {
     /// The stage position at which the board's plane is in focus at `e_ma`: the distance
     /// in focus less `stage_origin_mm`, along the stage axis.
     pub fn stage_z_mm(&self, e_ma: f64) -> Result<f64> {
+        Ok(self.stage_z_at_distance_mm(self.focus_distance_mm(e_ma)?))
+    }
+
+    /// The stage position at which the board's plane stands `distance_mm` (camera z) in
+    /// front, along the stage axis: for a distance in focus already found.
+    pub fn stage_z_at_distance_mm(&self, distance_mm: f64) -> f64 {
         let axis = mat_vec(&rodrigues_to_matrix(self.file.procedure.stage_rotation_rodrigues), [0.0, 0.0, 1.0]);
-        Ok((self.focus_distance_mm(e_ma)? - self.file.procedure.stage_origin_mm) / axis[2])
+        (distance_mm - self.file.procedure.stage_origin_mm) / axis[2]
     }
 
     /// The stage's pose, world to camera: (Rodrigues, translation mm); a world point is

@@ -41,14 +41,15 @@ pub fn setting_truths(rig: &OpticalRig) -> Result<Vec<SettingTruth>> {
         .iter()
         .map(|&e| {
             let f = focal_length_mm(&rig.file.centred_surfaces(e))?;
+            let focus_distance_mm = rig.focus_distance_mm(e)?;
             Ok(SettingTruth {
                 e_com_ma: e,
                 focal_length_mm: f,
                 focal_length_px: f / pitch,
                 // The tracer's lens frame has z towards the sensor (rig module docs).
                 entrance_pupil_z_mm: -rig.at(e)?.pupil.z_mm,
-                focus_distance_mm: rig.focus_distance_mm(e)?,
-                stage_z_mm: rig.stage_z_mm(e)?,
+                focus_distance_mm,
+                stage_z_mm: rig.stage_z_at_distance_mm(focus_distance_mm),
             })
         })
         .collect()

@@ -14,6 +14,18 @@ fn simulate(dir: &Path) {
     assert_eq!(code, 0, "{err}");
 }
 
+/// `calibrate` of the simulation in `dir` (its observations and A0) into `out` with
+/// `extra` flags, which must succeed; the calibration file.
+fn calibrate_simulated(dir: &Path, out: &str, extra: &[&str]) -> Value {
+    let p = |f: &str| dir.join(f).to_str().unwrap().to_owned();
+    let (obs, a0) = (p("observations.json"), p("a0.json"));
+    let mut args = vec!["calibrate", "--observations", &obs, "--a0", &a0, "--out", out];
+    args.extend_from_slice(extra);
+    let (code, _, err) = etlcal(&args);
+    assert_eq!(code, 0, "{extra:?}: {err}");
+    serde_json::from_str::<Value>(&std::fs::read_to_string(out).unwrap()).unwrap()
+}
+
 #[test]
 fn simulate_then_calibrate_recovers_the_paper_rig() {
     let dir = tempfile::tempdir().unwrap();
@@ -60,14 +72,7 @@ fn the_default_estimator_is_errors_in_variables() {
     let dir = tempfile::tempdir().unwrap();
     simulate(dir.path());
     let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
-    let (obs, a0) = (p("observations.json"), p("a0.json"));
-    let calibrate = |out: &str, extra: &[&str]| {
-        let mut args = vec!["calibrate", "--observations", &obs, "--a0", &a0, "--out", out];
-        args.extend_from_slice(extra);
-        let (code, _, err) = etlcal(&args);
-        assert_eq!(code, 0, "{err}");
-        serde_json::from_str::<Value>(&std::fs::read_to_string(out).unwrap()).unwrap()
-    };
+    let calibrate = |out: &str, extra: &[&str]| calibrate_simulated(dir.path(), out, extra);
     let default = calibrate(&p("default.json"), &[]);
     assert_eq!(default["estimator"], "eiv");
     // The same run as --estimator eiv with its default priors (10 um, 0.4 mA), number for number.
@@ -348,14 +353,7 @@ fn robust_and_sigma_flags_match_python_and_the_alias_is_the_same_request() {
     let dir = tempfile::tempdir().unwrap();
     simulate(dir.path());
     let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
-    let (obs, a0) = (p("observations.json"), p("a0.json"));
-    let calibrate = |out: &str, extra: &[&str]| {
-        let mut args = vec!["calibrate", "--observations", &obs, "--a0", &a0, "--out", out];
-        args.extend_from_slice(extra);
-        let (code, _, err) = etlcal(&args);
-        assert_eq!(code, 0, "{extra:?}: {err}");
-        serde_json::from_str::<Value>(&std::fs::read_to_string(out).unwrap()).unwrap()
-    };
+    let calibrate = |out: &str, extra: &[&str]| calibrate_simulated(dir.path(), out, extra);
     // --huber-px K is --robust huber --robust-k-px K, number for number.
     let alias = calibrate(&p("alias.json"), &["--huber-px", "0.8"]);
     assert_eq!(alias, calibrate(&p("robust.json"), &["--robust", "huber", "--robust-k-px", "0.8"]));
