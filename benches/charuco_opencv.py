@@ -14,7 +14,7 @@ On every image it measures, for OpenCV's CharucoDetector (default parameters) an
 (`etlcal detect --board FILE --json`): the fraction of the corners inside the frame that are
 found, the RMS distance to the truth, wrong ids (a corner farther than 2 px from its id's
 truth), and OpenCV's time per image (median and spread over --repeat calls in this process).
-etlcal's time is the criterion bench `cargo bench -p etl-image --bench charuco`, which reads
+etlcal's time is the criterion bench `cargo bench -p etl-image --features bench --bench charuco`, which reads
 the very PNGs written here (--out, default target/charuco-views).
 
     /work/venv/bin/python benches/charuco_opencv.py --etlcal target/release/etlcal [--repeat 7]

@@ -10,7 +10,7 @@ projected board corners), and measures on every image:
   - etlcal (`etlcal detect --json`, corners matched to the truth up to the board's half turn).
 Reports found rate, RMS error against the truth, and time per image (OpenCV in process, best
 of 5 for the classic detector;
-etlcal's time is the criterion bench `cargo bench -p etl-image --bench detect`, the CLI time
+etlcal's time is the criterion bench `cargo bench -p etl-image --features bench --bench detect`, the CLI time
 here includes process start and PNG decoding).
 
 Then the real photographs (fixtures/detect, or --real DIR...): found rate of both at the

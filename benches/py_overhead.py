@@ -1,6 +1,6 @@
 """Per-call overhead of the Python bindings over the Rust functions, both measured in one run.
 
-Rust side: the criterion benches of etl-core (`cargo bench -p etl-core --bench model`),
+Rust side: the criterion benches of etl-core (`cargo bench -p etl-core --features bench --bench model`),
 read from criterion's JSON estimates (median). Python side: the same work through
 `etlcal` (timeit, best of 7 repeats of the median-ish mean), with a wheel built in release:
 
@@ -27,7 +27,7 @@ TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
 
 def rust_median_ns(bench: str, name: str, package: str = "etl-core") -> float:
     subprocess.run(
-        ["cargo", "bench", "-q", "-p", package, "--bench", bench, "--", name, "--exact"],
+        ["cargo", "bench", "-q", "-p", package, "--features", "bench", "--bench", bench, "--", name, "--exact"],
         cwd=ROOT,
         check=True,
         stdout=subprocess.DEVNULL,

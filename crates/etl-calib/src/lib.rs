@@ -5,6 +5,7 @@
 //! verb that the CLI and Python parse their options into ([`request`]).
 
 pub mod baseline;
+pub mod diff;
 pub mod pipeline;
 pub mod request;
 pub mod robust;

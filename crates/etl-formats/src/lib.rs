@@ -74,14 +74,33 @@ pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use observations::Observations;
 pub use thermal::ThermalFile;
 
+/// The largest JSON file the readers take: 1 GiB, more than a thousand times a large
+/// rig's observations (10,000 views of a 9 x 7 board are about 60 MB). Anything larger is
+/// refused before it is read, so that a wrong path (a disk image, a log) cannot take the
+/// machine's memory.
+pub const MAX_JSON_BYTES: u64 = 1 << 30;
+
 /// Reads `path` as JSON of format `expected` (e.g. `"etlcal.calibration/1"`).
 ///
 /// The `"format"` field is checked before the rest is parsed, so a file of another
 /// format or version gets a message naming both, not a confusing field error.
 /// A path that is not a regular file (a FIFO, a device, a directory) is refused before it
-/// is opened ([`output::check_input`]).
+/// is opened ([`output::check_input`]), and so is a file larger than [`MAX_JSON_BYTES`]
+/// (before anything is allocated for it).
 pub fn read_json<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
-    output::check_input(path)?;
+    if let Some(m) = output::check_input(path)? {
+        if m.len() > MAX_JSON_BYTES {
+            return Err(Error::invalid_value(
+                "input",
+                path,
+                format!(
+                    "{}: {} bytes, more than the {MAX_JSON_BYTES} an etlcal JSON file may hold: refused before reading",
+                    path.display(),
+                    m.len()
+                ),
+            ));
+        }
+    }
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_owned(), source })?;
     parse_json(&text, path, expected)
 }

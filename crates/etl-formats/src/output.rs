@@ -249,7 +249,7 @@ pub fn kept_permissions(m: &std::fs::Metadata) -> std::fs::Permissions {
 }
 
 mod file_set;
-pub use file_set::write_file_set;
+pub use file_set::{write_bytes_set, write_file_set};
 
 // The policy's tests make symlinks, hard links, FIFOs and modes: Unix only.
 #[cfg(all(test, unix))]

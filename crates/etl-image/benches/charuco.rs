@@ -7,7 +7,7 @@
 //!
 //! ```sh
 //! /work/venv/bin/python benches/charuco_opencv.py --etlcal target/release/etlcal
-//! cargo bench -p etl-image --bench charuco
+//! cargo bench -p etl-image --features bench --bench charuco
 //! ```
 use std::path::PathBuf;
 

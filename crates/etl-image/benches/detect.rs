@@ -1,7 +1,7 @@
 //! Checkerboard detection + refinement on a rendered 1936 x 1458 view of the 14x12 board
 //! (blur sigma 0.5, 1.5 and 3 px, read noise 2 grey levels), one image per iteration, one
 //! thread per image as in `detect_many` (the refinement of the corners uses rayon).
-//! `cargo bench -p etl-image --bench detect`.
+//! `cargo bench -p etl-image --features bench --bench detect`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};

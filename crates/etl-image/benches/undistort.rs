@@ -2,7 +2,7 @@
 //! bands of rows, all the machine's threads): the maps alone, the maps at a new current
 //! (`FocusMaps::maps_at`, buffers reused: the per-frame cost of a focus change), remap of
 //! an 8-bit image through stored maps, and maps + remap fused (`undistort_image`).
-//! `cargo bench -p etl-image --bench undistort -- --measurement-time 3`; OpenCV's side is
+//! `cargo bench -p etl-image --features bench --bench undistort -- --measurement-time 3`; OpenCV's side is
 //! benches/undistort_opencv.py (docs/BENCHMARKS.md, "Undistortion").
 
 use criterion::{criterion_group, criterion_main, Criterion};

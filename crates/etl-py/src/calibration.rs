@@ -165,9 +165,9 @@ impl Calibration {
     /// calibration file.
     #[classmethod]
     fn load(_cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|source| crate::errors::calib_err(etl_calib::Error::Io { path: path.clone(), source }))?;
-        Calibration::from_file(parse_file(&text, &path)?)
+        // The CLI's reader: regular files only, a size cap, and a calibration written as a
+        // set with its observations read only once the set is whole.
+        Calibration::from_file(CalFile::load(&path).py()?)
     }
 
     /// Writes the calibration as an `etlcal.calibration/1` file (atomically: a failed

@@ -127,6 +127,11 @@ impl CameraAt {
         parts_out(py, &[], true, f(&self.inner, self.file.image_size)?, part_shapes)
     }
 
+    /// The image size of its calibration, px.
+    pub(crate) fn image_size(&self) -> [u32; 2] {
+        self.file.image_size
+    }
+
     /// Whether the setting was given as a known E_com (E_in and T unknown).
     fn given_e_com(&self) -> bool {
         self.inner.e_in_ma().is_nan()

@@ -4,6 +4,8 @@
 //! Every I/O call releases the GIL. Timeouts raise `DeviceTimeoutError`, other device and
 //! port failures `DeviceError`, bad arguments (NaN) `InputError`.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, MutexGuard, TryLockError};
 use std::time::Duration;
 
 use etl_hw::client::{LensClient, OpenOptions};
@@ -59,17 +61,81 @@ fn hw_err(e: HwError) -> PyErr {
 /// (`with etlcal.Lens(port) as lens:`) or call `close()`.
 #[pyclass(module = "etlcal")]
 pub struct Lens {
-    client: Option<LensClient>,
+    /// `None` once closed. Every call takes the lock for its own length ([`Lens::call`]);
+    /// a procedure for its whole run ([`Lens::procedure`]).
+    client: Mutex<Option<LensClient>>,
+    /// Set while a procedure (`hold`, `thermal_calibration`) runs: a call from another
+    /// thread meanwhile is refused at once instead of waiting for the end of the run.
+    busy: AtomicBool,
+}
+
+/// The thread rule, said by every refusal of a busy lens.
+const BUSY: &str = "the lens is busy: Lens.hold or thermal_calibration runs on another thread, and a Lens \
+    serves one procedure at a time (other calls wait for a call in progress, not for a procedure)";
+
+/// A lens held by a procedure: the lock, and the busy flag cleared when it is dropped.
+pub(crate) struct Procedure<'a> {
+    guard: MutexGuard<'a, Option<LensClient>>,
+    busy: &'a AtomicBool,
+}
+
+impl Procedure<'_> {
+    /// The open client. Errors: the lens is closed.
+    pub(crate) fn client_mut(&mut self) -> PyResult<&mut LensClient> {
+        self.guard.as_mut().ok_or_else(|| raise(Kind::Device, "the lens is closed"))
+    }
+}
+
+impl Drop for Procedure<'_> {
+    fn drop(&mut self) {
+        self.busy.store(false, Ordering::Release);
+    }
 }
 
 impl Lens {
-    fn client(&self) -> PyResult<&LensClient> {
-        self.client.as_ref().ok_or_else(|| raise(Kind::Device, "the lens is closed"))
+    fn from_client(client: LensClient) -> Self {
+        Lens { client: Mutex::new(Some(client)), busy: AtomicBool::new(false) }
     }
 
-    /// The open client, for procedures that drive the lens (`thermal_calibration`).
-    pub(crate) fn client_mut(&mut self) -> PyResult<&mut LensClient> {
-        self.client.as_mut().ok_or_else(|| raise(Kind::Device, "the lens is closed"))
+    /// The lock, waited for with the GIL released (a thread holding the lock may need the
+    /// GIL to finish), unless a procedure runs (a DeviceError saying the thread rule). A
+    /// poisoned lock is taken as it is: the client's own state survives a panic.
+    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, Option<LensClient>>> {
+        loop {
+            if self.busy.load(Ordering::Acquire) {
+                return Err(raise(Kind::Device, BUSY));
+            }
+            match self.client.try_lock() {
+                Ok(g) => return Ok(g),
+                Err(TryLockError::Poisoned(p)) => return Ok(p.into_inner()),
+                Err(TryLockError::WouldBlock) => py.detach(|| std::thread::sleep(Duration::from_micros(200))),
+            }
+        }
+    }
+
+    /// Runs `f` on the open client with the GIL released, the lens locked for the call.
+    fn call<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&LensClient) -> R + Send) -> PyResult<R> {
+        let guard = self.lock(py)?;
+        let c = guard.as_ref().ok_or_else(|| raise(Kind::Device, "the lens is closed"))?;
+        Ok(py.detach(|| f(c)))
+    }
+
+    /// The lens for a procedure that drives it for a while (`hold`, `thermal_calibration`):
+    /// refused while another procedure runs; waits for a call in progress.
+    pub(crate) fn procedure(&self, py: Python<'_>) -> PyResult<Procedure<'_>> {
+        if self.busy.compare_exchange(false, true, Ordering::AcqRel, Ordering::Acquire).is_err() {
+            return Err(raise(Kind::Device, BUSY));
+        }
+        let busy = &self.busy;
+        // Not `lock`: it refuses while busy, which this procedure itself now is.
+        let guard = loop {
+            match self.client.try_lock() {
+                Ok(g) => break g,
+                Err(TryLockError::Poisoned(p)) => break p.into_inner(),
+                Err(TryLockError::WouldBlock) => py.detach(|| std::thread::sleep(Duration::from_micros(200))),
+            }
+        };
+        Ok(Procedure { guard, busy })
     }
 }
 
@@ -99,7 +165,7 @@ impl Lens {
     fn new(py: Python<'_>, port: std::path::PathBuf, handshake: bool, timeout_ms: u64) -> PyResult<Self> {
         let options = OpenOptions { handshake, timeout: Duration::from_millis(timeout_ms), ..OpenOptions::default() };
         let client = py.detach(|| LensClient::open(&port, options)).map_err(hw_err)?;
-        Ok(Lens { client: Some(client) })
+        Ok(Lens::from_client(client))
     }
 
     /// Firmware, lens serial, limits and temperature: a LensInfo (attributes, also dict
@@ -107,9 +173,8 @@ impl Lens {
     /// `upper_limit_ma`, `lower_limit_ma` (mA) and `temperature_c` (degC, None without a
     /// sensor).
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let c = self.client()?;
-        let info = py.detach(|| c.identify()).map_err(hw_err)?;
-        let t = py.detach(|| c.temperature_c()).ok();
+        let (info, t) = self.call(py, |c| (c.identify(), c.temperature_c().ok()))?;
+        let info = info.map_err(hw_err)?;
         let d = PyDict::new(py);
         d.set_item("firmware_type", info.firmware_type.letter().to_string())?;
         d.set_item("firmware_version", info.firmware_version)?;
@@ -124,40 +189,36 @@ impl Lens {
     /// Commands the driver current, mA (clamped to the limits); returns the current
     /// actually commanded (after clamping and the driver's 12-bit quantisation), mA.
     fn set_current_ma(&self, py: Python<'_>, e_in_ma: f64) -> PyResult<f64> {
-        let c = self.client()?;
-        Ok(py.detach(|| c.set_current_ma(e_in_ma)).map_err(hw_err)?.commanded_ma)
+        Ok(self.call(py, |c| c.set_current_ma(e_in_ma))?.map_err(hw_err)?.commanded_ma)
     }
 
     /// The driver current, mA.
     fn current_ma(&self, py: Python<'_>) -> PyResult<f64> {
-        let c = self.client()?;
-        py.detach(|| c.current_ma()).map_err(hw_err)
+        self.call(py, |c| c.current_ma())?.map_err(hw_err)
     }
 
     /// The lens temperature, degC (the lens's own sensor).
     fn temperature_c(&self, py: Python<'_>) -> PyResult<f64> {
-        let c = self.client()?;
-        py.detach(|| c.temperature_c()).map_err(hw_err)
+        self.call(py, |c| c.temperature_c())?.map_err(hw_err)
     }
 
     /// The driver's software limits [lower, upper], mA.
     #[getter]
-    fn limits_ma(&self) -> PyResult<(f64, f64)> {
-        let [lo, hi] = self.client()?.limits_ma();
+    fn limits_ma(&self, py: Python<'_>) -> PyResult<(f64, f64)> {
+        let [lo, hi] = self.call(py, |c| c.limits_ma())?;
         Ok((lo, hi))
     }
 
     /// The serial port's path.
     #[getter]
-    fn port(&self) -> PyResult<String> {
-        Ok(self.client()?.path().display().to_string())
+    fn port(&self, py: Python<'_>) -> PyResult<String> {
+        self.call(py, |c| c.path().display().to_string())
     }
 
     /// Reopens the port at the same path without the handshake (the lens keeps its
     /// current) and re-reads the limits: after a DeviceError from a pulled cable.
     fn reconnect(&self, py: Python<'_>) -> PyResult<()> {
-        let c = self.client()?;
-        py.detach(|| c.reconnect()).map_err(hw_err)
+        self.call(py, |c| c.reconnect())?.map_err(hw_err)
     }
 
     /// Live temperature compensation (paper section 2.2.1 iii): holds a wanted E_com while
@@ -189,7 +250,7 @@ impl Lens {
     #[pyo3(signature = (calibration, e_com_ma, steps=None, duration_s=None, rate_hz=0.0, on_step=None))]
     #[allow(clippy::too_many_arguments)]
     fn hold<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         calibration: PyRef<'py, ThermalCalibration>,
         e_com_ma: f64,
@@ -217,7 +278,8 @@ impl Lens {
         };
         let config = HoldConfig { e_com_ma, rate_hz, duration };
         let cal = calibration.inner;
-        let client = self.client_mut()?;
+        let mut lens = self.procedure(py)?;
+        let client = lens.client_mut()?;
         let mut raised: Option<PyErr> = None;
         let report = py.detach(|| {
             hold(client, &cal, &config, |s| {
@@ -256,8 +318,9 @@ impl Lens {
     }
 
     /// Closes the port (the lens keeps its current).
-    fn close(&mut self) {
-        self.client = None;
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        *self.lock(py)? = None;
+        Ok(())
     }
 
     fn __enter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
@@ -265,17 +328,18 @@ impl Lens {
     }
 
     #[pyo3(signature = (*_args))]
-    fn __exit__(&mut self, _args: &Bound<'_, pyo3::types::PyTuple>) -> bool {
-        self.close();
-        false
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        self.close(py)?;
+        Ok(false)
     }
 }
 
 /// A simulated lens and driver speaking the Lens Driver 4 protocol on a pseudo-terminal:
 /// the paper's physics at E_com = E_in - E_T(T, E_in) (the paper's surface), a thermal
 /// model (ambient 25 degC, coil heating, a heater), the sensor quantised to 1/16 degC.
-/// Open it with `Lens(virtual_lens.port)`. It serves until garbage-collected.
-#[pyclass(module = "etlcal", unsendable)]
+/// Open it with `Lens(virtual_lens.port)`. It serves until garbage-collected. Usable from
+/// any thread (its state is behind a lock).
+#[pyclass(module = "etlcal")]
 pub struct VirtualLens {
     device: Device,
 }

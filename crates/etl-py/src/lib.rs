@@ -13,6 +13,7 @@ pub mod board;
 pub mod calibration;
 pub mod camera;
 pub mod dataset;
+pub mod diff;
 pub mod errors;
 pub mod focus;
 pub mod images;
@@ -55,6 +56,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
     m.add_function(wrap_pyfunction!(focus::autofocus, m)?)?;
     m.add_function(wrap_pyfunction!(zhang::zhang, m)?)?;
+    m.add_function(wrap_pyfunction!(diff::diff, m)?)?;
     m.add_function(wrap_pyfunction!(studies::study, m)?)?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<lens::VirtualLens>()?;

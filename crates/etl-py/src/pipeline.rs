@@ -79,6 +79,10 @@ impl Spelling for Keywords {
 ///     fix_k3: hold k3 = 0 (cv2.CALIB_FIX_K3); distortion "opencv" or "auto" only.
 ///     zero_tangent: hold p1 = p2 = 0 (cv2.CALIB_ZERO_TANGENT_DIST); likewise.
 ///     sigma_z_um: the stage prior in um instead (as `--sigma-z-um`); not with sigma_z_mm.
+///     accept_ill_conditioned: keep a calibration the data do not determine (a focal
+///         length not positive over the range, a principal point std above 5 % of the
+///         image), its symptom the first of its `warnings`; False (the default): refused
+///         with InputError naming the cause.
 ///
 /// Returns: a `Calibration` with the standard deviations (`std`), the RMS reprojection
 /// error (`rms_px`), per-view summaries (`views`), the corners left out as gross outliers
@@ -92,7 +96,8 @@ impl Spelling for Keywords {
 #[pyfunction]
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
-    distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None))]
+    distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None,
+    accept_ill_conditioned=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -112,6 +117,7 @@ pub fn calibrate(
     fix_k3: bool,
     zero_tangent: bool,
     sigma_z_um: Option<f64>,
+    accept_ill_conditioned: bool,
 ) -> PyResult<Calibration> {
     let sigma_z = match (sigma_z_mm, sigma_z_um) {
         (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
@@ -129,6 +135,7 @@ pub fn calibrate(
         focal_degree: focal_degree.map(parse_focal_degree).transpose()?,
         fix_k3,
         zero_tangent,
+        accept_ill_conditioned,
     };
     request.validate(&Keywords).py()?;
     let obs = observations.file.clone();

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use etl_studies::{Study, StudyOptions};
+use etl_studies::{Study, StudyOptions, MAX_TRIALS};
 use pyo3::prelude::*;
 
 use crate::errors::{invalid_value, CoreResultExt};
@@ -16,7 +16,8 @@ use crate::errors::{invalid_value, CoreResultExt};
 ///         (6..9 of 9 views), "baseline" (per-setting Zhang vs the proposed method), or
 ///         "crlb" (Cramer-Rao bound vs Monte Carlo spread), or "crlb-strong" (the same on
 ///         the strong-distortion rig for OpenCV's family, with the paper family's bias).
-///     trials: Monte Carlo trials per level (0: the study's default; fig6 100, crlb 300).
+///     trials: Monte Carlo trials per level, 0..=100000 (0: the study's default; fig6 100,
+///         crlb 300; more is refused with InputError before anything runs).
 ///     seed: base random seed.
 ///     out: a directory for name.json, name.md and the SVG/PNG plots (None: not written).
 ///
@@ -35,6 +36,14 @@ pub fn study<'py>(
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let which = Study::from_name(name).py()?;
+    // The CLI's limit, checked before anything is allocated for the trials.
+    if trials > MAX_TRIALS {
+        return Err(invalid_value(
+            "trials",
+            trials,
+            format!("trials {trials} must lie in 0..={MAX_TRIALS} (0: the study's default)"),
+        ));
+    }
     if let Some(dir) = &out {
         if !dir.is_dir() {
             return Err(invalid_value("out", dir, format!("{}: output directory does not exist", dir.display())));

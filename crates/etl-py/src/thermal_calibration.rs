@@ -87,7 +87,7 @@ impl etl_calib::thermal_calibration::Climate for PyClimate<'_> {
 #[allow(clippy::too_many_arguments)]
 pub fn thermal_calibration<'py>(
     py: Python<'py>,
-    mut lens: PyRefMut<'py, Lens>,
+    lens: PyRef<'py, Lens>,
     capture: Bound<'py, PyAny>,
     set_temperature: Bound<'py, PyAny>,
     place_board: Option<Bound<'py, PyAny>>,
@@ -109,7 +109,8 @@ pub fn thermal_calibration<'py>(
     if let Some(t) = temperatures_c {
         options.temperatures_c = t;
     }
-    let client = lens.client_mut()?;
+    let mut held = lens.procedure(py)?;
+    let client = held.client_mut()?;
     // The camera and climate are Python callables: the procedure runs with the GIL held.
     let mut camera = PyCamera { capture, place_board, raised: None };
     let mut climate = PyClimate { set_temperature, raised: None };

@@ -5,8 +5,10 @@ taking `e_com_ma` are that camera's, to the bit. `distortion()` is named for its
 and no thermal calibration is usable at a known E_com (issue 26)."""
 import json
 import math
+import os
 import pathlib
 import pickle
+import subprocess
 import warnings
 from typing import Callable, List, Tuple
 
@@ -218,3 +220,27 @@ def test_a_calibration_with_thermal_says_nothing_about_compensation() -> None:
         warnings.simplefilter("error")
         cal = etlcal.calibrate(sim.observations, sim.a0, thermal="paper")
     assert cal.temperature_compensation is None and "temperature_compensation" not in cal.to_json()
+
+
+def test_diff_of_two_cameras_is_the_clis(tmp_path: pathlib.Path) -> None:
+    root = pathlib.Path(__file__).resolve().parents[3]
+    path = root / "fixtures" / "service" / "calibration.json"
+    cal = etlcal.Calibration.load(path)
+    same = etlcal.diff(cal.at_e_com(150.0), cal.at_e_com(150.0))
+    assert isinstance(same, etlcal.ProjectionDiff) and same.max_px < 1e-9 and same.unmapped == 0
+    assert same.diff_px.shape == (48, 64) and same.grid == (64, 48)
+    d = json.loads(path.read_text())
+    d["principal_point"][0] += 2.0
+    moved = etlcal.Calibration.from_json(json.dumps(d))
+    r = etlcal.diff(cal.at_e_com(150.0), moved.at_e_com(150.0), grid=(32, 24))
+    assert abs(r.rms_px - 2.0) < 1e-6 and r.rotated_rms_px < 0.2 and r.rotated_diff_px.shape == (24, 32)
+    b = tmp_path / "b.json"
+    moved.save(b)
+    out = subprocess.run(
+        [os.environ["ETLCAL_TEST_BINARY"], "diff", str(path), str(b), "--e-com", "150", "--grid", "32x24", "--json"],
+        check=True, capture_output=True, text=True,
+    ).stdout
+    cli = json.loads(out)
+    assert cli["rms_px"] == r.rms_px and cli["rotated_max_px"] == r.rotated_max_px
+    with pytest.raises(etlcal.InputError, match="grid"):
+        etlcal.diff(cal.at_e_com(150.0), cal.at_e_com(150.0), grid=(0, 10))

@@ -462,3 +462,19 @@ def test_per_setting_baseline_names_zhangs_outliers_by_setting_view() -> None:
     assert [(v, p) for v, p, _ in base.setting_outliers] == [(2, 9), (last, 40)]
     assert all(r > 100.0 for _, _, r in base.setting_outliers)
     assert etlcal.Calibration.from_json(base.to_json()).setting_outliers == base.setting_outliers
+
+
+def test_a_calibration_the_data_do_not_determine_is_refused_unless_accepted(tmp_path: pathlib.Path) -> None:
+    # Three views of six corners of the golden observations: the principal point is then
+    # unknown to hundreds of px.
+    root = pathlib.Path(__file__).resolve().parents[3]
+    d = json.loads((root / "fixtures" / "golden" / "observations.json").read_text())
+    d["views"] = [dict(v, points=v["points"][:6]) for v in d["views"][:3]]
+    tiny = tmp_path / "tiny.json"
+    tiny.write_text(json.dumps(d))
+    obs = etlcal.Observations.load(tiny)
+    with pytest.raises(etlcal.InputError, match=r"principal point's standard deviation .*accept_ill_conditioned=True"):
+        etlcal.calibrate(obs)
+    with pytest.warns(UserWarning, match="ill-conditioned, kept by accept_ill_conditioned=True"):
+        cal = etlcal.calibrate(obs, accept_ill_conditioned=True)
+    assert cal.warnings[0].startswith("ill-conditioned, kept by accept_ill_conditioned=True: the principal point")

@@ -318,8 +318,8 @@ fn draw_figure<DB: Canvas>(root: &DrawingArea<DB, Shift>, f: &Figure, text: bool
     })
 }
 
-/// Writes `f` as `dir/name.svg` and `dir/name.png` (atomic writes); returns the paths.
-pub fn write_figure(dir: &Path, f: &Figure) -> Result<Vec<PathBuf>> {
+/// `f` drawn as PNG and SVG: `[("name.png", bytes), ("name.svg", bytes)]`.
+pub fn render_figure(f: &Figure) -> Result<[(String, Vec<u8>); 2]> {
     let size = ((560 + legend_px(f)) * f.grid.1 as u32, 420 * f.grid.0 as u32);
     let text = crate::font_available();
     // No input of the user's is at fault when a plot fails: `what` names the plot.
@@ -340,10 +340,19 @@ pub fn write_figure(dir: &Path, f: &Figure) -> Result<Vec<PathBuf>> {
     let mut png = std::io::Cursor::new(vec![]);
     img.write_to(&mut png, image::ImageFormat::Png)
         .map_err(|e| Error::invalid(&plot, format!("{plot}: PNG encoding: {e}")))?;
-    let (p, s) = (dir.join(format!("{}.png", f.name)), dir.join(format!("{}.svg", f.name)));
-    write_atomic(&p, png.get_ref())?;
-    write_atomic(&s, svg.as_bytes())?;
-    Ok(vec![p, s])
+    Ok([(format!("{}.png", f.name), png.into_inner()), (format!("{}.svg", f.name), svg.into_bytes())])
+}
+
+/// Writes `f` as `dir/name.png` and `dir/name.svg` ([`render_figure`]; atomic writes);
+/// returns the paths.
+pub fn write_figure(dir: &Path, f: &Figure) -> Result<Vec<PathBuf>> {
+    let mut paths = vec![];
+    for (name, bytes) in render_figure(f)? {
+        let path = dir.join(name);
+        write_atomic(&path, &bytes)?;
+        paths.push(path);
+    }
+    Ok(paths)
 }
 
 #[cfg(test)]

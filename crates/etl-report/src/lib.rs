@@ -5,6 +5,7 @@
 mod calibration;
 mod data;
 pub mod figure;
+pub mod heat_map;
 mod html;
 mod plots;
 mod uncertainty;

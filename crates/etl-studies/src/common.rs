@@ -20,15 +20,15 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use etl_formats::observations::Observations;
-use etl_formats::write_atomic;
+use etl_formats::output::write_bytes_set;
 use etl_formats::{Error, Result};
-pub use etl_report::figure::{write_figure, Chart, Figure, Series};
+pub use etl_report::figure::{render_figure, write_figure, Chart, Figure, Series};
 use etl_sim::simulate::{focused_z_mm, observe_board, NoiseModel};
 
 /// The most Monte Carlo trials a study runs (per level): each trial keeps its result in
 /// memory (up to a few hundred bytes, a few ms to seconds of CPU), so 100 000 trials stay
-/// within tens of MB while 10^8 would need about 24 GB. Callers (the CLI's `--trials`)
-/// refuse more.
+/// within tens of MB while 10^8 would need about 24 GB. Callers (the CLI's `--trials`,
+/// Python's `study(trials=)`) refuse more.
 pub const MAX_TRIALS: usize = 100_000;
 
 /// What a Cramer-Rao study of a rig reports beside its numbers (both rigs' studies): how
@@ -460,20 +460,21 @@ pub struct StudyOutput {
 }
 
 impl StudyOutput {
-    /// Writes `name.json`, `name.md` and every figure into the existing directory `dir`.
+    /// Writes `name.json`, `name.md` and every figure (PNG and SVG) into the existing
+    /// directory `dir` as one set (etl_formats::output::write_bytes_set): a kill or a full
+    /// disk leaves the earlier files of this study or the new ones, never a mix. Returns
+    /// the paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        let mut files = vec![];
-        let j = dir.join(format!("{}.json", self.name));
         let text = serde_json::to_string_pretty(&self.json).map_err(|e| Error::invalid(&self.name, e.to_string()))?;
-        write_atomic(&j, text.as_bytes())?;
-        files.push(j);
-        let m = dir.join(format!("{}.md", self.name));
-        write_atomic(&m, self.markdown.as_bytes())?;
-        files.push(m);
+        let mut files = vec![
+            (dir.join(format!("{}.json", self.name)), text.into_bytes()),
+            (dir.join(format!("{}.md", self.name)), self.markdown.clone().into_bytes()),
+        ];
         for f in &self.figures {
-            files.extend(write_figure(dir, f)?);
+            files.extend(render_figure(f)?.into_iter().map(|(name, bytes)| (dir.join(name), bytes)));
         }
-        Ok(files)
+        write_bytes_set(&files)?;
+        Ok(files.into_iter().map(|(p, _)| p).collect())
     }
 }
 

@@ -178,6 +178,11 @@ pub struct Args {
     /// Hold p1 = p2 = 0 (OpenCV's CALIB_ZERO_TANGENT_DIST; --distortion opencv or auto).
     #[arg(long)]
     pub zero_tangent: bool,
+    /// Keep a calibration the data do not determine (a focal length not positive over the
+    /// range, a principal point std above 5 % of the image), marked in its warnings;
+    /// refused otherwise, naming the cause.
+    #[arg(long)]
+    pub accept_ill_conditioned: bool,
     /// Thermal calibration for views without e_com_ma: an etlcal.thermal/1 file, or
     /// `paper` for the paper's surface. Required when a view has no e_com_ma (none is
     /// assumed); kept whole in the calibration, which uses it at run time.
@@ -261,6 +266,7 @@ impl Args {
             }),
             fix_k3: self.fix_k3,
             zero_tangent: self.zero_tangent,
+            accept_ill_conditioned: self.accept_ill_conditioned,
         })
     }
 }

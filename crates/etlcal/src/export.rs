@@ -12,6 +12,7 @@ use serde_json::json;
 use super::print_json;
 use crate::setting::SettingArgs;
 use etl_formats::export::{export, ExportFormat};
+use etl_formats::output::Output;
 use etl_formats::Result;
 
 /// Arguments of `etlcal export`.
@@ -35,6 +36,9 @@ pub struct Args {
 /// Runs `etlcal export`.
 pub fn run(args: Args) -> Result<()> {
     let format: ExportFormat = args.format.parse()?;
+    // The calibration is an input: an --out that is it (or a link to it) would replace it
+    // with the export.
+    crate::output::check([Some(args.setting.calibration.as_path())], &[Output::File(&args.out)])?;
     let (cal, camera) = args.setting.camera()?;
     crate::output::create_parent(&args.out)?;
     let e = export(&cal, &camera, format, &args.out)?;

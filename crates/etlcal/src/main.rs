@@ -30,6 +30,7 @@ pub mod board;
 pub mod calibrate;
 pub mod demo;
 pub mod detect;
+pub mod diff;
 pub mod export;
 pub mod focus;
 pub mod lens;
@@ -99,6 +100,8 @@ enum Command {
     Focus(focus::Args),
     /// Undistort images taken at a lens current and temperature (exact maps of the model).
     Undistort(undistort::Args),
+    /// How far apart two calibrations project the same directions at one lens setting.
+    Diff(diff::Args),
     /// The paper's simulations and comparisons (Fig. 5, Fig. 6, Tables 1-2, Fig. 12, CRLB).
     Study(study::Args),
     /// Sharpness of images: CPBD (as the reference package) or a gradient measure.
@@ -150,6 +153,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Export(a) => done(export::run(export::Args { json, ..a })),
         Command::Focus(a) => done(focus::run(focus::Args { json, ..a })),
         Command::Undistort(a) => done(undistort::run(undistort::Args { json, ..a })),
+        Command::Diff(a) => done(diff::run(diff::Args { json, ..a })),
         Command::Study(a) => done(study::run(study::Args { json, ..a })),
         Command::Sharpness(a) => done(sharpness::run(sharpness::Args { json, ..a })),
         Command::Detect(a) => detect::run(detect::Args { json, ..a }),

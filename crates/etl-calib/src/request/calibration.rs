@@ -163,6 +163,10 @@ pub struct CalibrationRequest {
     pub fix_k3: bool,
     /// Hold p1 = p2 = 0 (OpenCV's `CALIB_ZERO_TANGENT_DIST`; likewise).
     pub zero_tangent: bool,
+    /// Keep a calibration the data do not determine (a focal length not positive over
+    /// the range, a loose principal point: [`super::ill_condition`]) instead of refusing
+    /// it; its symptom is then the first of its `warnings`.
+    pub accept_ill_conditioned: bool,
 }
 
 /// What a run gives: the proposed method's result or the baseline's.
@@ -180,6 +184,13 @@ impl Calibrated {
         match self {
             Calibrated::Proposed(r) => &r.calibration,
             Calibrated::PerSetting(r) => &r.calibration,
+        }
+    }
+
+    fn calibration_mut(&mut self) -> &mut Calibration {
+        match self {
+            Calibrated::Proposed(r) => &mut r.calibration,
+            Calibrated::PerSetting(r) => &mut r.calibration,
         }
     }
 
@@ -321,13 +332,32 @@ impl CalibrationRequest {
 
     /// Calibrates `obs` as asked: the per-setting baseline, the proposed method with the
     /// model given, or the model chosen by held-out views (`auto`, with the comparison in
-    /// the file's `"model_selection"`).
+    /// the file's `"model_selection"`); then refuses a result the data do not determine
+    /// ([`super::ill_condition`]) unless [`Self::accept_ill_conditioned`].
     ///
     /// Errors: the refusals of [`Self::check`] and those of the data (no lens-off views
     /// with A0 not given, no setting views for the baseline, a view without E_com and no
     /// thermal calibration), in `spelling`'s words; then
-    /// those of the pipeline (e.g. fewer than 3 distinct currents).
+    /// those of the pipeline (e.g. fewer than 3 distinct currents); then
+    /// [`Refusal::IllConditioned`].
     pub fn run(&self, obs: &Observations, spelling: &dyn Spelling) -> Result<Calibrated> {
+        let mut calibrated = self.run_unchecked(obs, spelling)?;
+        if let Some(condition) = super::ill_condition(calibrated.calibration()) {
+            if !self.accept_ill_conditioned {
+                return Err(Refusal::IllConditioned { condition }.to_error(spelling));
+            }
+            let note = format!(
+                "ill-conditioned, kept by {}: {}",
+                spelling.switched_on(RequestOption::AcceptIllConditioned),
+                condition.describe()
+            );
+            calibrated.calibration_mut().warnings.insert(0, note);
+        }
+        Ok(calibrated)
+    }
+
+    /// [`Self::run`] without the conditioning check.
+    fn run_unchecked(&self, obs: &Observations, spelling: &dyn Spelling) -> Result<Calibrated> {
         self.validate(spelling)?;
         let thermal = self.thermal.as_ref();
         if thermal.is_none() {

@@ -10,6 +10,7 @@
 //! `--hold-a0`, Python `hold_a0`.
 
 mod calibration;
+mod conditioning;
 mod option;
 mod refusal;
 mod zhang;
@@ -18,6 +19,7 @@ pub use calibration::{
     Calibrated, CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method,
     StageSigma, DEFAULT_ROBUST_K_PX,
 };
+pub use conditioning::{ill_condition, IllCondition, MAX_PRINCIPAL_POINT_STD_FRACTION};
 pub use option::{KeySpelling, RequestOption, Spelling};
 pub use refusal::Refusal;
 pub use zhang::ZhangRequest;

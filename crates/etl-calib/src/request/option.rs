@@ -40,6 +40,8 @@ pub enum RequestOption {
     ZeroTangent,
     /// Zhang's distortion family.
     Model,
+    /// Keep a calibration the data do not determine (marked in its warnings).
+    AcceptIllConditioned,
 }
 
 impl RequestOption {
@@ -63,6 +65,7 @@ impl RequestOption {
             RequestOption::FixK3 => "fix_k3",
             RequestOption::ZeroTangent => "zero_tangent",
             RequestOption::Model => "model",
+            RequestOption::AcceptIllConditioned => "accept_ill_conditioned",
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use etl_formats::Error;
 
+use super::conditioning::IllCondition;
 use super::option::{RequestOption, Spelling};
 
 /// The options of the bundle adjustment, which the per-setting baseline has no use for,
@@ -60,6 +61,11 @@ pub enum Refusal {
         /// Its index there.
         view: usize,
     },
+    /// A calibration the data do not determine (module `conditioning`), not accepted.
+    IllConditioned {
+        /// The symptom.
+        condition: IllCondition,
+    },
 }
 
 impl Refusal {
@@ -75,6 +81,7 @@ impl Refusal {
             Refusal::NoLensOffViews => RequestOption::A0,
             Refusal::NoSettingViews => RequestOption::Method,
             Refusal::NoThermal { .. } => RequestOption::Thermal,
+            Refusal::IllConditioned { .. } => RequestOption::AcceptIllConditioned,
         }
     }
 
@@ -127,6 +134,11 @@ impl Refusal {
                 if setting { "setting view" } else { "view" },
                 s.name(RequestOption::Thermal),
                 s.with_word(RequestOption::Thermal, "paper")
+            ),
+            Refusal::IllConditioned { condition } => format!(
+                "refused: the calibration means nothing, {} ({} keeps it, marked in its warnings)",
+                condition.describe(),
+                s.switched_on(RequestOption::AcceptIllConditioned)
             ),
         }
     }

@@ -34,7 +34,7 @@ pub mod pinhole;
 pub mod remap;
 
 pub use maps::undistort_maps;
-pub use pinhole::{OutputCamera, MAX_SIDE_PX};
+pub use pinhole::{OutputCamera, MAX_PIXELS, MAX_SIDE_PX};
 pub use remap::{remap, Sample, SourceImage};
 
 // The path before issue 26 (`camera` held the output image's pinhole camera): kept so that

@@ -11,12 +11,17 @@ use crate::model::Intrinsics;
 /// `usize` overflow and every pixel coordinate exact in `f32` (exact up to 2^24).
 pub const MAX_SIDE_PX: usize = 1 << 20;
 
+/// The most pixels of an undistorted image: 2^28, the limit of the images the readers
+/// decode (etl_formats' `MAX_IMAGE_PIXELS`). Its two f32 maps take 2 GiB; a larger size
+/// is refused before anything is allocated, instead of aborting on a failed allocation.
+pub const MAX_PIXELS: usize = 1 << 28;
+
 /// The camera of the undistorted image: the matrix `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`
 /// (px; no skew, no distortion) and the image size.
 ///
 /// Invariants (checked by [`OutputCamera::new`] and by every function taking one, since the
 /// fields are public): fx, fy finite and > 0; cx, cy finite; 1 <= width, height <=
-/// [`MAX_SIDE_PX`].
+/// [`MAX_SIDE_PX`]; width x height <= [`MAX_PIXELS`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OutputCamera {
     /// Focal length along x, px.
@@ -54,6 +59,15 @@ impl OutputCamera {
     pub fn validate(&self) -> Result<()> {
         check_side("output width_px", self.width_px)?;
         check_side("output height_px", self.height_px)?;
+        let pixels = self.width_px.saturating_mul(self.height_px);
+        if pixels > MAX_PIXELS {
+            return Err(Error::OutOfRange {
+                what: "output width_px x height_px",
+                value: pixels as f64,
+                min: 1.0,
+                max: MAX_PIXELS as f64,
+            });
+        }
         if !(self.fx_px > 0.0 && self.fy_px > 0.0 && self.fx_px.is_finite() && self.fy_px.is_finite()) {
             return Err(Error::InvalidArgument { what: "camera matrix: fx and fy must be finite and > 0" });
         }

@@ -180,6 +180,19 @@ pub fn write_file_set<T>(outputs: &[&Path], write: impl FnOnce(&[PathBuf]) -> Re
     write_file_set_observed(outputs, write, &mut |_| {})
 }
 
+/// Writes each `(path, bytes)` as one set ([`write_file_set`]): the files of a run whose
+/// contents are all known before the first is written (a study's table, summary and
+/// plots). Errors: the outputs' checks; an I/O error (nothing replaced).
+pub fn write_bytes_set(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+    let outputs: Vec<&Path> = files.iter().map(|(p, _)| p.as_path()).collect();
+    write_file_set(&outputs, |temps| {
+        for ((path, bytes), tmp) in files.iter().zip(temps) {
+            write_synced(tmp, bytes).map_err(|source| Error::Output { path: path.clone(), source })?;
+        }
+        Ok(())
+    })
+}
+
 /// [`write_file_set`], reporting each step of the commit to `step` after it is made.
 pub(crate) fn write_file_set_observed<T>(
     outputs: &[&Path],

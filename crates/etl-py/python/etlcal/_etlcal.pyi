@@ -33,6 +33,7 @@ from etlcal.results import (
     ModelStd,
     OffstateView,
     OpenCvCamera,
+    ProjectionDiff,
     StudyResult,
     ThermalCalibrationResult,
     View,
@@ -77,6 +78,7 @@ __all__ = [
     "calibrate",
     "cramer_rao_std",
     "detect_corners",
+    "diff",
     "render",
     "sharpness",
     "simulate_paper_rig",
@@ -633,6 +635,7 @@ def calibrate(
     fix_k3: bool = False,
     zero_tangent: bool = False,
     sigma_z_um: Optional[float] = None,
+    accept_ill_conditioned: bool = False,
 ) -> Calibration:
     """The paper's calibration (or the per-setting baseline) from observations; every
     keyword is the `etlcal calibrate` flag of the same name (hold_a0: --hold-a0). None
@@ -896,4 +899,10 @@ def study(
 ) -> StudyResult:
     """One of the paper's studies ("fig5", "fig6", "subsets", "baseline", "crlb") as the
     command line's --json table; `out` also writes its JSON, summary and plots."""
+    ...
+
+
+def diff(a: CameraAt, b: CameraAt, grid: Tuple[int, int] = (64, 48)) -> ProjectionDiff:
+    """How far apart two cameras at a setting project the same directions over the image
+    (intrinsics only, and after the best rotation), px; as `etlcal diff`."""
     ...

@@ -35,6 +35,7 @@ __all__ = [
     "OffstateView",
     "OpenCvCamera",
     "OpenCvDistortion",
+    "ProjectionDiff",
     "PaperDistortion",
     "StudyResult",
     "ThermalCalibrationResult",
@@ -218,6 +219,25 @@ class HoldReport(_Result):
     temperature_range_c: Tuple[float, float]
     extrapolated_steps: int
     last: Optional[HoldStep]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ProjectionDiff(_Result):
+    """`diff(a, b)`: how far apart two cameras project the same directions over the image:
+    `grid` (columns, rows), `rms_px` and `max_px` (intrinsics only), `rotated_rms_px` and
+    `rotated_max_px` (after the best rotation, `rotation_rodrigues`, rad), `unmapped`
+    (pixels that did not map through both), `diff_px` and `rotated_diff_px` ((rows,
+    columns) arrays, px; NaN where unmapped)."""
+
+    grid: Tuple[int, int]
+    rms_px: float
+    max_px: float
+    rotated_rms_px: float
+    rotated_max_px: float
+    rotation_rodrigues: List[float]
+    unmapped: int
+    diff_px: _F64
+    rotated_diff_px: _F64
 
 
 @dataclass(frozen=True, eq=False, repr=False)

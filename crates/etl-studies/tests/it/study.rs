@@ -237,3 +237,35 @@ fn strong_rig_opencv_family_is_efficient_and_the_paper_family_biased() {
     let j = c.output().json;
     assert_eq!((j["rig"].as_str(), j["parameters"][30]["name"].as_str()), (Some("strong"), Some("a15")));
 }
+
+/// A study's files are one set: written whole, and when one of them cannot be replaced
+/// (here a directory where a plot goes) none is, and no temporary is left behind.
+#[test]
+fn a_studys_files_are_replaced_as_one_set_or_not_at_all() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = etl_studies::Study::Fig5.run(&opts(0)).unwrap();
+    let files = out.write(dir.path()).unwrap();
+    let names = |d: &std::path::Path| {
+        let mut v: Vec<String> =
+            std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        v.sort();
+        v
+    };
+    let written = names(dir.path());
+    assert!(written.contains(&"fig5.json".to_owned()) && written.contains(&"fig5.md".to_owned()), "{written:?}");
+    assert!(written.iter().any(|n| n.ends_with(".png")) && written.iter().any(|n| n.ends_with(".svg")), "{written:?}");
+    assert_eq!(files.len(), written.len());
+    let before: Vec<Vec<u8>> = files.iter().map(|f| std::fs::read(f).unwrap()).collect();
+    // A second run whose last plot's place is taken by a directory.
+    let last = files.last().unwrap().clone();
+    std::fs::remove_file(&last).unwrap();
+    std::fs::create_dir(&last).unwrap();
+    let mut changed = out.clone();
+    changed.markdown.push_str("\nchanged\n");
+    let err = changed.write(dir.path()).unwrap_err().to_string();
+    assert!(err.contains("not a regular file"), "{err}");
+    for (f, b) in files.iter().zip(&before).take(files.len() - 1) {
+        assert_eq!(&std::fs::read(f).unwrap(), b, "{} was replaced", f.display());
+    }
+    assert_eq!(names(dir.path()), written, "a temporary or marker was left");
+}

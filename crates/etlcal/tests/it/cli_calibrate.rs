@@ -414,3 +414,46 @@ fn bad_robust_and_sigma_flags_fail_naming_the_flag_and_write_nothing() {
         }
     }
 }
+
+/// Three views of six corners (the golden observations cut down) leave the principal
+/// point unknown to hundreds of px: refused in one line naming the cause and the flag,
+/// the earlier file kept; with `--accept-ill-conditioned` written, the symptom first among
+/// its warnings.
+#[test]
+fn a_calibration_the_data_do_not_determine_is_refused_unless_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let text = std::fs::read_to_string(root.join("fixtures/golden/observations.json")).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    let views: Vec<Value> = v["views"].as_array().unwrap()[..3]
+        .iter()
+        .map(|w| {
+            let mut w = w.clone();
+            w["points"] = Value::Array(w["points"].as_array().unwrap()[..6].to_vec());
+            w
+        })
+        .collect();
+    v["views"] = Value::Array(views);
+    let obs = dir.path().join("tiny.json");
+    std::fs::write(&obs, serde_json::to_string(&v).unwrap()).unwrap();
+    let out = dir.path().join("cal.json");
+    std::fs::write(&out, "an earlier calibration").unwrap();
+    let (o, c) = (obs.to_str().unwrap(), out.to_str().unwrap());
+    let (code, _, err) = etlcal(&["calibrate", "--observations", o, "--out", c]);
+    assert_eq!(code, 1, "{err}");
+    let line = err.lines().find(|l| l.contains("error")).unwrap();
+    assert!(
+        line.contains("the principal point's standard deviation is (") && line.contains("--accept-ill-conditioned"),
+        "{err}"
+    );
+    assert!(line.contains("more than 5 % of the 1936 x 1458 px image") && line.len() < 400, "{line}");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "an earlier calibration");
+    let (code, _, err) = etlcal(&["calibrate", "--observations", o, "--out", c, "--accept-ill-conditioned"]);
+    assert_eq!(code, 0, "{err}");
+    let cal: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let first = cal["warnings"][0].as_str().unwrap();
+    assert!(first.starts_with("ill-conditioned, kept by --accept-ill-conditioned: the principal point"), "{first}");
+    assert!(err.contains(first), "said on stderr too: {err}");
+    let std_u0 = cal["std"]["principal_point"][0].as_f64().unwrap();
+    assert!(std_u0 > 0.05 * 1936.0, "{std_u0}");
+}

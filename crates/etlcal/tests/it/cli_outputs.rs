@@ -83,6 +83,8 @@ fn an_output_that_is_an_input_is_refused_before_reading() {
     std::fs::write(p("D/index.html"), "a calibration named index.html").unwrap();
     std::os::unix::fs::symlink(p("o.json"), p("link.json")).unwrap();
     std::fs::hard_link(p("t.csv"), p("hard.csv")).unwrap();
+    std::fs::copy(format!("{ROOT}/fixtures/service/calibration.json"), p("c.json")).unwrap();
+    std::os::unix::fs::symlink(p("c.json"), p("c-link.yaml")).unwrap();
     let before = tree(d.path());
     let q = |n: &str| -> &'static str { Box::leak(p(n).to_str().unwrap().to_owned().into_boxed_str()) };
     let (o, d_json, t_csv) = (q("o.json"), q("d.json"), q("t.csv"));
@@ -91,6 +93,24 @@ fn an_output_that_is_an_input_is_refused_before_reading() {
         (vec!["calibrate", "--observations", o, "--out", q("link.json")], "is the input"),
         (vec!["calibrate", "--dataset", d_json, "--observations-out", d_json, "--out", q("c.json")], "is the input"),
         (vec!["thermal", "fit", t_csv, "--out", t_csv], "is the input"),
+        (
+            vec!["export", "--calibration", q("c.json"), "--e-com", "140", "--format", "opencv", "--out", q("c.json")],
+            "is the input",
+        ),
+        (
+            vec![
+                "export",
+                "--calibration",
+                q("c.json"),
+                "--e-com",
+                "140",
+                "--format",
+                "ros",
+                "--out",
+                q("c-link.yaml"),
+            ],
+            "is the input",
+        ),
         (vec!["thermal", "fit", t_csv, "--out", q("hard.csv")], "is the input"),
         (vec!["report", "--calibration", q("D/index.html"), "--out", q("D")], "holds the input"),
         (

@@ -11,6 +11,7 @@ mod cli_calibrate;
 mod cli_conventions;
 mod cli_dataset;
 mod cli_detect;
+mod cli_diff;
 mod cli_distortion;
 mod cli_focus;
 mod cli_lens;

@@ -1,0 +1,117 @@
+"""The Python paths as safe as the CLI's: objects used from other threads raise
+`etlcal.Error` (never PanicException or a builtin RuntimeError), the readers refuse what
+the CLI's refuse, and requests sized by the caller are refused before they allocate."""
+import os
+import threading
+from pathlib import Path
+from typing import Any, Callable, List, Tuple
+
+import pytest
+
+import etlcal
+
+ROOT = Path(__file__).resolve().parents[3]
+CALIBRATION = ROOT / "fixtures" / "service" / "calibration.json"
+
+
+def run_in_thread(f: Callable[[], Any]) -> Tuple[str, Any]:
+    """Runs f() on another thread; returns ("ok", value) or ("raised", exception)."""
+    out: List[Tuple[str, Any]] = []
+
+    def target() -> None:
+        try:
+            out.append(("ok", f()))
+        except BaseException as e:  # noqa: BLE001 - the point is to see what escapes
+            out.append(("raised", e))
+
+    t = threading.Thread(target=target)
+    t.start()
+    t.join(30)
+    assert not t.is_alive() and len(out) == 1
+    return out[0]
+
+
+def test_a_virtual_lens_and_a_lens_work_from_another_thread() -> None:
+    device = etlcal.VirtualLens()
+    kind, state = run_in_thread(device.state)
+    assert kind == "ok" and isinstance(state, etlcal.LensState), state
+    lens = etlcal.Lens(device.port)
+    kind, got = run_in_thread(lambda: lens.set_current_ma(120.0))
+    assert kind == "ok" and abs(got - 120.0) < 0.04, got
+    assert abs(device.state().e_in_ma - got) < 1e-9
+    lens.close()
+    kind, _ = run_in_thread(device.disconnect)
+    assert kind == "ok"
+
+
+def test_a_call_during_a_hold_on_another_thread_is_an_etlcal_error_naming_the_rule() -> None:
+    device = etlcal.VirtualLens()
+    cal = etlcal.ThermalCalibration.paper()
+    seen: List[Tuple[str, Any]] = []
+    with etlcal.Lens(device.port) as lens:
+        def observer(step: etlcal.HoldStep) -> bool:
+            if step.index == 0:
+                seen.append(run_in_thread(lens.current_ma))
+            return step.index < 2
+
+        r = lens.hold(cal, 120.0, on_step=observer)
+        assert r.commands_sent == 3
+        kind, err = seen[0]
+        assert kind == "raised" and isinstance(err, etlcal.DeviceError), err
+        assert "busy" in str(err) and "another thread" in str(err)
+        # After the hold the lens serves every thread again.
+        kind, got = run_in_thread(lens.current_ma)
+        assert kind == "ok" and abs(got - device.state().e_in_ma) < 0.04
+
+
+def test_many_threads_share_one_lens_without_mixing_replies() -> None:
+    device = etlcal.VirtualLens()
+    with etlcal.Lens(device.port) as lens:
+        errors: List[BaseException] = []
+
+        def worker(k: int) -> None:
+            try:
+                for _ in range(10):
+                    lens.temperature_c()
+                    lens.set_current_ma(100.0 + k)
+            except BaseException as e:  # noqa: BLE001
+                errors.append(e)
+
+        threads = [threading.Thread(target=worker, args=(k,)) for k in range(4)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(60)
+        assert errors == []
+        assert 100.0 - 0.04 < lens.current_ma() < 103.04
+
+
+def test_calibration_load_refuses_a_fifo_a_device_and_a_directory_in_the_clis_words(tmp_path: Path) -> None:
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    for bad in [fifo, Path("/dev/zero"), tmp_path]:
+        with pytest.raises(etlcal.Error, match="not a regular file"):
+            etlcal.Calibration.load(bad)
+    with pytest.raises(etlcal.Error, match="not a regular file"):
+        etlcal.Observations.load(fifo)
+    # The good file still reads.
+    assert etlcal.Calibration.load(CALIBRATION).image_size == (1936, 1458)
+
+
+def test_a_json_file_beyond_the_size_limit_is_refused_before_reading(tmp_path: Path) -> None:
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate((1 << 30) + 1)  # sparse: no disk used
+    with pytest.raises(etlcal.Error, match="more than the 1073741824"):
+        etlcal.Calibration.load(big)
+
+
+def test_caller_sized_requests_are_refused_before_they_allocate() -> None:
+    with pytest.raises(etlcal.InputError, match="trials 100000000 must lie in 0..=100000"):
+        etlcal.study("fig6", trials=10**8)
+    cal = etlcal.Calibration.load(CALIBRATION)
+    with pytest.raises(etlcal.InputError, match="width_px x height_px"):
+        cal.at_e_com(150.0).undistort_maps(size=(100000, 100000))
+    # A size within the limits works.
+    mx, my = cal.at_e_com(150.0).undistort_maps(size=(64, 48))
+    assert mx.shape == (48, 64) and my.shape == (48, 64)
