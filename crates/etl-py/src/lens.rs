@@ -98,11 +98,18 @@ impl Lens {
     }
 
     /// The lock, waited for with the GIL released (a thread holding the lock may need the
-    /// GIL to finish), unless a procedure runs (a DeviceError saying the thread rule). A
-    /// poisoned lock is taken as it is: the client's own state survives a panic.
+    /// GIL to finish), unless a procedure runs (a DeviceError saying the thread rule).
     fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, Option<LensClient>>> {
+        self.wait_for_lock(py, true)
+    }
+
+    /// The lock, polled with the GIL released between tries; while a procedure holds the
+    /// lens, refused if `refuse_while_busy` (a call), else waited for (the procedure
+    /// itself, which has set the flag). A poisoned lock is taken as it is: the client's own
+    /// state survives a panic.
+    fn wait_for_lock(&self, py: Python<'_>, refuse_while_busy: bool) -> PyResult<MutexGuard<'_, Option<LensClient>>> {
         loop {
-            if self.busy.load(Ordering::Acquire) {
+            if refuse_while_busy && self.busy.load(Ordering::Acquire) {
                 return Err(raise(Kind::Device, BUSY));
             }
             match self.client.try_lock() {
@@ -126,16 +133,14 @@ impl Lens {
         if self.busy.compare_exchange(false, true, Ordering::AcqRel, Ordering::Acquire).is_err() {
             return Err(raise(Kind::Device, BUSY));
         }
-        let busy = &self.busy;
-        // Not `lock`: it refuses while busy, which this procedure itself now is.
-        let guard = loop {
-            match self.client.try_lock() {
-                Ok(g) => break g,
-                Err(TryLockError::Poisoned(p)) => break p.into_inner(),
-                Err(TryLockError::WouldBlock) => py.detach(|| std::thread::sleep(Duration::from_micros(200))),
+        // The flag is set first, so a call that starts meanwhile is refused.
+        match self.wait_for_lock(py, false) {
+            Ok(guard) => Ok(Procedure { guard, busy: &self.busy }),
+            Err(e) => {
+                self.busy.store(false, Ordering::Release);
+                Err(e)
             }
-        };
-        Ok(Procedure { guard, busy })
+        }
     }
 }
 

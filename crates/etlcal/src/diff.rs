@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::print_json;
-use crate::setting::SettingArgs;
+use crate::setting::SettingFlags;
 use etl_calib::diff::{projection_diff, DEFAULT_GRID};
 use etl_formats::output::Output;
 use etl_formats::{Error, Result};
@@ -23,7 +23,6 @@ use etl_formats::{Error, Result};
 /// Arguments of `etlcal diff`.
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
-#[command(group(clap::ArgGroup::new("setting").required(true).args(["e_in_ma", "e_com_ma"])))]
 pub struct Args {
     /// The first calibration (etlcal.calibration/1): its pixels' directions.
     #[arg(value_name = "A.json")]
@@ -31,18 +30,9 @@ pub struct Args {
     /// The second calibration: where it projects them.
     #[arg(value_name = "B.json")]
     pub b: PathBuf,
-    /// Driver current, mA (with --t; E_com through each calibration's thermal part).
-    #[arg(long = "e-in", value_name = "MA", requires = "temperature_c")]
-    pub e_in_ma: Option<f64>,
-    /// Lens temperature, degC (with --e-in).
-    #[arg(long = "t", value_name = "C", requires = "e_in_ma")]
-    pub temperature_c: Option<f64>,
-    /// A known compensated current E_com, mA (instead of --e-in and --t).
-    #[arg(long = "e-com", value_name = "MA", conflicts_with = "temperature_c")]
-    pub e_com_ma: Option<f64>,
-    /// Go on outside either calibration's ranges (marked `"extrapolated": true`).
-    #[arg(long)]
-    pub allow_extrapolation: bool,
+    /// The setting of both (E_com through each calibration's thermal part).
+    #[command(flatten)]
+    pub setting: SettingFlags,
     /// The grid of pixels compared, columns x rows (each 1..=1000).
     #[arg(long, value_name = "CxR", default_value = "64x48", value_parser = parse_grid)]
     pub grid: [usize; 2],
@@ -60,26 +50,12 @@ fn parse_grid(s: &str) -> std::result::Result<[usize; 2], String> {
     Ok([c.parse().map_err(|_| bad())?, r.parse().map_err(|_| bad())?])
 }
 
-impl Args {
-    /// The camera of `calibration` at the setting, through the shared setting flags.
-    fn camera(&self, calibration: &std::path::Path) -> Result<(etl_formats::Calibration, etl_formats::CameraAt)> {
-        SettingArgs {
-            calibration: calibration.to_owned(),
-            e_in_ma: self.e_in_ma,
-            temperature_c: self.temperature_c,
-            e_com_ma: self.e_com_ma,
-            allow_extrapolation: self.allow_extrapolation,
-        }
-        .camera()
-    }
-}
-
 /// Runs `etlcal diff`.
 pub fn run(args: Args) -> Result<()> {
     let outputs: Vec<Output<'_>> = args.heatmap.iter().map(|p| Output::File(p)).collect();
     crate::output::check([Some(args.a.as_path()), Some(args.b.as_path())], &outputs)?;
-    let (cal_a, a) = args.camera(&args.a)?;
-    let (cal_b, b) = args.camera(&args.b)?;
+    let (cal_a, a) = args.setting.camera_of(&args.a)?;
+    let (cal_b, b) = args.setting.camera_of(&args.b)?;
     if cal_a.image_size != cal_b.image_size {
         return Err(Error::invalid(
             "B.json",
@@ -103,14 +79,10 @@ pub fn run(args: Args) -> Result<()> {
         etl_formats::write_atomic(path, &png)?;
     }
     if args.json {
-        let mut j = json!({
-            "a": args.a.display().to_string(),
-            "b": args.b.display().to_string(),
-            "e_in_ma": args.e_in_ma,
-            "temperature_c": args.temperature_c,
-            "e_com_ma": b.e_com_ma(),
-            "extrapolated": a.extrapolated() || b.extrapolated(),
-        });
+        let mut j = args.setting.json(&b);
+        j["a"] = json!(args.a.display().to_string());
+        j["b"] = json!(args.b.display().to_string());
+        j["extrapolated"] = json!(a.extrapolated() || b.extrapolated());
         j["grid"] = json!(d.grid);
         j["rms_px"] = json!(d.rms_px);
         j["max_px"] = json!(d.max_px);

@@ -7,18 +7,27 @@
 //! into E_com by the calibration's thermal part, or a known compensated current E_com
 //! (a calibration without temperature compensation, or E_com compensated elsewhere).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use etl_formats::calibration::Calibration;
 use etl_formats::{CameraAt, Error, Result, Trust};
 
 /// `--calibration FILE (--e-in MA --t C | --e-com MA) [--allow-extrapolation]`.
 #[derive(clap::Args, Debug, Clone)]
-#[command(group(clap::ArgGroup::new("setting").required(true).args(["e_in_ma", "e_com_ma"])))]
 pub struct SettingArgs {
     /// The calibration (etlcal.calibration/1).
     #[arg(long, value_name = "FILE")]
     pub calibration: PathBuf,
+    /// The setting.
+    #[command(flatten)]
+    pub flags: SettingFlags,
+}
+
+/// `(--e-in MA --t C | --e-com MA) [--allow-extrapolation]`: the setting of any number of
+/// calibrations (`diff` takes two).
+#[derive(clap::Args, Debug, Clone)]
+#[command(group(clap::ArgGroup::new("setting").required(true).args(["e_in_ma", "e_com_ma"])))]
+pub struct SettingFlags {
     /// Driver current, mA (with --t; E_com through the calibration's thermal part).
     #[arg(long = "e-in", value_name = "MA", requires = "temperature_c")]
     pub e_in_ma: Option<f64>,
@@ -52,7 +61,7 @@ pub enum Setting {
     },
 }
 
-impl SettingArgs {
+impl SettingFlags {
     /// The out-of-range policy the flags choose.
     pub fn trust(&self) -> Trust {
         crate::trust(self.allow_extrapolation)
@@ -67,18 +76,19 @@ impl SettingArgs {
         }
     }
 
-    /// The calibration, and the camera at the setting (`Calibration::at` or
-    /// `Calibration::at_e_com`: the one range policy). A driver current given to a
-    /// calibration without temperature compensation is refused, naming `--e-com`.
-    pub fn camera(&self) -> Result<(Calibration, CameraAt)> {
-        let cal = Calibration::load(&self.calibration)?;
+    /// The calibration at `calibration`, and the camera at the setting
+    /// (`Calibration::at` or `Calibration::at_e_com`: the one range policy). A driver
+    /// current given to a calibration without temperature compensation is refused, naming
+    /// `--e-com`.
+    pub fn camera_of(&self, calibration: &Path) -> Result<(Calibration, CameraAt)> {
+        let cal = Calibration::load(calibration)?;
         let camera = match self.setting()? {
             Setting::DriverCurrent { .. } if cal.thermal.is_none() => {
                 return Err(Error::invalid(
                     "--e-in",
                     format!(
                         "{} has no temperature compensation (thermal): give the setting as --e-com MA, not --e-in/--t",
-                        self.calibration.display()
+                        calibration.display()
                     ),
                 ))
             }
@@ -97,5 +107,17 @@ impl SettingArgs {
             "e_com_ma": camera.e_com_ma(),
             "extrapolated": camera.extrapolated(),
         })
+    }
+}
+
+impl SettingArgs {
+    /// The calibration, and the camera at the setting ([`SettingFlags::camera_of`]).
+    pub fn camera(&self) -> Result<(Calibration, CameraAt)> {
+        self.flags.camera_of(&self.calibration)
+    }
+
+    /// The `--json` keys of the setting ([`SettingFlags::json`]).
+    pub fn json(&self, camera: &CameraAt) -> serde_json::Value {
+        self.flags.json(camera)
     }
 }
