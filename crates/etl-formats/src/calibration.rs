@@ -21,7 +21,7 @@ use etl_core::calib::jacobian::{from_params, to_params};
 use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
 use etl_core::focus::FocusLaw;
-use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly};
+use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly, MovingCentre};
 use etl_core::runtime::{Camera, CameraAt, ThermalTrust, Trust};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use serde::{Deserialize, Serialize};
@@ -49,6 +49,72 @@ pub struct ModelStd {
     pub principal_point: [f64; 2],
     /// Of the a_i.
     pub distortion_a: Vec<f64>,
+    /// Of the moving centre's coefficients, laid out as the file's `"centre"` (the
+    /// constants: 0 for dz, `principal_point`'s for u0 and v0); absent for a fixed centre.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre: Option<CentreField>,
+}
+
+/// `"centre"`: a projection centre and principal point that move with E (Eq. C1-C3 of
+/// `etl_core::model::centre`), each as its polynomial's ascending coefficients in E from
+/// E^0. `dz_mm` is [0, dz1, dz2]: its constant is 0 because a constant move is the pose's
+/// own T_z, so the calibration's pose (`translation_mm`) is the centre's at E = 0 and
+/// T(E) = T - dz(E) e_z. `principal_point_px` is [[u0, u1], [v0, v1]], whose constants are
+/// `principal_point`. Absent: the paper's fixed centre (files read and write as before).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CentreField {
+    /// dz(E) = dz1 E + dz2 E^2 as [0, dz1, dz2]: mm, mm / mA, mm / mA^2.
+    pub dz_mm: Vec<f64>,
+    /// u0(E) = u0 + u1 E and v0(E) = v0 + v1 E as [[u0, u1], [v0, v1]]: px, px / mA.
+    pub principal_point_px: Vec<Vec<f64>>,
+}
+
+impl CentreField {
+    /// The field of `centre` with the principal point `principal_point`.
+    pub fn of(centre: &MovingCentre, principal_point: [f64; 2]) -> Self {
+        let [u1, v1] = centre.principal_point_slope_px;
+        CentreField {
+            dz_mm: vec![0.0, centre.dz_mm[0], centre.dz_mm[1]],
+            principal_point_px: vec![vec![principal_point[0], u1], vec![principal_point[1], v1]],
+        }
+    }
+
+    /// The centre, checked against the model's `principal_point`. `key` names the field in
+    /// the messages (`centre` or `std.centre`).
+    fn checked(&self, principal_point: [f64; 2], key: &str) -> std::result::Result<MovingCentre, String> {
+        let n_dz = 1 + etl_core::model::CENTRE_DZ_LEN;
+        if self.dz_mm.len() != n_dz {
+            return Err(format!(
+                "{key}.dz_mm has {} numbers: the moving centre's dz(E) has {n_dz} (E^0 .. E^{})",
+                self.dz_mm.len(),
+                n_dz - 1
+            ));
+        }
+        if self.dz_mm[0] != 0.0 {
+            return Err(format!(
+                "{key}.dz_mm[0] = {} must be 0: a constant move of the centre is translation_mm's",
+                crate::compact(self.dz_mm[0])
+            ));
+        }
+        let n_pp = 1 + etl_core::model::CENTRE_PP_LEN;
+        if self.principal_point_px.len() != 2 || self.principal_point_px.iter().any(|c| c.len() != n_pp) {
+            return Err(format!("{key}.principal_point_px must be [[u0, u1], [v0, v1]]: 2 lists of {n_pp} numbers"));
+        }
+        for (k, axis) in ["u0", "v0"].into_iter().enumerate() {
+            if self.principal_point_px[k][0] != principal_point[k] {
+                return Err(format!(
+                    "{key}.principal_point_px[{k}][0] = {} must equal principal_point[{k}] = {} ({axis} at E = 0)",
+                    crate::compact(self.principal_point_px[k][0]),
+                    crate::compact(principal_point[k])
+                ));
+            }
+        }
+        Ok(MovingCentre {
+            dz_mm: [self.dz_mm[1], self.dz_mm[2]],
+            principal_point_slope_px: [self.principal_point_px[0][1], self.principal_point_px[1][1]],
+        })
+    }
 }
 
 impl ModelStd {
@@ -63,6 +129,7 @@ impl ModelStd {
             kf_y: m.kf_y.coefficients().to_vec(),
             principal_point: m.principal_point,
             distortion_a: m.distortion_a.as_slice().to_vec(),
+            centre: m.centre.as_ref().map(|c| CentreField::of(c, m.principal_point)),
         }
     }
 
@@ -87,10 +154,11 @@ impl ModelStd {
             (&self.kf_x, &self.kf_y),
             self.principal_point,
             &self.distortion_a,
+            self.centre.as_ref(),
         )
         .map_err(|e| format!("std.{e}"))?;
         if model.layout() != *layout {
-            return Err("std: kf_x, kf_y and distortion_a must have the lengths of the model's".into());
+            return Err("std: kf_x, kf_y, distortion_a and centre must have the lengths of the model's".into());
         }
         Ok(to_params(&model))
     }
@@ -110,6 +178,7 @@ fn model_of(
     (kf_x, kf_y): (&[f64], &[f64]),
     principal_point: [f64; 2],
     distortion_a: &[f64],
+    centre: Option<&CentreField>,
 ) -> std::result::Result<CameraModel, String> {
     let focal = |v: &[f64], name: &str| {
         FocalPoly::new(v)
@@ -131,7 +200,8 @@ fn model_of(
             family.a_len()
         )
     })?;
-    Ok(CameraModel { rotation_rodrigues, translation_mm, kf_x, kf_y, principal_point, distortion_a })
+    let centre = centre.map(|c| c.checked(principal_point, "centre")).transpose()?;
+    Ok(CameraModel { rotation_rodrigues, translation_mm, kf_x, kf_y, principal_point, distortion_a, centre })
 }
 
 /// The temperature compensation a calibration was made with and is used with: the whole
@@ -311,6 +381,9 @@ pub struct Calibration {
     pub distortion_model: Option<String>,
     /// The a_i: a1..a9 (paper) or a1..a15 (opencv: k1, k2, p1, p2, k3, each (w^2, w, 1)).
     pub distortion_a: Vec<f64>,
+    /// The moving centre ([`CentreField`]); absent for the paper's fixed centre.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre: Option<CentreField>,
     /// The thermal surface (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thermal: Option<ThermalRef>,
@@ -406,6 +479,7 @@ impl Calibration {
             principal_point: model.principal_point,
             distortion_model: distortion_model_field(model.distortion_model()),
             distortion_a: model.distortion_a.as_slice().to_vec(),
+            centre: model.centre.as_ref().map(|c| CentreField::of(c, model.principal_point)),
             thermal: None,
             temperature_compensation: None,
             e_com_range_ma,
@@ -568,6 +642,7 @@ impl Calibration {
             (&self.kf_x, &self.kf_y),
             self.principal_point,
             &self.distortion_a,
+            self.centre.as_ref(),
         )
         .map_err(|m| Error::invalid(leading_field(&m).to_owned(), m))
     }

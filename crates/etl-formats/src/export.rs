@@ -68,7 +68,7 @@ pub fn export_text(cal: &Calibration, camera: &CameraAt, format: ExportFormat) -
     let text = match format {
         ExportFormat::OpenCv => opencv_yaml(&header, cal.image_size, &camera_matrix, &fit.dist_coeffs),
         ExportFormat::Ros => ros_yaml(&header, cal.image_size, &camera_matrix, &fit.dist_coeffs),
-        ExportFormat::Mrcal => mrcal_model(&header, cal, &camera_matrix, &fit.dist_coeffs),
+        ExportFormat::Mrcal => mrcal_model(&header, cal, camera.e_com_ma(), &camera_matrix, &fit.dist_coeffs)?,
     };
     Ok(Exported { text, camera_matrix, fit })
 }
@@ -144,18 +144,21 @@ fn ros_yaml(header: &str, [w, h]: [u32; 2], k: &[[f64; 3]; 3], d: &[f64; 5]) -> 
     )
 }
 
-fn mrcal_model(header: &str, cal: &Calibration, k: &[[f64; 3]; 3], d: &[f64; 5]) -> String {
+/// mrcal's `.cameramodel` at E_com `e_com_ma`. Its extrinsics are rt_cam_ref
+/// (x_cam = R x_ref + t): the calibration's R and T(E) of Eq. C2, the pose of the centre
+/// at this setting relative to the calibration's frame (T itself for a fixed centre).
+fn mrcal_model(header: &str, cal: &Calibration, e_com_ma: f64, k: &[[f64; 3]; 3], d: &[f64; 5]) -> Result<String> {
     let intrinsics = [k[0][0], k[1][1], k[0][2], k[1][2], d[0], d[1], d[2], d[3], d[4]];
-    // mrcal's extrinsics are rt_cam_ref: x_cam = R x_ref + t, the calibration's R, T (Eq. 13).
-    let rt = cal.rotation_rodrigues.iter().chain(&cal.translation_mm).copied();
-    format!(
+    let t = cal.model()?.translation_at(e_com_ma);
+    let rt = cal.rotation_rodrigues.iter().chain(&t).copied();
+    Ok(format!(
         "{header}{{\n    'lensmodel': 'LENSMODEL_OPENCV5',\n    'intrinsics': [ {} ],\n    'extrinsics': [ {} ],\n    \
          'imagersize': [ {}, {} ],\n}}\n",
         list(intrinsics),
         list(rt),
         cal.image_size[0],
         cal.image_size[1]
-    )
+    ))
 }
 
 #[cfg(test)]

@@ -28,7 +28,11 @@ pub struct ModelCandidate {
     pub distortion_model: String,
     /// Degree of fx(E), fy(E), 1..=5.
     pub focal_degree: usize,
-    /// Model parameters (pose, focal polynomials, principal point, a_i).
+    /// `"moving"` for a candidate with the moving centre (Eq. C1-C3); absent for the fixed
+    /// centre (and in files written before the centre was a candidate).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre: Option<String>,
+    /// Model parameters (pose, focal polynomials, principal point, a_i, the centre's).
     pub parameters: usize,
     /// RMS reprojection error of the fit to every view, px.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -86,6 +90,9 @@ impl ModelSelection {
             }
             if !(1..=etl_core::model::MAX_FOCAL_DEGREE).contains(&c.focal_degree) {
                 return bad(format!("candidates[{i}].focal_degree = {} is outside 1..=5", c.focal_degree));
+            }
+            if let Some(centre) = c.centre.as_deref().filter(|&w| w != "moving") {
+                return bad(format!("candidates[{i}].centre = {centre:?} is not \"moving\" (absent: fixed)"));
             }
             let numbers = [
                 ("fit_rms_px", c.fit_rms_px),

@@ -136,6 +136,7 @@ impl Calibration {
             kf_y: FocalPoly::cubic(fixed::<4>(kf_y, "kf_y")?),
             principal_point: fixed::<2>(principal_point, "principal_point")?,
             distortion_a: DistortionA::paper(fixed::<9>(distortion_a, "distortion_a")?),
+            centre: None,
         };
         model.validate().py()?;
         etl_core::error::finite(rms_px, "rms_px").py()?;
@@ -227,6 +228,19 @@ impl Calibration {
     #[getter]
     fn principal_point<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         vec_out(py, &self.model.principal_point)
+    }
+
+    /// The moving centre (`calibrate(..., centre="moving")`), as the file's `"centre"`:
+    /// `{"dz_mm": [0, dz1, dz2], "principal_point_px": [[u0, u1], [v0, v1]]}`, ascending
+    /// coefficients in E (mA); dz(E) is the centre's move along the camera's +Z from its
+    /// place at E = 0 (`translation_mm`). None for the paper's fixed centre.
+    #[getter]
+    fn centre<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let Some(c) = &self.file.centre else { return Ok(None) };
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("dz_mm", c.dz_mm.clone())?;
+        d.set_item("principal_point_px", c.principal_point_px.clone())?;
+        Ok(Some(d.into_any()))
     }
 
     /// fx(E) as a `numpy.polynomial.Polynomial` in E (mA), px: its coefficients are

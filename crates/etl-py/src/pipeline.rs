@@ -4,8 +4,8 @@
 //! `etlcal calibrate` parses its flags into too: the same names, the same file.
 
 use etl_calib::request::{
-    CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method, RequestOption,
-    Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
+    CalibrationRequest, CentreChoice, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method,
+    RequestOption, Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
 };
 use etl_core::calib::RobustLoss;
 use etl_core::model::DistortionModel;
@@ -79,6 +79,10 @@ impl Spelling for Keywords {
 ///     fix_k3: hold k3 = 0 (cv2.CALIB_FIX_K3); distortion "opencv" or "auto" only.
 ///     zero_tangent: hold p1 = p2 = 0 (cv2.CALIB_ZERO_TANGENT_DIST); likewise.
 ///     sigma_z_um: the stage prior in um instead (as `--sigma-z-um`); not with sigma_z_mm.
+///     centre: the projection centre: "fixed" (the default, the paper's), "moving" (the
+///         centre moves along the axis by dz(E) = dz1 E + dz2 E^2 and the principal
+///         point by (u1 E, v1 E): the entrance pupil behind an ETL moves with its power;
+///         the result's `centre`) or "auto" (as distortion="auto").
 ///     accept_ill_conditioned: keep a calibration the data do not determine (a focal
 ///         length not positive over the range, a principal point std above 5 % of the
 ///         image), its symptom the first of its `warnings`; False (the default): refused
@@ -97,7 +101,7 @@ impl Spelling for Keywords {
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
     distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None,
-    accept_ill_conditioned=false))]
+    accept_ill_conditioned=false, centre=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -118,6 +122,7 @@ pub fn calibrate(
     zero_tangent: bool,
     sigma_z_um: Option<f64>,
     accept_ill_conditioned: bool,
+    centre: Option<&str>,
 ) -> PyResult<Calibration> {
     let sigma_z = match (sigma_z_mm, sigma_z_um) {
         (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
@@ -136,6 +141,7 @@ pub fn calibrate(
         fix_k3,
         zero_tangent,
         accept_ill_conditioned,
+        centre: centre.map(parse_centre).transpose()?,
     };
     request.validate(&Keywords).py()?;
     let obs = observations.file.clone();
@@ -152,6 +158,13 @@ pub fn calibrate(
         PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
     }
     Calibration::from_file(calibrated.into_calibration())
+}
+
+/// `centre=`: "fixed", "moving" or "auto".
+fn parse_centre(centre: &str) -> PyResult<CentreChoice> {
+    CentreChoice::from_word(centre).ok_or_else(|| {
+        invalid_value("centre", centre, format!("centre must be \"fixed\", \"moving\" or \"auto\", got {centre:?}"))
+    })
 }
 
 /// `method=`: "proposed" or "per-setting".

@@ -81,6 +81,31 @@ def test_the_default_estimator_is_errors_in_variables(sim: etlcal.Simulation) ->
     assert all(v["dz_mm"] == 0.0 for v in paper.views)
 
 
+def test_the_centre_fixed_moving_and_bad(sim: etlcal.Simulation, tmp_path: pathlib.Path) -> None:
+    # centre="fixed" is the default; "moving" fits dz(E) and the principal point's move
+    # (Eq. C1-C3), recorded as the file's "centre"; a bad word is refused naming centre=.
+    fixed = etlcal.calibrate(sim.observations, sim.a0, estimator="paper")
+    assert fixed.centre is None
+    assert fixed == etlcal.calibrate(sim.observations, sim.a0, estimator="paper", centre="fixed")
+    moving = etlcal.calibrate(sim.observations, sim.a0, estimator="paper", centre="moving")
+    c = moving.centre
+    assert c is not None and c["dz_mm"][0] == 0.0 and len(c["dz_mm"]) == 3
+    assert c["principal_point_px"][0][0] == moving.principal_point[0]
+    # The paper rig's centre does not move: noise-free, the move over 80..225 mA is 0.
+    clean = etlcal.simulate.paper_rig(seed=0, noise="none")
+    exact = etlcal.calibrate(clean.observations, clean.a0, estimator="paper", centre="moving")
+    still = exact.centre
+    assert still is not None
+    assert not any("centre's move" in w for w in exact.warnings), exact.warnings
+    move = still["dz_mm"][1] * 145.0 + still["dz_mm"][2] * (225.0**2 - 80.0**2)
+    assert abs(move) < 1e-6, move
+    path = tmp_path / "moving.json"
+    moving.save(path)
+    assert etlcal.Calibration.load(path) == moving
+    with pytest.raises(etlcal.InputError, match='centre must be "fixed", "moving" or "auto"'):
+        etlcal.calibrate(sim.observations, sim.a0, centre="sideways")  # type: ignore[arg-type]  # the run-time check under test
+
+
 def test_calibrate_bad_inputs(sim: etlcal.Simulation) -> None:
     obs = sim.observations
     with pytest.raises(etlcal.InputError, match='estimator must be "paper" or "eiv"'):

@@ -90,6 +90,7 @@ impl Camera for VirtualCamera<'_> {
             kf_y: FocalPoly::cubic([f_px, 0.0, 0.0, 0.0]),
             principal_point: [0.5 * (w as f64 - 1.0), 0.5 * (h as f64 - 1.0)],
             distortion_a: DistortionA::paper([0.0; 9]),
+            centre: None,
         };
         self.frames += 1;
         let scene = Scene::new(model, 0.0, Board::Checkerboard(self.board), 0.0, self.image_size);

@@ -37,8 +37,8 @@ use etl_core::model::DistortionModel;
 use super::print_json;
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
 use etl_calib::request::{
-    CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method, RequestOption,
-    Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
+    CalibrationRequest, CentreChoice, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method,
+    RequestOption, Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
 };
 use etl_formats::a0::A0File;
 use etl_formats::calibration::ThermalRef;
@@ -64,6 +64,18 @@ pub enum MethodArg {
     Proposed,
     /// The baseline of section 5.2.3: Zhang at each current, then a cubic.
     PerSetting,
+}
+
+/// The projection centre of `--centre`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CentreArg {
+    /// The paper's: one centre and principal point for every current.
+    Fixed,
+    /// The centre moves along the axis by dz(E) and the principal point with E (the
+    /// entrance pupil behind an ETL moves with its power).
+    Moving,
+    /// Chosen by the prediction error of held-out views.
+    Auto,
 }
 
 /// The distortion family of `--distortion`.
@@ -172,6 +184,11 @@ pub struct Args {
     /// Degree of fx(E), fy(E): 1..5 or auto [default: 3, the paper's cubic].
     #[arg(long, value_name = "1..5|auto", value_parser = parse_focal_degree)]
     pub focal_degree: Option<FocalDegreeArg>,
+    /// Projection centre [default: fixed, the paper's]: `moving` fits dz(E) = dz1 E + dz2
+    /// E^2 along the axis and u0(E), v0(E) linear in E (the file's "centre"); `auto`
+    /// chooses by held-out views.
+    #[arg(long, value_enum)]
+    pub centre: Option<CentreArg>,
     /// Hold k3 at 0 (OpenCV's CALIB_FIX_K3; --distortion opencv or auto).
     #[arg(long)]
     pub fix_k3: bool,
@@ -267,6 +284,11 @@ impl Args {
             fix_k3: self.fix_k3,
             zero_tangent: self.zero_tangent,
             accept_ill_conditioned: self.accept_ill_conditioned,
+            centre: self.centre.map(|c| match c {
+                CentreArg::Fixed => CentreChoice::Fixed,
+                CentreArg::Moving => CentreChoice::Moving,
+                CentreArg::Auto => CentreChoice::Auto,
+            }),
         })
     }
 }

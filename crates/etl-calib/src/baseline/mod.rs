@@ -247,6 +247,8 @@ fn calibration_of(
         principal_point: [u0, v0],
         distortion_model: None,
         distortion_a: a.to_vec(),
+        // The baseline's principal point is the weighted mean of the settings' (fixed).
+        centre: None,
         thermal: thermal.cloned(),
         temperature_compensation: TemperatureCompensation::of(thermal),
         e_com_range_ma: [es[0], es[es.len() - 1]],
@@ -258,6 +260,7 @@ fn calibration_of(
             kf_y: sd4(&cy).to_vec(),
             principal_point: [su0, sv0],
             distortion_a: sa.to_vec(),
+            centre: None,
         },
         estimator: "per-setting".into(),
         // Zhang's per-setting solves set their own outliers aside (crate::zhang); they are

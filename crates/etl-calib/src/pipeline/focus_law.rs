@@ -28,7 +28,7 @@ pub fn focus_samples(model: &CameraModel, views: &[View<'_>]) -> Vec<FocusSample
                     *ci += wi / n;
                 }
             }
-            FocusSample { e_com_ma: v.e_com_ma, distance_mm: model.world_to_camera(c)[2] }
+            FocusSample { e_com_ma: v.e_com_ma, distance_mm: model.world_to_camera_at(c, v.e_com_ma)[2] }
         })
         .collect()
 }

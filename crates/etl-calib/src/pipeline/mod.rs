@@ -7,6 +7,7 @@
 //! and skipped); [`view_focal`] gives each view's own focal-length estimate for reports;
 //! [`focus_law`] fits the distance in focus against the current from the views.
 
+pub mod centre;
 pub mod dataset;
 pub mod focus_law;
 pub mod measure;
@@ -242,5 +243,6 @@ fn calibration_of(
     // The covariance of the 25 shared numbers (for errors-in-variables, with the view
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.
     calibration.set_covariance(&report.covariance)?;
+    calibration.warnings.extend(centre::undetermined_move(&m, &report.covariance, views));
     Ok(CalibrationResult { calibration, report, initial, focus_law_warning })
 }

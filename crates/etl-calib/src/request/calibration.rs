@@ -99,6 +99,35 @@ pub enum FocalDegreeChoice {
     Auto,
 }
 
+/// The projection centre of the model (docs/METHOD.md, "The moving centre").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CentreChoice {
+    /// The paper's: one centre and one principal point for every setting.
+    Fixed,
+    /// A centre that moves along the axis by dz(E) and a principal point (u0(E), v0(E))
+    /// (Eq. C1-C3 of `etl_core::model::centre`).
+    Moving,
+    /// Chosen by held-out views, as [`DistortionChoice::Auto`] (fixed unless the moving
+    /// centre predicts better by more than one standard error).
+    Auto,
+}
+
+impl CentreChoice {
+    /// The word of the choice (`fixed`, `moving`, `auto`): the CLI's value and Python's.
+    pub const fn word(self) -> &'static str {
+        match self {
+            CentreChoice::Fixed => "fixed",
+            CentreChoice::Moving => "moving",
+            CentreChoice::Auto => "auto",
+        }
+    }
+
+    /// The choice a word names, or `None`.
+    pub fn from_word(word: &str) -> Option<Self> {
+        [CentreChoice::Fixed, CentreChoice::Moving, CentreChoice::Auto].into_iter().find(|c| c.word() == word)
+    }
+}
+
 /// Every option of a calibration: what `etlcal calibrate` and Python's
 /// `etlcal.calibrate(...)` parse their arguments into, so that the two give the same file
 /// for the same request. An option left `None` (or `false`) was not given and takes its
@@ -167,6 +196,8 @@ pub struct CalibrationRequest {
     /// the range, a loose principal point: [`super::ill_condition`]) instead of refusing
     /// it; its symptom is then the first of its `warnings`.
     pub accept_ill_conditioned: bool,
+    /// The projection centre; `None`: fixed, the paper's.
+    pub centre: Option<CentreChoice>,
 }
 
 /// What a run gives: the proposed method's result or the baseline's.
@@ -238,6 +269,16 @@ impl CalibrationRequest {
         }
     }
 
+    /// The centre asked for: `Some(true)` moving, `Some(false)` fixed (the default), `None`
+    /// chosen by the data.
+    pub fn moving_centre(&self) -> Option<bool> {
+        match self.centre {
+            None | Some(CentreChoice::Fixed) => Some(false),
+            Some(CentreChoice::Moving) => Some(true),
+            Some(CentreChoice::Auto) => None,
+        }
+    }
+
     /// The estimator run: the paper's, or errors-in-variables with each prior given or the
     /// paper's ([`Estimator::EIV_PAPER`]).
     pub fn estimator(&self) -> Estimator {
@@ -283,6 +324,7 @@ impl CalibrationRequest {
             let model = [
                 (RequestOption::Distortion, self.distortion.is_some()),
                 (RequestOption::FocalDegree, self.focal_degree.is_some()),
+                (RequestOption::Centre, self.centre.is_some()),
                 (RequestOption::FixK3, self.fix_k3),
                 (RequestOption::ZeroTangent, self.zero_tangent),
             ];
@@ -378,19 +420,20 @@ impl CalibrationRequest {
             return Err(Refusal::NoLensOffViews.to_error(spelling));
         }
         let options = self.options();
-        let result = match (self.family(), self.degree()) {
-            (Some(family), Some(degree)) => {
-                let layout = Layout::new(family, degree).map_err(Error::Core)?;
+        let result = match (self.family(), self.degree(), self.moving_centre()) {
+            (Some(family), Some(degree), Some(moving)) => {
+                let layout = Layout::new(family, degree).map_err(Error::Core)?.with_moving_centre(moving);
                 let a0 = match self.a0 {
                     Some(a0) => a0,
                     None => a0_from_offstate_with(obs, &ZhangOptions { model: family, flags: self.flags() })?.a0(),
                 };
                 calibrate(obs, &a0, thermal, &CalibrateOptions { layout, ..options })?
             }
-            (family, degree) => {
+            (family, degree, moving) => {
                 let candidates = Candidates {
                     families: family.map_or(DistortionModel::ALL.to_vec(), |f| vec![f]),
                     focal_degrees: degree.map_or((1..=MAX_FOCAL_DEGREE).collect(), |d| vec![d]),
+                    centres: moving.map_or(vec![false, true], |m| vec![m]),
                 };
                 let source = self.a0.map_or(A0Source::Offstate, A0Source::Given);
                 select(obs, &source, thermal, &options, &candidates)?

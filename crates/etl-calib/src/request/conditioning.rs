@@ -5,7 +5,8 @@
 //! - **A focal length that is not positive** somewhere over the calibrated E_com range
 //!   (fx(E) or fy(E), Eq. 16, at 65 evenly spaced currents and the ends): no camera has
 //!   one, so the polynomials were fitted to too few currents or too little signal.
-//! - **A principal point the data leave loose**: a standard deviation of u0 above
+//! - **A principal point the data leave loose** (with a moving centre: u0(E), v0(E) at the
+//!   ends of the range): a standard deviation of u0 above
 //!   [`MAX_PRINCIPAL_POINT_STD_FRACTION`] of the image width (v0: of its height). At 5 %
 //!   (97 px on a 1936 px sensor) the point is not known to within a tenth of the image; a
 //!   calibration of the paper's 15 views has 0.3 px. Three views of six corners gave
@@ -77,6 +78,27 @@ fn shown(v: f64) -> String {
 }
 
 /// Horner's rule for sum c_i x^i.
+/// The standard deviation of (u0, v0) as the check judges it: `std.principal_point`, or
+/// with a moving centre the larger of u0(E)'s (v0(E)'s) at the ends of the range, from the
+/// covariance (the file's u0 is the line's value at E = 0, mostly outside the range, whose
+/// spread says nothing of the point where the camera is used).
+fn principal_point_std_px(cal: &Calibration) -> [f64; 2] {
+    let fixed = cal.std.principal_point;
+    let (Some(cov), Ok(layout)) = (cal.covariance.as_ref(), cal.layout()) else { return fixed };
+    if !layout.moving_centre() {
+        return fixed;
+    }
+    let slope = layout.centre_principal_point();
+    let at = |i: usize, j: usize| cov.get(i).and_then(|r| r.get(j)).copied().unwrap_or(f64::NAN);
+    core::array::from_fn(|k| {
+        let (c, s) = ([layout.u0(), layout.v0()][k], slope.at(k));
+        cal.e_com_range_ma
+            .iter()
+            .map(|&e| (at(c, c) + 2.0 * e * at(c, s) + e * e * at(s, s)).max(0.0).sqrt())
+            .fold(f64::NEG_INFINITY, f64::max)
+    })
+}
+
 fn poly(c: &[f64], x: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, &k| acc * x + k)
 }
@@ -94,7 +116,7 @@ pub fn ill_condition(cal: &Calibration) -> Option<IllCondition> {
             }
         }
     }
-    let std_px = cal.std.principal_point;
+    let std_px = principal_point_std_px(cal);
     let [w, h] = cal.image_size;
     let limits = [f64::from(w), f64::from(h)].map(|side| MAX_PRINCIPAL_POINT_STD_FRACTION * side);
     let loose = std_px.iter().zip(limits).any(|(&s, limit)| !(s <= limit));

@@ -16,8 +16,8 @@ mod refusal;
 mod zhang;
 
 pub use calibration::{
-    Calibrated, CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method,
-    StageSigma, DEFAULT_ROBUST_K_PX,
+    Calibrated, CalibrationRequest, CentreChoice, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice,
+    Method, StageSigma, DEFAULT_ROBUST_K_PX,
 };
 pub use conditioning::{ill_condition, IllCondition, MAX_PRINCIPAL_POINT_STD_FRACTION};
 pub use option::{KeySpelling, RequestOption, Spelling};

@@ -42,6 +42,8 @@ pub enum RequestOption {
     Model,
     /// Keep a calibration the data do not determine (marked in its warnings).
     AcceptIllConditioned,
+    /// The projection centre: fixed, moving with the setting, or `auto`.
+    Centre,
 }
 
 impl RequestOption {
@@ -66,6 +68,7 @@ impl RequestOption {
             RequestOption::ZeroTangent => "zero_tangent",
             RequestOption::Model => "model",
             RequestOption::AcceptIllConditioned => "accept_ill_conditioned",
+            RequestOption::Centre => "centre",
         }
     }
 }

@@ -143,6 +143,7 @@ fn model_at(model: DistortionModel, z: &Shared, pose: &[f64; 6]) -> CameraModel 
         kf_y: FocalPoly::cubic([z[1], 0.0, 0.0, 0.0]),
         principal_point: [z[2], z[3]],
         distortion_a: a,
+        centre: None,
     }
 }
 

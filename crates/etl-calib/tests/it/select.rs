@@ -39,7 +39,7 @@ fn chosen(sim: &Simulation, candidates: &Candidates) -> (DistortionModel, usize)
 
 #[test]
 fn auto_chooses_the_opencv_family_on_the_strong_rig() {
-    let candidates = Candidates { families: DistortionModel::ALL.to_vec(), focal_degrees: vec![3] };
+    let candidates = Candidates::fixed_centre(DistortionModel::ALL.to_vec(), vec![3]);
     let picks: Vec<_> = SEEDS.map(|s| chosen(&strong_rig(&NoiseModel::PAPER, s), &candidates)).collect();
     let opencv = picks.iter().filter(|p| p.0 == DistortionModel::OpenCv).count();
     eprintln!("strong rig: opencv in {opencv} of 20 seeds");
@@ -48,7 +48,7 @@ fn auto_chooses_the_opencv_family_on_the_strong_rig() {
 
 #[test]
 fn auto_chooses_the_papers_family_and_mostly_the_cubic_on_the_paper_rig() {
-    let candidates = Candidates { families: DistortionModel::ALL.to_vec(), focal_degrees: (1..=5).collect() };
+    let candidates = Candidates::fixed_centre(DistortionModel::ALL.to_vec(), (1..=5).collect());
     let picks: Vec<_> = SEEDS.map(|s| chosen(&paper_rig(&NoiseModel::PAPER, s), &candidates)).collect();
     let paper = picks.iter().filter(|p| p.0 == DistortionModel::Paper).count();
     let cubic = picks.iter().filter(|p| **p == (DistortionModel::Paper, 3)).count();
@@ -62,7 +62,7 @@ fn auto_chooses_the_papers_family_and_mostly_the_cubic_on_the_paper_rig() {
 #[test]
 fn candidates_are_needed() {
     let sim = paper_rig(&NoiseModel::PAPER, 1);
-    let none = Candidates { families: vec![], focal_degrees: vec![3] };
+    let none = Candidates::fixed_centre(vec![], vec![3]);
     let e = select(&sim.observations, &A0Source::Given(sim.a0), None, &CalibrateOptions::default(), &none).unwrap_err();
     assert!(e.to_string().contains("at least one family"), "{e}");
 }
@@ -73,7 +73,7 @@ fn candidates_are_needed() {
 #[test]
 #[ignore = "100 auto calibrations: run with --release"]
 fn auto_chooses_the_cubic_on_100_fresh_seeds_of_the_paper_rig() {
-    let candidates = Candidates { families: DistortionModel::ALL.to_vec(), focal_degrees: (1..=5).collect() };
+    let candidates = Candidates::fixed_centre(DistortionModel::ALL.to_vec(), (1..=5).collect());
     let picks: Vec<_> = (61..161).map(|s| (s, chosen(&paper_rig(&NoiseModel::PAPER, s), &candidates))).collect();
     let others: Vec<_> = picks.iter().filter(|p| p.1 != (DistortionModel::Paper, 3)).collect();
     eprintln!("paper rig, seeds 61..=160: paper + cubic in {} of 100; others: {others:?}", 100 - others.len());

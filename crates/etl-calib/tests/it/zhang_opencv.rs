@@ -32,6 +32,7 @@ fn camera(om: [f64; 3], t: [f64; 3]) -> CameraModel {
         kf_y: FocalPoly::cubic([K[1], 0.0, 0.0, 0.0]),
         principal_point: [K[2], K[3]],
         distortion_a: DistortionA::opencv(a),
+        centre: None,
     }
 }
 

@@ -17,6 +17,11 @@
 //! and the covariance (mapped back by dx/dz) are those of the paper's parameters; only the
 //! path of the iterations changes.
 //!
+//! With a moving centre (Eq. C1-C3) the per-view T_z(E) = T_z - dz1 E - dz2 E^2 and
+//! u0(E) = u0 + u1 E (likewise v0) are polynomials in E too, and take the same map:
+//! (T_z, -dz1, -dz2) and (u0, u1) as monomial coefficients, Chebyshev coefficients in t
+//! inside ([`CentreGroup`]). Without it, T_z and dz would be as collinear as kf0 and kf1.
+//!
 //! The w range moves with the focal lengths: w_lo and w_hi are 2 / (fx + fy) at the ends
 //! of the current range *under the parameters being evaluated*, not under the start. Why:
 //! a view's distortion depends on kf only through w_j = 2 / (fx(E_j) + fy(E_j)), and on
@@ -122,6 +127,48 @@ fn set<const N: usize>(j: &mut [[f64; N]; N], row: usize, col: usize, val: f64) 
     }
 }
 
+/// One polynomial in E that a moving centre spreads over slots that are not contiguous
+/// (T_z(E) over tz, dz1, dz2; u0(E) over u0, u1; v0(E) over v0, v1): its monomial
+/// coefficient i is `sign[i] x[slot[i]]`.
+#[derive(Clone, Copy)]
+struct CentreGroup {
+    slots: [usize; 3],
+    sign: [f64; 3],
+    n: usize,
+}
+
+impl CentreGroup {
+    /// Slot `i` and its sign, for `i` below the group's length (else `None`).
+    fn slot(&self, i: usize) -> Option<(usize, f64)> {
+        if i < self.n {
+            Some((*self.slots.get(i)?, *self.sign.get(i)?))
+        } else {
+            None
+        }
+    }
+
+    /// The monomial coefficients of the group in `x` (signs applied).
+    fn gather<const N: usize>(&self, x: &[f64; N]) -> [f64; MAXN] {
+        core::array::from_fn(|i| self.slot(i).map_or(0.0, |(at, sign)| sign * x.get(at).copied().unwrap_or(0.0)))
+    }
+
+    /// The group's raw slots of `v` (no signs).
+    fn read<const N: usize>(&self, v: &[f64; N]) -> [f64; MAXN] {
+        core::array::from_fn(|i| self.slot(i).map_or(0.0, |(at, _)| v.get(at).copied().unwrap_or(0.0)))
+    }
+
+    /// Writes `vals` into the group's slots, times the signs when `signed`.
+    fn write<const N: usize>(&self, v: &mut [f64; N], vals: [f64; MAXN], signed: bool) {
+        for (i, &val) in vals.iter().enumerate() {
+            if let Some((at, sign)) = self.slot(i) {
+                if let Some(out) = v.get_mut(at) {
+                    *out = if signed { sign * val } else { val };
+                }
+            }
+        }
+    }
+}
+
 /// The a-triple (w^2, w, 1) in slots [descending degree] as ascending coefficients.
 fn triple_up(v: [f64; MAXN]) -> [f64; MAXN] {
     [v[2], v[1], v[0], 0.0, 0.0, 0.0]
@@ -157,6 +204,19 @@ impl Basis {
     /// Where fx's and fy's coefficients start (kf0x, kf0y).
     fn kf_starts(&self) -> [usize; 2] {
         [self.layout.kf0x(), self.layout.kf0y()]
+    }
+
+    /// The moving centre's polynomials in E (none for a fixed centre).
+    fn centre_groups(&self) -> impl Iterator<Item = CentreGroup> + '_ {
+        let l = &self.layout;
+        let (dz, cp) = (l.centre_dz(), l.centre_principal_point());
+        let tz = l.translation().at(2);
+        let groups = [
+            CentreGroup { slots: [tz, dz.at(0), dz.at(1)], sign: [1.0, -1.0, -1.0], n: 3 },
+            CentreGroup { slots: [l.u0(), cp.at(0), 0], sign: [1.0; 3], n: 2 },
+            CentreGroup { slots: [l.v0(), cp.at(1), 0], sign: [1.0; 3], n: 2 },
+        ];
+        groups.into_iter().filter(|_| l.moving_centre())
     }
 
     /// Where each distortion coefficient's a-triple starts (a1, a4, ...).
@@ -203,6 +263,9 @@ impl Basis {
         for start in self.kf_starts() {
             write(&mut z, start, &mono_to_cheb(read(x, start, nk), nk, self.e_mid, self.e_half), nk);
         }
+        for g in self.centre_groups() {
+            g.write(&mut z, mono_to_cheb(g.gather(x), g.n, self.e_mid, self.e_half), false);
+        }
         let w = self.w_range(x);
         for s in self.a_starts() {
             // Slots (w^2, w, 1) hold degrees (2, 1, 0): reversed to ascending order.
@@ -218,6 +281,9 @@ impl Basis {
         let mut x = *z;
         for start in self.kf_starts() {
             write(&mut x, start, &cheb_to_mono(read(z, start, nk), nk, self.e_mid, self.e_half), nk);
+        }
+        for g in self.centre_groups() {
+            g.write(&mut x, cheb_to_mono(g.read(z), g.n, self.e_mid, self.e_half), true);
         }
         let w = self.w_range(&x);
         for s in self.a_starts() {
@@ -248,6 +314,16 @@ impl Basis {
                 let unit: [f64; MAXN] = core::array::from_fn(|k| if k == col { 1.0 } else { 0.0 });
                 for (row, a) in cheb_to_mono(unit, nk, self.e_mid, self.e_half).into_iter().take(nk).enumerate() {
                     set(&mut j, start + row, start + col, a);
+                }
+            }
+        }
+        for g in self.centre_groups() {
+            for col in 0..g.n {
+                let unit: [f64; MAXN] = core::array::from_fn(|k| if k == col { 1.0 } else { 0.0 });
+                for (row, a) in cheb_to_mono(unit, g.n, self.e_mid, self.e_half).into_iter().enumerate() {
+                    if let (Some((r, sign)), Some((c, _))) = (g.slot(row), g.slot(col)) {
+                        set(&mut j, r, c, sign * a);
+                    }
                 }
             }
         }
@@ -283,7 +359,7 @@ impl Basis {
 mod tests {
     use super::*;
     use crate::calib::jacobian::to_params_n;
-    use crate::model::{CameraModel, DistortionA, DistortionModel};
+    use crate::model::{CameraModel, DistortionA, DistortionModel, MovingCentre};
 
     /// The paper rig, and the strong rig with quintic focal polynomials (every slot of the
     /// largest layout in play).
@@ -330,6 +406,9 @@ mod tests {
         let [paper, strong] = models();
         round_trip::<25>(&paper);
         round_trip::<35>(&strong);
+        let [moving_paper, moving_strong] = moving_models();
+        round_trip::<29>(&moving_paper);
+        round_trip::<39>(&moving_strong);
         // Every degree of the paper family: a linear fx(E) round-trips too.
         let mut linear = paper;
         linear.kf_x = FocalPoly::new(&[5380.0, -3.0]).unwrap();
@@ -371,5 +450,33 @@ mod tests {
         let [paper, strong] = models();
         jacobian_check::<25>(&paper);
         jacobian_check::<35>(&strong);
+        let [moving_paper, moving_strong] = moving_models();
+        jacobian_check::<29>(&moving_paper);
+        jacobian_check::<39>(&moving_strong);
+    }
+
+    /// [`models`] with a moving centre.
+    fn moving_models() -> [CameraModel; 2] {
+        let centre = Some(MovingCentre { dz_mm: [-6e-3, 1.2e-5], principal_point_slope_px: [0.03, -0.02] });
+        models().map(|m| CameraModel { centre, ..m })
+    }
+
+    /// T_z(E) and u0(E) from the internal coefficients equal the model's (Eq. C2-C3).
+    #[test]
+    fn the_centre_polynomials_are_chebyshev_inside() {
+        let [m, _] = moving_models();
+        let pts = [];
+        let views = [View { e_com_ma: 80.0, points: &pts }, View { e_com_ma: 225.0, points: &pts }];
+        let l = m.layout();
+        let b = Basis::for_views(&views, l);
+        let z = b.to_internal(&to_params_n::<29>(&m).unwrap());
+        for e in [80.0, 120.0, 225.0] {
+            let t: f64 = (e - 152.5) / 72.5;
+            let tz =
+                z[l.translation().at(2)] + z[l.centre_dz().at(0)] * t + z[l.centre_dz().at(1)] * (2.0 * t * t - 1.0);
+            assert!((tz - m.translation_at(e)[2]).abs() < 1e-9, "{tz} vs {:?}", m.translation_at(e));
+            let u0 = z[l.u0()] + z[l.centre_principal_point().at(0)] * t;
+            assert!((u0 - m.principal_point_at(e)[0]).abs() < 1e-9);
+        }
     }
 }

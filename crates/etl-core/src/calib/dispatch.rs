@@ -10,7 +10,8 @@
 
 /// The layouts the solvers are compiled for, one row per distortion family: the
 /// [`DistortionModel`](crate::model::DistortionModel) variant and, for each focal degree
-/// 1..=5, the name of its storage in [`ViewScratch`](super::ViewScratch). Every size comes
+/// 1..=5 with a fixed and a moving centre, the name of its storage in
+/// [`ViewScratch`](super::ViewScratch). Every size comes
 /// from the layout itself ([`Layout::len`](super::params::Layout::len),
 /// [`Layout::reduced_len`](super::params::Layout::reduced_len)), so a new family is one
 /// row here. Expands `$callback! { $args TABLE }` (the callback given as a path in
@@ -20,8 +21,18 @@ macro_rules! layout_table {
     ([$($callback:tt)+] $($args:tt)*) => {
         $($callback)+! {
             $($args)*
-            Paper: [1 => Paper1, 2 => Paper2, 3 => Paper3, 4 => Paper4, 5 => Paper5],
-            OpenCv: [1 => OpenCv1, 2 => OpenCv2, 3 => OpenCv3, 4 => OpenCv4, 5 => OpenCv5],
+            Paper: [
+                (1, false) => Paper1, (2, false) => Paper2, (3, false) => Paper3,
+                (4, false) => Paper4, (5, false) => Paper5,
+                (1, true) => PaperMoving1, (2, true) => PaperMoving2, (3, true) => PaperMoving3,
+                (4, true) => PaperMoving4, (5, true) => PaperMoving5
+            ],
+            OpenCv: [
+                (1, false) => OpenCv1, (2, false) => OpenCv2, (3, false) => OpenCv3,
+                (4, false) => OpenCv4, (5, false) => OpenCv5,
+                (1, true) => OpenCvMoving1, (2, true) => OpenCvMoving2, (3, true) => OpenCvMoving3,
+                (4, true) => OpenCvMoving4, (5, true) => OpenCvMoving5
+            ],
         }
     };
 }
@@ -37,13 +48,15 @@ macro_rules! with_layout {
         )
     };
     (@arms ($layout:expr, $n:ident, $o:ident, $p:ident, $body:expr)
-        $($family:ident: [$($degree:literal => $name:ident),*],)*) => {{
+        $($family:ident: [$(($degree:literal, $centre:literal) => $name:ident),*],)*) => {{
         use $crate::model::DistortionModel;
-        match ($layout.model(), $layout.focal_degree()) {
-            $($((DistortionModel::$family, $degree) => {
-                const $n: usize = $crate::calib::params::Layout::of_table(DistortionModel::$family, $degree).len();
-                const $o: usize =
-                    $crate::calib::params::Layout::of_table(DistortionModel::$family, $degree).reduced_len() - 2;
+        match ($layout.model(), $layout.focal_degree(), $layout.moving_centre()) {
+            $($((DistortionModel::$family, $degree, $centre) => {
+                const $n: usize =
+                    $crate::calib::params::Layout::of_table(DistortionModel::$family, $degree, $centre).len();
+                const $o: usize = $crate::calib::params::Layout::of_table(DistortionModel::$family, $degree, $centre)
+                    .reduced_len()
+                    - 2;
                 const $p: usize = $o.div_ceil(4) * 4;
                 $body
             })*)*
@@ -81,12 +94,14 @@ mod tests {
     fn every_layout_maps_to_its_sizes() {
         for model in DistortionModel::ALL {
             for d in 1..=MAX_FOCAL_DEGREE {
-                let l = Layout::new(model, d).unwrap();
-                let (n, o, p): (usize, usize, usize) = with_layout!(l, N, O, P, Result::Ok((N, O, P))).unwrap();
-                assert_eq!(n, l.len());
-                assert_eq!(o, l.reduced_len() - 2);
-                assert!(p >= o && p % 4 == 0 && p < o + 4, "{l:?}");
-                assert_eq!(Layout::of_table(model, d), l);
+                for moving in [false, true] {
+                    let l = Layout::new(model, d).unwrap().with_moving_centre(moving);
+                    let (n, o, p): (usize, usize, usize) = with_layout!(l, N, O, P, Result::Ok((N, O, P))).unwrap();
+                    assert_eq!(n, l.len());
+                    assert_eq!(o, l.reduced_len() - 2);
+                    assert!(p >= o && p % 4 == 0 && p < o + 4, "{l:?}");
+                    assert_eq!(Layout::of_table(model, d, moving), l);
+                }
             }
         }
     }

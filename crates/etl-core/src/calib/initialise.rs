@@ -6,7 +6,7 @@ use super::observations::View;
 use super::params::Layout;
 use super::rac::rac;
 use crate::error::{all_finite, Result};
-use crate::model::{CameraModel, DistortionA, OpenCvFlags};
+use crate::model::{CameraModel, DistortionA, MovingCentre, OpenCvFlags};
 
 /// The lens-off intrinsics A0 (section 4.2): focal lengths at E = 0 and principal point.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -50,6 +50,9 @@ pub fn initialise_model(views: &[View<'_>], a0: &A0, layout: Layout, flags: Open
         kf_y: f.kf_y,
         principal_point: pp,
         distortion_a: DistortionA::zero(layout.model()),
+        // The linear steps assume a fixed centre; a moving one starts from it (zero move),
+        // and the bundle adjustment finds the move.
+        centre: layout.moving_centre().then_some(MovingCentre::ZERO),
     };
     model.distortion_a = distortion_a(&model, views, flags)?;
     Ok(model)

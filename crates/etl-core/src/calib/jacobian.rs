@@ -5,7 +5,7 @@ use super::params::{Layout, Span, MAX_PARAMS, MAX_REDUCED, ROTATION, R_FX, R_FY,
 use crate::error::{Error, Result};
 use crate::model::distortion::{opencv_rows, paper_rows};
 use crate::model::rotation::{mat_vec, rodrigues_to_matrix, Mat3};
-use crate::model::{CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, MAX_COEFFICIENTS};
+use crate::model::{CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, MovingCentre, MAX_COEFFICIENTS};
 
 /// Writes `values` into `x` from `span.start` (at most `span.len` of them).
 fn put_span(x: &mut [f64], span: Span, values: &[f64]) {
@@ -30,6 +30,10 @@ pub fn to_params(m: &CameraModel) -> [f64; MAX_PARAMS] {
     put_span(&mut x, l.kf_y(), m.kf_y.coefficients());
     put_span(&mut x, l.principal_point(), &m.principal_point);
     put_span(&mut x, l.distortion_a(), m.distortion_a.as_slice());
+    if let Some(c) = &m.centre {
+        put_span(&mut x, l.centre_dz(), &c.dz_mm);
+        put_span(&mut x, l.centre_principal_point(), &c.principal_point_slope_px);
+    }
     x
 }
 
@@ -54,13 +58,20 @@ pub fn from_params(layout: &Layout, x: &[f64]) -> CameraModel {
     copy_into(distortion_a.as_mut_slice(), span_of(x, layout.distortion_a()));
     let fixed = |span: Span| -> [f64; 3] { core::array::from_fn(|k| x.get(span.at(k)).copied().unwrap_or(0.0)) };
     let pp = layout.principal_point();
+    let entry = |i: usize| x.get(i).copied().unwrap_or(0.0);
+    let (dz, cp) = (layout.centre_dz(), layout.centre_principal_point());
+    let centre = layout.moving_centre().then(|| MovingCentre {
+        dz_mm: [entry(dz.at(0)), entry(dz.at(1))],
+        principal_point_slope_px: [entry(cp.at(0)), entry(cp.at(1))],
+    });
     CameraModel {
         rotation_rodrigues: fixed(layout.rotation()),
         translation_mm: fixed(layout.translation()),
         kf_x,
         kf_y,
-        principal_point: [x.get(pp.at(0)).copied().unwrap_or(0.0), x.get(pp.at(1)).copied().unwrap_or(0.0)],
+        principal_point: [entry(pp.at(0)), entry(pp.at(1))],
         distortion_a,
+        centre,
     }
 }
 
@@ -215,6 +226,14 @@ impl Projector {
         }
         put(R_U0, l.u0(), 1.0);
         put(R_U0 + 1, l.v0(), 1.0);
+        // Eq. C2-C3: T_z(E) = T_z - dz1 E - dz2 E^2, u0(E) = u0 + u1 E, v0(E) = v0 + v1 E.
+        if l.moving_centre() {
+            let (dz, cp) = (l.centre_dz(), l.centre_principal_point());
+            put(TRANSLATION.at(2), dz.at(0), -e_ma);
+            put(TRANSLATION.at(2), dz.at(1), -e_ma * e_ma);
+            put(R_U0, cp.at(0), e_ma);
+            put(R_U0 + 1, cp.at(1), e_ma);
+        }
         let wp = [w * w, w, 1.0];
         for k in 0..l.model().coefficient_count() {
             let triple = l.distortion_triple(k);
@@ -263,7 +282,7 @@ impl Projector {
     fn reduced<const C: usize>(&self, world_mm: [f64; 3], e_ma: f64, jacobian: bool) -> Result<ReducedProjection> {
         let (fx, fy) = self.focal(e_ma)?;
         let rc = mat_vec(&self.r, world_mm);
-        let t = self.model.translation_mm;
+        let t = self.model.translation_at(e_ma);
         let pc = [rc[0] + t[0], rc[1] + t[1], rc[2] + t[2]];
         if !(pc[2] > 0.0) {
             return Err(Error::BehindCamera);
@@ -273,7 +292,7 @@ impl Projector {
         let w = 2.0 / (fx + fy);
         let a = self.model.distortion_a.padded();
         let coefficients = self.model.distortion_a.coefficients_at(0.5 * (fx + fy));
-        let [u0, v0] = self.model.principal_point;
+        let [u0, v0] = self.model.principal_point_at(e_ma);
         // Per family: the pixel, d pixel / d pc, d pixel / d(fx, fy) at fixed coefficients,
         // and d pixel / d coefficients.
         let local = if C == 3 {
@@ -342,7 +361,7 @@ impl Projector {
 
     /// d(per-view variables)/d(Z_W, E) (at capacity x 2): a stage shift moves the point
     /// along world Z, which acts as the change R e_z of T; the current acts through fx
-    /// and fy.
+    /// and fy, and with a moving centre through T_z(E) and (u0(E), v0(E)) (Eq. C2-C3).
     pub fn shift_chain(&self, e_ma: f64) -> [[f64; 2]; MAX_REDUCED] {
         let slope = self.focal_slope(e_ma);
         let mut c = [[0.0; 2]; MAX_REDUCED];
@@ -351,6 +370,11 @@ impl Projector {
         }
         c[R_FX][1] = slope[0];
         c[R_FY][1] = slope[1];
+        if let Some(centre) = &self.model.centre {
+            c[TRANSLATION.at(2)][1] = -centre.dz_slope(e_ma);
+            c[R_U0][1] = centre.principal_point_slope_px[0];
+            c[R_U0 + 1][1] = centre.principal_point_slope_px[1];
+        }
         c
     }
 
@@ -505,6 +529,32 @@ mod tests {
         quintic.kf_x = FocalPoly::new(&[5380.0, -7.0, 0.02, -3e-5, 1e-9, -2e-12]).unwrap();
         quintic.kf_y = FocalPoly::new(&[5430.0, -7.0, 0.02, -3e-5, 1e-9, -2e-12]).unwrap();
         check(&quintic, &[([3.0, 4.5, 48.0], 100.0), ([19.5, 16.5, 2.0], 225.0)]);
+        // A moving centre (Eq. C1-C3), both families.
+        let centre = Some(MovingCentre { dz_mm: [-6e-3, 1.2e-5], principal_point_slope_px: [0.03, -0.02] });
+        check(
+            &CameraModel { centre, ..CameraModel::paper_rig() },
+            &[([3.0, 4.5, 48.0], 100.0), ([19.5, 16.5, 2.0], 225.0)],
+        );
+        check(&CameraModel { centre, ..strong }, &pts);
+    }
+
+    /// A moving centre's T_z(E) and principal point (Eq. C2-C3) in the projection: the
+    /// model at E projects as the fixed-centre model with T_z - dz(E) and (u0, v0)(E).
+    #[test]
+    fn a_moving_centre_is_the_fixed_model_moved() {
+        let centre = MovingCentre { dz_mm: [-6e-3, 1.2e-5], principal_point_slope_px: [0.03, -0.02] };
+        let moving = CameraModel { centre: Some(centre), ..CameraModel::paper_rig() };
+        let e = 150.0;
+        let mut fixed = CameraModel::paper_rig();
+        fixed.translation_mm[2] -= e * (-6e-3 + 1.2e-5 * e);
+        fixed.principal_point = [900.0 + 0.03 * e, 550.0 - 0.02 * e];
+        let p = [3.0, 4.5, 48.0];
+        let (a, b) = (moving.project(p, e).unwrap(), fixed.project(p, e).unwrap());
+        assert!((a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9);
+        let r = Projector::new(&moving).project(p, e, false).unwrap().pixel;
+        assert!((r[0] - b[0]).abs() < 1e-9 && (r[1] - b[1]).abs() < 1e-9);
+        let back = from_params(&moving.layout(), &to_params(&moving));
+        assert_eq!(back, moving);
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! with Weng's decentering term, or OpenCV's model: see [`family`] and [`distortion`]) ->
 //! observed pixel (u_d + u0, v_d + v0).
 
+pub mod centre;
 pub mod distortion;
 pub mod family;
 pub mod focal;
@@ -14,6 +15,7 @@ pub mod projection;
 pub mod ray;
 pub mod rotation;
 
+pub use centre::{MovingCentre, CENTRE_DZ_LEN, CENTRE_PP_LEN};
 pub use distortion::Distortion;
 pub use family::{DistortionA, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS, MAX_DISTORTION_A};
 pub use focal::{FocalPoly, MAX_FOCAL_DEGREE, PAPER_FOCAL_DEGREE};

@@ -4,15 +4,19 @@
 //!
 //! Parameter vector (also the names used in studies, reports and files' covariances), for
 //! focal degree d and a distortion family with n_a numbers:
-//! `om1 om2 om3 tx ty tz kf0x .. kf{d}x kf0y .. kf{d}y u0 v0 a1 .. a{n_a}`. The paper's model
-//! ([`Layout::PAPER`]: cubic, paper family) has 25 numbers; the largest (degree 5, opencv)
-//! has [`MAX_PARAMS`] = 35.
+//! `om1 om2 om3 tx ty tz kf0x .. kf{d}x kf0y .. kf{d}y u0 v0 a1 .. a{n_a}`, and with a
+//! moving centre ([`super::centre`], Eq. C1-C3) `dz1 dz2 u1 v1` after them. The paper's
+//! model ([`Layout::PAPER`]: cubic, paper family, fixed centre) has 25 numbers; the largest
+//! (degree 5, opencv, moving centre) has [`MAX_PARAMS`] = 39.
 //!
 //! Per-view variables (one current E fixed): `om1 om2 om3 tx ty tz fx fy u0 v0` and the
 //! family's coefficients (`k1 p1 p2`, or `k1 k2 p1 p2 k3`): 13 or 15.
 
 use crate::error::{count_in_range, Result};
-use crate::model::{CameraModel, DistortionModel, OpenCvFlags, MAX_COEFFICIENTS, MAX_DISTORTION_A, MAX_FOCAL_DEGREE};
+use crate::model::{
+    CameraModel, DistortionModel, OpenCvFlags, CENTRE_DZ_LEN, CENTRE_PP_LEN, MAX_COEFFICIENTS, MAX_DISTORTION_A,
+    MAX_FOCAL_DEGREE,
+};
 
 /// A run of consecutive entries of a parameter vector: `start..start + len`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,8 +44,11 @@ impl Span {
     }
 }
 
-/// The most model parameters of any layout (degree 5, opencv family).
-pub const MAX_PARAMS: usize = 6 + 2 * (MAX_FOCAL_DEGREE + 1) + 2 + MAX_DISTORTION_A;
+/// Numbers a moving centre adds (dz1 dz2 u1 v1).
+pub const CENTRE_LEN: usize = CENTRE_DZ_LEN + 2 * CENTRE_PP_LEN;
+
+/// The most model parameters of any layout (degree 5, opencv family, moving centre).
+pub const MAX_PARAMS: usize = 6 + 2 * (MAX_FOCAL_DEGREE + 1) + 2 + MAX_DISTORTION_A + CENTRE_LEN;
 
 /// Rodrigues rotation vector om1..om3 (every layout).
 pub const ROTATION: Span = Span { start: 0, len: 3 };
@@ -49,12 +56,14 @@ pub const ROTATION: Span = Span { start: 0, len: 3 };
 pub const TRANSLATION: Span = Span { start: ROTATION.end(), len: 3 };
 
 /// The layout of the parameter vector of a model with distortion family `model` and focal
-/// polynomials of degree `focal_degree` (1..=5): where each group of numbers lies, their
-/// names, the per-view variables. A value, so that every solver is generic over it.
+/// polynomials of degree `focal_degree` (1..=5), with a fixed or a moving centre: where
+/// each group of numbers lies, their names, the per-view variables. A value, so that every
+/// solver is generic over it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Layout {
     model: DistortionModel,
     focal_degree: usize,
+    moving_centre: bool,
 }
 
 impl Default for Layout {
@@ -69,29 +78,45 @@ const A_NAMES: [&str; MAX_DISTORTION_A] =
     ["a1", "a2", "a3", "a4", "a5", "a6", "a7", "a8", "a9", "a10", "a11", "a12", "a13", "a14", "a15"];
 const POSE_NAMES: [&str; 6] = ["om1", "om2", "om3", "tx", "ty", "tz"];
 const PP_NAMES: [&str; 2] = ["u0", "v0"];
+const CENTRE_NAMES: [&str; CENTRE_LEN] = ["dz1", "dz2", "u1", "v1"];
 
 impl Layout {
     /// The paper's model: the cubic focal polynomial and the paper's distortion (25
     /// numbers).
-    pub const PAPER: Layout = Layout { model: DistortionModel::Paper, focal_degree: 3 };
+    pub const PAPER: Layout = Layout { model: DistortionModel::Paper, focal_degree: 3, moving_centre: false };
 
-    /// The layout of family `model` with focal degree `focal_degree`. Errors: a degree
-    /// outside 1..=5 ([`Error::OutOfRange`](crate::Error::OutOfRange) naming `focal_degree`).
+    /// The layout of family `model` with focal degree `focal_degree` and a fixed centre.
+    /// Errors: a degree outside 1..=5 ([`Error::OutOfRange`](crate::Error::OutOfRange)
+    /// naming `focal_degree`).
     pub fn new(model: DistortionModel, focal_degree: usize) -> Result<Self> {
         let focal_degree = count_in_range(focal_degree, 1, MAX_FOCAL_DEGREE, "focal_degree")?;
-        Ok(Layout { model, focal_degree })
+        Ok(Layout { model, focal_degree, moving_centre: false })
     }
 
-    /// The layout of family `model` with focal degree `focal_degree`, unchecked: for the
-    /// table of the layouts the solvers are compiled for (`calib::dispatch`), whose
+    /// This layout with a moving centre (`true`: Eq. C1-C3) or a fixed one.
+    pub const fn with_moving_centre(self, moving_centre: bool) -> Self {
+        Layout { moving_centre, ..self }
+    }
+
+    /// The layout of family `model`, focal degree `focal_degree` and centre, unchecked: for
+    /// the table of the layouts the solvers are compiled for (`calib::dispatch`), whose
     /// degrees are 1..=5. Everywhere else use [`Layout::new`], which checks the degree.
-    pub(crate) const fn of_table(model: DistortionModel, focal_degree: usize) -> Self {
-        Layout { model, focal_degree }
+    pub(crate) const fn of_table(model: DistortionModel, focal_degree: usize, moving_centre: bool) -> Self {
+        Layout { model, focal_degree, moving_centre }
     }
 
-    /// The layout of `model`'s numbers (its family, and kf_x's degree).
+    /// The layout of `model`'s numbers (its family, kf_x's degree, its centre).
     pub const fn of(model: &CameraModel) -> Self {
-        Layout { model: model.distortion_a.model(), focal_degree: model.kf_x.degree() }
+        Layout {
+            model: model.distortion_a.model(),
+            focal_degree: model.kf_x.degree(),
+            moving_centre: model.centre.is_some(),
+        }
+    }
+
+    /// Whether the centre moves with E (Eq. C1-C3).
+    pub const fn moving_centre(&self) -> bool {
+        self.moving_centre
     }
 
     /// The distortion family.
@@ -104,9 +129,9 @@ impl Layout {
         self.focal_degree
     }
 
-    /// Number of parameters: 6 + 2 (d + 1) + 2 + 3 n_c.
+    /// Number of parameters: 6 + 2 (d + 1) + 2 + 3 n_c (+ 4 with a moving centre).
     pub const fn len(&self) -> usize {
-        self.distortion_a().end()
+        self.centre_principal_point().end()
     }
 
     /// Never empty (a pose at least); for the `len`/`is_empty` convention.
@@ -142,6 +167,16 @@ impl Layout {
     /// The a_i (Eq. 18 generalised): one triple per distortion coefficient.
     pub const fn distortion_a(&self) -> Span {
         Span { start: self.principal_point().end(), len: self.model.a_len() }
+    }
+
+    /// dz1, dz2 of Eq. C1 (mm / mA, mm / mA^2; empty with a fixed centre).
+    pub const fn centre_dz(&self) -> Span {
+        Span { start: self.distortion_a().end(), len: if self.moving_centre { CENTRE_DZ_LEN } else { 0 } }
+    }
+
+    /// u1, v1 of Eq. C3 (px / mA; empty with a fixed centre).
+    pub const fn centre_principal_point(&self) -> Span {
+        Span { start: self.centre_dz().end(), len: if self.moving_centre { 2 * CENTRE_PP_LEN } else { 0 } }
     }
 
     /// The a-triple of distortion coefficient `c` (in the family's order), (w^2, w, 1).
@@ -209,6 +244,8 @@ impl Layout {
             pick(&PP_NAMES, self.principal_point())
         } else if self.distortion_a().contains(i) {
             pick(&A_NAMES, self.distortion_a())
+        } else if i < self.len() {
+            pick(&CENTRE_NAMES, self.centre_dz())
         } else {
             ""
         }
@@ -327,33 +364,52 @@ mod tests {
     fn spans_tile_the_vectors_in_name_order() {
         for model in DistortionModel::ALL {
             for d in 1..=MAX_FOCAL_DEGREE {
-                let l = Layout::new(model, d).unwrap();
-                let spans = [l.rotation(), l.translation(), l.kf_x(), l.kf_y(), l.principal_point(), l.distortion_a()];
-                let mut next = 0;
-                for s in spans {
-                    assert_eq!(s.start, next);
-                    next = s.end();
+                for moving in [false, true] {
+                    let l = Layout::new(model, d).unwrap().with_moving_centre(moving);
+                    let spans = [
+                        l.rotation(),
+                        l.translation(),
+                        l.kf_x(),
+                        l.kf_y(),
+                        l.principal_point(),
+                        l.distortion_a(),
+                        l.centre_dz(),
+                        l.centre_principal_point(),
+                    ];
+                    let mut next = 0;
+                    for s in spans {
+                        assert_eq!(s.start, next);
+                        next = s.end();
+                    }
+                    assert_eq!(next, l.len());
+                    assert!(l.len() <= MAX_PARAMS);
+                    assert_eq!(l.name(l.kf0x()), "kf0x");
+                    assert_eq!(l.name(l.kf0y()), "kf0y");
+                    assert_eq!(l.name(l.u0()), "u0");
+                    assert_eq!(l.name(l.v0()), "v0");
+                    assert_eq!(l.name(l.distortion_a().start), "a1");
+                    let last = match (moving, model) {
+                        (true, _) => "v1",
+                        (false, DistortionModel::Paper) => "a9",
+                        (false, DistortionModel::OpenCv) => "a15",
+                    };
+                    assert_eq!(l.name(l.len() - 1), last);
+                    assert_eq!(l.name(l.len()), "");
+                    assert_eq!(l.names().filter(|n| n.is_empty()).count(), 0);
+                    assert_eq!(l.index_of("v0"), Some(l.v0()));
+                    assert!(l.a0_mask().fits(l.len()) && l.a0_mask().count() == 4);
+                    assert!(l.reduced_len() <= MAX_REDUCED);
+                    assert_eq!(l.len(), Layout::new(model, d).unwrap().len() + if moving { CENTRE_LEN } else { 0 });
                 }
-                assert_eq!(next, l.len());
-                assert!(l.len() <= MAX_PARAMS);
-                assert_eq!(l.name(l.kf0x()), "kf0x");
-                assert_eq!(l.name(l.kf0y()), "kf0y");
-                assert_eq!(l.name(l.u0()), "u0");
-                assert_eq!(l.name(l.v0()), "v0");
-                assert_eq!(l.name(l.distortion_a().start), "a1");
-                assert_eq!(l.name(l.len() - 1), if model == DistortionModel::Paper { "a9" } else { "a15" });
-                assert_eq!(l.name(l.len()), "");
-                assert_eq!(l.names().filter(|n| n.is_empty()).count(), 0);
-                assert_eq!(l.index_of("v0"), Some(l.v0()));
-                assert!(l.a0_mask().fits(l.len()) && l.a0_mask().count() == 4);
-                assert!(l.reduced_len() <= MAX_REDUCED);
             }
         }
         let p = Layout::PAPER;
         assert_eq!(p.len(), 25);
         assert_eq!((p.kf0x(), p.kf0y(), p.u0(), p.v0(), p.distortion_a().start), (6, 10, 14, 15, 16));
         assert_eq!((R_FX, R_FY, R_U0, R_V0, R_K1, p.reduced_len()), (6, 7, 8, 9, 10, 13));
-        assert_eq!(Layout::new(DistortionModel::OpenCv, 5).unwrap().len(), MAX_PARAMS);
+        assert_eq!(Layout::new(DistortionModel::OpenCv, 5).unwrap().with_moving_centre(true).len(), MAX_PARAMS);
+        let c = Layout::PAPER.with_moving_centre(true);
+        assert_eq!((c.len(), c.centre_dz().start, c.index_of("dz1"), c.index_of("v1")), (29, 25, Some(25), Some(28)));
         assert!(Layout::new(DistortionModel::Paper, 0).is_err() && Layout::new(DistortionModel::Paper, 6).is_err());
     }
 

@@ -8,6 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::centre::MovingCentre;
 use super::distortion::Distortion;
 use super::family::{DistortionA, DistortionModel};
 use super::focal::FocalPoly;
@@ -38,6 +39,9 @@ pub struct CameraModel {
     pub principal_point: [f64; 2],
     /// The a_i of Eq. 18 (the paper: a1..a9) with their distortion family.
     pub distortion_a: DistortionA,
+    /// The projection centre's and the principal point's move with E (Eq. C1-C3), or
+    /// `None` for the paper's fixed centre.
+    pub centre: Option<MovingCentre>,
 }
 
 /// As the fields of `etlcal.calibration/1` (what `etlcal simulate` writes as the truth):
@@ -49,7 +53,8 @@ impl Serialize for CameraModel {
         use serde::ser::SerializeStruct;
         let family = self.distortion_model();
         let named = family != DistortionModel::Paper;
-        let mut st = serializer.serialize_struct("CameraModel", if named { 7 } else { 6 })?;
+        let fields = 6 + usize::from(named) + usize::from(self.centre.is_some());
+        let mut st = serializer.serialize_struct("CameraModel", fields)?;
         st.serialize_field("rotation_rodrigues", &self.rotation_rodrigues)?;
         st.serialize_field("translation_mm", &self.translation_mm)?;
         st.serialize_field("kf_x", &self.kf_x)?;
@@ -59,7 +64,28 @@ impl Serialize for CameraModel {
             st.serialize_field("distortion_model", &family)?;
         }
         st.serialize_field("distortion_a", &self.distortion_a)?;
+        if let Some(c) = &self.centre {
+            st.serialize_field("centre", &CentreFields::of(c, self.principal_point))?;
+        }
         st.end()
+    }
+}
+
+/// The file's `"centre"`: each polynomial's ascending coefficients in E from E^0, dz's
+/// constant 0 (Eq. C1) and the principal point's the model's (u0, v0).
+#[derive(Serialize)]
+struct CentreFields {
+    dz_mm: [f64; 3],
+    principal_point_px: [[f64; 2]; 2],
+}
+
+impl CentreFields {
+    fn of(c: &MovingCentre, principal_point: [f64; 2]) -> Self {
+        let [u1, v1] = c.principal_point_slope_px;
+        CentreFields {
+            dz_mm: [0.0, c.dz_mm[0], c.dz_mm[1]],
+            principal_point_px: [[principal_point[0], u1], [principal_point[1], v1]],
+        }
     }
 }
 
@@ -95,6 +121,7 @@ impl CameraModel {
             distortion_a: DistortionA::paper([
                 -0.067, -5.19e-5, 1.09e-8, -0.0077, 0.103, -1.93e-5, 0.11, -0.0257, 5.6e-6,
             ]),
+            centre: None,
         }
     }
 
@@ -139,6 +166,7 @@ impl CameraModel {
                 0.0, 0.0, -3.0e-4, // p2
                 0.0, -20.0, -4.8e-3, // k3
             ]),
+            centre: None,
         }
     }
 
@@ -152,7 +180,33 @@ impl CameraModel {
             return Err(Error::InvalidArgument { what: "kf_x and kf_y must have the same degree" });
         }
         all_finite(&self.principal_point, "principal_point")?;
+        if let Some(c) = &self.centre {
+            c.validate()?;
+        }
         self.distortion_a.validate()
+    }
+
+    /// The principal point (u0, v0) at `e_com_ma` (Eq. C3; the fixed one without a moving
+    /// centre), px.
+    #[inline]
+    pub fn principal_point_at(&self, e_com_ma: f64) -> [f64; 2] {
+        let [u0, v0] = self.principal_point;
+        match &self.centre {
+            None => [u0, v0],
+            Some(c) => {
+                let [du, dv] = c.principal_point_shift_px(e_com_ma);
+                [u0 + du, v0 + dv]
+            }
+        }
+    }
+
+    /// T at `e_com_ma` (Eq. C2: the translation of the centre there; `translation_mm` for
+    /// the fixed centre), mm.
+    #[inline]
+    pub fn translation_at(&self, e_com_ma: f64) -> [f64; 3] {
+        let [tx, ty, tz] = self.translation_mm;
+        let dz = self.centre.as_ref().map_or(0.0, |c| c.dz_mm_at(e_com_ma));
+        [tx, ty, tz - dz]
     }
 
     /// Rotation matrix R (world -> camera).
@@ -174,7 +228,7 @@ impl CameraModel {
     pub fn intrinsics(&self, e_com_ma: f64) -> Result<Intrinsics> {
         finite(e_com_ma, "e_com_ma")?;
         let (fx, fy) = self.focal_lengths(e_com_ma);
-        let [u0, v0] = self.principal_point;
+        let [u0, v0] = self.principal_point_at(e_com_ma);
         if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
             return Err(Error::Degenerate { what: "focal length is not positive at this current" });
         }
@@ -196,10 +250,20 @@ impl CameraModel {
         Ok(d)
     }
 
-    /// World point (mm) -> camera coordinates (mm), Eq. 13.
+    /// World point (mm) -> camera coordinates (mm), Eq. 13, with the centre of the
+    /// calibration's pose (for a moving centre, the centre at E = 0: use
+    /// [`Self::world_to_camera_at`] at a setting).
     #[inline]
     pub fn world_to_camera(&self, world_mm: [f64; 3]) -> [f64; 3] {
         (to_matrix3(&self.rotation_matrix()) * Vector3::from(world_mm) + Vector3::from(self.translation_mm)).into()
+    }
+
+    /// World point (mm) -> camera coordinates (mm) at `e_com_ma`: Eq. 13 with T(E) of
+    /// Eq. C2 (the centre where the lens puts it).
+    #[inline]
+    pub fn world_to_camera_at(&self, world_mm: [f64; 3], e_com_ma: f64) -> [f64; 3] {
+        let t = Vector3::from(self.translation_at(e_com_ma));
+        (to_matrix3(&self.rotation_matrix()) * Vector3::from(world_mm) + t).into()
     }
 
     /// Projects a world point (mm) to the observed pixel at compensated current `e_com_ma`
@@ -211,7 +275,7 @@ impl CameraModel {
         all_finite(&world_mm, "world_mm")?;
         let k = self.intrinsics(e_com_ma)?;
         let d = Distortion::from_a(&self.distortion_a, k.fx, k.fy);
-        let pc = self.world_to_camera(world_mm);
+        let pc = self.world_to_camera_at(world_mm, e_com_ma);
         project_camera_point(pc, &k, &d)
     }
 
@@ -226,7 +290,7 @@ impl CameraModel {
         let k = self.intrinsics(e_com_ma)?;
         let d = Distortion::from_a(&self.distortion_a, k.fx, k.fy);
         let r = to_matrix3(&self.rotation_matrix());
-        let t = Vector3::from(self.translation_mm);
+        let t = Vector3::from(self.translation_at(e_com_ma));
         for (w, o) in world_mm.iter().zip(out.iter_mut()) {
             all_finite(w, "world_mm")?;
             *o = project_camera_point((r * Vector3::from(*w) + t).into(), &k, &d)?;

@@ -36,10 +36,11 @@ impl CameraModel {
         let k = self.intrinsics(e_com_ma)?;
         let [x, y] = self.undistort(pixel, e_com_ma)?;
         let dc = Vector3::new((x - k.u0) / k.fx, (y - k.v0) / k.fy, 1.0);
-        // World = R^T (camera - T): the direction R^T dc / |dc|, the origin -R^T T.
+        // World = R^T (camera - T(E)): the direction R^T dc / |dc|, the origin -R^T T(E)
+        // (Eq. C2: the centre where the lens puts it).
         let r = to_matrix3(&self.rotation_matrix());
         let dir: [f64; 3] = r.tr_mul(&(dc / dc.norm())).into();
-        let o: [f64; 3] = r.tr_mul(&-Vector3::from(self.translation_mm)).into();
+        let o: [f64; 3] = r.tr_mul(&-Vector3::from(self.translation_at(e_com_ma))).into();
         // A NaN rotation or translation (or an overflow) must not come back as a ray.
         all_finite(&o, "ray origin (check rotation_rodrigues and translation_mm)")?;
         all_finite(&dir, "ray direction (check rotation_rodrigues)")?;

@@ -3,6 +3,7 @@
 
 mod common;
 
+mod centre;
 mod families;
 mod lm;
 mod nist;

@@ -7,7 +7,9 @@ use etl_core::fit::basis::{chebyshev_to_monomial, chebyshev_values, horner, scal
 use etl_core::fit::{GivensQr, PolyFit, Polynomial};
 use etl_core::model::projection::project_camera_point;
 use etl_core::model::rotation::{mat_t_vec, mat_vec, matrix_to_rodrigues, rodrigues_to_matrix};
-use etl_core::model::{CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, Intrinsics, Ray};
+use etl_core::model::{
+    CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, Intrinsics, MovingCentre, Ray,
+};
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::{Compensation, ThermalCalibration, ThermalFit, ThermalSurface};
 use etl_core::Result;
@@ -129,8 +131,11 @@ fn ok_finite<T: Finite + core::fmt::Debug>(r: Result<T>) {
 }
 
 fn camera() -> impl Strategy<Value = CameraModel> {
-    (arr::<3>(), arr::<3>(), arr::<6>(), arr::<6>(), arr::<2>(), arr::<15>(), 1usize..=5, any::<bool>()).prop_map(
-        |(r, t, kx, ky, pp, a, degree, opencv)| {
+    let centre = (arr::<4>(), any::<bool>()).prop_map(|(c, moving)| {
+        moving.then_some(MovingCentre { dz_mm: [c[0], c[1]], principal_point_slope_px: [c[2], c[3]] })
+    });
+    (arr::<3>(), arr::<3>(), arr::<6>(), arr::<6>(), arr::<2>(), arr::<15>(), 1usize..=5, any::<bool>(), centre)
+        .prop_map(|(r, t, kx, ky, pp, a, degree, opencv, centre)| {
             let family = if opencv { DistortionModel::OpenCv } else { DistortionModel::Paper };
             CameraModel {
                 rotation_rodrigues: r,
@@ -139,9 +144,9 @@ fn camera() -> impl Strategy<Value = CameraModel> {
                 kf_y: FocalPoly::new(&ky[..=degree]).unwrap(),
                 principal_point: pp,
                 distortion_a: DistortionA::new(family, &a[..family.a_len()]).unwrap(),
+                centre,
             }
-        },
-    )
+        })
 }
 
 /// The paper rig, or an arbitrary model.

@@ -197,7 +197,7 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
     let truth = CameraModel::paper_rig();
     let truth_x = etl_core::calib::jacobian::to_params(&truth);
     let cov = etl_core::calib::crlb::crlb_covariance(&as_views(&pts0, &e), &truth, 0.2).unwrap();
-    let run = |seeds: std::ops::Range<u64>| -> Vec<[f64; 35]> {
+    let run = |seeds: std::ops::Range<u64>| -> Vec<[f64; etl_core::calib::params::MAX_PARAMS]> {
         seeds
             .map(|s| {
                 let (pts, e, _) = paper_rig(&noise, 10_000 + s);
@@ -205,7 +205,7 @@ fn bundle_adjustment_reaches_the_cramer_rao_bound() {
             })
             .collect()
     };
-    let est: Vec<[f64; 35]> = std::thread::scope(|sc| {
+    let est: Vec<[f64; etl_core::calib::params::MAX_PARAMS]> = std::thread::scope(|sc| {
         let h = sc.spawn(|| run(0..trials / 2));
         let mut b = run(trials / 2..trials);
         let mut a = h.join().unwrap();

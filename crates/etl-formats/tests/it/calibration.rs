@@ -380,3 +380,73 @@ fn temperature_compensation_none_is_optional_and_checked() {
     let e = Calibration::parse(&word, &bad).unwrap_err().to_string();
     assert!(e.contains("partial") && e.contains("none"), "{e}");
 }
+
+/// A calibration with a moving centre (Eq. C1-C3): its `"centre"` round-trips, and the
+/// camera at a setting has the principal point of that setting.
+fn with_centre() -> Calibration {
+    let mut c = Calibration::load(&fixture()).unwrap();
+    let pp = c.principal_point;
+    c.centre = Some(etl_formats::calibration::CentreField {
+        dz_mm: vec![0.0, -0.006, 1.2e-5],
+        principal_point_px: vec![vec![pp[0], 0.02], vec![pp[1], -0.01]],
+    });
+    c.std.centre = Some(etl_formats::calibration::CentreField {
+        dz_mm: vec![0.0, 1e-4, 1e-7],
+        principal_point_px: vec![vec![c.std.principal_point[0], 1e-3], vec![c.std.principal_point[1], 1e-3]],
+    });
+    c.covariance = None;
+    c
+}
+
+#[test]
+fn a_moving_centre_round_trips_and_moves_the_principal_point() {
+    let c = with_centre();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.json");
+    c.save(&out).unwrap();
+    let back = Calibration::load(&out).unwrap();
+    assert_eq!(back, c);
+    let m = back.model().unwrap();
+    assert_eq!(m.layout().len(), 29);
+    let e = 150.0;
+    let k = back.at_e_com(e, etl_core::runtime::Trust::Refuse).unwrap();
+    let want = [c.principal_point[0] + 0.02 * e, c.principal_point[1] - 0.01 * e];
+    let got = m.intrinsics(e).unwrap();
+    assert!((got.u0 - want[0]).abs() < 1e-9 && (got.v0 - want[1]).abs() < 1e-9, "{got:?}");
+    assert_eq!(k.e_com_ma(), e);
+    // A file without the field reads as the fixed centre, as before.
+    assert!(Calibration::load(&fixture()).unwrap().model().unwrap().centre.is_none());
+}
+
+#[test]
+fn a_bad_centre_is_refused_naming_the_field_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let bads: [Spoil; 5] = [
+        ("centre.dz_mm has 2 numbers", |c| {
+            c.centre.as_mut().unwrap().dz_mm.pop();
+        }),
+        ("centre.dz_mm[0] = 0.5 must be 0", |c| c.centre.as_mut().unwrap().dz_mm[0] = 0.5),
+        ("centre.principal_point_px must be [[u0, u1], [v0, v1]]", |c| {
+            c.centre.as_mut().unwrap().principal_point_px[1].push(0.0);
+        }),
+        ("centre.principal_point_px[0][0]", |c| c.centre.as_mut().unwrap().principal_point_px[0][0] += 1.0),
+        ("std.centre.dz_mm has 4 numbers", |c| c.std.centre.as_mut().unwrap().dz_mm.push(0.0)),
+    ];
+    for (i, (message, spoil)) in bads.into_iter().enumerate() {
+        let mut c = with_centre();
+        spoil(&mut c);
+        let out = dir.path().join(format!("{i}.json"));
+        let e = c.save(&out).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(message), "{message}: {text}");
+        assert_eq!(text.lines().count(), 1, "{text}");
+        assert!(!out.exists(), "{message}: a refused calibration was written");
+        // The reader refuses the same text.
+        let json = serde_json::to_string(&c).unwrap();
+        assert!(Calibration::parse(&json, Path::new("c.json")).is_err(), "{message}");
+    }
+    // A moving centre's std without the centre: the lengths differ.
+    let mut c = with_centre();
+    c.centre = None;
+    assert!(c.save(&dir.path().join("x.json")).unwrap_err().to_string().contains("std"), "std.centre alone");
+}

@@ -333,6 +333,8 @@ class Calibration:
     @property
     def principal_point(self) -> _F64: ...
     @property
+    def centre(self) -> Optional[Dict[str, Any]]: ...
+    @property
     def fx_poly(self) -> Polynomial: ...
     @property
     def fy_poly(self) -> Polynomial: ...
@@ -636,6 +638,7 @@ def calibrate(
     zero_tangent: bool = False,
     sigma_z_um: Optional[float] = None,
     accept_ill_conditioned: bool = False,
+    centre: Optional[Literal["fixed", "moving", "auto"]] = None,
 ) -> Calibration:
     """The paper's calibration (or the per-setting baseline) from observations; every
     keyword is the `etlcal calibrate` flag of the same name (hold_a0: --hold-a0). None

@@ -121,7 +121,7 @@ fn opencv_family_and_the_model_selection_table_are_reported() {
     use etl_calib::pipeline::select::{select, A0Source, Candidates};
     use etl_core::model::DistortionModel;
     let sim = etl_sim::simulate::strong_rig(&NoiseModel::PAPER, 5);
-    let candidates = Candidates { families: DistortionModel::ALL.to_vec(), focal_degrees: vec![3] };
+    let candidates = Candidates::fixed_centre(DistortionModel::ALL.to_vec(), vec![3]);
     let r = select(
         &sim.observations,
         &A0Source::Given(sim.a0),

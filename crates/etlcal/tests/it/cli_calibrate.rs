@@ -457,3 +457,53 @@ fn a_calibration_the_data_do_not_determine_is_refused_unless_accepted() {
     let std_u0 = cal["std"]["principal_point"][0].as_f64().unwrap();
     assert!(std_u0 > 0.05 * 1936.0, "{std_u0}");
 }
+
+/// `--centre`: `fixed` is the default, file for file; `moving` writes the file's
+/// `"centre"` (on the paper rig, whose centre is fixed, a move within its uncertainty and
+/// the same focal lengths within theirs); `auto` keeps the fixed centre there; a bad word
+/// and the baseline are refused, naming the flag, and nothing is written.
+#[test]
+fn the_centre_flag_fixed_moving_auto() {
+    let dir = tempfile::tempdir().unwrap();
+    simulate(dir.path());
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    let calibrate = |out: &str, extra: &[&str]| calibrate_simulated(dir.path(), out, extra);
+    let plain = calibrate(&p("plain.json"), &["--estimator", "paper"]);
+    let fixed = calibrate(&p("fixed.json"), &["--estimator", "paper", "--centre", "fixed"]);
+    assert_eq!(std::fs::read(p("plain.json")).unwrap(), std::fs::read(p("fixed.json")).unwrap());
+    assert!(fixed.get("centre").is_none());
+    let moving = calibrate(&p("moving.json"), &["--estimator", "paper", "--centre", "moving"]);
+    let c = &moving["centre"];
+    let dz: Vec<f64> = c["dz_mm"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!((dz.len(), dz[0]), (3, 0.0), "{c}");
+    let sd: Vec<f64> =
+        moving["std"]["centre"]["dz_mm"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    // The move over 80..225 mA, against its standard deviation (the two terms' stds summed:
+    // an upper bound of the move's).
+    let mv = |d: &[f64]| (d[1] * (225.0 - 80.0) + d[2] * (225.0f64.powi(2) - 80.0f64.powi(2))).abs();
+    let bound = sd[1] * 145.0 + sd[2] * (225.0f64.powi(2) - 80.0f64.powi(2));
+    assert!(mv(&dz) < 4.0 * bound, "move {} mm, bound {bound}", mv(&dz));
+    assert_eq!(moving["covariance"].as_array().unwrap().len(), 29);
+    // Under the paper's noise the move is known to 0.15 mm, 0.2 % of the distance: said.
+    let said = moving["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().contains("do not determine the centre's move"));
+    assert!(said, "{}", moving["warnings"]);
+    assert_eq!(moving["principal_point"][0], c["principal_point_px"][0][0]);
+    assert_eq!(moving["principal_point"][1], c["principal_point_px"][1][0]);
+    let (auto_out, bad_out) = (p("auto.json"), p("bad.json"));
+    let auto = calibrate(&auto_out, &["--estimator", "paper", "--centre", "auto"]);
+    let table = auto["model_selection"]["candidates"].as_array().unwrap();
+    assert_eq!(table.len(), 2);
+    assert!(table.iter().any(|r| r["centre"] == "moving") && auto.get("centre").is_none(), "{table:?}");
+    let (obs, a0) = (p("observations.json"), p("a0.json"));
+    let args = ["calibrate", "--observations", &obs, "--a0", &a0, "--out", &bad_out, "--centre", "sideways"];
+    let (code, _, err) = etlcal(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--centre") && !Path::new(&bad_out).exists(), "{err}");
+    let args =
+        ["calibrate", "--observations", &obs, "--method", "per-setting", "--out", &bad_out, "--centre", "moving"];
+    fails_without_writing(&args, Path::new(&bad_out), "takes no --centre");
+}

@@ -70,6 +70,7 @@ use etl_formats::calibration::ThermalRef;
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
 
+use super::centre::undetermined_move;
 use super::solve::{solve_without_outliers, Solved};
 use super::{calibration_of, CalibrateOptions, CalibrationResult};
 use crate::zhang::ZhangOptions;
@@ -90,13 +91,23 @@ pub enum A0Source {
     Offstate,
 }
 
-/// The candidates: every family of `families` with every degree of `focal_degrees`.
+/// The candidates: every family of `families` with every degree of `focal_degrees` and
+/// every centre of `centres`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Candidates {
     /// Distortion families tried (the paper's first is the simpler).
     pub families: Vec<DistortionModel>,
     /// Focal degrees tried (1..=5).
     pub focal_degrees: Vec<usize>,
+    /// Centres tried: `false` the fixed centre, `true` the moving one (Eq. C1-C3).
+    pub centres: Vec<bool>,
+}
+
+impl Candidates {
+    /// `families` x `focal_degrees`, each with the fixed centre.
+    pub fn fixed_centre(families: Vec<DistortionModel>, focal_degrees: Vec<usize>) -> Self {
+        Candidates { families, focal_degrees, centres: vec![false] }
+    }
 }
 
 /// One candidate's fit to all views.
@@ -131,12 +142,19 @@ fn fit_all(
         let flags = if family == DistortionModel::OpenCv { base.flags } else { OpenCvFlags::NONE };
         let family_a0 = a0_of(family, flags)?;
         for &degree in &candidates.focal_degrees {
-            let layout = Layout::new(family, degree).map_err(Error::Core)?;
-            let options = candidate_options(base, layout);
-            let fit = solve_without_outliers(views, &family_a0, &options)
-                .map(|solved| Fitted { options, solved })
-                .map_err(|e| e.to_string());
-            out.push((layout, fit));
+            for &moving in &candidates.centres {
+                let layout = Layout::new(family, degree).map_err(Error::Core)?.with_moving_centre(moving);
+                let options = candidate_options(base, layout);
+                let fit =
+                    solve_without_outliers(views, &family_a0, &options).map_err(|e| e.to_string()).and_then(|solved| {
+                        match undetermined_move(&solved.report.model, &solved.report.covariance, views) {
+                            // A move the data do not determine is no candidate (module centre).
+                            Some(why) => Err(why),
+                            None => Ok(Fitted { options, solved }),
+                        }
+                    });
+                out.push((layout, fit));
+            }
         }
     }
     Ok(out)
@@ -167,8 +185,11 @@ pub fn select(
     candidates: &Candidates,
 ) -> Result<CalibrationResult> {
     obs.validate()?;
-    if candidates.families.is_empty() || candidates.focal_degrees.is_empty() {
-        return Err(Error::invalid("candidates", "model selection needs at least one family and one focal degree"));
+    if candidates.families.is_empty() || candidates.focal_degrees.is_empty() || candidates.centres.is_empty() {
+        return Err(Error::invalid(
+            "candidates",
+            "model selection needs at least one family, one focal degree and one centre",
+        ));
     }
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();

@@ -72,13 +72,14 @@ pub(super) fn table(
     })?;
     let best_scored =
         scored[best].as_ref().ok_or_else(|| Error::invalid("model_selection", "the best candidate has no errors"))?;
-    let simplicity = |l: &Layout| (l.len(), l.model() != DistortionModel::Paper, l.focal_degree());
+    let simplicity = |l: &Layout| (l.len(), l.moving_centre(), l.model() != DistortionModel::Paper, l.focal_degree());
     let mut chosen = best;
     let mut rows = vec![];
     for (i, (((layout, fit), e), s)) in fits.iter().zip(errors).zip(&scored).enumerate() {
         let mut row = ModelCandidate {
             distortion_model: layout.model().name().into(),
             focal_degree: layout.focal_degree(),
+            centre: layout.moving_centre().then(|| "moving".to_owned()),
             parameters: layout.len(),
             fit_rms_px: fit.as_ref().ok().map(|f| f.solved.report.rms_px),
             prediction_rms_px: None,

@@ -86,6 +86,7 @@ fn camera_model() -> BoxedStrategy<CameraModel> {
                     kf_y: FocalPoly::new(&ky).unwrap(),
                     principal_point: pp,
                     distortion_a: DistortionA::new(family, &a).unwrap(),
+                    centre: None,
                 })
         })
         .boxed()
