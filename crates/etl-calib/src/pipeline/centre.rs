@@ -11,6 +11,7 @@
 //! `--centre auto` does not choose it.
 
 use etl_core::calib::params::{Layout, MAX_PARAMS};
+use etl_core::calib::uncertainty::sandwich;
 use etl_core::calib::View;
 use etl_core::model::CameraModel;
 
@@ -21,17 +22,16 @@ use super::focus_law::focus_samples;
 pub const MAX_CENTRE_SCALE_STD: f64 = 1e-3;
 
 /// The standard deviation of dz(E_hi) - dz(E_lo), mm, from `covariance` of `layout`'s
-/// numbers (None for a fixed centre).
+/// numbers (None for a fixed centre): g C g^T with g = d(move)/d(dz1, dz2).
 pub fn move_std_mm(layout: &Layout, covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS], [lo, hi]: [f64; 2]) -> Option<f64> {
     if !layout.moving_centre() {
         return None;
     }
     let dz = layout.centre_dz();
-    let (a, b) = (dz.at(0), dz.at(1));
-    let g = [hi - lo, hi * hi - lo * lo];
-    let c = |i: usize, j: usize| covariance.get(i).and_then(|r| r.get(j)).copied().unwrap_or(f64::NAN);
-    let var = g[0] * g[0] * c(a, a) + 2.0 * g[0] * g[1] * c(a, b) + g[1] * g[1] * c(b, b);
-    Some(var.max(0.0).sqrt())
+    let mut g = [0.0; MAX_PARAMS];
+    g[dz.at(0)] = hi - lo;
+    g[dz.at(1)] = hi * hi - lo * lo;
+    Some(sandwich(&[g], covariance)[0][0].max(0.0).sqrt())
 }
 
 /// Why `model`'s moving centre is not determined by `views` (one sentence), or None (a

@@ -17,6 +17,8 @@
 //! the numbers (mm, px, px/mA^3), so any threshold on it would be arbitrary, where these
 //! two are in the units a user judges a camera by.
 
+use etl_core::calib::params::MAX_PARAMS;
+use etl_core::calib::uncertainty::sandwich;
 use etl_formats::calibration::Calibration;
 
 /// The largest standard deviation of the principal point a calibration may have, as a
@@ -84,18 +86,20 @@ fn shown(v: f64) -> String {
 /// spread says nothing of the point where the camera is used).
 fn principal_point_std_px(cal: &Calibration) -> [f64; 2] {
     let fixed = cal.std.principal_point;
-    let (Some(cov), Ok(layout)) = (cal.covariance.as_ref(), cal.layout()) else { return fixed };
+    let (Some(cov), Ok(layout)) = (cal.covariance_matrix(), cal.layout()) else { return fixed };
     if !layout.moving_centre() {
         return fixed;
     }
     let slope = layout.centre_principal_point();
-    let at = |i: usize, j: usize| cov.get(i).and_then(|r| r.get(j)).copied().unwrap_or(f64::NAN);
     core::array::from_fn(|k| {
-        let (c, s) = ([layout.u0(), layout.v0()][k], slope.at(k));
-        cal.e_com_range_ma
-            .iter()
-            .map(|&e| (at(c, c) + 2.0 * e * at(c, s) + e * e * at(s, s)).max(0.0).sqrt())
-            .fold(f64::NEG_INFINITY, f64::max)
+        let at = |e: f64| {
+            // d u0(E) / d (u0, u1) = (1, E).
+            let mut g = [0.0; MAX_PARAMS];
+            g[[layout.u0(), layout.v0()][k]] = 1.0;
+            g[slope.at(k)] = e;
+            sandwich(&[g], &cov)[0][0].max(0.0).sqrt()
+        };
+        cal.e_com_range_ma.iter().map(|&e| at(e)).fold(f64::NEG_INFINITY, f64::max)
     })
 }
 
