@@ -257,6 +257,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         Error::Output { source, .. } => Error::Output { path: path.to_owned(), source },
         other => other,
     })?;
+    if output::is_own_temp(&target) {
+        // A file set's temporary, renamed by the set: a temporary of it would be one more
+        // file a kill leaves behind.
+        return output::write_synced(&target, bytes).map_err(io);
+    }
     output::remove_stale_temps(&dir, &name);
     let tmp = output::temp_sibling(&dir, &name);
     let mode = output::kept_mode(&target);

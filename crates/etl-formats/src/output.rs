@@ -15,8 +15,10 @@
 //!   `output::write_dir_set`, built on [`resolve_output`], [`temp_sibling`],
 //!   [`remove_stale_temps`] and [`kept_permissions`]): the atomic exchange of two
 //!   directories is a Linux system call, and this crate builds wherever `std` does.
-//! - Temporaries are named `.NAME.tmpPID`; one whose process is gone is removed by the next
-//!   run writing NAME.
+//! - Temporaries are named `.NAME.tmpPID` (NAME cut and hashed when the whole would pass
+//!   255 bytes, [`temp_stem`]); one whose process is gone is removed by the next run writing
+//!   NAME, and so are nested ones that earlier versions left (`..NAME.tmpA.tmpB`). A writer
+//!   given its own process's temporary (by [`write_file_set`]) writes it in place.
 //!
 //! Portability: the policy is written for Unix and holds there whole. Elsewhere it falls
 //! back on what `std` offers, and says so: an output is the same file as an input when
@@ -186,25 +188,69 @@ pub fn temp_sibling(dir: &Path, name: &std::ffi::OsStr) -> PathBuf {
     temp_of(dir, name, std::process::id())
 }
 
-/// The temporary sibling of `name` in `dir` for process `pid`: `.NAME.tmpPID`.
+/// The longest file name most file systems take, bytes (ext4, XFS, Btrfs, tmpfs).
+pub const MAX_NAME_BYTES: usize = 255;
+
+/// The temporary sibling of `name` in `dir` for process `pid`: `.NAME.tmpPID`, with NAME
+/// replaced by its [`temp_stem`] when the whole would not fit in [`MAX_NAME_BYTES`].
 pub(crate) fn temp_of(dir: &Path, name: &std::ffi::OsStr, pid: u32) -> PathBuf {
-    dir.join(format!(".{}.tmp{}", name.to_string_lossy(), pid))
+    dir.join(format!(".{}.tmp{}", temp_stem(name), pid))
+}
+
+/// What a temporary (or a file set's marker) of `name` is named after: `name` itself when
+/// `.NAME` and the longer of the two suffixes, `.etlcal-pending` and `.tmp` with a pid of
+/// 10 digits (a process id is below 2^32), fit in [`MAX_NAME_BYTES`]; else its first bytes
+/// (cut at a character boundary), `~` and 16 hex digits of a hash of the whole name, so
+/// that two long names sharing their first bytes still get two temporaries.
+pub fn temp_stem(name: &std::ffi::OsStr) -> String {
+    let name = name.to_string_lossy();
+    let room = MAX_NAME_BYTES - ".".len() - ".etlcal-pending".len();
+    if name.len() <= room {
+        return name.into_owned();
+    }
+    // FNV-1a: stable across runs and builds, which std's hasher does not promise.
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+    let mut cut = room - 17;
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    format!("{}~{hash:016x}", &name[..cut])
+}
+
+/// Whether `path` is this process's own temporary (`.NAME.tmpPID`, PID this one's): a
+/// writer handed such a path by [`write_file_set`] writes it in place, with no temporary of
+/// its own (a temporary of a temporary was left as `..NAME.tmpPID.tmpPID` by a kill).
+pub(crate) fn is_own_temp(path: &Path) -> bool {
+    let own = format!(".tmp{}", std::process::id());
+    path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with('.') && n.ends_with(&own))
+}
+
+/// The process ids of a temporary of `name` called `file_name`: one for `.NAME.tmpPID`,
+/// one per level for the nested temporaries earlier versions left (`..NAME.tmpA.tmpB`);
+/// `None` when `file_name` is not one.
+fn temp_pids<'a>(file_name: &'a str, stem: &str) -> Option<Vec<&'a str>> {
+    let depth = file_name.bytes().take_while(|&b| b == b'.').count();
+    let rest = file_name.get(depth..)?.strip_prefix(stem)?;
+    let pids: Vec<&str> = rest.split(".tmp").skip(1).collect();
+    let well_formed =
+        rest.starts_with(".tmp") && pids.iter().all(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
+    (depth >= 1 && pids.len() == depth && well_formed).then_some(pids)
 }
 
 /// Removes the temporaries `.NAME.tmpPID` (files or directories) in `dir` left by
-/// processes that no longer run (a killed run); best effort, errors ignored. Another
-/// running process's temporary is left alone.
+/// processes that no longer run (a killed run), nested ones (`..NAME.tmpA.tmpB`) included;
+/// best effort, errors ignored. Another running process's temporary is left alone.
 ///
 /// A file set of a killed run pending on `dir/name` ([`write_file_set`]) is completed or
 /// abandoned first: its temporaries are either the set's new files or garbage.
 pub fn remove_stale_temps(dir: &Path, name: &std::ffi::OsStr) {
     let _ = file_set::complete_pending(&dir.join(name));
-    let prefix = format!(".{}.tmp", name.to_string_lossy());
+    let stem = temp_stem(name);
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let file_name = entry.file_name();
-        let Some(pid) = file_name.to_str().and_then(|n| n.strip_prefix(&prefix)) else { continue };
-        if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) || process_runs(pid) {
+        let Some(pids) = file_name.to_str().and_then(|n| temp_pids(n, &stem)) else { continue };
+        if pids.iter().any(|pid| process_runs(pid)) {
             continue;
         }
         let p = entry.path();
@@ -249,6 +295,7 @@ pub fn kept_permissions(m: &std::fs::Metadata) -> std::fs::Permissions {
 }
 
 mod file_set;
+pub(crate) use file_set::write_synced;
 pub use file_set::{write_bytes_set, write_file_set};
 
 // The policy's tests make symlinks, hard links, FIFOs and modes: Unix only.

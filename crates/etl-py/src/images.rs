@@ -11,7 +11,7 @@ use etl_image::checkerboard::{detect_view, Pattern};
 use etl_image::grey::GrayView;
 use etl_image::sharpness::cpbd::cpbd;
 use etl_image::sharpness::{sharpness_u16, Gray16Image, Metric};
-use etl_sim::render::{render as render_board, BitDepth, Optics, Photometry, RenderOptions, Scene};
+use etl_sim::render::{render as render_board, BitDepth, PaperRender, Scene};
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -241,16 +241,11 @@ pub fn render<'py>(
         b => return Err(invalid_value("bit_depth", b, format!("bit_depth must be 8 or 16, got {b}"))),
     };
     let truth = CameraModel::paper_rig();
-    let z = z_mm.unwrap_or_else(|| etl_sim::simulate::focused_z_mm(e_com_ma));
+    let request = PaperRender { e_com_ma, z_mm, aperture_mm, blur_px, noise, bit_depth: depth, seed };
+    request.validate(str::to_owned).py()?;
     let board = etl_formats::Board::checkerboard([pattern.cols, pattern.rows], square_mm).py()?;
-    let scene = Scene::new(truth, e_com_ma, board, z, CameraModel::PAPER_IMAGE_SIZE);
-    let focus = if aperture_mm > 0.0 { Optics::paper_focus(&truth, e_com_ma, aperture_mm) } else { Optics::sharp() };
-    let opts = RenderOptions {
-        optics: Optics { base_sigma_px: blur_px, ..focus },
-        photometry: Photometry { read_noise: noise, ..Photometry::default() },
-        bit_depth: depth,
-        seed,
-    };
+    let scene = Scene::new(truth, e_com_ma, board, request.stage_z_mm(), CameraModel::PAPER_IMAGE_SIZE);
+    let opts = request.options(&truth);
     let r = py.detach(|| render_board(&scene, &opts)).py()?;
     let (w, h) = (r.image.width as usize, r.image.height as usize);
     let image = match depth {

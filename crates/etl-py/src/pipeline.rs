@@ -260,8 +260,16 @@ pub fn cramer_rao_std<'py>(
         (None, _) => return Err(invalid("sigma_z_mm", "give both sigma_z_mm and sigma_e_ma, or neither")),
         (_, None) => return Err(invalid("sigma_e_ma", "give both sigma_z_mm and sigma_e_ma, or neither")),
     };
-    if !(sigma_px > 0.0 && sigma_px.is_finite()) {
-        return Err(invalid_value("sigma_px", sigma_px, format!("sigma_px = {sigma_px} must be a finite number > 0")));
+    // The calibration request's ranges: a sigma whose square overflows gave a bound of 0.
+    let sigmas = [
+        (RequestOption::SigmaPx, Some(sigma_px)),
+        (RequestOption::SigmaZMm, sigma_z_mm),
+        (RequestOption::SigmaEMa, sigma_e_ma),
+    ];
+    for (option, value) in sigmas {
+        if let Some(v) = value {
+            etl_calib::request::positive(option, v).map_err(|r| crate::errors::calib_err(r.to_error(&Keywords)))?;
+        }
     }
     let thermal = thermal.map(crate::calibration::thermal_ref).transpose()?;
     let obs = &observations.file;

@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::calibration::Calibration;
-use crate::errors::{invalid, invalid_value};
+use crate::errors::{invalid, invalid_value, CoreResultExt};
 use crate::observations::{Observations, A0};
 use crate::results::fields_dict;
 
@@ -113,13 +113,6 @@ fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {
     for (k, v) in d.iter() {
         let key: String = k.extract()?;
         let val: f64 = v.extract()?;
-        if !(val.is_finite() && val >= 0.0) {
-            return Err(invalid_value(
-                &format!("noise.{key}"),
-                val,
-                format!("noise {key} = {val} must be a finite number >= 0"),
-            ));
-        }
         match key.as_str() {
             "xy_mm" => m.xy_mm = val,
             "z_mm" => m.z_mm = val,
@@ -136,6 +129,7 @@ fn noise_model(noise: Option<&Bound<'_, PyAny>>) -> PyResult<NoiseModel> {
             }
         }
     }
+    m.validate(|key| format!("noise[{key:?}]")).py()?;
     Ok(m)
 }
 

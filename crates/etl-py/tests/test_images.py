@@ -125,6 +125,11 @@ def test_render_16_bit_and_bad_input(board: Board) -> None:
     assert c.shape == (20, 2)
     with pytest.raises(etlcal.InputError, match="bit_depth"):
         etlcal.render(bit_depth=12)
+    # The CLI's ranges, by Python's names (a NaN aperture once rendered a sharp image).
+    bad = {"aperture_mm": float("nan"), "blur_px": 100.0, "noise": 1e308, "e_com_ma": float("nan"), "z_mm": 1e308}
+    for key, value in bad.items():
+        with pytest.raises(etlcal.InputError, match=rf"^invalid input: {key} .* is outside \["):
+            etlcal.render(**{key: value})  # type: ignore[arg-type]  # every keyword is a float
     with pytest.raises(etlcal.InputError):
         etlcal.render(square_mm=-1.5)
     with pytest.raises(etlcal.InputError):

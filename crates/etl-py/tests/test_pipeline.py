@@ -37,8 +37,12 @@ def test_simulation_matches_the_paper_rig(sim: etlcal.Simulation) -> None:
     assert only_px.true_dz_mm == [0.0] * 15
     with pytest.raises(etlcal.InputError, match="unknown noise key"):
         etlcal.simulate.paper_rig(0, noise={"pixels": 1.0})
-    with pytest.raises(etlcal.InputError, match="must be a finite number >= 0"):
-        etlcal.simulate.paper_rig(0, noise={"px": -1.0})
+    # Each standard deviation in its documented range (the simulation file's), named.
+    for key, bad in [("px", -1.0), ("px", 1e308), ("z_mm", float("nan")), ("e_ma", float("inf")), ("pp_px", 1e4)]:
+        with pytest.raises(etlcal.InputError, match=rf'noise\["{key}"\] .* is outside \[0, '):
+            etlcal.simulate.paper_rig(0, noise={key: bad})
+        with pytest.raises(etlcal.InputError, match=rf'noise\["{key}"\]'):
+            etlcal.simulate.strong_rig(0, noise={key: bad})
     with pytest.raises(etlcal.InputError, match='noise must be "paper"'):
         etlcal.simulate.paper_rig(0, noise="loud")  # type: ignore[arg-type]  # the run-time check under test
     assert repr(sim) == "Simulation(views=15, points=2311)"
@@ -263,6 +267,11 @@ def test_cramer_rao_bound_of_the_paper_rig() -> None:
         etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2, sigma_z_mm=0.01)
     with pytest.raises(etlcal.InputError, match="sigma_px"):
         etlcal.cramer_rao_std(sim.observations, sim.truth, 0.0)
+    # The request's ranges: a sigma whose square overflows once gave a bound of 0.
+    with pytest.raises(etlcal.InputError, match="^invalid input: sigma_px must be positive and finite, at most 100 px"):
+        etlcal.cramer_rao_std(sim.observations, sim.truth, 1e155)
+    with pytest.raises(etlcal.InputError, match="^invalid input: sigma_e_ma .* at most 50 mA"):
+        etlcal.cramer_rao_std(sim.observations, sim.truth, 0.2, sigma_z_mm=0.01, sigma_e_ma=1e200)
 
 
 def test_a0_from_the_lens_off_views_when_not_given(sim: etlcal.Simulation) -> None:

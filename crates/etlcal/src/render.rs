@@ -25,11 +25,10 @@ use serde_json::json;
 use super::print_json;
 use etl_formats::board::Board;
 use etl_formats::output::{write_file_set, Output};
-use etl_formats::{check_range, Error, Result};
 use etl_formats::{write_atomic, write_json};
+use etl_formats::{Error, Result};
 use etl_image::checkerboard::Pattern;
-use etl_sim::render::{render, BitDepth, Optics, Photometry, RenderOptions, Scene};
-use etl_sim::simulate::focused_z_mm;
+use etl_sim::render::{render, BitDepth, PaperRender, Scene};
 
 /// Arguments of `etlcal render`.
 #[derive(clap::Args, Debug)]
@@ -74,6 +73,14 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The CLI's spelling of a [`PaperRender`] key: `--aperture-mm`; the current is `--e-com`.
+fn flag(key: &'static str) -> String {
+    match key {
+        "e_com_ma" => "--e-com".to_owned(),
+        key => format!("--{}", key.replace('_', "-")),
+    }
+}
+
 /// Runs `etlcal render`.
 pub fn run(args: Args) -> Result<()> {
     let bit_depth = match args.bit_depth {
@@ -87,27 +94,23 @@ pub fn run(args: Args) -> Result<()> {
     let corners_path = PathBuf::from(corners_path);
     crate::output::check([args.board.as_deref()], &[Output::File(&args.out), Output::File(&corners_path)])?;
     let truth = CameraModel::paper_rig();
-    // Documented ranges (docs/RELIABILITY.md), checked before rendering: NaN is in none.
-    let e = check_range("--e-com", args.e_com, etl_core::thermal::E_IN_DOMAIN_MA, "mA")?;
-    check_range("--aperture-mm", args.aperture_mm, [0.0, 50.0], "mm")?;
-    check_range("--blur-px", args.blur_px, [0.0, 100.0], "px")?;
-    check_range("--noise", args.noise, [0.0, 255.0], "grey levels")?;
-    let z = match args.z_mm {
-        Some(z) => check_range("--z-mm", z, [-10_000.0, 10_000.0], "mm")?,
-        None => focused_z_mm(e),
+    let request = PaperRender {
+        e_com_ma: args.e_com,
+        z_mm: args.z_mm,
+        aperture_mm: args.aperture_mm,
+        blur_px: args.blur_px,
+        noise: args.noise,
+        bit_depth,
+        seed: args.seed,
     };
+    request.validate(flag)?;
+    let (e, z) = (request.e_com_ma, request.stage_z_mm());
     let board = match &args.board {
         Some(path) => Board::load(path)?,
         None => Board::checkerboard([args.pattern.cols, args.pattern.rows], args.square)?,
     };
     let scene = Scene::new(truth, e, board, z, CameraModel::PAPER_IMAGE_SIZE);
-    let focus = if args.aperture_mm > 0.0 { Optics::paper_focus(&truth, e, args.aperture_mm) } else { Optics::sharp() };
-    let opts = RenderOptions {
-        optics: Optics { base_sigma_px: args.blur_px, ..focus },
-        photometry: Photometry { read_noise: args.noise, ..Photometry::default() },
-        bit_depth,
-        seed: args.seed,
-    };
+    let opts = request.options(&truth);
     let r = render(&scene, &opts)?;
     let corners = match args.board {
         Some(_) => {

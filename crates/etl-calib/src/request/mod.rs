@@ -21,5 +21,5 @@ pub use calibration::{
 };
 pub use conditioning::{ill_condition, IllCondition, MAX_PRINCIPAL_POINT_STD_FRACTION};
 pub use option::{KeySpelling, RequestOption, Spelling};
-pub use refusal::Refusal;
+pub use refusal::{largest, positive, Refusal};
 pub use zhang::ZhangRequest;

@@ -37,7 +37,8 @@ pub enum Refusal {
         /// Whether the family may also be chosen by the data (`auto`).
         auto_allowed: bool,
     },
-    /// A standard deviation or a robust threshold that is not a finite number > 0.
+    /// A standard deviation or a robust threshold that is not a finite number > 0 and at
+    /// most its [`largest`] value.
     NotPositive {
         /// The option.
         option: RequestOption,
@@ -114,7 +115,10 @@ impl Refusal {
                     s.switched_on(flag)
                 )
             }
-            Refusal::NotPositive { option, .. } => format!("{} must be positive and finite", s.name(option)),
+            Refusal::NotPositive { option, .. } => match largest(option) {
+                Some((max, unit)) => format!("{} must be positive and finite, at most {max} {unit}", s.name(option)),
+                None => format!("{} must be positive and finite", s.name(option)),
+            },
             Refusal::FocalDegreeOutOfRange { degree } => format!(
                 "{} must be 1..{} or {}, got {degree}",
                 s.name(RequestOption::FocalDegree),
@@ -164,9 +168,28 @@ impl Refusal {
     }
 }
 
-/// `value` if it is a finite number > 0, else the refusal naming `option`.
-pub(super) fn positive(option: RequestOption, value: f64) -> Result<f64, Refusal> {
-    if value > 0.0 && value.is_finite() {
+/// The largest standard deviation or robust threshold an option takes, and its unit: the
+/// simulation's noise caps (docs/RELIABILITY.md), far above any real rig's noise and small
+/// enough that a variance and its inverse stay normal floats (a sigma of 1e155 px squared
+/// is infinite, and the Cramer-Rao bound it gave was 0).
+pub const fn largest(option: RequestOption) -> Option<(f64, &'static str)> {
+    match option {
+        RequestOption::SigmaZMm => Some((10.0, "mm")),
+        RequestOption::SigmaZUm => Some((10_000.0, "um")),
+        RequestOption::SigmaEMa => Some((50.0, "mA")),
+        RequestOption::SigmaPx | RequestOption::RobustKPx => Some((100.0, "px")),
+        _ => None,
+    }
+}
+
+/// `value` if it is a finite number > 0 and at most its [`largest`], else the refusal
+/// naming `option`.
+pub fn positive(option: RequestOption, value: f64) -> Result<f64, Refusal> {
+    let max = match largest(option) {
+        Some((max, _)) => max,
+        None => f64::MAX,
+    };
+    if value > 0.0 && value <= max {
         Ok(value)
     } else {
         Err(Refusal::NotPositive { option, value })

@@ -112,6 +112,22 @@ fn every_refusal_names_its_option_in_the_callers_words() {
         ),
         (priors(EivPriors { sigma_e_ma: Some(0.0), ..EivPriors::default() }), RequestOption::SigmaEMa, "<sigma_e_ma>"),
         (priors(EivPriors { sigma_px: Some(f64::NAN), ..EivPriors::default() }), RequestOption::SigmaPx, "<sigma_px>"),
+        // Beyond any rig's noise: its square would overflow (the bound was 0 at 1e155 px).
+        (
+            priors(EivPriors { sigma_px: Some(1e155), ..EivPriors::default() }),
+            RequestOption::SigmaPx,
+            "<sigma_px> must be positive and finite, at most 100 px",
+        ),
+        (
+            priors(EivPriors { sigma_z: Some(StageSigma::Um(10_001.0)), ..EivPriors::default() }),
+            RequestOption::SigmaZUm,
+            "<sigma_z_um> must be positive and finite, at most 10000 um",
+        ),
+        (
+            priors(EivPriors { sigma_e_ma: Some(51.0), ..EivPriors::default() }),
+            RequestOption::SigmaEMa,
+            "at most 50 mA",
+        ),
         (
             CalibrationRequest { robust: Some(RobustLoss::Cauchy { k_px: -2.0 }), ..base.clone() },
             RequestOption::RobustKPx,

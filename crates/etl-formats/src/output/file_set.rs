@@ -51,8 +51,8 @@ pub(crate) enum Step {
 
 /// The marker of `target`: `.NAME.etlcal-pending` beside it.
 fn marker_of(target: &Path) -> PathBuf {
-    let name = target.file_name().unwrap_or_default().to_string_lossy();
-    target.with_file_name(format!(".{name}.etlcal-pending"))
+    let stem = super::temp_stem(target.file_name().unwrap_or_default());
+    target.with_file_name(format!(".{stem}.etlcal-pending"))
 }
 
 /// The temporary of `target` of process `pid`.
@@ -113,7 +113,7 @@ fn parse_marker(bytes: &[u8]) -> Option<(u32, Vec<PathBuf>)> {
 }
 
 /// Writes `bytes` to `path` and flushes it to disk.
-fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+pub(crate) fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut f = std::fs::File::create(path)?;
     f.write_all(bytes)?;
     f.sync_all()

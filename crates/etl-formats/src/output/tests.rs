@@ -87,6 +87,60 @@ fn a_replaced_file_keeps_its_mode_a_symlink_is_written_through_read_only_is_refu
 }
 
 #[test]
+fn nested_temporaries_of_dead_processes_are_removed_and_a_set_writes_none() {
+    let d = tempfile::tempdir().unwrap();
+    // What a killed set of earlier versions left: a temporary of a temporary.
+    for stale in ["..o.json.tmp99999999.tmp99999999", "...o.json.tmp99999997.tmp99999997.tmp99999997"] {
+        std::fs::write(d.path().join(stale), "torn").unwrap();
+    }
+    // Not temporaries of o.json: kept.
+    for kept in ["..o.json.tmp99999999", ".o.json.tmp", ".o.json.tmpx1", ".xo.json.tmp99999999"] {
+        std::fs::write(d.path().join(kept), "someone's").unwrap();
+    }
+    let (a, b) = (d.path().join("o.json"), d.path().join("c.json"));
+    write_file_set(&[&a, &b], |tmp| {
+        write_atomic(&tmp[0], b"new")?;
+        write_atomic(&tmp[1], b"new")?;
+        // The set's writers write its temporaries in place: no temporary of a temporary.
+        assert!(
+            names(d.path()).iter().all(|n| !n.contains(".tmp")
+                || n.matches(".tmp").count() == 1
+                || n.starts_with("..o.json.tmp99999999")),
+            "{:?}",
+            names(d.path())
+        );
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(
+        names(d.path()),
+        ["..o.json.tmp99999999", ".o.json.tmp", ".o.json.tmpx1", ".xo.json.tmp99999999", "c.json", "o.json"]
+    );
+}
+
+#[test]
+fn a_name_too_long_for_its_temporary_still_writes_and_cleans_up() {
+    let d = tempfile::tempdir().unwrap();
+    // 250 bytes: the name fits, `.NAME.tmpPID` would not (255 bytes at most).
+    let (long_a, long_b) = (format!("{}a.json", "x".repeat(244)), format!("{}b.json", "x".repeat(244)));
+    let (a, b) = (d.path().join(&long_a), d.path().join(&long_b));
+    write_atomic(&a, b"one").unwrap();
+    write_file_set(&[&a, &b], |tmp| {
+        assert!(tmp.iter().all(|t| t.file_name().unwrap().len() <= MAX_NAME_BYTES));
+        // Two names alike in their first bytes still get two temporaries.
+        assert_ne!(tmp[0], tmp[1]);
+        tmp.iter().try_for_each(|t| write_atomic(t, b"two"))
+    })
+    .unwrap();
+    assert_eq!(std::fs::read(&a).unwrap(), b"two");
+    // A killed run's temporary of the long name is found by the next write.
+    let stale = temp_of(d.path(), std::ffi::OsStr::new(&long_a), 99_999_999);
+    std::fs::write(&stale, "torn").unwrap();
+    write_atomic(&a, b"three").unwrap();
+    assert_eq!(names(d.path()), [long_a, long_b]);
+}
+
+#[test]
 fn temporaries_of_dead_processes_are_removed_by_the_next_write() {
     let d = tempfile::tempdir().unwrap();
     // No process has a pid this large (Linux's pid_max is at most 2^22).

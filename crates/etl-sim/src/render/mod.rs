@@ -43,11 +43,13 @@ pub mod defocus;
 pub mod image;
 pub mod mapping;
 pub mod photometry;
+pub mod request;
 
 pub use defocus::{defocus_sigma_px, MAX_SIGMA_PX};
 pub use etl_formats::board::{Board, Checkerboard};
 pub use image::{BitDepth, Image};
 pub use photometry::Photometry;
+pub use request::PaperRender;
 
 use board::{BoardLayout, Levels};
 use coverage::Nodes;

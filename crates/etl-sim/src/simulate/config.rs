@@ -96,19 +96,7 @@ impl SimConfig {
 
     /// See [`Self::load`].
     pub fn validate(&self) -> Result<()> {
-        let n = &self.noise;
-        // Practical ranges (docs/RELIABILITY.md): far above any real rig's noise, far
-        // below what makes the synthetic corners leave the image or overflow.
-        for (key, value, hi, unit) in [
-            ("noise.xy_mm", n.xy_mm, 10.0, "mm"),
-            ("noise.z_mm", n.z_mm, 10.0, "mm"),
-            ("noise.e_ma", n.e_ma, 50.0, "mA"),
-            ("noise.px", n.px, 100.0, "px"),
-            ("noise.kf0_rel", n.kf0_rel, 1.0, ""),
-            ("noise.pp_px", n.pp_px, 1000.0, "px"),
-        ] {
-            etl_formats::check_range(key, value, [0.0, hi], unit)?;
-        }
+        self.noise.validate(|key| format!("noise.{key}"))?;
         if let Some(r) = &self.setting_rig {
             if self.rig != SimRig::Paper {
                 return Err(Error::invalid(

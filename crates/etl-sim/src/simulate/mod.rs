@@ -51,6 +51,33 @@ impl NoiseModel {
         NoiseModel { xy_mm: 0.001, z_mm: 0.010, e_ma: 0.4, px: 0.2, kf0_rel: 0.003, pp_px: 1.0 };
     /// No noise at all.
     pub const NONE: NoiseModel = NoiseModel { xy_mm: 0.0, z_mm: 0.0, e_ma: 0.0, px: 0.0, kf0_rel: 0.0, pp_px: 0.0 };
+
+    /// Checks every standard deviation against its documented range: at least 0 and at
+    /// most xy_mm 10 mm, z_mm 10 mm, e_ma 50 mA, px 100 px, kf0_rel 1, pp_px 1000 px (far
+    /// above any real rig's noise, far below what makes the synthetic corners leave the
+    /// image or overflow; NaN is in none). `name` spells a key for the message (the
+    /// simulation file's `noise.px`, Python's `noise["px"]`).
+    ///
+    /// ```
+    /// use etl_sim::simulate::NoiseModel;
+    /// let huge = NoiseModel { px: 1e308, ..NoiseModel::PAPER };
+    /// let err = huge.validate(|k| format!("noise.{k}")).unwrap_err();
+    /// assert_eq!(err.to_string(), "invalid input: noise.px 1e308 px is outside [0, 100] px");
+    /// assert!(NoiseModel::PAPER.validate(|k| k.to_owned()).is_ok());
+    /// ```
+    pub fn validate(&self, name: impl Fn(&'static str) -> String) -> Result<()> {
+        for (key, value, hi, unit) in [
+            ("xy_mm", self.xy_mm, 10.0, "mm"),
+            ("z_mm", self.z_mm, 10.0, "mm"),
+            ("e_ma", self.e_ma, 50.0, "mA"),
+            ("px", self.px, 100.0, "px"),
+            ("kf0_rel", self.kf0_rel, 1.0, ""),
+            ("pp_px", self.pp_px, 1000.0, "px"),
+        ] {
+            etl_formats::check_range(&name(key), value, [0.0, hi], unit)?;
+        }
+        Ok(())
+    }
 }
 
 /// A simulated data set and the truth behind it.

@@ -55,7 +55,11 @@ fn bad_input_fails_in_one_line_and_writes_nothing() {
         (vec!["render", "--out", p, "--pattern", "2x12"], "3", 2),
         (vec!["render", "--out", bmp.to_str().unwrap()], "use .png, .tif, .tiff, .jpg or .jpeg", 1),
         (vec!["render", "--out", jpg16.to_str().unwrap(), "--bit-depth", "16"], "JPEG is 8-bit only", 1),
-        (vec!["render", "--out", p, "--e-com", "NaN"], "", 1),
+        (vec!["render", "--out", p, "--e-com", "NaN"], "--e-com NaN mA is outside", 1),
+        (vec!["render", "--out", p, "--aperture-mm", "NaN"], "--aperture-mm NaN mm is outside [0, 50] mm", 1),
+        // The renderer's largest blur is the flag's largest: no blur quietly clamped.
+        (vec!["render", "--out", p, "--blur-px", "64.5"], "--blur-px 64.5 px is outside [0, 64] px", 1),
+        (vec!["render", "--out", p, "--noise", "1e308"], "--noise 1e308 grey levels is outside", 1),
     ] {
         let out = etlcal(&args);
         assert!(!out.status.success(), "{args:?} should fail");
