@@ -73,7 +73,7 @@ impl fmt::Display for Error {
         match *self {
             Error::NotFinite { what } => write!(f, "{what} is NaN or infinite; pass finite numbers"),
             Error::OutOfRange { what, value, min, max } => {
-                write!(f, "{what} = {value} is outside [{min}, {max}]")
+                write!(f, "{what} = {} is outside [{}, {}]", Compact(value), Compact(min), Compact(max))
             }
             Error::TooFew { what, needed, got } => {
                 write!(f, "too few {what}: the method needs at least {needed}, got {got}")
@@ -94,6 +94,33 @@ impl fmt::Display for Error {
 }
 
 impl core::error::Error for Error {}
+
+/// A number as messages print it, for people: scientific notation outside [1e-4, 1e5)
+/// (so that 1e308 prints as `1e308`, not 309 digits; `1e5`, not `100000`), else Rust's
+/// shortest round-trip digits (at most 17 significant), so that -292.84 reads as typed.
+/// Without allocation, for `write!` in `no_std` code.
+///
+/// ```
+/// use etl_core::Compact;
+/// assert_eq!(format!("{}", Compact(1e308)), "1e308");
+/// assert_eq!(format!("{}", Compact(-292.84)), "-292.84");
+/// assert_eq!(format!("{}", Compact(100000.0)), "1e5");
+/// assert_eq!(format!("{}", Compact(1.8446744073709552e19)), "1.8446744073709552e19");
+/// assert_eq!(format!("{}", Compact(f64::NAN)), "NaN");
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Compact(pub f64);
+
+impl fmt::Display for Compact {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if x != 0.0 && x.is_finite() && !(1e-4..1e5).contains(&x.abs()) {
+            write!(f, "{x:e}")
+        } else {
+            write!(f, "{x}")
+        }
+    }
+}
 
 /// `Ok(x)` if `x` is finite, else [`Error::NotFinite`] naming it.
 #[inline]

@@ -43,7 +43,7 @@ pub mod runtime;
 pub mod thermal;
 pub mod undistort;
 
-pub use error::{Error, Result};
+pub use error::{Compact, Error, Result};
 
 // The paths before issue 26 named modules for what they held: kept so that code written
 // against them still compiles, hidden from the documentation.

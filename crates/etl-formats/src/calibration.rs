@@ -617,11 +617,17 @@ impl Calibration {
                     return Err(format!("covariance[{i}][{j}] = {cij} must be finite"));
                 }
                 if (cij - cji).abs() > tol * scale {
-                    return Err(format!("covariance is not symmetric: [{i}][{j}] = {cij}, [{j}][{i}] = {cji}"));
+                    return Err(format!(
+                        "covariance is not symmetric: [{i}][{j}] = {}, [{j}][{i}] = {}",
+                        crate::compact(cij),
+                        crate::compact(cji)
+                    ));
                 }
                 if cij.abs() > (1.0 + tol) * scale {
                     return Err(format!(
-                        "covariance[{i}][{j}] = {cij} exceeds sqrt(c_ii c_jj) = {scale} ({}, {}): not a covariance",
+                        "covariance[{i}][{j}] = {} exceeds sqrt(c_ii c_jj) = {} ({}, {}): not a covariance",
+                        crate::compact(cij),
+                        crate::compact(scale),
                         name(i),
                         name(j)
                     ));

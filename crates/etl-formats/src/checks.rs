@@ -3,14 +3,10 @@
 
 use crate::{Error, Result};
 
-/// A number as messages print it: compact, so that 1e308 is `1e308`, not 309 digits
-/// (scientific notation outside [1e-4, 1e5), Rust's shortest round-trip digits inside).
+/// A number as messages print it: [`etl_core::Compact`] (scientific notation outside
+/// [1e-4, 1e5), so that 1e308 is `1e308`, not 309 digits; shortest round-trip digits inside).
 pub fn compact(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e5).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
+    etl_core::Compact(x).to_string()
 }
 
 /// `value` if it is in `range` (inclusive; NaN never is), else [`Error::InvalidInput`]

@@ -294,6 +294,25 @@ pub fn kept_permissions(m: &std::fs::Metadata) -> std::fs::Permissions {
     }
 }
 
+/// The time a report says it was written, from the environment's `SOURCE_DATE_EPOCH`
+/// (reproducible-builds.org: whole seconds since 1970-01-01 UTC), so that two runs on the
+/// same inputs write the same bytes; `None` when it is unset (the clock's time is used).
+/// A value that is not a whole number of seconds in 0..=253402300799 (year 9999) is
+/// refused, as the convention asks, rather than replaced by the clock.
+pub fn source_date_epoch() -> Result<Option<i64>> {
+    const LAST_S: i64 = 253_402_300_799;
+    let Some(raw) = std::env::var_os("SOURCE_DATE_EPOCH") else { return Ok(None) };
+    let text = raw.to_string_lossy();
+    match text.parse::<i64>() {
+        Ok(s) if (0..=LAST_S).contains(&s) && text.bytes().all(|b| b.is_ascii_digit()) => Ok(Some(s)),
+        _ => Err(Error::invalid_value(
+            "SOURCE_DATE_EPOCH",
+            text.as_ref(),
+            format!("SOURCE_DATE_EPOCH {text:?} must be whole seconds since 1970 (0..={LAST_S}), or unset"),
+        )),
+    }
+}
+
 mod file_set;
 pub(crate) use file_set::write_synced;
 pub use file_set::{write_bytes_set, write_file_set};

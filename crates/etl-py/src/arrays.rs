@@ -1,11 +1,36 @@
 //! numpy in and out: (N, k) point arrays, 3 x 3 matrices, scalars-or-arrays.
 
 use numpy::ndarray::{Array1, Array2, ArrayD, IxDyn};
-use numpy::{AllowTypeChange, IntoPyArray, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{
+    AllowTypeChange, IntoPyArray, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyFloat;
 
 use crate::errors::{input_error, invalid};
+
+/// The most numbers an array argument may hold (2^26: 64 M numbers, 512 MiB as float64,
+/// far above any rig's points or any grid of currents). Checked on the array's shape before
+/// numpy converts it or etlcal copies it, so that a broadcast view of 2^31 rows (no memory
+/// of its own) is refused in one line instead of aborting the interpreter when copied.
+pub const MAX_ARRAY_NUMBERS: usize = 1 << 26;
+
+/// Refuses a numpy array `obj` with more than `max` elements (the product of its shape),
+/// naming `what`. Anything that is not an ndarray passes: a list's size is paid for already.
+pub fn refuse_oversized(obj: &Bound<'_, PyAny>, what: &str, max: usize) -> PyResult<()> {
+    let Ok(arr) = obj.cast::<PyUntypedArray>() else { return Ok(()) };
+    let shape = arr.shape();
+    match shape.iter().try_fold(1usize, |n, &d| n.checked_mul(d)) {
+        Some(n) if n <= max => Ok(()),
+        n => {
+            let n = n.map_or_else(|| "more than 2^64".to_owned(), |n| n.to_string());
+            Err(invalid(
+                what,
+                format!("{what} has {n} elements (shape {shape:?}), more than the {max} an array argument may hold"),
+            ))
+        }
+    }
+}
 
 /// Points of dimension `K` read from an array-like of shape (N, K) or (K,).
 pub struct Points<const K: usize> {
@@ -18,6 +43,7 @@ pub struct Points<const K: usize> {
 /// Reads (N, K) or (K,) floats (any numeric dtype, any layout; lists too). `what` and
 /// `unit` name the argument in the error message.
 pub fn points<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Points<K>> {
+    refuse_oversized(obj, what, MAX_ARRAY_NUMBERS)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj
         .extract()
         .map_err(|e| invalid(what, format!("{what} must be an array of numbers of shape (N, {K}): {e}")))?;
@@ -91,6 +117,7 @@ pub fn vec_out<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
 
 /// Reads exactly `N` numbers (a sequence or 1-D array).
 pub fn fixed<const N: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; N]> {
+    refuse_oversized(obj, what, N)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
         obj.extract().map_err(|e| invalid(what, format!("{what} must be {N} numbers: {e}")))?;
     if arr.len() != N || arr.ndim() != 1 {
@@ -115,6 +142,7 @@ pub fn map1<'py>(x: &Bound<'py, PyAny>, what: &str, f: impl Fn(f64) -> PyResult<
         let v: f64 = x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
         return Ok(PyFloat::new(py, f(v)?).into_any());
     }
+    refuse_oversized(x, what, MAX_ARRAY_NUMBERS)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
         x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
     if arr.ndim() == 0 {
@@ -164,12 +192,16 @@ pub fn broadcast2<'py>(a: &Bound<'py, PyAny>, b: &Bound<'py, PyAny>, what: (&str
         np.call_method1("asarray", (x, "float64"))
             .map_err(|e| invalid(name, format!("{name} must be a number or an array: {e}")))
     };
+    refuse_oversized(a, what.0, MAX_ARRAY_NUMBERS)?;
+    refuse_oversized(b, what.1, MAX_ARRAY_NUMBERS)?;
     let (a, b) = (asf(a, what.0)?, asf(b, what.1)?);
     let pair = np
         .call_method1("broadcast_arrays", (a, b))
         .map_err(|e| invalid(what.1, format!("{} and {} do not broadcast together: {e}", what.0, what.1)))?;
     let x: Bound<'py, PyArrayDyn<f64>> = pair.get_item(0)?.cast_into()?;
     let y: Bound<'py, PyArrayDyn<f64>> = pair.get_item(1)?.cast_into()?;
+    // Broadcasting makes views: the result is costed before it is copied.
+    refuse_oversized(x.as_any(), what.0, MAX_ARRAY_NUMBERS)?;
     let (x, y) = (x.readonly(), y.readonly());
     let shape = x.shape().to_vec();
     Ok(Broadcast2::Array {
@@ -224,6 +256,7 @@ pub fn currents(x: &Bound<'_, PyAny>, what: &str) -> PyResult<Currents> {
         let v: f64 = x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
         return Ok(Currents::Scalar(v));
     }
+    refuse_oversized(x, what, MAX_ARRAY_NUMBERS)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
         x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array of numbers: {e}")))?;
     let values: Vec<f64> = arr.as_array().iter().copied().collect();

@@ -123,7 +123,7 @@ impl Board {
     fn to_image<'py>(&self, py: Python<'py>, dpi: f64, margin_mm: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
         let margin = margin_mm.unwrap_or(self.inner.square_mm());
         let board = self.inner;
-        let img = py.detach(|| etl_sim::print::raster(&board, dpi, margin)).py()?;
+        let img = crate::pool::detach(py, || etl_sim::print::raster(&board, dpi, margin)).py()?;
         let bytes: Vec<u8> = img.data.iter().map(|&v| v.min(255) as u8).collect();
         let a = Array2::from_shape_vec((img.height as usize, img.width as usize), bytes)
             .map_err(|e| input_error(e.to_string()))?;

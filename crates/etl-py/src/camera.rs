@@ -208,7 +208,7 @@ impl CameraAt {
         let mut out = vec![[0.0; 2]; p.points.len()];
         // Rotation, K and distortion once for all points, not once per point.
         let run = |out: &mut [[f64; 2]]| model.project_many(&p.points, e_com_ma, out);
-        if p.points.len() > DETACH_POINTS { py.detach(|| run(&mut out)) } else { run(&mut out) }.py()?;
+        if p.points.len() > DETACH_POINTS { crate::pool::detach(py, || run(&mut out)) } else { run(&mut out) }.py()?;
         points_out(py, out, p.single)
     }
     /// Removes the distortion from observed pixels (N, 2) or (2,): the pixels they would
@@ -221,7 +221,7 @@ impl CameraAt {
         let (py, at) = (pixels.py(), self.inner);
         let mut out = vec![[0.0; 2]; p.points.len()];
         let run = |out: &mut [[f64; 2]]| at.undistort_points(&p.points, out);
-        if p.points.len() > DETACH_POINTS { py.detach(|| run(&mut out)) } else { run(&mut out) }.py()?;
+        if p.points.len() > DETACH_POINTS { crate::pool::detach(py, || run(&mut out)) } else { run(&mut out) }.py()?;
         points_out(py, out, p.single)
     }
     /// The viewing ray of a pixel in world coordinates: (origin_mm, direction), float64
@@ -248,13 +248,12 @@ impl CameraAt {
         let p = points::<2>(pixels, "pixels")?;
         let noise = sigma_px.map_or(PixelNoise::FromResidual, PixelNoise::Known);
         let at = self.inner;
-        let (pose, u) = py
-            .detach(|| {
-                let pose = at.solve_pnp(&b.points, &p.points)?;
-                let u = pose_uncertainty(at.model(), at.e_com_ma(), &b.points, &p.points, &pose, noise)?;
-                Ok::<_, etl_core::Error>((pose, u))
-            })
-            .py()?;
+        let (pose, u) = crate::pool::detach(py, || {
+            let pose = at.solve_pnp(&b.points, &p.points)?;
+            let u = pose_uncertainty(at.model(), at.e_com_ma(), &b.points, &p.points, &pose, noise)?;
+            Ok::<_, etl_core::Error>((pose, u))
+        })
+        .py()?;
         let calibration_covariance = self.file.covariance_matrix().map(Arc::new);
         Ok(BoardPose { inner: pose, uncertainty: Some(u), calibration_covariance })
     }
@@ -268,14 +267,13 @@ impl CameraAt {
         let py = world_mm.py();
         let cov = self.file.require_covariance().map_err(calib_err)?;
         let (model, e_com_ma) = (*self.inner.model(), self.inner.e_com_ma());
-        let out = py
-            .detach(|| {
-                p.points
-                    .iter()
-                    .map(|w| projection_uncertainty(&model, &cov, *w, e_com_ma).map(|u| u.std_px))
-                    .collect::<etl_core::Result<Vec<[f64; 2]>>>()
-            })
-            .py()?;
+        let out = crate::pool::detach(py, || {
+            p.points
+                .iter()
+                .map(|w| projection_uncertainty(&model, &cov, *w, e_com_ma).map(|u| u.std_px))
+                .collect::<etl_core::Result<Vec<[f64; 2]>>>()
+        })
+        .py()?;
         points_out(py, out, p.single)
     }
     /// The undistortion maps (map_x, map_y) at E_com, float32 (h, w), in cv2.remap's

@@ -284,9 +284,10 @@ impl Dataset {
     fn detect<'py>(&self, py: Python<'py>) -> PyResult<(Observations, Bound<'py, PyAny>)> {
         let base = self.path.clone().unwrap_or_else(|| PathBuf::from("dataset.json"));
         let file = self.file.clone();
-        let (obs, summary) = py
-            .detach(|| observations_from_dataset(&file, &base, &default_detector(), &etl_core::progress::NoProgress))
-            .py()?;
+        let (obs, summary) = crate::pool::detach(py, || {
+            observations_from_dataset(&file, &base, &default_detector(), &etl_core::progress::NoProgress)
+        })
+        .py()?;
         let d = PyDict::new(py);
         d.set_item("images", summary.images)?;
         d.set_item("detected", summary.detected)?;

@@ -43,7 +43,7 @@ pub fn diff<'py>(
         ));
     }
     let (ca, cb, size) = (a.inner, b.inner, a.image_size());
-    let d = py.detach(|| projection_diff(&ca, &cb, size, [grid.0, grid.1])).py()?;
+    let d = crate::pool::detach(py, || projection_diff(&ca, &cb, size, [grid.0, grid.1])).py()?;
     let map = |v: Vec<f64>| Array2::from_shape_vec((d.grid[1], d.grid[0]), v).map_err(|e| input_error(e.to_string()));
     let out = PyDict::new(py);
     out.set_item("grid", (d.grid[0], d.grid[1]))?;

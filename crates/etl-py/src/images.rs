@@ -31,6 +31,9 @@ enum Pixels {
 /// Reads a 2-D uint8 or uint16 array as (width, height, samples); `f` gets a borrowed
 /// view of C-contiguous arrays without a copy.
 fn with_image<R>(obj: &Bound<'_, PyAny>, f: impl FnOnce(usize, usize, ImageRef<'_>) -> PyResult<R>) -> PyResult<R> {
+    // The files' pixel limit, checked on the shape: before a copy, and before any detector
+    // sizes its buffers by the image.
+    crate::arrays::refuse_oversized(obj, "image", etl_formats::observations::MAX_IMAGE_PIXELS as usize)?;
     if let Ok(a) = obj.extract::<PyReadonlyArray2<'_, u8>>() {
         let (h, w) = (a.shape()[0], a.shape()[1]);
         return match a.as_slice() {
@@ -144,7 +147,7 @@ fn with_view<'py, R: Send>(
 ) -> PyResult<R> {
     with_image(image, |w, h, px| {
         let bad = || invalid("image", format!("image of {w} x {h} px has an inconsistent buffer"));
-        py.detach(|| match px {
+        crate::pool::detach(py, || match px {
             ImageRef::U8(s) => GrayView::new(w, h, s).map(at8),
             ImageRef::U16(s) => GrayView::new(w, h, s).map(at16),
         })
@@ -172,15 +175,15 @@ fn metric_of(name: &str) -> PyResult<Metric> {
 pub fn sharpness(py: Python<'_>, image: &Bound<'_, PyAny>, metric: &str) -> PyResult<f64> {
     let metric = metric_of(metric)?;
     with_image(image, |w, h, px| match px {
-        ImageRef::U8(s) if metric == Metric::Cpbd => py.detach(|| cpbd(s, w, h)).py(),
-        ImageRef::U8(s) => py.detach(|| gradient_measure(s, w, h, metric)).py(),
+        ImageRef::U8(s) if metric == Metric::Cpbd => crate::pool::detach(py, || cpbd(s, w, h)).py(),
+        ImageRef::U8(s) => crate::pool::detach(py, || gradient_measure(s, w, h, metric)).py(),
         ImageRef::U16(s) if metric == Metric::Cpbd => {
             // CPBD reads 8-bit levels: etl-calib converts (a copy it makes anyway).
             let img = Gray16Image::from_raw(w as u32, h as u32, s.to_vec())
                 .ok_or_else(|| invalid("image", format!("image of {w} x {h} px has an inconsistent buffer")))?;
-            py.detach(|| sharpness_u16(&img, metric)).py()
+            crate::pool::detach(py, || sharpness_u16(&img, metric)).py()
         }
-        ImageRef::U16(s) => py.detach(|| gradient_measure(s, w, h, metric)).py(),
+        ImageRef::U16(s) => crate::pool::detach(py, || gradient_measure(s, w, h, metric)).py(),
     })
 }
 
@@ -246,7 +249,7 @@ pub fn render<'py>(
     let board = etl_formats::Board::checkerboard([pattern.cols, pattern.rows], square_mm).py()?;
     let scene = Scene::new(truth, e_com_ma, board, request.stage_z_mm(), CameraModel::PAPER_IMAGE_SIZE);
     let opts = request.options(&truth);
-    let r = py.detach(|| render_board(&scene, &opts)).py()?;
+    let r = crate::pool::detach(py, || render_board(&scene, &opts)).py()?;
     let (w, h) = (r.image.width as usize, r.image.height as usize);
     let image = match depth {
         BitDepth::Eight => {

@@ -21,6 +21,7 @@ pub mod lens;
 pub mod observations;
 pub mod physics;
 pub mod pipeline;
+pub mod pool;
 pub mod pose;
 pub mod results;
 pub mod simulate;

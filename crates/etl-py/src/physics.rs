@@ -4,6 +4,7 @@
 //! methods of this class (with the paper's lens as default).
 
 use etl_core::physics::LensPhysics as CoreLens;
+use etl_formats::compact;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -245,8 +246,12 @@ impl LensPhysics {
             && e_from_ma.is_finite()
             && e_to_ma.is_finite())
         {
-            let message =
-                format!("need finite e_from_ma < e_to_ma and step_ma > 0, got {e_from_ma}, {e_to_ma}, {step_ma}");
+            let message = format!(
+                "need finite e_from_ma < e_to_ma and step_ma > 0, got {}, {}, {}",
+                compact(e_from_ma),
+                compact(e_to_ma),
+                compact(step_ma)
+            );
             let (what, value) = if !e_from_ma.is_finite() {
                 ("e_from_ma", e_from_ma)
             } else if !(e_to_ma.is_finite() && e_to_ma > e_from_ma) {
@@ -256,12 +261,19 @@ impl LensPhysics {
             };
             return Err(invalid_value(what, value, message));
         }
-        let n = ((e_to_ma - e_from_ma) / step_ma + 1e-9).floor() as usize;
-        if n > 10_000_000 {
-            return Err(invalid_value("step_ma", step_ma, format!("{} samples are too many: raise step_ma", n + 1)));
+        // Counted in f64 first: a range of 1e308 mA would saturate the usize.
+        let intervals = ((e_to_ma - e_from_ma) / step_ma + 1e-9).floor();
+        if intervals >= 10_000_000.0 {
+            let samples = intervals + 1.0;
+            return Err(invalid_value(
+                "step_ma",
+                step_ma,
+                format!("{samples:.3e} samples are too many: raise step_ma"),
+            ));
         }
+        let n = intervals as usize;
         let l = self.inner;
-        py.detach(|| {
+        crate::pool::detach(py, || {
             let mut out = Vec::with_capacity(6);
             for degree in 1..=6 {
                 let mut fit = etl_core::fit::PolyFit::new(degree, [e_from_ma, e_to_ma])?;

@@ -105,7 +105,9 @@ impl Spelling for Keywords {
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
-    observations: &Observations,
+    // By value (a copy taken under the GIL): a borrow held through the solve would make
+    // another thread's `add_view` fail with "Already borrowed".
+    observations: Observations,
     a0: Option<&A0>,
     thermal: Option<&Bound<'_, PyAny>>,
     estimator: Option<&str>,
@@ -144,8 +146,8 @@ pub fn calibrate(
         centre: centre.map(parse_centre).transpose()?,
     };
     request.validate(&Keywords).py()?;
-    let obs = observations.file.clone();
-    let calibrated = py.detach(|| request.run(&obs, &Keywords)).py()?;
+    let obs = observations.file;
+    let calibrated = crate::pool::detach(py, || request.run(&obs, &Keywords)).py()?;
     // Said, not silent: a calibration without a focus law, and implausible data (also in
     // Calibration.warnings).
     // Also said once: no temperature compensation (views with E_com, no thermal=).
@@ -247,7 +249,7 @@ fn parse_focal_degree(d: &Bound<'_, PyAny>) -> PyResult<FocalDegreeChoice> {
 #[pyo3(signature = (observations, truth, sigma_px, sigma_z_mm=None, sigma_e_ma=None, thermal=None))]
 pub fn cramer_rao_std<'py>(
     py: Python<'py>,
-    observations: &Observations,
+    observations: Observations,
     truth: &Calibration,
     sigma_px: f64,
     sigma_z_mm: Option<f64>,
@@ -277,13 +279,12 @@ pub fn cramer_rao_std<'py>(
     let e_com = obs.e_com_ma(thermal.as_ref()).map_err(crate::errors::calib_err)?;
     let pts = obs.core_points();
     let model = truth.model;
-    let cov = py
-        .detach(|| {
-            let views: Vec<etl_core::calib::View<'_>> =
-                pts.iter().zip(&e_com).map(|(p, &e)| etl_core::calib::View { e_com_ma: e, points: p }).collect();
-            etl_core::calib::crlb::crlb_covariance_eiv(&views, &model, sigma_px, priors)
-        })
-        .py()?;
+    let cov = crate::pool::detach(py, || {
+        let views: Vec<etl_core::calib::View<'_>> =
+            pts.iter().zip(&e_com).map(|(p, &e)| etl_core::calib::View { e_com_ma: e, points: p }).collect();
+        etl_core::calib::crlb::crlb_covariance_eiv(&views, &model, sigma_px, priors)
+    })
+    .py()?;
     let sd: [f64; etl_core::calib::params::MAX_PARAMS] =
         core::array::from_fn(|i| if cov[i][i] >= 0.0 { cov[i][i].sqrt() } else { f64::NAN });
     let std = etl_formats::calibration::ModelStd::from_params(&model.layout(), &sd);

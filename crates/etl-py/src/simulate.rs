@@ -155,7 +155,7 @@ pub fn simulate_paper_rig(
     setting_views: bool,
 ) -> PyResult<Simulation> {
     let m = noise_model(noise)?;
-    let inner = py.detach(|| {
+    let inner = crate::pool::detach(py, || {
         let mut sim = paper_rig(&m, seed);
         if setting_views {
             add_setting_views(&mut sim.observations, &SettingRig::default(), &m, seed);
@@ -179,6 +179,6 @@ pub fn simulate_paper_rig(
 #[pyo3(signature = (seed=0, noise=None))]
 pub fn simulate_strong_rig(py: Python<'_>, seed: u64, noise: Option<&Bound<'_, PyAny>>) -> PyResult<Simulation> {
     let m = noise_model(noise)?;
-    let inner = py.detach(|| strong_rig(&m, seed));
+    let inner = crate::pool::detach(py, || strong_rig(&m, seed));
     Ok(Simulation { inner, seed, noise: m, setting_views: false, strong: true })
 }

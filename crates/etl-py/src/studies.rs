@@ -49,8 +49,10 @@ pub fn study<'py>(
             return Err(invalid_value("out", dir, format!("{}: output directory does not exist", dir.display())));
         }
     }
-    let opts = StudyOptions { trials, seed, ..Default::default() };
-    let result = py.detach(|| which.run(&opts)).py()?;
+    // As the CLI: with SOURCE_DATE_EPOCH set, the files carry no wall time.
+    let wall_time = etl_formats::output::source_date_epoch().py()?.is_none();
+    let opts = StudyOptions { trials, seed, wall_time, ..Default::default() };
+    let result = crate::pool::detach(py, || which.run(&opts)).py()?;
     if let Some(dir) = &out {
         result.write(dir).py()?;
     }

@@ -136,15 +136,14 @@ impl ThermalSurface {
                 w.len()
             )));
         }
-        let (cal, rms) = py
-            .detach(|| {
-                let mut fit = ThermalFit::new();
-                for i in 0..e.len() {
-                    fit.add_weighted(e[i], t[i], y[i], w[i])?;
-                }
-                fit.solve_calibration()
-            })
-            .py()?;
+        let (cal, rms) = crate::pool::detach(py, || {
+            let mut fit = ThermalFit::new();
+            for i in 0..e.len() {
+                fit.add_weighted(e[i], t[i], y[i], w[i])?;
+            }
+            fit.solve_calibration()
+        })
+        .py()?;
         Ok(ThermalCalibration { inner: cal, rms_ma: rms })
     }
 
@@ -161,6 +160,7 @@ impl ThermalSurface {
 
 /// A 1-D float column of an array-like.
 pub(crate) fn column(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    crate::arrays::refuse_oversized(obj, what, crate::arrays::MAX_ARRAY_NUMBERS)?;
     let arr: numpy::PyArrayLikeDyn<'_, f64, numpy::AllowTypeChange> =
         obj.extract().map_err(|e| invalid(what, format!("{what} must be a 1-D array of numbers: {e}")))?;
     use numpy::PyUntypedArrayMethods;

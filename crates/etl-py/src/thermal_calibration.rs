@@ -26,6 +26,9 @@ struct PyCamera<'py> {
 impl etl_calib::thermal_calibration::Camera for PyCamera<'_> {
     fn capture(&mut self) -> etl_calib::Result<image::GrayImage> {
         let frame = self.capture.call0().map_err(|e| keep(&mut self.raised, "capture", e))?;
+        let pixels = etl_formats::observations::MAX_IMAGE_PIXELS as usize;
+        crate::arrays::refuse_oversized(&frame, "capture()", pixels)
+            .map_err(|e| keep(&mut self.raised, "capture", e))?;
         let arr = frame
             .extract::<numpy::PyReadonlyArray2<'_, u8>>()
             .map_err(|_| etl_calib::Error::invalid("capture", "capture() must return a 2-D uint8 numpy array"))?;

@@ -53,7 +53,7 @@ pub(crate) fn maps_out<'py>(
     d: &Distortion,
     out: &OutputCamera,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let maps = py.detach(|| undistort_maps(k, d, out)).py()?;
+    let maps = crate::pool::detach(py, || undistort_maps(k, d, out)).py()?;
     let (w, h) = (maps.width_px(), maps.height_px());
     let (mx, my) = maps.into_parts();
     let shape = |v: Vec<f32>| Array2::from_shape_vec((h, w), v).map_err(|e| input_error(e.to_string()));
@@ -94,12 +94,11 @@ fn try_dtype<'py, T: Sample + Element + Send + Sync>(
         }
     };
     let zero = T::from_f32(0.0);
-    let pixels = py
-        .detach(|| -> etl_image::Result<Vec<T>> {
-            let src = SourceImage::new(data, w, h, c)?;
-            undistort_image(k, d, &out, &src, zero)
-        })
-        .py()?;
+    let pixels = crate::pool::detach(py, || -> etl_image::Result<Vec<T>> {
+        let src = SourceImage::new(data, w, h, c)?;
+        undistort_image(k, d, &out, &src, zero)
+    })
+    .py()?;
     let arr = ArrayD::from_shape_vec(IxDyn(&shape), pixels).map_err(|e| input_error(e.to_string()))?;
     Ok(Some(arr.into_pyarray(py).into_any()))
 }

@@ -84,7 +84,7 @@ pub fn zhang<'py>(
     let request = request(model, fix_k3, zero_tangent)?;
     request.validate(&Keywords).py()?;
     let planar = planar_views(&views)?;
-    let r = py.detach(|| request.run(&planar, [image_size.0, image_size.1], &Keywords)).py()?;
+    let r = crate::pool::detach(py, || request.run(&planar, [image_size.0, image_size.1], &Keywords)).py()?;
     result(py, &r)
 }
 

@@ -197,7 +197,7 @@ def test_bad_inputs_raise_the_rust_message(cal: etlcal.Calibration) -> None:
         (lambda: cal.ray((1e7, 1e7), 100.0), etlcal.InputError, None),
         # The thermal calibration's ranges (27..37 degC, 40..240 mA, margins 1 degC, 5 mA).
         (lambda: cal.e_com(150.0, 80.0), etlcal.InputError, "temperature_c = 80 is outside [26, 38]"),
-        (lambda: cal.e_com(1e5, 30.0), etlcal.InputError, "e_in_ma = 100000 is outside [35, 245]"),
+        (lambda: cal.e_com(1e5, 30.0), etlcal.InputError, "e_in_ma = 1e5 is outside [35, 245]"),
         # Beyond the lens's operating domain even extrapolation is refused.
         (lambda: cal.e_com(100.0, 300.0, allow_extrapolation=True), etlcal.InputError,
          "t_c = 300 is outside [-40, 125]"),

@@ -6,6 +6,7 @@ import threading
 from pathlib import Path
 from typing import Any, Callable, List, Tuple
 
+import numpy as np
 import pytest
 
 import etlcal
@@ -115,3 +116,52 @@ def test_caller_sized_requests_are_refused_before_they_allocate() -> None:
     # A size within the limits works.
     mx, my = cal.at_e_com(150.0).undistort_maps(size=(64, 48))
     assert mx.shape == (48, 64) and my.shape == (48, 64)
+
+
+def _huge(shape: Tuple[int, ...], dtype: Any = np.float64) -> "np.ndarray[Any, Any]":
+    """An array declaring `shape` over one element (zero strides): no memory of its own."""
+    return np.lib.stride_tricks.as_strided(np.ones(1, dtype=dtype), shape=shape, strides=(0,) * len(shape))
+
+
+def test_an_array_too_large_to_copy_is_refused_by_its_shape_before_any_copy() -> None:
+    # Each of these once aborted the interpreter (SIGABRT) when copied.
+    cal = etlcal.Calibration.load(CALIBRATION)
+    cam = cal.at_e_com(150.0)
+    rows = 2**31
+    with pytest.raises(etlcal.InputError, match=rf"^pixels has {rows * 2} elements .* more than the 67108864"):
+        cam.undistort(_huge((rows, 2)))
+    with pytest.raises(etlcal.InputError, match="more than the 67108864"):
+        cal.focal_lengths(_huge((rows,)))
+    with pytest.raises(etlcal.InputError, match="^image has 1073741824 elements .* more than the 268435456"):
+        etlcal.detect_corners(_huge((2**15, 2**15), np.uint8), (9, 6))
+    o = etlcal.Observations((1936, 1458))
+    with pytest.raises(etlcal.InputError, match="more than the 67108864"):
+        o.add_view(_huge((rows, 3)), _huge((rows, 2)), 150.0, 31.0)
+    assert len(o) == 0
+    # The limit is on what is copied, not on what is passed: a real array is read whole.
+    fx, fy = cal.focal_lengths(np.linspace(100.0, 200.0, 1000))
+    assert fx.shape == fy.shape == (1000,)
+
+
+def test_views_added_while_another_thread_calibrates_are_not_an_error() -> None:
+    # calibrate() once held a borrow of the Observations through the solve: add_view on
+    # another thread raised a builtin RuntimeError("Already borrowed").
+    sim = etlcal.simulate.paper_rig(seed=3)
+    obs = sim.observations
+    first = obs[0]
+    errors: List[BaseException] = []
+    before = len(obs)
+
+    def add() -> None:
+        try:
+            for _ in range(300):
+                obs.add_view(first.world_mm, first.pixels, first.e_in_ma, first.temperature_c)
+        except BaseException as e:  # the test's point: nothing escapes
+            errors.append(e)
+
+    t = threading.Thread(target=add)
+    t.start()
+    for _ in range(3):
+        etlcal.calibrate(obs, sim.a0, thermal="paper")
+    t.join()
+    assert errors == [] and len(obs) == before + 300

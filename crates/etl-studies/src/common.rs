@@ -87,11 +87,14 @@ pub struct StudyOptions<'p> {
     pub seed: u64,
     /// Where the trials' progress is reported.
     pub progress: &'p dyn Progress,
+    /// Whether the outputs carry the run's wall time (a study's "seconds"). The front ends
+    /// set it false when `SOURCE_DATE_EPOCH` is set, so that two runs write the same bytes.
+    pub wall_time: bool,
 }
 
 impl Default for StudyOptions<'_> {
     fn default() -> Self {
-        StudyOptions { trials: 0, seed: 1, progress: &NoProgress }
+        StudyOptions { trials: 0, seed: 1, progress: &NoProgress, wall_time: true }
     }
 }
 

@@ -153,14 +153,13 @@ pub fn summary_markdown(demo: &Demo, options: &DemoOptions) -> String {
     let table = parameter_table(&demo.truth, &demo.paper, &demo.eiv);
     format!(
         "# etlcal demo (seed {}, stage noise {} um)\n\nThe paper rig (docs/METHOD.md, \"The paper rig\"), {} views, {} points{}, the paper's noise model; \
-         A0 by Zhang's method from {} lens-off views.\n\n## Errors users feel (validated on fresh views)\n\n{figures}\n## Every parameter\n\n{table}\n({:.2} s)\n",
+         A0 by Zhang's method from {} lens-off views.\n\n## Errors users feel (validated on fresh views)\n\n{figures}\n## Every parameter\n\n{table}",
         options.seed,
         options.stage_noise_um,
         demo.views_detected,
         demo.observations.views.iter().map(|v| v.points.len()).sum::<usize>(),
         if options.images { " detected in rendered images" } else { " simulated" },
         demo.observations.offstate_views.len(),
-        demo.seconds,
     )
 }
 
@@ -241,14 +240,13 @@ pub fn index_html(demo: &Demo, options: &DemoOptions) -> String {
          <h1>etlcal demo (seed {}, stage noise {} um)</h1>\n\
          <p>The paper's rig simulated with its noise model: {} views, {points} corners {source}; A0 by Zhang's \
          method from {} lens-off views; calibrated with the errors-in-variables estimator and with the paper's, \
-         then validated on fresh views against the truth ({:.2} s).</p>\n\
+         then validated on fresh views against the truth.</p>\n\
          <table>\n<tr><th>figure</th><th>errors-in-variables BA</th><th>paper BA</th></tr>\n{rows}</table>\n\
          <h2>Files</h2>\n<ul>\n{files}</ul>\n</body></html>\n",
         options.seed,
         options.stage_noise_um,
         demo.views_detected,
         demo.observations.offstate_views.len(),
-        demo.seconds,
     )
 }
 

@@ -147,8 +147,9 @@ pub struct Fig6 {
     pub trials: usize,
     /// Per study, its levels.
     pub studies: Vec<(Fig6Study, Vec<Fig6Level>)>,
-    /// Wall time, s.
-    pub seconds: f64,
+    /// Wall time, s; `None` when the options ask for outputs without it
+    /// ([`StudyOptions::wall_time`]): the JSON's "seconds" is then null.
+    pub seconds: Option<f64>,
 }
 
 struct TrialOut {
@@ -307,7 +308,8 @@ pub fn fig6_of(studies: &[Fig6Study], opts: &StudyOptions) -> Result<Fig6> {
         }
         result.push((*study, levels));
     }
-    Ok(Fig6 { trials, studies: result, seconds: start.elapsed().as_secs_f64() })
+    let seconds = opts.wall_time.then(|| start.elapsed().as_secs_f64());
+    Ok(Fig6 { trials, studies: result, seconds })
 }
 
 fn summary_json(s: &LevelSummary) -> Value {
@@ -442,7 +444,9 @@ impl Fig6 {
                 if ok { "yes" } else { "**no**" }
             );
         }
-        md += &format!("\n({:.1} s)\n", self.seconds);
+        if let Some(s) = self.seconds {
+            md += &format!("\n({s:.1} s)\n");
+        }
         StudyOutput { name: "fig6".into(), json: j, markdown: md, figures }
     }
 

@@ -130,9 +130,11 @@ pub fn run(args: Args) -> Result<()> {
         outln!("{}", demo.summary_md);
         outln!(
             "wrote {}observations.json, a0.json (Zhang's), truth.json, calibration.json (errors-in-variables), \
-             calibration-paper.json, summary.md, index.html, report/index.html, report-paper/index.html to {}",
+             calibration-paper.json, summary.md, index.html, report/index.html, report-paper/index.html to {} \
+             in {:.1} s",
             if options.images { "views/*.png, offstate/*.png, dataset.json, " } else { "" },
-            args.out.display()
+            args.out.display(),
+            demo.seconds
         );
     }
     Ok(())

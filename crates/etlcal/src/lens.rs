@@ -201,6 +201,7 @@ fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
                 thermal: ThermalModel { ambient_c: 27.0, ..Default::default() },
                 ..Default::default()
             };
+            crate::signals::remove_lens_folders_on_signal()?;
             let d = VirtualLens::spawn(config).map_err(Error::lens)?;
             let p = d.path().to_owned();
             (Some(d), p)

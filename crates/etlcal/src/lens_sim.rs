@@ -65,6 +65,7 @@ pub fn run(args: Args) -> Result<()> {
         lower_limit_code: current_code(lo, 292.84),
         ..Default::default()
     };
+    crate::signals::remove_lens_folders_on_signal()?;
     let lens = VirtualLens::spawn(config).map_err(Error::lens)?;
     if args.json {
         print_json(&json!({ "port": lens.path().display().to_string() }));

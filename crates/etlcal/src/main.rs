@@ -16,6 +16,7 @@ use etl_formats::Result;
 mod output;
 mod progress;
 mod setting;
+mod signals;
 
 /// `println!` for everything the verbs print on stdout (human-readable lines and
 /// [`print_json`]), ignoring a closed stdout (`etlcal ... | head`): `println!` panics there.
@@ -193,7 +194,7 @@ fn verb_of(argv: &[String]) -> String {
 /// The command line parsed, with negative numbers taken as values by every verb and
 /// subcommand (`render --e-com -292`, `thermal eval --t -10`): set here once rather than
 /// on each `Args`, so that a new verb cannot forget it.
-fn parse(argv: &[String]) -> std::result::Result<Cli, clap::Error> {
+fn parse(argv: &[std::ffi::OsString]) -> std::result::Result<Cli, clap::Error> {
     fn negatives(c: clap::Command) -> clap::Command {
         c.allow_negative_numbers(true).mut_subcommands(negatives)
     }
@@ -202,8 +203,10 @@ fn parse(argv: &[String]) -> std::result::Result<Cli, clap::Error> {
 }
 
 fn main() -> ExitCode {
-    let argv: Vec<String> = std::env::args().collect();
-    let cli = match parse(&argv) {
+    // `args_os`: a path that is not UTF-8 is a legal path, and `args` would panic on it.
+    let argv_os: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let argv: Vec<String> = argv_os.iter().map(|a| a.to_string_lossy().into_owned()).collect();
+    let cli = match parse(&argv_os) {
         Ok(cli) => cli,
         Err(e) if matches!(e.kind(), clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion) => {
             let _ = e.print();

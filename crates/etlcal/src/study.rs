@@ -76,9 +76,12 @@ pub fn run(args: Args) -> Result<()> {
     if args.rig == RigArg::Strong && args.name != Name::Crlb {
         return Err(Error::invalid("--rig", "--rig strong is for `study crlb` only"));
     }
+    // Read before the work: a malformed SOURCE_DATE_EPOCH is refused first; a set one
+    // keeps the wall time out of the files.
+    let wall_time = crate::output::source_date_epoch()?.is_none();
     crate::output::create_dir(&args.out)?;
     let bar = Bar::new(true);
-    let opts = StudyOptions { trials: args.trials.unwrap_or(0), seed: args.seed, progress: &bar };
+    let opts = StudyOptions { trials: args.trials.unwrap_or(0), seed: args.seed, progress: &bar, wall_time };
     let studies = match args.name {
         Name::All => Study::ALL.to_vec(),
         Name::Fig5 => vec![Study::Fig5],

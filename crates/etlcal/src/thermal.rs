@@ -122,6 +122,7 @@ pub fn run(args: Args, json: bool) -> Result<()> {
 /// Runs `etlcal thermal calibrate --virtual`.
 pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     use etl_calib::thermal_calibration::ProcedureOptions;
+    crate::signals::remove_lens_folders_on_signal()?;
     let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
     crate::output::check([], &[Output::File(&args.out), Output::File(&table)])?;
     for p in [&args.out, &table] {

@@ -7,13 +7,16 @@
 //!
 //! Every image is checked (readable header, the calibration's size, a supported pixel
 //! type, no two outputs with one name, no output over its input) before anything is
-//! written; each output is written atomically.
+//! written; the outputs are written as one set (`etl_formats::output::write_file_set`): a
+//! kill, a full disk or an unreadable image leaves every earlier output as it was, or every
+//! new one, never a mix of the two runs.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use crate::setting::SettingArgs;
 use etl_core::model::CameraModel;
+use etl_formats::output::write_file_set;
 use etl_formats::{write_atomic, Error, Result};
 use etl_image::undistort::{undistort_image, OutputCamera, Sample, SourceImage};
 use image::{ColorType, DynamicImage, ImageBuffer, ImageFormat, Pixel};
@@ -90,8 +93,9 @@ fn undistort_buffer<P: Pixel<Subpixel = T>, T: Sample + Send + Sync + image::Pri
         .ok_or_else(|| Error::invalid("image", "undistorted image has an inconsistent size"))
 }
 
-/// Reads, undistorts, encodes and writes one image.
-fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64) -> Result<()> {
+/// Reads, undistorts and encodes one image, and writes it to `to` (the set's temporary
+/// for `job.output`).
+fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64, to: &Path) -> Result<()> {
     let img = etl_image::read_image(&job.input)?;
     let out: DynamicImage = match &img {
         DynamicImage::ImageLuma8(b) => undistort_buffer(b, model, e_com_ma)?.into(),
@@ -111,7 +115,7 @@ fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64) -> Result<()> {
         path: job.output.clone(),
         source: std::io::Error::other(format!("cannot encode: {e}")),
     })?;
-    write_atomic(&job.output, bytes.get_ref())
+    write_atomic(to, bytes.get_ref())
 }
 
 /// Runs `etlcal undistort`.
@@ -133,9 +137,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     crate::output::create_dir(&args.out)?;
     let model = cal.model()?;
-    for job in &jobs {
-        undistort_file(job, &model, e_com)?;
-        if !args.json {
+    let outputs: Vec<&Path> = jobs.iter().map(|j| j.output.as_path()).collect();
+    write_file_set(&outputs, |temps| {
+        jobs.iter().zip(temps).try_for_each(|(job, tmp)| undistort_file(job, &model, e_com, tmp))
+    })?;
+    if !args.json {
+        for job in &jobs {
             outln!("{} -> {}", job.input.display(), job.output.display());
         }
     }

@@ -18,6 +18,8 @@
 //! ```
 
 pub mod faults;
+#[cfg(unix)]
+pub mod folders;
 pub mod model;
 #[cfg(unix)]
 mod pty;

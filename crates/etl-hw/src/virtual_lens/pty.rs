@@ -6,7 +6,6 @@ use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, OwnedFd};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -15,7 +14,7 @@ use nix::poll::{poll, PollFd, PollFlags};
 use nix::pty::openpty;
 use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
 
-use super::{responder, VirtualDevice, VirtualLensConfig};
+use super::{folders, responder, VirtualDevice, VirtualLensConfig};
 use crate::error::{HwError, Result};
 
 struct Pty {
@@ -59,8 +58,6 @@ pub struct VirtualLens {
     thread: Option<JoinHandle<()>>,
 }
 
-static SERIAL: AtomicU64 = AtomicU64::new(0);
-
 fn pty_err(step: &'static str) -> impl FnOnce(nix::Error) -> HwError {
     move |e| HwError::Pty { step, source: std::io::Error::from(e) }
 }
@@ -90,12 +87,11 @@ impl VirtualLens {
     /// directory and symlink ([`HwError::PortPath`]).
     pub fn spawn(config: VirtualLensConfig) -> Result<VirtualLens> {
         let device = VirtualDevice::new(config)?;
-        let dir = std::env::temp_dir().join(format!(
-            "etl-vlens-{}-{}",
-            std::process::id(),
-            SERIAL.fetch_add(1, Ordering::Relaxed)
-        ));
+        // Folders of processes killed before they could remove theirs go first.
+        folders::sweep_dead(&std::env::temp_dir());
+        let dir = folders::next_path();
         std::fs::create_dir_all(&dir).map_err(path_err(&dir))?;
+        folders::hold(&dir);
         let link = dir.join("lens");
         let (pty, name) = open_pty()?;
         std::os::unix::fs::symlink(&name, &link).map_err(path_err(&link))?;
@@ -157,8 +153,7 @@ impl Drop for VirtualLens {
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
-        let _ = std::fs::remove_file(&self.link);
-        let _ = std::fs::remove_dir(&self.dir);
+        folders::release(&self.dir);
     }
 }
 

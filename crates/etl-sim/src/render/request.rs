@@ -103,7 +103,9 @@ mod tests {
     fn every_option_out_of_its_range_is_refused_by_its_front_ends_name() {
         let cli = |key: &'static str| format!("--{}", key.replace('_', "-"));
         assert!(request().validate(cli).is_ok());
-        let cases: [(fn(&mut PaperRender), &str); 7] = [
+        // A change to the request and the start of the message that refuses it.
+        type Case = (fn(&mut PaperRender), &'static str);
+        let cases: [Case; 7] = [
             (|r| r.e_com_ma = f64::NAN, "--e-com-ma NaN mA"),
             (|r| r.z_mm = Some(f64::INFINITY), "--z-mm inf mm"),
             (|r| r.aperture_mm = f64::NAN, "--aperture-mm NaN mm"),

@@ -468,7 +468,7 @@ fn the_centre_flag_fixed_moving_auto() {
     simulate(dir.path());
     let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
     let calibrate = |out: &str, extra: &[&str]| calibrate_simulated(dir.path(), out, extra);
-    let plain = calibrate(&p("plain.json"), &["--estimator", "paper"]);
+    calibrate(&p("plain.json"), &["--estimator", "paper"]);
     let fixed = calibrate(&p("fixed.json"), &["--estimator", "paper", "--centre", "fixed"]);
     assert_eq!(std::fs::read(p("plain.json")).unwrap(), std::fs::read(p("fixed.json")).unwrap());
     assert!(fixed.get("centre").is_none());

@@ -156,3 +156,35 @@ fn lens_sim_refuses_an_absurd_ambient_or_time_scale() {
     refused(&["lens-sim", "--time-scale", "0"], "--time-scale 0 must lie in (0, 1e6]");
     refused(&["lens-sim", "--upper-limit", "1e308"], "limits [-292.84, 1e308] mA");
 }
+
+/// The folder of the port `sim` printed (`TMPDIR/etl-vlens-PID-N/lens`).
+#[cfg(unix)]
+fn port_folder(sim: &Sim) -> std::path::PathBuf {
+    let port = sim.1.rsplit(' ').next().unwrap_or(&sim.1);
+    std::path::Path::new(port).parent().unwrap().to_owned()
+}
+
+#[cfg(unix)]
+#[test]
+fn a_stopped_lens_sim_removes_its_folder_and_a_killed_ones_is_swept_by_the_next() {
+    use nix::sys::signal::{kill, Signal};
+    use nix::unistd::Pid;
+    use std::os::unix::process::ExitStatusExt;
+    for sig in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
+        let mut sim = Sim::spawn(&[]);
+        let dir = port_folder(&sim);
+        assert!(dir.join("lens").exists(), "{}", sim.1);
+        kill(Pid::from_raw(sim.0.id() as i32), sig).unwrap();
+        let status = sim.0.wait().unwrap();
+        assert_eq!(status.signal(), Some(sig as i32), "dies of the signal, as without a handler");
+        assert!(!dir.exists(), "{sig}: {} is left", dir.display());
+    }
+    let mut killed = Sim::spawn(&[]);
+    let dir = port_folder(&killed);
+    killed.0.kill().unwrap(); // SIGKILL: no code of the process runs
+    killed.0.wait().unwrap();
+    assert!(dir.exists(), "a SIGKILLed process cannot remove its folder");
+    let next = Sim::spawn(&[]);
+    assert!(!dir.exists(), "the next lens sweeps {}", dir.display());
+    drop(next);
+}

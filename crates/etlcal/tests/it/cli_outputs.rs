@@ -9,6 +9,8 @@ use std::process::{Command, Output, Stdio};
 
 use rand::{Rng, SeedableRng};
 
+use crate::common::tree;
+
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
 
 /// The time every run here writes into a report (`SOURCE_DATE_EPOCH`): sets are compared
@@ -38,23 +40,6 @@ fn refused(args: &[&str]) -> String {
     assert_eq!(err.lines().count(), 1, "{args:?}: one line: {err}");
     assert!(err.starts_with("etlcal: error: "), "{args:?}: {err}");
     err
-}
-
-/// Every file under `dir` (relative path -> bytes); also the proof that no temporary is left.
-fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.insert(p.strip_prefix(root).unwrap().to_owned(), std::fs::read(&p).unwrap_or_default());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
 }
 
 fn s(p: &Path) -> &str {
@@ -194,6 +179,32 @@ fn kill_after(args: &[&str], delay_ms: u64) -> bool {
 /// every kill the directory holds exactly one of the two complete sets. Returns how many
 /// runs were killed before they finished.
 fn kill_test(name: &str, kills: usize, args_of: impl Fn(usize, &Path) -> Vec<String>) -> usize {
+    kill_test_seen(name, kills, args_of, tree)
+}
+
+/// The files under `dir` as the next reader sees them: each read once through
+/// `etl_formats::output::check_input` (which finishes a committed set's renames, as every
+/// reader does), then listed without hidden entries (a killed writer's temporaries and
+/// markers, which the next writer removes).
+fn tree_as_read(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let names: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    for p in names.iter().filter(|p| !hidden(p)) {
+        etl_formats::output::check_input(p).unwrap();
+    }
+    tree(dir).into_iter().filter(|(p, _)| !hidden(p)).collect()
+}
+
+fn hidden(p: &Path) -> bool {
+    p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'))
+}
+
+/// [`kill_test`] with the directory compared as `seen` shows it.
+fn kill_test_seen(
+    name: &str,
+    kills: usize,
+    args_of: impl Fn(usize, &Path) -> Vec<String>,
+    seen: fn(&Path) -> BTreeMap<PathBuf, Vec<u8>>,
+) -> usize {
     let d = tempfile::tempdir().unwrap();
     let mut sets = vec![];
     let mut millis = 0u64;
@@ -215,8 +226,9 @@ fn kill_test(name: &str, kills: usize, args_of: impl Fn(usize, &Path) -> Vec<Str
         let args = args_of(next, &out);
         let slice = (millis * i as u64 / kills as u64)..=(millis * (i as u64 + 1) / kills as u64);
         let finished = kill_after(&args.iter().map(String::as_str).collect::<Vec<_>>(), rng.random_range(slice));
-        let now = tree(&out);
-        // Temporaries of the killed run may remain beside `out`; never inside it.
+        let now = seen(&out);
+        // Temporaries of the killed run may remain beside `out` (or, for file sets, as
+        // hidden entries beside each file); never as a visible file inside it.
         let whole = sets.iter().position(|s| *s == now);
         assert!(whole.is_some(), "{name}: kill {i} left a mixed set: {:?}", now.keys().collect::<Vec<_>>());
         killed += usize::from(!finished && whole == Some(current));
@@ -226,7 +238,43 @@ fn kill_test(name: &str, kills: usize, args_of: impl Fn(usize, &Path) -> Vec<Str
     ok(&args_of(0, &out).iter().map(String::as_str).collect::<Vec<_>>());
     let left: Vec<_> = std::fs::read_dir(d.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left.len(), 3, "{name}: temporaries left: {left:?}");
+    // (A set directory's list of its entries, `.etlcal-set`, is part of the set.)
+    let inside: Vec<_> =
+        tree(&out).into_keys().filter(|p| hidden(p) && p.file_name() != Some(".etlcal-set".as_ref())).collect();
+    assert!(inside.is_empty(), "{name}: temporaries left in the output: {inside:?}");
     killed
+}
+
+#[test]
+fn killed_study_and_undistort_leave_one_whole_set() {
+    let study = |k: usize, out: &Path| -> Vec<String> {
+        let seed = (k + 1).to_string();
+        ["study", "fig6", "--trials", "1", "--seed", &seed, "--out", s(out)].map(String::from).to_vec()
+    };
+    let killed = kill_test_seen("study", 40, study, tree_as_read);
+    assert!(killed > 0, "no study run was killed before finishing");
+    // Three distinct images of the calibration's size (no two rows alike).
+    let d = tempfile::tempdir().unwrap();
+    let [w, h] = etl_core::model::CameraModel::PAPER_IMAGE_SIZE;
+    let images: Vec<String> = (0..3u32)
+        .map(|i| {
+            let img = image::GrayImage::from_fn(w, h, |x, y| image::Luma([((x * 7 + y * 3 + i * 50) % 251) as u8]));
+            let p = d.path().join(format!("view{i}.png"));
+            img.save(&p).unwrap();
+            p.to_str().unwrap().to_owned()
+        })
+        .collect();
+    let undistort = |k: usize, out: &Path| -> Vec<String> {
+        let e_com = if k == 0 { "150" } else { "170" };
+        let mut a: Vec<String> = ["undistort", "--calibration", "fixtures/service/calibration.json", "--e-com", e_com]
+            .map(String::from)
+            .to_vec();
+        a.extend(images.iter().cloned());
+        a.extend(["--out".to_owned(), s(out).to_owned()]);
+        a
+    };
+    let killed = kill_test_seen("undistort", 40, undistort, tree_as_read);
+    assert!(killed > 0, "no undistort run was killed before finishing");
 }
 
 #[test]

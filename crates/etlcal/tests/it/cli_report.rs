@@ -4,6 +4,8 @@ use std::process::Command;
 
 use serde_json::Value;
 
+use crate::common::tree;
+
 fn etlcal(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_etlcal")).args(args).output().expect("run etlcal");
     (o.status.code().unwrap_or(-1), String::from_utf8(o.stdout).unwrap(), String::from_utf8(o.stderr).unwrap())
@@ -79,4 +81,31 @@ fn source_date_epoch_fixes_the_reports_time_and_a_bad_one_is_refused() {
         assert_eq!(files(&a), before, "{bad:?}: the earlier report is kept");
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary left");
+}
+
+#[test]
+fn with_source_date_epoch_set_demo_and_study_write_the_same_bytes_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_etlcal"))
+            .args(args)
+            .env("SOURCE_DATE_EPOCH", "1796214896")
+            .output()
+            .expect("run etlcal");
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    };
+    let out = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    for name in ["demo-a", "demo-b"] {
+        run(&["demo", "--no-images", "--out", &out(name)]);
+    }
+    for name in ["fig6-a", "fig6-b"] {
+        run(&["study", "fig6", "--trials", "1", "--out", &out(name)]);
+    }
+    let (demo, fig6) = (tree(&dir.path().join("demo-a")), tree(&dir.path().join("fig6-a")));
+    assert!(demo.len() > 3 && !fig6.is_empty(), "{:?} {:?}", demo.keys(), fig6.keys());
+    // Before, the elapsed seconds were written into summary.md, index.html and fig6.json.
+    assert_eq!(demo, tree(&dir.path().join("demo-b")), "demo's files differ between two runs");
+    assert_eq!(fig6, tree(&dir.path().join("fig6-b")), "study fig6's files differ between two runs");
+    let json: Value = serde_json::from_slice(&fig6[std::path::Path::new("fig6.json")]).unwrap();
+    assert!(json["seconds"].is_null(), "{json}");
 }

@@ -32,3 +32,24 @@ pub fn render_move_pair(a: &str, b: &str, e_com: &str) -> f64 {
     render(b, "2", &["--z-mm", &format!("{}", z_a - 2.0)]);
     z_a
 }
+
+/// Every file under `dir` (relative path -> bytes); also the proof that no temporary is left.
+pub fn tree(dir: &std::path::Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    use std::{
+        collections::BTreeMap,
+        path::{Path, PathBuf},
+    };
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, out);
+            } else {
+                out.insert(p.strip_prefix(root).unwrap().to_owned(), std::fs::read(&p).unwrap_or_default());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
