@@ -70,6 +70,20 @@ def _rm(p: str) -> None:
         shutil.rmtree(p)
 
 
+def dataset_with_image(kind: str, d: str, fx: str, seed: int) -> None:
+    """Writes d/dataset.json: the fixtures' dataset with its first view's image replaced by
+    an image input of `kind` (a device path as is, else made by make_input as view0.png)."""
+    with open(os.path.join(fx, "dataset.json")) as f:
+        ds = json.load(f)
+    if kind.startswith("/dev/"):
+        ds["views"][0]["image"] = kind
+    else:
+        make_input(kind, d, "view0.png", fx, os.path.join("simimg", "views", "view00.png"), "obs.json", seed)
+        ds["views"][0]["image"] = "view0.png"
+    with open(os.path.join(d, "dataset.json"), "w") as f:
+        json.dump(ds, f)
+
+
 def make_input(kind: str, d: str, dest: str, fx: str, src: str, other: str, seed: int) -> None:
     p = os.path.join(d, dest)
     if os.path.lexists(p):

@@ -65,16 +65,7 @@ def reader_cases(ctx: B.Ctx) -> List[B.Case]:
             continue
 
         def setup(d, kind=kind):
-            with open(ctx.fxp("dataset.json")) as f:
-                ds = json.load(f)
-            if kind.startswith("/dev/"):
-                ds["views"][0]["image"] = kind
-            else:
-                H.make_input(kind, d, "view0.png", ctx.fx, os.path.join("simimg", "views", "view00.png"),
-                             "obs.json", seed)
-                ds["views"][0]["image"] = "view0.png"
-            with open(os.path.join(d, "dataset.json"), "w") as f:
-                json.dump(ds, f)
+            H.dataset_with_image(kind, d, ctx.fx, seed)
 
         out.append(case(f"py-reader/Dataset.detect/view-image={kind}", "py-reader",
                         "o, summary = etlcal.Dataset.load('dataset.json').detect()\nRESULT = (len(o), summary)",

@@ -115,9 +115,7 @@ impl Lens {
             match self.client.try_lock() {
                 Ok(g) => return Ok(g),
                 Err(TryLockError::Poisoned(p)) => return Ok(p.into_inner()),
-                Err(TryLockError::WouldBlock) => {
-                    crate::pool::detach(py, || std::thread::sleep(Duration::from_micros(200)))
-                }
+                Err(TryLockError::WouldBlock) => py.detach(|| std::thread::sleep(Duration::from_micros(200))),
             }
         }
     }
@@ -126,7 +124,7 @@ impl Lens {
     fn call<R: Send>(&self, py: Python<'_>, f: impl FnOnce(&LensClient) -> R + Send) -> PyResult<R> {
         let guard = self.lock(py)?;
         let c = guard.as_ref().ok_or_else(|| raise(Kind::Device, "the lens is closed"))?;
-        Ok(crate::pool::detach(py, || f(c)))
+        Ok(py.detach(|| f(c)))
     }
 
     /// The lens for a procedure that drives it for a while (`hold`, `thermal_calibration`):
@@ -171,7 +169,7 @@ impl Lens {
     #[pyo3(signature = (port, handshake=false, timeout_ms=500))]
     fn new(py: Python<'_>, port: std::path::PathBuf, handshake: bool, timeout_ms: u64) -> PyResult<Self> {
         let options = OpenOptions { handshake, timeout: Duration::from_millis(timeout_ms), ..OpenOptions::default() };
-        let client = crate::pool::detach(py, || LensClient::open(&port, options)).map_err(hw_err)?;
+        let client = py.detach(|| LensClient::open(&port, options)).map_err(hw_err)?;
         Ok(Lens::from_client(client))
     }
 
@@ -288,7 +286,7 @@ impl Lens {
         let mut lens = self.procedure(py)?;
         let client = lens.client_mut()?;
         let mut raised: Option<PyErr> = None;
-        let report = crate::pool::detach(py, || {
+        let report = py.detach(|| {
             hold(client, &cal, &config, |s| {
                 if steps.is_some_and(|n| s.index + 1 >= n) {
                     return false;

@@ -2,11 +2,12 @@
 //!
 //! After `os.fork()` the child holds none of its parent's threads, but rayon's global
 //! pool, inherited in memory, believes its workers still run: the child's first parallel
-//! call would wait for them for ever (a render, a detection, a study). So every call that
-//! releases the GIL runs its work through [`detach`], in a pool of this process: a pool
+//! call would wait for them for ever (a render, a detection, a study). So every call whose
+//! work has parallel parts runs it through [`detach`], in a pool of this process: a pool
 //! built by another process (the parent, before a fork) is abandoned, not used, and a new
 //! one is built. Everything else about the pool is rayon's default (one thread per core,
-//! or `RAYON_NUM_THREADS`).
+//! or `RAYON_NUM_THREADS`). Work with no parallel parts (the lens's serial I/O, in
+//! lens.rs) stays on `py.detach`: `install` would move it to a worker thread for nothing.
 
 use std::sync::{Arc, Mutex};
 
@@ -20,15 +21,15 @@ static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
 fn pool() -> Option<Arc<rayon::ThreadPool>> {
     let pid = std::process::id();
     let mut slot = POOL.lock().unwrap_or_else(|p| p.into_inner());
-    match slot.take() {
-        Some((owner, p)) if owner == pid => {
-            *slot = Some((owner, Arc::clone(&p)));
-            return Some(p);
+    if let Some((owner, p)) = slot.as_ref() {
+        if *owner == pid {
+            return Some(Arc::clone(p));
         }
-        // The parent's pool: its threads do not exist here, and dropping it would signal
-        // them; it is left as memory.
-        Some(stale) => std::mem::forget(stale),
-        None => {}
+    }
+    // The parent's pool: its threads do not exist here, and dropping it would signal
+    // them; it is left as memory.
+    if let Some(stale) = slot.take() {
+        std::mem::forget(stale);
     }
     let p = Arc::new(rayon::ThreadPoolBuilder::new().thread_name(|i| format!("etlcal-{i}")).build().ok()?);
     *slot = Some((pid, Arc::clone(&p)));
