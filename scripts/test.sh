@@ -88,4 +88,11 @@ export ETLCAL_TEST_RUST_REFERENCE="$target/debug/examples/rust_reference"
 export ETLCAL_TEST_BINARY="$target/debug/etlcal"
 "$venv/bin/python" -m pytest -q --durations=10
 stage_done "pytest"
+cd "$root"
+
+echo "== hostile-user battery (fast part)"
+# The wide net of docs/RELIABILITY.md: the fast part of scripts/hostile/ (its README); a
+# case that loses data, dies uncatchably, hangs or leaks fails the run.
+"$venv/bin/python" scripts/hostile/battery.py --fast --binary "$target/debug/etlcal"
+stage_done "hostile-user battery (fast)"
 echo "== all tests passed in $((SECONDS - start)) s"

@@ -49,6 +49,54 @@ pub fn json_readers(data: &[u8]) {
     let _ = etl_formats::thermal::read_thermal_table(&path);
 }
 
+/// `text_readers`: the bytes as the JSON text the Python package's `from_json` methods
+/// take (`Calibration`, `Observations`, `Dataset`, `Board`, `A0`, `ThermalCalibration`):
+/// valid UTF-8 only, as a Python `str` is; each parsed and validated as those methods do,
+/// with no file in between. A value accepted is serialised again and accepted again.
+pub fn text_readers(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else { return };
+    let p = std::path::Path::new("<json>");
+    // The value's text again, parsed as `$t`.
+    macro_rules! again {
+        ($v:expr, $t:ty, $format:expr) => {{
+            let text = serde_json::to_string(&$v).expect("an accepted value serialises");
+            etl_formats::parse_json::<$t>(&text, p, $format).expect("its text parses again")
+        }};
+    }
+    if let Ok(c) = Calibration::parse(text, p) {
+        again!(c, Calibration, etl_formats::calibration::FORMAT).validate(p).expect("a calibration reads back valid");
+    }
+    if let Ok(o) = etl_formats::parse_json::<Observations>(text, p, etl_formats::observations::FORMAT) {
+        if o.validate().is_ok() {
+            again!(o, Observations, etl_formats::observations::FORMAT)
+                .validate()
+                .expect("observations read back valid");
+        }
+    }
+    if let Ok(d) = etl_formats::parse_json::<Dataset>(text, p, etl_formats::dataset::FORMAT) {
+        if d.validate().is_ok() {
+            again!(d, Dataset, etl_formats::dataset::FORMAT).validate().expect("a dataset reads back valid");
+        }
+    }
+    if let Ok(b) = etl_formats::parse_json::<Board>(text, p, etl_formats::board::FORMAT) {
+        if b.validate().is_ok() {
+            again!(b, Board, etl_formats::board::FORMAT).validate().expect("a board reads back valid");
+        }
+    }
+    if let Ok(a) = etl_formats::parse_json::<A0File>(text, p, etl_formats::a0::FORMAT) {
+        if a.validate(p).is_ok() {
+            again!(a, A0File, etl_formats::a0::FORMAT).validate(p).expect("an A0 reads back valid");
+        }
+    }
+    if let Ok(t) = etl_formats::parse_json::<ThermalFile>(text, p, etl_formats::thermal::THERMAL_FORMAT) {
+        if t.validate(p).is_ok() {
+            again!(t, ThermalFile, etl_formats::thermal::THERMAL_FORMAT)
+                .validate(p)
+                .expect("a thermal file reads back valid");
+        }
+    }
+}
+
 /// `image_detect`: the bytes as an image file (PNG, JPEG, TIFF by content) through the
 /// reader and the checkerboard detector; with a leading 0 byte, as a raw grey image of at
 /// most 255 x 255 px (its side in the next two bytes) straight into the detector.

@@ -1015,12 +1015,19 @@ def normalized(path: str) -> tuple:
 
 
 def set_state(d: str, outputs: List[str]) -> Dict[str, tuple]:
-    """The bytes of the named outputs (files, or every file of a folder), run times aside."""
+    """The bytes of the named outputs (files, or every file of a folder), run times aside.
+
+    A temporary inside an output folder (`.NAME.tmpPID`) is left out: a run killed before
+    its commit leaves its temporaries as garbage, which the next writer removes (the leak
+    check after the next run sees any that stay). Pending markers are kept: a set whose
+    commit is written but whose renames are not is not the earlier set."""
     st: Dict[str, tuple] = {}
     for o in outputs:
         p = os.path.join(d, o)
         if os.path.isdir(p) and not os.path.islink(p):
             for k, v in B.snapshot(p).items():
+                if B.is_temporary(k) and "etlcal-pending" not in k:
+                    continue
                 fp = os.path.join(p, k)
                 st[os.path.join(o, k)] = normalized(fp) if v[0] == "file" else v
         elif os.path.isfile(p) and not os.path.islink(p):

@@ -53,6 +53,7 @@ mod error;
 pub mod export;
 mod input_value;
 mod json_path;
+pub mod memory;
 pub mod model_selection;
 pub mod observations;
 pub mod optics;

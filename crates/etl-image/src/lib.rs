@@ -14,7 +14,7 @@ pub mod sharpness;
 mod subpixel;
 pub mod undistort;
 
-pub use read::{read_image, MAX_JPEG_PIXELS_PER_BYTE, MAX_PNG_PIXELS_PER_BYTE};
+pub use read::{read_image, MAX_JPEG_PIXELS_PER_BYTE, MAX_PNG_PIXELS_PER_BYTE, MAX_TIFF_PIXELS_PER_BYTE};
 
 pub use etl_formats::{Error, Result};
 

@@ -37,6 +37,8 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     // A test hook, private: set as an attribute so that it stays out of `__all__`.
     m.setattr("_raise_rust_error", wrap_pyfunction!(errors::_raise_rust_error, m)?)?;
+    m.setattr("_panic", wrap_pyfunction!(errors::_panic, m)?)?;
+    m.setattr("_PanicProbe", m.py().get_type::<errors::_PanicProbe>())?;
     m.add_class::<calibration::Calibration>()?;
     m.add_class::<camera::CameraAt>()?;
     m.add_class::<thermal::ThermalSurface>()?;

@@ -118,6 +118,20 @@ def test_caller_sized_requests_are_refused_before_they_allocate() -> None:
     assert mx.shape == (48, 64) and my.shape == (48, 64)
 
 
+def test_maps_beyond_the_memory_budget_are_refused_naming_the_option(monkeypatch: pytest.MonkeyPatch) -> None:
+    # 4000 x 3000 px of two f32 maps: 96 MB, above a 10 MB budget, within the pixel cap.
+    cal = etlcal.Calibration.load(CALIBRATION)
+    monkeypatch.setenv("ETLCAL_MEMORY_BUDGET", "10M")
+    with pytest.raises(etlcal.InputError, match=r"size needs about 0\.096 GB, above the memory budget of 0\.010 GB"):
+        cal.at_e_com(150.0).undistort_maps(size=(4000, 3000))
+    monkeypatch.setenv("ETLCAL_MEMORY_BUDGET", "ten megabytes")
+    with pytest.raises(etlcal.InputError, match="is not a number of bytes"):
+        cal.at_e_com(150.0).undistort_maps(size=(4000, 3000))
+    monkeypatch.setenv("ETLCAL_MEMORY_BUDGET", "200M")
+    mx, _ = cal.at_e_com(150.0).undistort_maps(size=(4000, 3000))
+    assert mx.shape == (3000, 4000)
+
+
 def _huge(shape: Tuple[int, ...], dtype: Any = np.float64) -> "np.ndarray[Any, Any]":
     """An array declaring `shape` over one element (zero strides): no memory of its own."""
     return np.lib.stride_tricks.as_strided(np.ones(1, dtype=dtype), shape=shape, strides=(0,) * len(shape))

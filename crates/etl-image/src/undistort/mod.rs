@@ -86,11 +86,15 @@ pub fn undistort_maps(k: &Intrinsics, d: &Distortion, out: &OutputCamera) -> Res
 
 /// [`undistort_maps`] into `maps`, reusing its buffers (no allocation when the size is
 /// unchanged: the per-frame path of a focus change). On error `maps` is left as it was.
+/// Maps of a new size whose 8 bytes a pixel are above the memory budget
+/// ([`etl_formats::memory`]) are refused before they are allocated.
 pub fn undistort_maps_into(k: &Intrinsics, d: &Distortion, out: &OutputCamera, maps: &mut UndistortMaps) -> Result<()> {
     // The whole image as one band first checks every argument, without writing.
     etl_core::undistort::undistort_maps(k, d, out, 0..0, &mut [], &mut [])?;
     let (w, h) = (out.width_px, out.height_px);
     if maps.map_x.len() != w * h || maps.map_y.len() != w * h {
+        // Two f32 maps: costed against the memory budget before the allocation.
+        etl_formats::memory::check_memory("size", 8 * (w * h) as u64)?;
         // Fresh zeroed pages (calloc) are written once below; `resize` would fill them
         // first, touching 22 MB twice for 1936 x 1458.
         (maps.map_x, maps.map_y) = (vec![0.0; w * h], vec![0.0; w * h]);

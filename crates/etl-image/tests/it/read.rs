@@ -5,7 +5,7 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use etl_image::{read_image, Error, MAX_JPEG_PIXELS_PER_BYTE, MAX_PNG_PIXELS_PER_BYTE};
+use etl_image::{read_image, Error, MAX_JPEG_PIXELS_PER_BYTE, MAX_PNG_PIXELS_PER_BYTE, MAX_TIFF_PIXELS_PER_BYTE};
 use image::{GrayImage, ImageFormat, Luma};
 
 /// `img` encoded as `format`.
@@ -34,6 +34,42 @@ fn png_declaring(w: u32, h: u32) -> Vec<u8> {
     b[20..24].copy_from_slice(&h.to_be_bytes());
     let crc = crc32fast::hash(&b[12..29]);
     b[29..33].copy_from_slice(&crc.to_be_bytes());
+    b
+}
+
+/// An uncompressed 8-bit grey little-endian TIFF of `w` x `h` px, one row a strip, whose
+/// strips all point at the same `w` bytes when `shared` (else each has its own row).
+fn tiff_strips(w: u32, h: u32, shared: bool) -> Vec<u8> {
+    let rows = if shared { 1 } else { h };
+    let data: Vec<u8> = (0..w * rows).map(|x| (x * 7) as u8).collect();
+    let offsets: Vec<u32> = (0..h).map(|r| 8 + if shared { 0 } else { r * w }).collect();
+    let offs_at = 8 + data.len() as u32;
+    let cnts_at = offs_at + 4 * h;
+    let ifd_at = cnts_at + 4 * h;
+    let mut b = b"II*\0".to_vec();
+    b.extend(ifd_at.to_le_bytes());
+    b.extend(&data);
+    offsets.iter().for_each(|o| b.extend(o.to_le_bytes()));
+    (0..h).for_each(|_| b.extend(w.to_le_bytes()));
+    // (tag, type: 3 short / 4 long, count, value or offset)
+    let entries = [
+        (256u16, 4u16, 1u32, w),
+        (257, 4, 1, h),
+        (258, 3, 1, 8),
+        (259, 3, 1, 1),
+        (262, 3, 1, 1),
+        (273, 4, h, offs_at),
+        (278, 4, 1, 1),
+        (279, 4, h, cnts_at),
+    ];
+    b.extend((entries.len() as u16).to_le_bytes());
+    for (tag, ty, n, v) in entries {
+        b.extend(tag.to_le_bytes());
+        b.extend(ty.to_le_bytes());
+        b.extend(n.to_le_bytes());
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(0u32.to_le_bytes());
     b
 }
 
@@ -80,6 +116,33 @@ fn a_tiny_png_declaring_256_megapixels_is_refused_from_its_header() {
     assert!(m.starts_with("declares 16384 x 16384 px, more than its") && m.contains("as PNG (at most 8256 px"), "{m}");
 }
 
+/// The hostile-user battery's slow input: 16000 strips of one row all pointing at the same
+/// 16000 bytes declare 256 Mpx in 144 kB, which was decoded and searched for more than
+/// 20 s. The same image with its own bytes per strip is read.
+#[test]
+fn a_tiff_whose_strips_share_their_bytes_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = refused(dir.path(), "shared.tif", &tiff_strips(16000, 16000, true));
+    assert!(
+        m.starts_with("a strip of bytes 8..16008 overlaps another") && m.contains("refused before decoding"),
+        "{m}"
+    );
+    let small = tiff_strips(300, 200, true);
+    let m = refused(dir.path(), "small-shared.tif", &small);
+    assert!(m.contains("overlaps another"), "{m}");
+    let path = dir.path().join("own.tif");
+    std::fs::write(&path, tiff_strips(300, 200, false)).unwrap();
+    let img = read_image(&path).unwrap().to_luma8();
+    assert_eq!(img.dimensions(), (300, 200));
+    assert_eq!(img.get_pixel(5, 3).0[0], ((3 * 300 + 5) * 7) as u8);
+    // A strip past the file's end: cut the last row's bytes off the data.
+    let mut cut = tiff_strips(300, 200, false);
+    let at = cut.len() - 4 * 8 - 12 * 8 - 2 - 4 * 200; // the last byte count
+    cut[at..at + 4].copy_from_slice(&(10_000_000u32).to_le_bytes());
+    let m = refused(dir.path(), "past-end.tif", &cut);
+    assert!(m.contains("runs past the file's"), "{m}");
+}
+
 #[test]
 fn a_header_beyond_the_pixel_limit_is_refused_before_decoding() {
     let dir = tempfile::tempdir().unwrap();
@@ -98,6 +161,7 @@ fn the_most_compressible_real_images_are_read() {
     for (format, name, per_byte) in [
         (ImageFormat::Jpeg, "flat.jpg", MAX_JPEG_PIXELS_PER_BYTE),
         (ImageFormat::Png, "flat.png", MAX_PNG_PIXELS_PER_BYTE),
+        (ImageFormat::Tiff, "flat.tif", MAX_TIFF_PIXELS_PER_BYTE),
     ] {
         let bytes = encode(&flat, format);
         let ratio = (2048 * 1536) as f64 / bytes.len() as f64;

@@ -48,6 +48,11 @@ Every exception derives from `etlcal.Error`: `InputError` (also a ValueError),
 (a file key, field or argument: `"views[3].points"`, `"square_mm"`) and the offending
 value in `value` (text, numbers compact), each None when the error names none.
 """
+from . import _etlcal, _guard
+
+# Before any name is taken from the extension: a Rust panic becomes etlcal.Error.
+_guard.install(_etlcal)
+
 from ._etlcal import (
     __version__,
     A0,

@@ -28,6 +28,10 @@ pub const MAX_VIEWS_PER_SETTING: usize = 1000;
 /// The most currents of a setting rig (the paper's has 7).
 pub const MAX_SETTINGS: usize = 1000;
 
+/// The peak memory one view of the setting rig costs a simulation, bytes (measured 42 kB,
+/// rounded up): the estimate [`SimConfig::validate`] checks against the memory budget.
+pub const SETTING_VIEW_BYTES: u64 = 48 * 1024;
+
 /// Which simulated rig.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -124,6 +128,10 @@ impl SimConfig {
                     Error::invalid("setting_rig.e_com_ma", message)
                 });
             }
+            // Measured: 42 kB of peak memory per setting view (`simulate --observations-only`,
+            // 400 and 3600 views); the caps alone allow a million views, 42 GB.
+            let views = (r.e_com_ma.len() * r.views_per_setting) as u64;
+            etl_formats::memory::check_memory("setting_rig.views_per_setting", views * SETTING_VIEW_BYTES)?;
             for e in &r.e_com_ma {
                 etl_formats::check_range("setting_rig.e_com_ma", *e, etl_core::thermal::E_IN_DOMAIN_MA, "mA")?;
             }

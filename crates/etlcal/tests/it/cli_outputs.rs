@@ -311,6 +311,58 @@ fn observations_with(dir: &Path, name: &str, change: impl FnOnce(&mut serde_json
     p
 }
 
+/// A simulation within the caps (1000 currents x 1000 views) would need about 49 GB: it is
+/// costed before anything is allocated, against the memory budget (half of physical memory,
+/// or `ETLCAL_MEMORY_BUDGET`), and refused naming the option and the estimate; a budget
+/// that does not parse is refused too, never ignored. Nothing is written either way.
+#[test]
+fn a_simulation_beyond_the_memory_budget_is_refused_before_it_allocates() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let config = d.path().join("sim.json");
+    let currents: Vec<String> = (0..1000).map(|i| format!("{}", 80.0 + 0.1 * f64::from(i))).collect();
+    std::fs::write(
+        &config,
+        format!(
+            r#"{{"format": "etlcal.simconfig/1", "setting_rig": {{"e_com_ma": [{}], "views_per_setting": 1000,
+                "blur_px": 2.0, "aperture_mm": 2.5, "max_tilt_deg": 25.0}}}}"#,
+            currents.join(",")
+        ),
+    )
+    .unwrap();
+    let run = |budget: Option<&str>, views: &str| {
+        let text = std::fs::read_to_string(&config).unwrap().replace("\"views_per_setting\": 1000,", views);
+        std::fs::write(&config, text).unwrap();
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_etlcal"));
+        c.args(["simulate", "--observations-only", "--quiet", "--config", s(&config), "--out", s(&out)]);
+        match budget {
+            Some(b) => c.env("ETLCAL_MEMORY_BUDGET", b),
+            None => c.env_remove("ETLCAL_MEMORY_BUDGET"),
+        };
+        let o = c.output().unwrap();
+        (o.status.code(), String::from_utf8(o.stderr).unwrap())
+    };
+    let (code, err) = run(Some("24G"), "\"views_per_setting\": 1000,");
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains(
+            "setting_rig.views_per_setting needs about 49 GB, above the memory budget of 26 GB \
+                      (ETLCAL_MEMORY_BUDGET): refused before allocating"
+        ),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let (code, err) = run(None, "\"views_per_setting\": 1000,");
+    assert!(code == Some(1) && err.contains("(half of physical memory; ETLCAL_MEMORY_BUDGET sets it)"), "{err}");
+    let (code, err) = run(Some("lots"), "\"views_per_setting\": 1000,");
+    assert!(code == Some(1) && err.contains("ETLCAL_MEMORY_BUDGET=\"lots\" is not a number of bytes"), "{err}");
+    assert!(!out.exists(), "nothing written");
+    // One view per current is within a 1 GB budget: written.
+    let (code, err) = run(Some("1G"), "\"views_per_setting\": 1,");
+    assert_eq!(code, Some(0), "{err}");
+    assert!(out.join("observations.json").is_file());
+}
+
 #[test]
 fn numbers_out_of_their_documented_ranges_are_refused_naming_the_quantity() {
     let d = tempfile::tempdir().unwrap();

@@ -27,6 +27,11 @@ fn json_readers_corpus() {
 }
 
 #[test]
+fn text_readers_corpus() {
+    replay("text_readers", bodies::text_readers);
+}
+
+#[test]
 fn image_detect_corpus() {
     replay("image_detect", bodies::image_detect);
 }
