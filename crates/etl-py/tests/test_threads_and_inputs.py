@@ -132,6 +132,39 @@ def test_maps_beyond_the_memory_budget_are_refused_naming_the_option(monkeypatch
     assert mx.shape == (3000, 4000)
 
 
+def test_arrays_of_other_than_real_numbers_are_refused_naming_the_dtype() -> None:
+    cal = etlcal.Calibration.load(CALIBRATION)
+    cam = cal.at_e_com(150.0)
+    world = np.array([[0.0, 0.0, 0.0], [10.0, 5.0, 0.0]])
+    # complex: numpy's cast would drop the imaginary part with only a warning
+    for bad, dtype in [
+        (world.astype(np.complex128), "complex128"),
+        (world.astype(bool), "bool"),
+        (world.astype(str), "<U32"),
+        (world.astype(object), "object"),
+    ]:
+        with pytest.raises(etlcal.InputError, match=f"must hold real numbers \\(integer or float\\), got dtype {dtype}"):
+            cam.project(bad)
+    with pytest.raises(etlcal.InputError, match="got dtype complex128"):
+        cal.e_com(np.array([100.0, 150.0], dtype=np.complex128), 30.0)
+    with pytest.raises(etlcal.InputError, match="got dtype <U3"):
+        cal.focal_lengths("1.5")  # type: ignore[arg-type]
+    with pytest.raises(etlcal.InputError, match="got dtype <U5"):
+        cal.focal_lengths(["100.0", "150.0"])  # type: ignore[list-item]
+    # real numbers in any numeric dtype or as lists: accepted, the same result
+    ref = cam.project(world)
+    for ok in [world.astype(np.float32), world.astype(np.int64), world.tolist()]:
+        assert np.allclose(cam.project(ok), ref, atol=1e-3)
+
+
+def test_zhang_refuses_an_image_size_of_zero() -> None:
+    obs = etlcal.simulate.paper_rig(1).observations
+    views = [(obs.offstate_view(k)["world_mm"][:, :2], obs.offstate_view(k)["pixels"]) for k in range(4)]
+    with pytest.raises(etlcal.InputError, match="image_size"):
+        etlcal.zhang(views, (0, 0))
+    assert etlcal.zhang(views, (1936, 1458)).rms_px < 1.0
+
+
 def _huge(shape: Tuple[int, ...], dtype: Any = np.float64) -> "np.ndarray[Any, Any]":
     """An array declaring `shape` over one element (zero strides): no memory of its own."""
     return np.lib.stride_tricks.as_strided(np.ones(1, dtype=dtype), shape=shape, strides=(0,) * len(shape))

@@ -66,10 +66,13 @@ impl ZhangRequest {
     /// Calibrates the camera from `views` of a planar board in images of `image_size`
     /// ([`zhang_with`]).
     ///
-    /// Errors: the refusal of [`Self::check`] in `spelling`'s words; those of
+    /// Errors: the refusal of [`Self::check`] in `spelling`'s words; an `image_size` outside
+    /// [1, 65536] px a side or above 2^28 px (`image_size`: the principal point's start and
+    /// the normalisation depend on it, so (0, 0) would calibrate nonsense); those of
     /// [`zhang_with`] (at least 3 views, 4 points each, not all parallel).
     pub fn run(&self, views: &[PlanarView], image_size: [u32; 2], spelling: &dyn Spelling) -> Result<ZhangResult> {
         self.validate(spelling)?;
+        etl_formats::check_image_size(image_size, "image_size")?;
         zhang_with(views, image_size, &self.options())
     }
 }
