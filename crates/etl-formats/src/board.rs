@@ -62,6 +62,19 @@ pub struct Checkerboard {
     pub square_mm: f64,
 }
 
+/// The smallest square a board may have: 1 um. Below it no camera resolves the board, and
+/// squares of 1e-300 mm made every later number denormal or zero.
+pub const MIN_SQUARE_MM: f64 = 1e-3;
+
+/// Refuses a square below [`MIN_SQUARE_MM`] (NaN and the non-positive are refused before).
+fn check_square_mm(square_mm: f64) -> Result<()> {
+    if square_mm < MIN_SQUARE_MM {
+        let message = format!("square_mm {} mm is below the smallest board square, 1e-3 mm", compact(square_mm));
+        return Err(Error::invalid_value("square_mm", square_mm, message));
+    }
+    Ok(())
+}
+
 impl Checkerboard {
     /// Checks the board: 3 to [`MAX_INNER_CORNERS`] inner corners each way and a positive,
     /// finite square, small enough that the whole pattern's size is finite too.
@@ -72,6 +85,7 @@ impl Checkerboard {
             let message = format!("square_mm must be a positive square size, got {} mm", compact(self.square_mm));
             return Err(Error::invalid_value("square_mm", self.square_mm, message));
         }
+        check_square_mm(self.square_mm)?;
         let [c, r] = self.inner_corners;
         if c < 3 || r < 3 {
             let message = format!("inner_corners: a board needs at least 3 x 3 inner corners, got {c} x {r}");
@@ -134,24 +148,27 @@ impl Board {
             );
             Error::invalid_value("dictionary", name, message)
         })?;
-        CharucoBoard::new(squares, square_mm, marker_mm, dict).map(Board::Charuco).map_err(|e| {
-            // etl-core's message names the field; the values make it actionable.
-            let what = match e {
-                etl_core::Error::InvalidArgument { what } => what.to_string(),
-                other => other.to_string(),
-            };
-            let field = what.split([' ', ':']).next().unwrap_or("board").to_owned();
-            let (detail, value) = if field == "squares" {
-                (format!("squares [{}, {}]", squares[0], squares[1]), squares.to_input_value())
-            } else if field == "dictionary" {
-                let white = (squares[0] as usize * squares[1] as usize) / 2;
-                (format!("{} has {} markers, the board {white}", dict.name(), dict.len()), dict.name().into())
-            } else {
-                let value = if field == "square_mm" { square_mm } else { marker_mm };
-                (format!("square_mm {}, marker_mm {}", compact(square_mm), compact(marker_mm)), compact(value))
-            };
-            Error::invalid_value(field, value, format!("{what} ({detail})"))
-        })
+        CharucoBoard::new(squares, square_mm, marker_mm, dict)
+            .map(Board::Charuco)
+            .map_err(|e| {
+                // etl-core's message names the field; the values make it actionable.
+                let what = match e {
+                    etl_core::Error::InvalidArgument { what } => what.to_string(),
+                    other => other.to_string(),
+                };
+                let field = what.split([' ', ':']).next().unwrap_or("board").to_owned();
+                let (detail, value) = if field == "squares" {
+                    (format!("squares [{}, {}]", squares[0], squares[1]), squares.to_input_value())
+                } else if field == "dictionary" {
+                    let white = (squares[0] as usize * squares[1] as usize) / 2;
+                    (format!("{} has {} markers, the board {white}", dict.name(), dict.len()), dict.name().into())
+                } else {
+                    let value = if field == "square_mm" { square_mm } else { marker_mm };
+                    (format!("square_mm {}, marker_mm {}", compact(square_mm), compact(marker_mm)), compact(value))
+                };
+                Error::invalid_value(field, value, format!("{what} ({detail})"))
+            })
+            .and_then(|b| b.validate().map(|()| b))
     }
 
     /// A checkerboard of `inner_corners` [cols, rows] and `square_mm`; errors as
@@ -176,10 +193,11 @@ impl Board {
     }
 
     /// The one check of a board, made by every reader and writer: a checkerboard's
-    /// [`Checkerboard::validate`]; a ChArUco board holds by construction.
+    /// [`Checkerboard::validate`]; a ChArUco board holds by construction, and its square
+    /// is at least [`MIN_SQUARE_MM`].
     pub fn validate(&self) -> Result<()> {
         match self {
-            Board::Charuco(_) => Ok(()),
+            Board::Charuco(b) => check_square_mm(b.square_mm()),
             Board::Checkerboard(c) => c.validate(),
         }
     }

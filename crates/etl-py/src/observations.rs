@@ -77,13 +77,7 @@ impl Observations {
 impl Observations {
     #[new]
     fn new(image_size: (u32, u32)) -> PyResult<Self> {
-        if image_size.0 == 0 || image_size.1 == 0 {
-            return Err(invalid_value(
-                "image_size",
-                [image_size.0, image_size.1],
-                format!("image_size {image_size:?} must be positive"),
-            ));
-        }
+        etl_formats::check_image_size([image_size.0, image_size.1], "image_size").py()?;
         Ok(Observations { file: ObsFile::new([image_size.0, image_size.1]) })
     }
 

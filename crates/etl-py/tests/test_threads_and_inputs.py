@@ -163,6 +163,22 @@ def test_zhang_refuses_an_image_size_of_zero() -> None:
     with pytest.raises(etlcal.InputError, match="image_size"):
         etlcal.zhang(views, (0, 0))
     assert etlcal.zhang(views, (1936, 1458)).rms_px < 1.0
+    # a NaN pixel is refused, naming its view (it was dropped silently)
+    bad = [(w, p.copy()) for w, p in views]
+    bad[2][1][5, 0] = np.nan
+    with pytest.raises(etlcal.InputError, match="view 2: pixels point 5 is not finite"):
+        etlcal.zhang(bad, (1936, 1458))
+
+
+def test_sizes_that_mean_nothing_are_refused() -> None:
+    with pytest.raises(etlcal.InputError, match="more than 268435456 pixels"):
+        etlcal.Observations((65536, 65536))
+    with pytest.raises(etlcal.InputError, match="below the smallest board square, 1e-3 mm"):
+        etlcal.Board.checkerboard((9, 7), 1e-300)
+    with pytest.raises(etlcal.InputError, match="below the smallest board square"):
+        etlcal.Board.charuco((12, 9), 1e-300, 0.7e-300, "DICT_5X5_100")
+    assert etlcal.Observations((1936, 1458)).image_size == (1936, 1458)
+    etlcal.Board.checkerboard((9, 7), 0.001)
 
 
 def _huge(shape: Tuple[int, ...], dtype: Any = np.float64) -> "np.ndarray[Any, Any]":

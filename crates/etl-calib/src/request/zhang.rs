@@ -68,11 +68,23 @@ impl ZhangRequest {
     ///
     /// Errors: the refusal of [`Self::check`] in `spelling`'s words; an `image_size` outside
     /// [1, 65536] px a side or above 2^28 px (`image_size`: the principal point's start and
-    /// the normalisation depend on it, so (0, 0) would calibrate nonsense); those of
+    /// the normalisation depend on it, so (0, 0) would calibrate nonsense); a point or pixel
+    /// that is not finite, naming its view; those of
     /// [`zhang_with`] (at least 3 views, 4 points each, not all parallel).
     pub fn run(&self, views: &[PlanarView], image_size: [u32; 2], spelling: &dyn Spelling) -> Result<ZhangResult> {
         self.validate(spelling)?;
         etl_formats::check_image_size(image_size, "image_size")?;
+        // A NaN pixel would be dropped by nothing and poison the fit: refused, named.
+        for (i, v) in views.iter().enumerate() {
+            let bad = v.board_mm.iter().chain(&v.pixels).position(|p| !(p[0].is_finite() && p[1].is_finite()));
+            if let Some(j) = bad {
+                let (what, k) = if j < v.board_mm.len() { ("board_mm", j) } else { ("pixels", j - v.board_mm.len()) };
+                return Err(etl_formats::Error::invalid(
+                    format!("views[{i}].{what}"),
+                    format!("view {i}: {what} point {k} is not finite"),
+                ));
+            }
+        }
         zhang_with(views, image_size, &self.options())
     }
 }
