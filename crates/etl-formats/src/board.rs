@@ -69,6 +69,7 @@ pub const MIN_SQUARE_MM: f64 = 1e-3;
 /// Refuses a square below [`MIN_SQUARE_MM`] (NaN and the non-positive are refused before).
 fn check_square_mm(square_mm: f64) -> Result<()> {
     if square_mm < MIN_SQUARE_MM {
+        // The minimum as written in MIN_SQUARE_MM's doc (compact would print 0.001).
         let message = format!("square_mm {} mm is below the smallest board square, 1e-3 mm", compact(square_mm));
         return Err(Error::invalid_value("square_mm", square_mm, message));
     }
@@ -148,27 +149,26 @@ impl Board {
             );
             Error::invalid_value("dictionary", name, message)
         })?;
-        CharucoBoard::new(squares, square_mm, marker_mm, dict)
-            .map(Board::Charuco)
-            .map_err(|e| {
-                // etl-core's message names the field; the values make it actionable.
-                let what = match e {
-                    etl_core::Error::InvalidArgument { what } => what.to_string(),
-                    other => other.to_string(),
-                };
-                let field = what.split([' ', ':']).next().unwrap_or("board").to_owned();
-                let (detail, value) = if field == "squares" {
-                    (format!("squares [{}, {}]", squares[0], squares[1]), squares.to_input_value())
-                } else if field == "dictionary" {
-                    let white = (squares[0] as usize * squares[1] as usize) / 2;
-                    (format!("{} has {} markers, the board {white}", dict.name(), dict.len()), dict.name().into())
-                } else {
-                    let value = if field == "square_mm" { square_mm } else { marker_mm };
-                    (format!("square_mm {}, marker_mm {}", compact(square_mm), compact(marker_mm)), compact(value))
-                };
-                Error::invalid_value(field, value, format!("{what} ({detail})"))
-            })
-            .and_then(|b| b.validate().map(|()| b))
+        let board = CharucoBoard::new(squares, square_mm, marker_mm, dict).map(Board::Charuco).map_err(|e| {
+            // etl-core's message names the field; the values make it actionable.
+            let what = match e {
+                etl_core::Error::InvalidArgument { what } => what.to_string(),
+                other => other.to_string(),
+            };
+            let field = what.split([' ', ':']).next().unwrap_or("board").to_owned();
+            let (detail, value) = if field == "squares" {
+                (format!("squares [{}, {}]", squares[0], squares[1]), squares.to_input_value())
+            } else if field == "dictionary" {
+                let white = (squares[0] as usize * squares[1] as usize) / 2;
+                (format!("{} has {} markers, the board {white}", dict.name(), dict.len()), dict.name().into())
+            } else {
+                let value = if field == "square_mm" { square_mm } else { marker_mm };
+                (format!("square_mm {}, marker_mm {}", compact(square_mm), compact(marker_mm)), compact(value))
+            };
+            Error::invalid_value(field, value, format!("{what} ({detail})"))
+        })?;
+        board.validate()?;
+        Ok(board)
     }
 
     /// A checkerboard of `inner_corners` [cols, rows] and `square_mm`; errors as

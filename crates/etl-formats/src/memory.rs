@@ -55,12 +55,16 @@ pub fn parse_budget(text: &str) -> Result<Option<u64>> {
 
 /// The budget in bytes, `None` when nothing is checked (see the module doc).
 pub fn budget_bytes() -> Result<Option<u64>> {
+    Ok(budget()?.map(|(bytes, _)| bytes))
+}
+
+/// The budget in bytes and where it comes from (for the refusal's message).
+fn budget() -> Result<Option<(u64, String)>> {
     match std::env::var(BUDGET_ENV) {
-        Ok(text) => parse_budget(&text),
+        Ok(text) => Ok(parse_budget(&text)?.map(|b| (b, BUDGET_ENV.to_string()))),
         Err(std::env::VarError::NotUnicode(_)) => Err(Error::invalid(BUDGET_ENV, format!("{BUDGET_ENV} is not UTF-8"))),
-        Err(std::env::VarError::NotPresent) => {
-            Ok(physical_memory_bytes().map(|b| (b as f64 * DEFAULT_FRACTION) as u64))
-        }
+        Err(std::env::VarError::NotPresent) => Ok(physical_memory_bytes()
+            .map(|b| ((b as f64 * DEFAULT_FRACTION) as u64, format!("half of physical memory; {BUDGET_ENV} sets it")))),
     }
 }
 
@@ -76,15 +80,10 @@ fn physical_memory_bytes() -> Option<u64> {
 /// budget: `"size needs about 40 GB, above the memory budget of 12 GB (half of physical
 /// memory; ETLCAL_MEMORY_BUDGET sets it)"`.
 pub fn check_memory(option: &str, estimate_bytes: u64) -> Result<()> {
-    let Some(budget) = budget_bytes()? else { return Ok(()) };
+    let Some((budget, source)) = budget()? else { return Ok(()) };
     if estimate_bytes <= budget {
         return Ok(());
     }
-    let source = if std::env::var_os(BUDGET_ENV).is_some() {
-        BUDGET_ENV.to_string()
-    } else {
-        format!("half of physical memory; {BUDGET_ENV} sets it")
-    };
     Err(Error::invalid(
         option,
         format!(

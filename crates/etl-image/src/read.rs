@@ -72,15 +72,12 @@ pub(crate) fn check_pixels(path: &Path, w: u32, h: u32) -> Result<()> {
 /// Refuses a `format` file of `file_bytes` bytes whose header declares `w` x `h` px, more
 /// than that many bytes can code (JPEG and PNG; see [`read_image`]).
 fn check_declared_size(path: &Path, format: ImageFormat, w: u32, h: u32, file_bytes: u64) -> Result<()> {
-    let (name, per_byte) = match format {
-        ImageFormat::Jpeg => ("JPEG", MAX_JPEG_PIXELS_PER_BYTE),
-        ImageFormat::Png => ("PNG", MAX_PNG_PIXELS_PER_BYTE),
-        ImageFormat::Tiff => ("TIFF", MAX_TIFF_PIXELS_PER_BYTE),
+    // (name, bound, the bytes that code the pixels, what they are called)
+    let (name, per_byte, coded_bytes, what) = match format {
+        ImageFormat::Jpeg => ("JPEG", MAX_JPEG_PIXELS_PER_BYTE, file_bytes, "bytes"),
+        ImageFormat::Png => ("PNG", MAX_PNG_PIXELS_PER_BYTE, file_bytes, "bytes"),
+        ImageFormat::Tiff => ("TIFF", MAX_TIFF_PIXELS_PER_BYTE, tiff_coded_bytes(path, file_bytes)?, "bytes of strips"),
         _ => return Ok(()),
-    };
-    let (coded_bytes, what) = match format {
-        ImageFormat::Tiff => (tiff_coded_bytes(path, file_bytes)?, "bytes of strips"),
-        _ => (file_bytes, "bytes"),
     };
     let pixels = u64::from(w) * u64::from(h);
     if pixels > coded_bytes.saturating_mul(per_byte) {

@@ -32,32 +32,29 @@ pub fn refuse_oversized(obj: &Bound<'_, PyAny>, what: &str, max: usize) -> PyRes
     }
 }
 
-/// Refuses an array argument `obj` (named `what`) whose elements are not real numbers, or
-/// which holds more than `max` of them ([`refuse_oversized`]). Accepted dtypes: numpy's
-/// integer and float kinds (`i`, `u`, `f`); refused: bool, complex (numpy's cast would drop
-/// the imaginary part with only a warning), strings (it would parse `"1.5"`), objects,
-/// dates. A list or tuple is judged by the dtype numpy gives it.
-pub fn refuse_non_numeric(obj: &Bound<'_, PyAny>, what: &str, max: usize) -> PyResult<()> {
+/// The array argument `obj` (named `what`) as an ndarray of real numbers, to read from:
+/// `obj` itself when it is one, else numpy's conversion of it (a list or tuple, converted
+/// once here and read from the result). Refused: more than `max` elements
+/// ([`refuse_oversized`]), and dtypes other than numpy's integer and float kinds (`i`, `u`,
+/// `f`): bool, complex (numpy's cast would drop the imaginary part with only a warning),
+/// strings (it would parse `"1.5"`), objects, dates.
+pub fn real_array<'py>(obj: &Bound<'py, PyAny>, what: &str, max: usize) -> PyResult<Bound<'py, PyAny>> {
     refuse_oversized(obj, what, max)?;
     let arr = match obj.cast::<PyUntypedArray>() {
         Ok(a) => a.clone(),
-        Err(_) => {
-            let np = obj.py().import("numpy")?;
-            let converted = np
-                .call_method1("asarray", (obj,))
-                .map_err(|e| invalid(what, format!("{what} must be a number or an array of numbers: {e}")))?;
-            match converted.cast_into::<PyUntypedArray>() {
-                Ok(a) => a,
-                Err(_) => return Ok(()),
-            }
-        }
+        Err(_) => obj
+            .py()
+            .import("numpy")?
+            .call_method1("asarray", (obj,))
+            .and_then(|a| Ok(a.cast_into::<PyUntypedArray>()?))
+            .map_err(|e| invalid(what, format!("{what} must be a number or an array of numbers: {e}")))?,
     };
     let dtype = arr.dtype();
     let kind: char = dtype.getattr("kind")?.extract()?;
-    if matches!(kind, 'i' | 'u' | 'f') {
-        return Ok(());
+    if !matches!(kind, 'i' | 'u' | 'f') {
+        return Err(invalid(what, format!("{what} must hold real numbers (integer or float), got dtype {dtype}")));
     }
-    Err(invalid(what, format!("{what} must hold real numbers (integer or float), got dtype {dtype}")))
+    Ok(arr.into_any())
 }
 
 /// Points of dimension `K` read from an array-like of shape (N, K) or (K,).
@@ -71,7 +68,7 @@ pub struct Points<const K: usize> {
 /// Reads (N, K) or (K,) floats (any numeric dtype, any layout; lists too). `what` and
 /// `unit` name the argument in the error message.
 pub fn points<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Points<K>> {
-    refuse_non_numeric(obj, what, MAX_ARRAY_NUMBERS)?;
+    let obj = real_array(obj, what, MAX_ARRAY_NUMBERS)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj
         .extract()
         .map_err(|e| invalid(what, format!("{what} must be an array of numbers of shape (N, {K}): {e}")))?;
@@ -145,7 +142,7 @@ pub fn vec_out<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyAny> {
 
 /// Reads exactly `N` numbers (a sequence or 1-D array).
 pub fn fixed<const N: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; N]> {
-    refuse_non_numeric(obj, what, N)?;
+    let obj = real_array(obj, what, N)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
         obj.extract().map_err(|e| invalid(what, format!("{what} must be {N} numbers: {e}")))?;
     if arr.len() != N || arr.ndim() != 1 {
@@ -170,7 +167,7 @@ pub fn map1<'py>(x: &Bound<'py, PyAny>, what: &str, f: impl Fn(f64) -> PyResult<
         let v: f64 = x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
         return Ok(PyFloat::new(py, f(v)?).into_any());
     }
-    refuse_non_numeric(x, what, MAX_ARRAY_NUMBERS)?;
+    let x = real_array(x, what, MAX_ARRAY_NUMBERS)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
         x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
     if arr.ndim() == 0 {
@@ -220,9 +217,8 @@ pub fn broadcast2<'py>(a: &Bound<'py, PyAny>, b: &Bound<'py, PyAny>, what: (&str
         np.call_method1("asarray", (x, "float64"))
             .map_err(|e| invalid(name, format!("{name} must be a number or an array: {e}")))
     };
-    refuse_non_numeric(a, what.0, MAX_ARRAY_NUMBERS)?;
-    refuse_non_numeric(b, what.1, MAX_ARRAY_NUMBERS)?;
-    let (a, b) = (asf(a, what.0)?, asf(b, what.1)?);
+    let (a, b) = (real_array(a, what.0, MAX_ARRAY_NUMBERS)?, real_array(b, what.1, MAX_ARRAY_NUMBERS)?);
+    let (a, b) = (asf(&a, what.0)?, asf(&b, what.1)?);
     let pair = np
         .call_method1("broadcast_arrays", (a, b))
         .map_err(|e| invalid(what.1, format!("{} and {} do not broadcast together: {e}", what.0, what.1)))?;
@@ -284,7 +280,7 @@ pub fn currents(x: &Bound<'_, PyAny>, what: &str) -> PyResult<Currents> {
         let v: f64 = x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array: {e}")))?;
         return Ok(Currents::Scalar(v));
     }
-    refuse_non_numeric(x, what, MAX_ARRAY_NUMBERS)?;
+    let x = real_array(x, what, MAX_ARRAY_NUMBERS)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> =
         x.extract().map_err(|e| invalid(what, format!("{what} must be a number or an array of numbers: {e}")))?;
     let values: Vec<f64> = arr.as_array().iter().copied().collect();

@@ -278,53 +278,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// `core:InvalidArgument`, `calib:Io`, `calib:Parse`, `calib:Format`, `calib:Image`,
 /// `calib:BoardNotFound`, `calib:InvalidInput`, `calib:InvalidInputNoValue`, `calib:Core`,
 /// `calib:LensTimeout`.
-/// A test hook: panics with `message` (in a rayon worker when `in_pool`, as a parallel
-/// call's bug would), so that the tests see what a bug at the binding boundary becomes
-/// (`etlcal._guard`: `etlcal.Error` with a report file, never PanicException).
-#[pyfunction]
-#[pyo3(signature = (message, in_pool=false))]
-pub fn _panic(py: Python<'_>, message: &str, in_pool: bool) -> PyResult<()> {
-    if in_pool {
-        crate::pool::detach(py, || {
-            use rayon::prelude::*;
-            (0..4).into_par_iter().for_each(|i| {
-                if i == 3 {
-                    panic!("{message}")
-                }
-            })
-        });
-    }
-    panic!("{message}")
-}
-
-/// A test hook: a class whose constructor, method, static method and property panic on
-/// request (`etlcal._guard` wraps each kind).
-#[pyclass(frozen, module = "etlcal")]
-pub struct _PanicProbe {
-    armed: bool,
-}
-
-#[pymethods]
-impl _PanicProbe {
-    #[new]
-    fn new(panic_now: bool) -> Self {
-        assert!(!panic_now, "the constructor panicked");
-        _PanicProbe { armed: true }
-    }
-    fn method(&self) {
-        assert!(!self.armed, "the method panicked");
-    }
-    #[staticmethod]
-    fn static_method() {
-        panic!("the static method panicked")
-    }
-    #[getter]
-    fn property(&self) -> bool {
-        assert!(!self.armed, "the property panicked");
-        false
-    }
-}
-
 /// Returns the message the Rust side formats, after raising it.
 #[pyfunction]
 pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
@@ -357,5 +310,52 @@ pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
             message: "no reply to GetTemperature within 500ms".into(),
         }),
         _ => Err(input_error(format!("unknown error kind {kind:?}"))),
+    }
+}
+
+/// A test hook: panics with `message` (in a rayon worker when `in_pool`, as a parallel
+/// call's bug would), so that the tests see what a bug at the binding boundary becomes
+/// (`etlcal._guard`: `etlcal.Error` with a report file, never PanicException).
+#[pyfunction]
+#[pyo3(signature = (message, in_pool=false))]
+pub fn _panic(py: Python<'_>, message: &str, in_pool: bool) -> PyResult<()> {
+    if in_pool {
+        crate::pool::detach(py, || {
+            use rayon::prelude::*;
+            (0..4).into_par_iter().for_each(|i| {
+                if i == 3 {
+                    panic!("{message}")
+                }
+            })
+        });
+    }
+    panic!("{message}")
+}
+
+/// A test hook: a class whose method, static method and property panic (the kinds
+/// `etlcal._guard` wraps), and whose constructor panics on request (which it does not).
+#[pyclass(frozen, module = "etlcal")]
+pub struct _PanicProbe {
+    armed: bool,
+}
+
+#[pymethods]
+impl _PanicProbe {
+    #[new]
+    fn new(panic_now: bool) -> Self {
+        assert!(!panic_now, "the constructor panicked");
+        _PanicProbe { armed: true }
+    }
+    fn method(&self) {
+        assert!(!self.armed, "the method panicked");
+    }
+    #[staticmethod]
+    fn static_method() {
+        panic!("the static method panicked")
+    }
+    #[getter]
+    fn property(&self) -> bool {
+        assert!(!self.armed, "the property panicked");
+        false
     }
 }

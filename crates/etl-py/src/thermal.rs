@@ -160,7 +160,7 @@ impl ThermalSurface {
 
 /// A 1-D float column of an array-like.
 pub(crate) fn column(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
-    crate::arrays::refuse_non_numeric(obj, what, crate::arrays::MAX_ARRAY_NUMBERS)?;
+    let obj = crate::arrays::real_array(obj, what, crate::arrays::MAX_ARRAY_NUMBERS)?;
     let arr: numpy::PyArrayLikeDyn<'_, f64, numpy::AllowTypeChange> =
         obj.extract().map_err(|e| invalid(what, format!("{what} must be a 1-D array of numbers: {e}")))?;
     use numpy::PyUntypedArrayMethods;
