@@ -186,24 +186,30 @@ impl Board {
         py.import("json")?.call_method1("loads", (self.to_json()?,))
     }
 
-    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other.cast::<Board>().is_ok_and(|o| o.get().inner == self.inner)
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        crate::errors::guarded_value("Board.__eq__", || {
+            other.cast::<Board>().is_ok_and(|o| o.get().inner == self.inner)
+        })
     }
 
     fn __hash__(&self) -> PyResult<u64> {
-        use std::hash::{Hash, Hasher};
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        self.to_json()?.hash(&mut h);
-        Ok(h.finish())
+        crate::errors::guarded("Board.__hash__", || {
+            use std::hash::{Hash, Hasher};
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            self.to_json()?.hash(&mut h);
+            Ok(h.finish())
+        })
     }
 
-    fn __repr__(&self) -> String {
-        format!("Board({})", self.inner.describe())
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("Board.__repr__", || format!("Board({})", self.inner.describe()))
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let ctor = py.get_type::<Board>().getattr("from_json")?;
-        Ok((ctor, PyTuple::new(py, [slf.get().to_json()?])?))
+        crate::errors::guarded("Board.__reduce__", || {
+            let py = slf.py();
+            let ctor = py.get_type::<Board>().getattr("from_json")?;
+            Ok((ctor, PyTuple::new(py, [slf.get().to_json()?])?))
+        })
     }
 }

@@ -128,23 +128,26 @@ impl Calibration {
         thermal: Option<&Bound<'_, PyAny>>,
         rms_px: f64,
     ) -> PyResult<Self> {
-        use crate::arrays::fixed;
-        let model = CameraModel {
-            rotation_rodrigues: fixed::<3>(rotation_rodrigues, "rotation_rodrigues")?,
-            translation_mm: fixed::<3>(translation_mm, "translation_mm")?,
-            kf_x: FocalPoly::cubic(fixed::<4>(kf_x, "kf_x")?),
-            kf_y: FocalPoly::cubic(fixed::<4>(kf_y, "kf_y")?),
-            principal_point: fixed::<2>(principal_point, "principal_point")?,
-            distortion_a: DistortionA::paper(fixed::<9>(distortion_a, "distortion_a")?),
-            centre: None,
-        };
-        model.validate().py()?;
-        etl_core::error::finite(rms_px, "rms_px").py()?;
-        let mut c = Calibration::from_model(model, [image_size.0, image_size.1], [e_com_range_ma.0, e_com_range_ma.1]);
-        c.file_mut().thermal = thermal.map(thermal_ref).transpose()?;
-        c.file_mut().rms_reprojection_px = rms_px;
-        c.file.validate(Path::new("<Calibration>")).py()?;
-        Ok(c)
+        crate::errors::guarded("Calibration.__new__", || {
+            use crate::arrays::fixed;
+            let model = CameraModel {
+                rotation_rodrigues: fixed::<3>(rotation_rodrigues, "rotation_rodrigues")?,
+                translation_mm: fixed::<3>(translation_mm, "translation_mm")?,
+                kf_x: FocalPoly::cubic(fixed::<4>(kf_x, "kf_x")?),
+                kf_y: FocalPoly::cubic(fixed::<4>(kf_y, "kf_y")?),
+                principal_point: fixed::<2>(principal_point, "principal_point")?,
+                distortion_a: DistortionA::paper(fixed::<9>(distortion_a, "distortion_a")?),
+                centre: None,
+            };
+            model.validate().py()?;
+            etl_core::error::finite(rms_px, "rms_px").py()?;
+            let mut c =
+                Calibration::from_model(model, [image_size.0, image_size.1], [e_com_range_ma.0, e_com_range_ma.1]);
+            c.file_mut().thermal = thermal.map(thermal_ref).transpose()?;
+            c.file_mut().rms_reprojection_px = rms_px;
+            c.file.validate(Path::new("<Calibration>")).py()?;
+            Ok(c)
+        })
     }
 
     /// The simulated rig of the paper (section 5.1.2) with the paper's temperature
@@ -868,9 +871,10 @@ impl Calibration {
         Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.undistort_image(image)
     }
 
-    fn __repr__(&self) -> String {
-        let m = &self.model;
-        format!(
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("Calibration.__repr__", || {
+            let m = &self.model;
+            format!(
             "Calibration(kf_x={:?}, kf_y={:?}, principal_point={:?}, image_size={:?}, e_com_range_ma={:?}, thermal={}, rms_px={:?})",
             m.kf_x.coefficients(),
             m.kf_y.coefficients(),
@@ -880,13 +884,16 @@ impl Calibration {
             self.file.thermal.is_some(),
             self.file.rms_reprojection_px
         )
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let text = slf.get().to_json()?;
-        let ctor = py.get_type::<Calibration>().getattr("from_json")?;
-        Ok((ctor, PyTuple::new(py, [text])?))
+        crate::errors::guarded("Calibration.__reduce__", || {
+            let py = slf.py();
+            let text = slf.get().to_json()?;
+            let ctor = py.get_type::<Calibration>().getattr("from_json")?;
+            Ok((ctor, PyTuple::new(py, [text])?))
+        })
     }
 }
 

@@ -314,19 +314,21 @@ impl CameraAt {
         d.set_item("fit_max_px", e.fit.max_px)?;
         crate::results::make(py, "ExportResult", &d)
     }
-    fn __repr__(&self) -> String {
-        let k = self.inner.intrinsics();
-        let setting = if self.given_e_com() {
-            String::new()
-        } else {
-            format!("e_in_ma={:?}, temperature_c={:?}, ", self.inner.e_in_ma(), self.inner.temperature_c())
-        };
-        format!(
-            "CameraAt({setting}e_com_ma={:?}, fx={:?}, fy={:?}, extrapolated={})",
-            self.inner.e_com_ma(),
-            k.fx,
-            k.fy,
-            if self.inner.extrapolated() { "True" } else { "False" }
-        )
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("CameraAt.__repr__", || {
+            let k = self.inner.intrinsics();
+            let setting = if self.given_e_com() {
+                String::new()
+            } else {
+                format!("e_in_ma={:?}, temperature_c={:?}, ", self.inner.e_in_ma(), self.inner.temperature_c())
+            };
+            format!(
+                "CameraAt({setting}e_com_ma={:?}, fx={:?}, fy={:?}, extrapolated={})",
+                self.inner.e_com_ma(),
+                k.fx,
+                k.fy,
+                if self.inner.extrapolated() { "True" } else { "False" }
+            )
+        })
     }
 }

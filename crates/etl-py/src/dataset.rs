@@ -83,17 +83,19 @@ impl Dataset {
         offstate_board: Option<Bound<'_, PyAny>>,
         board: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        if image_size.0 == 0 || image_size.1 == 0 {
-            return Err(invalid_value("image_size", [image_size.0, image_size.1], "image_size must be positive"));
-        }
-        let board = match (board, inner_corners, square_mm) {
-            (Some(b), None, None) => board_of(&b, "board")?,
-            (None, Some((c, r)), Some(s)) => Board::checkerboard([c, r], s).py()?,
-            _ => return Err(invalid("board", "give board=etlcal.Board(...), or inner_corners with square_mm")),
-        };
-        let mut file = DatasetFile::new([image_size.0, image_size.1], board);
-        file.offstate_board = offstate_board.map(|b| board_of(&b, "offstate_board")).transpose()?;
-        Ok(Dataset { file, path: base_dir.map(|d| d.join("dataset.json")) })
+        crate::errors::guarded("Dataset.__new__", || {
+            if image_size.0 == 0 || image_size.1 == 0 {
+                return Err(invalid_value("image_size", [image_size.0, image_size.1], "image_size must be positive"));
+            }
+            let board = match (board, inner_corners, square_mm) {
+                (Some(b), None, None) => board_of(&b, "board")?,
+                (None, Some((c, r)), Some(s)) => Board::checkerboard([c, r], s).py()?,
+                _ => return Err(invalid("board", "give board=etlcal.Board(...), or inner_corners with square_mm")),
+            };
+            let mut file = DatasetFile::new([image_size.0, image_size.1], board);
+            file.offstate_board = offstate_board.map(|b| board_of(&b, "offstate_board")).transpose()?;
+            Ok(Dataset { file, path: base_dir.map(|d| d.join("dataset.json")) })
+        })
     }
 
     /// Adds an ETL view: the image of the board on the stage and what was recorded with it.
@@ -237,8 +239,8 @@ impl Dataset {
     }
 
     /// Number of ETL views.
-    fn __len__(&self) -> usize {
-        self.file.views.len()
+    fn __len__(&self) -> PyResult<usize> {
+        crate::errors::guarded_value("Dataset.__len__", || self.file.views.len())
     }
 
     /// (width, height), px.
@@ -298,22 +300,26 @@ impl Dataset {
         Ok((Observations { file: obs }, crate::results::make(py, "DetectionSummary", &d)?))
     }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "Dataset(image_size={:?}, views={}, offstate_views={}, board={})",
-            self.file.image_size,
-            self.file.views.len(),
-            self.file.offstate_views.len(),
-            self.file.board.describe()
-        )
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("Dataset.__repr__", || {
+            format!(
+                "Dataset(image_size={:?}, views={}, offstate_views={}, board={})",
+                self.file.image_size,
+                self.file.views.len(),
+                self.file.offstate_views.len(),
+                self.file.board.describe()
+            )
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let me = slf.borrow();
-        let text = me.to_json()?;
-        let base = me.path.as_ref().and_then(|p| p.parent()).map(|d| d.display().to_string());
-        let ctor = py.get_type::<Dataset>().getattr("from_json")?;
-        Ok((ctor, PyTuple::new(py, [text.into_pyobject(py)?.into_any(), base.into_pyobject(py)?.into_any()])?))
+        crate::errors::guarded("Dataset.__reduce__", || {
+            let py = slf.py();
+            let me = slf.borrow();
+            let text = me.to_json()?;
+            let base = me.path.as_ref().and_then(|p| p.parent()).map(|d| d.display().to_string());
+            let ctor = py.get_type::<Dataset>().getattr("from_json")?;
+            Ok((ctor, PyTuple::new(py, [text.into_pyobject(py)?.into_any(), base.into_pyobject(py)?.into_any()])?))
+        })
     }
 }

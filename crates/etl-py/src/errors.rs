@@ -313,6 +313,47 @@ pub fn _raise_rust_error(kind: &str) -> PyResult<()> {
     }
 }
 
+/// `f`, with a panic turned into `etlcal.Error` and a report file, as `etlcal._guard` turns
+/// them for the functions, methods and properties it wraps. For what that Python wrapper
+/// cannot reach: the constructors (CPython refuses a Python `__new__` over an extension
+/// type's) and the special methods (a Python slot would slow every `len()` and `repr()`).
+/// `qualname` is the call as the user wrote it (`Calibration.__repr__`).
+pub fn guarded<T>(qualname: &str, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    // Unwind safety: on a panic nothing `f` touched is used again but the error.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        .unwrap_or_else(|payload| Err(Python::attach(|py| panic_error(py, qualname, payload.as_ref()))))
+}
+
+/// [`guarded`] for a body that cannot fail but by panicking.
+pub fn guarded_value<T>(qualname: &str, f: impl FnOnce() -> T) -> PyResult<T> {
+    guarded(qualname, || Ok(f()))
+}
+
+/// The `etlcal.Error` a panic with `payload` in `qualname` becomes (`_guard._panic_error`
+/// writes the report; if that module cannot be reached, the error says no report was written).
+fn panic_error(py: Python<'_>, qualname: &str, payload: &(dyn std::any::Any + Send)) -> PyErr {
+    let message = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".to_string());
+    let panic = pyo3::panic::PanicException::new_err(message.clone()).into_value(py);
+    let base = match exceptions(py) {
+        Ok(ex) => ex.base.bind(py).clone(),
+        Err(e) => return e,
+    };
+    let error = py
+        .import("etlcal._guard")
+        .and_then(|g| g.getattr("_panic_error")?.call1((qualname, panic, &base, env!("CARGO_PKG_VERSION"))));
+    match error {
+        Ok(e) => PyErr::from_value(e),
+        Err(_) => PyErr::from_type(
+            base,
+            (format!("internal error in {qualname}: {message} (a bug in etlcal; no report written)"),),
+        ),
+    }
+}
+
 /// A test hook: panics with `message` (in a rayon worker when `in_pool`, as a parallel
 /// call's bug would), so that the tests see what a bug at the binding boundary becomes
 /// (`etlcal._guard`: `etlcal.Error` with a report file, never PanicException).
@@ -333,7 +374,8 @@ pub fn _panic(py: Python<'_>, message: &str, in_pool: bool) -> PyResult<()> {
 }
 
 /// A test hook: a class whose method, static method and property panic (the kinds
-/// `etlcal._guard` wraps), and whose constructor panics on request (which it does not).
+/// `etlcal._guard` wraps), and whose constructor (on request), `repr` and `len` panic (the
+/// kinds [`guarded`] covers).
 #[pyclass(frozen, module = "etlcal")]
 pub struct _PanicProbe {
     armed: bool,
@@ -342,9 +384,11 @@ pub struct _PanicProbe {
 #[pymethods]
 impl _PanicProbe {
     #[new]
-    fn new(panic_now: bool) -> Self {
-        assert!(!panic_now, "the constructor panicked");
-        _PanicProbe { armed: true }
+    fn new(panic_now: bool) -> PyResult<Self> {
+        guarded_value("_PanicProbe.__new__", || {
+            assert!(!panic_now, "the constructor panicked");
+            _PanicProbe { armed: true }
+        })
     }
     fn method(&self) {
         assert!(!self.armed, "the method panicked");
@@ -357,5 +401,17 @@ impl _PanicProbe {
     fn property(&self) -> bool {
         assert!(!self.armed, "the property panicked");
         false
+    }
+    fn __repr__(&self) -> PyResult<String> {
+        guarded_value("_PanicProbe.__repr__", || {
+            assert!(!self.armed, "the repr panicked");
+            String::new()
+        })
+    }
+    fn __len__(&self) -> PyResult<usize> {
+        guarded_value("_PanicProbe.__len__", || {
+            assert!(!self.armed, "the len panicked");
+            0
+        })
     }
 }

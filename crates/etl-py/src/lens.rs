@@ -168,9 +168,12 @@ impl Lens {
     #[new]
     #[pyo3(signature = (port, handshake=false, timeout_ms=500))]
     fn new(py: Python<'_>, port: std::path::PathBuf, handshake: bool, timeout_ms: u64) -> PyResult<Self> {
-        let options = OpenOptions { handshake, timeout: Duration::from_millis(timeout_ms), ..OpenOptions::default() };
-        let client = py.detach(|| LensClient::open(&port, options)).map_err(hw_err)?;
-        Ok(Lens::from_client(client))
+        crate::errors::guarded("Lens.__new__", || {
+            let options =
+                OpenOptions { handshake, timeout: Duration::from_millis(timeout_ms), ..OpenOptions::default() };
+            let client = py.detach(|| LensClient::open(&port, options)).map_err(hw_err)?;
+            Ok(Lens::from_client(client))
+        })
     }
 
     /// Firmware, lens serial, limits and temperature: a LensInfo (attributes, also dict
@@ -328,14 +331,16 @@ impl Lens {
         Ok(())
     }
 
-    fn __enter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
-        slf
+    fn __enter__(slf: PyRef<'_, Self>) -> PyResult<PyRef<'_, Self>> {
+        crate::errors::guarded_value("Lens.__enter__", || slf)
     }
 
     #[pyo3(signature = (*_args))]
     fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
-        self.close(py)?;
-        Ok(false)
+        crate::errors::guarded("Lens.__exit__", || {
+            self.close(py)?;
+            Ok(false)
+        })
     }
 }
 
@@ -353,8 +358,10 @@ pub struct VirtualLens {
 impl VirtualLens {
     #[new]
     fn new() -> PyResult<Self> {
-        let device = Device::spawn(VirtualLensConfig::default()).map_err(hw_err)?;
-        Ok(VirtualLens { device })
+        crate::errors::guarded("VirtualLens.__new__", || {
+            let device = Device::spawn(VirtualLensConfig::default()).map_err(hw_err)?;
+            Ok(VirtualLens { device })
+        })
     }
 
     /// The pseudo-terminal's path (pass it to `Lens`).

@@ -77,8 +77,10 @@ impl Observations {
 impl Observations {
     #[new]
     fn new(image_size: (u32, u32)) -> PyResult<Self> {
-        etl_formats::check_image_size([image_size.0, image_size.1], "image_size").py()?;
-        Ok(Observations { file: ObsFile::new([image_size.0, image_size.1]) })
+        crate::errors::guarded("Observations.__new__", || {
+            etl_formats::check_image_size([image_size.0, image_size.1], "image_size").py()?;
+            Ok(Observations { file: ObsFile::new([image_size.0, image_size.1]) })
+        })
     }
 
     /// Builds observations from arrays, one entry per view.
@@ -223,20 +225,22 @@ impl Observations {
     }
 
     /// Number of ETL views.
-    fn __len__(&self) -> usize {
-        self.file.views.len()
+    fn __len__(&self) -> PyResult<usize> {
+        crate::errors::guarded_value("Observations.__len__", || self.file.views.len())
     }
 
     /// ETL view `index` as a View (negative counts from the end; IndexError outside).
     fn __getitem__<'py>(&self, py: Python<'py>, index: isize) -> PyResult<Bound<'py, PyAny>> {
-        view_dict(py, pick(&self.file.views, index)?)
+        crate::errors::guarded("Observations.__getitem__", || view_dict(py, pick(&self.file.views, index)?))
     }
 
     /// The ETL views in order, as View objects (a snapshot: views added while iterating
     /// are not seen).
     fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let views = self.file.views.iter().map(|v| view_dict(py, v)).collect::<PyResult<Vec<_>>>()?;
-        Ok(pyo3::types::PyList::new(py, views)?.try_iter()?.into_any())
+        crate::errors::guarded("Observations.__iter__", || {
+            let views = self.file.views.iter().map(|v| view_dict(py, v)).collect::<PyResult<Vec<_>>>()?;
+            Ok(pyo3::types::PyList::new(py, views)?.try_iter()?.into_any())
+        })
     }
 
     /// Number of lens-off views.
@@ -298,21 +302,25 @@ impl Observations {
         self.file.e_com_ma(t.as_ref()).map_err(crate::errors::calib_err)
     }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "Observations(image_size={:?}, views={}, points={}, offstate_views={})",
-            self.file.image_size,
-            self.file.views.len(),
-            self.point_count(),
-            self.file.offstate_views.len()
-        )
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("Observations.__repr__", || {
+            format!(
+                "Observations(image_size={:?}, views={}, points={}, offstate_views={})",
+                self.file.image_size,
+                self.file.views.len(),
+                self.point_count(),
+                self.file.offstate_views.len()
+            )
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let text = slf.borrow().to_json()?;
-        let ctor = py.get_type::<Observations>().getattr("from_json")?;
-        Ok((ctor, PyTuple::new(py, [text])?))
+        crate::errors::guarded("Observations.__reduce__", || {
+            let py = slf.py();
+            let text = slf.borrow().to_json()?;
+            let ctor = py.get_type::<Observations>().getattr("from_json")?;
+            Ok((ctor, PyTuple::new(py, [text])?))
+        })
     }
 }
 
@@ -362,9 +370,11 @@ fn check_a0(a: &CoreA0) -> PyResult<()> {
 impl A0 {
     #[new]
     fn new(kf0x: f64, kf0y: f64, u0: f64, v0: f64) -> PyResult<Self> {
-        let inner = CoreA0 { kf0x, kf0y, u0, v0 };
-        check_a0(&inner)?;
-        Ok(A0 { inner })
+        crate::errors::guarded("A0.__new__", || {
+            let inner = CoreA0 { kf0x, kf0y, u0, v0 };
+            check_a0(&inner)?;
+            Ok(A0 { inner })
+        })
     }
 
     /// Reads an `etlcal.a0/1` file.
@@ -423,14 +433,18 @@ impl A0 {
         self.inner.v0
     }
 
-    fn __repr__(&self) -> String {
-        let a = &self.inner;
-        format!("A0(kf0x={:?}, kf0y={:?}, u0={:?}, v0={:?})", a.kf0x, a.kf0y, a.u0, a.v0)
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("A0.__repr__", || {
+            let a = &self.inner;
+            format!("A0(kf0x={:?}, kf0y={:?}, u0={:?}, v0={:?})", a.kf0x, a.kf0y, a.u0, a.v0)
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let a = slf.get().inner;
-        Ok((py.get_type::<A0>().into_any(), PyTuple::new(py, [a.kf0x, a.kf0y, a.u0, a.v0])?))
+        crate::errors::guarded("A0.__reduce__", || {
+            let py = slf.py();
+            let a = slf.get().inner;
+            Ok((py.get_type::<A0>().into_any(), PyTuple::new(py, [a.kf0x, a.kf0y, a.u0, a.v0])?))
+        })
     }
 }

@@ -100,23 +100,25 @@ impl LensPhysics {
         f_pri_mm: f64,
         d_lens_mm: f64,
     ) -> PyResult<Self> {
-        let inner = CoreLens {
-            young_modulus_pa,
-            membrane_radius_mm,
-            membrane_thickness_mm,
-            poisson_ratio,
-            prestrain,
-            n_liq,
-            n_0,
-            p0_pa,
-            k_e0_pa,
-            k_e1_pa_per_ma,
-            k_e2_pa_per_ma2,
-            f_pri_mm,
-            d_lens_mm,
-        };
-        inner.validate().py()?;
-        Ok(LensPhysics { inner })
+        crate::errors::guarded("LensPhysics.__new__", || {
+            let inner = CoreLens {
+                young_modulus_pa,
+                membrane_radius_mm,
+                membrane_thickness_mm,
+                poisson_ratio,
+                prestrain,
+                n_liq,
+                n_0,
+                p0_pa,
+                k_e0_pa,
+                k_e1_pa_per_ma,
+                k_e2_pa_per_ma2,
+                f_pri_mm,
+                d_lens_mm,
+            };
+            inner.validate().py()?;
+            Ok(LensPhysics { inner })
+        })
     }
 
     /// The lens of the paper's section 5.1.1 (f_liq 120.5 mm at 0 mA to 50.5 mm at 250 mA).
@@ -288,13 +290,17 @@ impl LensPhysics {
         .py()
     }
 
-    fn __repr__(&self) -> String {
-        let parts: Vec<String> = FIELDS.iter().zip(self.values()).map(|(k, v)| format!("{k}={v:?}")).collect();
-        format!("LensPhysics({})", parts.join(", "))
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("LensPhysics.__repr__", || {
+            let parts: Vec<String> = FIELDS.iter().zip(self.values()).map(|(k, v)| format!("{k}={v:?}")).collect();
+            format!("LensPhysics({})", parts.join(", "))
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        Ok((py.get_type::<LensPhysics>().into_any(), PyTuple::new(py, slf.get().values())?))
+        crate::errors::guarded("LensPhysics.__reduce__", || {
+            let py = slf.py();
+            Ok((py.get_type::<LensPhysics>().into_any(), PyTuple::new(py, slf.get().values())?))
+        })
     }
 }

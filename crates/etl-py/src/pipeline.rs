@@ -157,7 +157,8 @@ pub fn calibrate(
         .map(|why| format!("{why}: use it with at_e_com(e_com_ma)"));
     for why in calibrated.warnings().into_iter().chain(uncompensated.as_deref()) {
         let message = std::ffi::CString::new(why).map_err(|e| input_error(e.to_string()))?;
-        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)?;
+        // Level 2: the caller's line, above `etlcal._guard`'s wrapper (the user calls that).
+        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 2)?;
     }
     Calibration::from_file(calibrated.into_calibration())
 }

@@ -62,14 +62,16 @@ impl BoardPose {
         translation_mm: (f64, f64, f64),
         rms_px: f64,
         iterations: usize,
-    ) -> Self {
-        let (a, b, c) = rotation_rodrigues;
-        let (x, y, z) = translation_mm;
-        BoardPose {
-            inner: CorePose { rotation_rodrigues: [a, b, c], translation_mm: [x, y, z], rms_px, iterations },
-            uncertainty: None,
-            calibration_covariance: None,
-        }
+    ) -> PyResult<Self> {
+        crate::errors::guarded_value("BoardPose.__new__", || {
+            let (a, b, c) = rotation_rodrigues;
+            let (x, y, z) = translation_mm;
+            BoardPose {
+                inner: CorePose { rotation_rodrigues: [a, b, c], translation_mm: [x, y, z], rms_px, iterations },
+                uncertainty: None,
+                calibration_covariance: None,
+            }
+        })
     }
 
     /// Rebuilds a pickled pose (its uncertainty included).
@@ -82,7 +84,7 @@ impl BoardPose {
         state: Option<Vec<f64>>,
         calibration_covariance: Option<Vec<f64>>,
     ) -> PyResult<Self> {
-        let mut pose = BoardPose::new(rotation_rodrigues, translation_mm, rms_px, iterations);
+        let mut pose = BoardPose::new(rotation_rodrigues, translation_mm, rms_px, iterations)?;
         if let Some(v) = state {
             if v.len() != STATE {
                 return Err(invalid("state", format!("a pose's state has {STATE} numbers, got {}", v.len())));
@@ -203,23 +205,28 @@ impl BoardPose {
         vec_out(py, &displacement_mm(&self.inner, &other.inner))
     }
 
-    fn __repr__(&self) -> String {
-        let p = &self.inner;
-        format!(
-            "BoardPose(rotation_rodrigues={:?}, translation_mm={:?}, rms_px={:?}, iterations={})",
-            p.rotation_rodrigues, p.translation_mm, p.rms_px, p.iterations
-        )
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("BoardPose.__repr__", || {
+            let p = &self.inner;
+            format!(
+                "BoardPose(rotation_rodrigues={:?}, translation_mm={:?}, rms_px={:?}, iterations={})",
+                p.rotation_rodrigues, p.translation_mm, p.rms_px, p.iterations
+            )
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let p = slf.get().inner;
-        let r = p.rotation_rodrigues;
-        let t = p.translation_mm;
-        let pose = slf.get();
-        let cal: Option<Vec<f64>> = pose.calibration_covariance.as_ref().map(|c| c.iter().flatten().copied().collect());
-        let args = ((r[0], r[1], r[2]), (t[0], t[1], t[2]), p.rms_px, p.iterations, pose.state(), cal);
-        let ctor = py.get_type::<BoardPose>().getattr("_restore")?;
-        Ok((ctor, args.into_pyobject(py)?))
+        crate::errors::guarded("BoardPose.__reduce__", || {
+            let py = slf.py();
+            let p = slf.get().inner;
+            let r = p.rotation_rodrigues;
+            let t = p.translation_mm;
+            let pose = slf.get();
+            let cal: Option<Vec<f64>> =
+                pose.calibration_covariance.as_ref().map(|c| c.iter().flatten().copied().collect());
+            let args = ((r[0], r[1], r[2]), (t[0], t[1], t[2]), p.rms_px, p.iterations, pose.state(), cal);
+            let ctor = py.get_type::<BoardPose>().getattr("_restore")?;
+            Ok((ctor, args.into_pyobject(py)?))
+        })
     }
 }

@@ -74,20 +74,28 @@ impl Simulation {
 
     /// Pickles as the call that makes it (the simulation is deterministic).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Reduced<'py>> {
-        let m = py.import("etlcal._etlcal")?;
-        if self.strong {
-            return Ok((
-                m.getattr("simulate_strong_rig")?,
-                (self.seed, noise_dict(py, &self.noise)?).into_pyobject(py)?.into_any(),
-            ));
-        }
-        let args = (self.seed, noise_dict(py, &self.noise)?, self.setting_views);
-        Ok((m.getattr("simulate_paper_rig")?, args.into_pyobject(py)?.into_any()))
+        crate::errors::guarded("Simulation.__reduce__", || {
+            let m = py.import("etlcal._etlcal")?;
+            if self.strong {
+                return Ok((
+                    m.getattr("simulate_strong_rig")?,
+                    (self.seed, noise_dict(py, &self.noise)?).into_pyobject(py)?.into_any(),
+                ));
+            }
+            let args = (self.seed, noise_dict(py, &self.noise)?, self.setting_views);
+            Ok((m.getattr("simulate_paper_rig")?, args.into_pyobject(py)?.into_any()))
+        })
     }
 
-    fn __repr__(&self) -> String {
-        let o = &self.inner.observations;
-        format!("Simulation(views={}, points={})", o.views.len(), o.views.iter().map(|v| v.points.len()).sum::<usize>())
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("Simulation.__repr__", || {
+            let o = &self.inner.observations;
+            format!(
+                "Simulation(views={}, points={})",
+                o.views.len(),
+                o.views.iter().map(|v| v.points.len()).sum::<usize>()
+            )
+        })
     }
 }
 

@@ -39,10 +39,12 @@ pub struct ThermalSurface {
 impl ThermalSurface {
     #[new]
     fn new(coefficients: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let c = crate::arrays::fixed::<10>(coefficients, "coefficients")?;
-        let inner = CoreSurface { coefficients: c };
-        inner.validate().py()?;
-        Ok(ThermalSurface { inner })
+        crate::errors::guarded("ThermalSurface.__new__", || {
+            let c = crate::arrays::fixed::<10>(coefficients, "coefficients")?;
+            let inner = CoreSurface { coefficients: c };
+            inner.validate().py()?;
+            Ok(ThermalSurface { inner })
+        })
     }
 
     /// The paper's fitted surface (section 5.2.2; RMSE 0.2106 mA).
@@ -147,14 +149,18 @@ impl ThermalSurface {
         Ok(ThermalCalibration { inner: cal, rms_ma: rms })
     }
 
-    fn __repr__(&self) -> String {
-        format!("ThermalSurface({:?})", self.inner.coefficients)
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("ThermalSurface.__repr__", || {
+            format!("ThermalSurface({:?})", self.inner.coefficients)
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let c = slf.get().inner.coefficients.to_vec();
-        Ok((py.get_type::<ThermalSurface>().into_any(), PyTuple::new(py, [c])?))
+        crate::errors::guarded("ThermalSurface.__reduce__", || {
+            let py = slf.py();
+            let c = slf.get().inner.coefficients.to_vec();
+            Ok((py.get_type::<ThermalSurface>().into_any(), PyTuple::new(py, [c])?))
+        })
     }
 }
 
@@ -202,16 +208,18 @@ impl ThermalCalibration {
     // the old positional order (t_range_c first) must fail loudly, not swap them silently.
     #[pyo3(signature = (surface, *, e_in_range_ma, t_range_c, rms_ma=0.0))]
     fn new(surface: ThermalSurface, e_in_range_ma: (f64, f64), t_range_c: (f64, f64), rms_ma: f64) -> PyResult<Self> {
-        let c = ThermalCalibration {
-            inner: CoreThermalCal {
-                surface: surface.inner,
-                t_range_c: [t_range_c.0, t_range_c.1],
-                e_in_range_ma: [e_in_range_ma.0, e_in_range_ma.1],
-            },
-            rms_ma,
-        };
-        c.file().validate(std::path::Path::new("<ThermalCalibration>")).py()?;
-        Ok(c)
+        crate::errors::guarded("ThermalCalibration.__new__", || {
+            let c = ThermalCalibration {
+                inner: CoreThermalCal {
+                    surface: surface.inner,
+                    t_range_c: [t_range_c.0, t_range_c.1],
+                    e_in_range_ma: [e_in_range_ma.0, e_in_range_ma.1],
+                },
+                rms_ma,
+            };
+            c.file().validate(std::path::Path::new("<ThermalCalibration>")).py()?;
+            Ok(c)
+        })
     }
 
     /// The paper's surface over the paper's procedure (27..37 degC, 40..240 mA; RMS
@@ -334,18 +342,22 @@ impl ThermalCalibration {
         self.inner.contains(e_in_ma, temperature_c)
     }
 
-    fn __repr__(&self) -> String {
-        format!(
-            "ThermalCalibration(e_in_range_ma={:?}, t_range_c={:?}, rms_ma={})",
-            self.inner.e_in_range_ma, self.inner.t_range_c, self.rms_ma
-        )
+    fn __repr__(&self) -> PyResult<String> {
+        crate::errors::guarded_value("ThermalCalibration.__repr__", || {
+            format!(
+                "ThermalCalibration(e_in_range_ma={:?}, t_range_c={:?}, rms_ma={})",
+                self.inner.e_in_range_ma, self.inner.t_range_c, self.rms_ma
+            )
+        })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        let py = slf.py();
-        let text = slf.get().to_json()?;
-        let ctor = py.get_type::<ThermalCalibration>().getattr("from_json")?;
-        Ok((ctor, PyTuple::new(py, [text])?))
+        crate::errors::guarded("ThermalCalibration.__reduce__", || {
+            let py = slf.py();
+            let text = slf.get().to_json()?;
+            let ctor = py.get_type::<ThermalCalibration>().getattr("from_json")?;
+            Ok((ctor, PyTuple::new(py, [text])?))
+        })
     }
 }
 

@@ -29,6 +29,7 @@ def uncompensated() -> etlcal.Calibration:
         cal = etlcal.calibrate(sim.observations, sim.a0)
     mine = [w for w in said if "temperature compensation" in str(w.message)]
     assert len(mine) == 1, "said once"
+    assert mine[0].filename == __file__, "at the caller's line, not inside etlcal"
     assert str(mine[0].message).endswith("use it with at_e_com(e_com_ma)")
     return cal
 

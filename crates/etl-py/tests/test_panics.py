@@ -46,6 +46,20 @@ def test_a_panic_in_a_method_static_method_or_property_is_an_etlcal_error() -> N
     _caught(lambda: probe.property, "_PanicProbe.property", "the property panicked")
 
 
+def test_a_panic_in_a_constructor_or_a_special_method_is_an_etlcal_error() -> None:
+    _caught(lambda: _etlcal._PanicProbe(True), "_PanicProbe.__new__", "the constructor panicked")
+    probe = _etlcal._PanicProbe(False)
+    _caught(lambda: repr(probe), "_PanicProbe.__repr__", "the repr panicked")
+    _caught(lambda: len(probe), "_PanicProbe.__len__", "the len panicked")
+    # the report's traceback is the Python stack of the call
+    with pytest.raises(etlcal.Error) as info:
+        _etlcal._PanicProbe(True)
+    path = REPORT.search(str(info.value)).group(1)  # type: ignore[union-attr]
+    report = Path(path).read_text()
+    os.unlink(path)
+    assert "test_a_panic_in_a_constructor_or_a_special_method_is_an_etlcal_error" in report, report
+
+
 def test_a_panic_on_other_threads_is_an_etlcal_error_on_each() -> None:
     errors: List[BaseException] = []
 

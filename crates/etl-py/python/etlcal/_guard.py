@@ -8,9 +8,9 @@ module, and every method, static method, class method and property of its classe
 wrapped. A panic is a bug in etlcal, so the message says so. Not wrapped: the
 constructors (a Python ``__new__`` over an extension type's fails CPython's safety check
 of ``tp_new``) and the special methods (``__repr__``, ``__eq__``, ``__len__``, ...), whose
-slots a Python function would slow down for every container use; a panic there is still
-PanicException. Exceptions other than a panic pass through untouched (KeyboardInterrupt
-included).
+slots a Python function would slow down for every container use: those catch their panics
+in Rust (``errors::guarded``) and come here for the same error (`_panic_error`).
+Exceptions other than a panic pass through untouched (KeyboardInterrupt included).
 """
 import functools
 import itertools
@@ -33,9 +33,15 @@ def _is_panic(e: BaseException) -> bool:
 def _write_report(qualname: str, e: BaseException, version: str) -> str:
     """The report's path, or why it could not be written."""
     path = os.path.join(tempfile.gettempdir(), f"etlcal-panic-{os.getpid()}-{next(_reports)}.txt")
+    if e.__traceback__ is not None:
+        trace = "".join(traceback.format_exception(type(e), e, e.__traceback__))
+    else:
+        # Caught in Rust (a constructor or a special method): no traceback of its own, so
+        # the Python stack that made the call.
+        trace = "Traceback (most recent call last):\n" + "".join(traceback.format_stack()[:-2]) + f"{e!r}\n"
     text = (
         f"etlcal {version}, Python {sys.version.split()[0]}, {platform.platform()}\n"
-        f"call: {qualname}\npanic: {e}\n\n" + "".join(traceback.format_exception(type(e), e, e.__traceback__))
+        f"call: {qualname}\npanic: {e}\n\n" + trace
     )
     try:
         # O_EXCL: never through a planted symlink, never over another process's report.
@@ -60,10 +66,16 @@ def _guarded(
         except BaseException as e:
             if not _is_panic(e):
                 raise
-            where = _write_report(qualname, e, version)
-            raise error(f"internal error in {qualname}: {e} (a bug in etlcal; {where})") from None
+            raise _panic_error(qualname, e, error, version) from None
 
     return call
+
+
+def _panic_error(qualname: str, e: BaseException, error: type, version: str) -> BaseException:
+    """The `error` a panic `e` in `qualname` becomes, its report written (also called from
+    Rust, for the panics of constructors and special methods)."""
+    where = _write_report(qualname, e, version)
+    return error(f"internal error in {qualname}: {e} (a bug in etlcal; {where})")  # type: ignore[no-any-return]
 
 
 def _class_call(raw: Any) -> Callable[..., Any]:

@@ -4,7 +4,9 @@
 //!   re-exports, outside tests and comments): each layer depends on the ones below;
 //! - no function outside tests is longer than 100 lines (one screen, read at once);
 //! - the command line is the `etlcal` crate's alone (no other crate depends on it, on clap
-//!   or on indicatif), and plotting is the report crate's (plotters).
+//!   or on indicatif), and plotting is the report crate's (plotters);
+//! - every Python constructor and special method of the extension catches its panics
+//!   (`etl-py`'s `errors::guarded`; `etlcal._guard` covers the rest from Python).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -517,4 +519,48 @@ fn the_cycle_check_follows_every_path_form() {
     assert_eq!(sibling_cycles(&via), vec!["x::y::a -> x::y::b (x/y/a.rs:1), x::y::b -> x::y::a (x/y/b.rs:1)"]);
     assert_eq!(module_path(Path::new("lib.rs")), Vec::<String>::new());
     assert_eq!(module_path(Path::new("a/b/mod.rs")), vec!["a", "b"]);
+}
+
+/// The Python constructors (`#[new]`) and special methods (`fn __x__`) of `lines` whose body
+/// does not start with `guarded(` or `guarded_value(`: (line, name).
+fn unguarded_entry_points(lines: &[String]) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let mut after_new = false;
+    for (i, line) in lines.iter().enumerate() {
+        let t = line.trim();
+        after_new |= t == "#[new]";
+        let Some(rest) = t.strip_prefix("fn ") else { continue };
+        let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        let entry = std::mem::take(&mut after_new) || (name.starts_with("__") && name.ends_with("__"));
+        let Some(open) = (i..lines.len()).find(|&k| lines[k].trim_end().ends_with('{')) else { continue };
+        let first = lines[open + 1..].iter().map(|l| l.trim()).find(|l| !l.is_empty()).unwrap_or("");
+        if entry && !(first.contains("guarded(") || first.contains("guarded_value(")) {
+            out.push((i + 1, name));
+        }
+    }
+    out
+}
+
+/// A panic in a constructor or a special method would reach Python as pyo3's
+/// PanicException (a BaseException that `except Exception` misses): each one's body goes
+/// through `errors::guarded`, which turns it into `etlcal.Error` with a report.
+#[test]
+fn every_python_constructor_and_special_method_catches_its_panics() {
+    let mut files = Vec::new();
+    rust_files(&workspace().join("crates/etl-py/src"), &mut files);
+    let mut missing = Vec::new();
+    for f in &files {
+        let lines = code_lines(&std::fs::read_to_string(f).unwrap());
+        for (line, name) in unguarded_entry_points(&lines) {
+            missing.push(format!("{}:{line} {name}", f.display()));
+        }
+    }
+    assert!(missing.is_empty(), "not through errors::guarded: {missing:?}");
+    let sample = |body: &str| -> Vec<String> { body.lines().map(strip_comment).collect() };
+    let bad = sample("#[new]\n#[pyo3(signature = (a))]\nfn new(a: u8) -> Self {\n    Self { a }\n}\nfn __len__(&self) -> usize {\n    0\n}\nfn other(&self) {\n}");
+    assert_eq!(unguarded_entry_points(&bad), vec![(3, "new".to_owned()), (6, "__len__".to_owned())]);
+    let good = sample(
+        "fn __repr__(\n    &self,\n) -> PyResult<String> {\n    guarded_value(\"X.__repr__\", || String::new())\n}",
+    );
+    assert!(unguarded_entry_points(&good).is_empty());
 }
