@@ -419,6 +419,11 @@ pub struct Calibration {
     /// complement).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub covariance: Option<Vec<Vec<f64>>>,
+    /// What `covariance` accounts for ([`CovarianceNoise`]); absent in files written
+    /// before it was recorded, in which an `"estimator": "paper"` covariance holds the
+    /// pixel noise only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub covariance_noise: Option<CovarianceNoise>,
     /// The focus law: the distance in focus (mm, along the optical axis from the camera's
     /// centre) against E_com, fitted to the views (optional; absent when the views did not
     /// allow one, and in files written before it existed).
@@ -443,6 +448,39 @@ pub struct Calibration {
     /// the comparison table ([`crate::model_selection`]); absent when the model was given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_selection: Option<crate::model_selection::ModelSelection>,
+}
+
+/// The noise a calibration's covariance accounts for: the corners' pixel noise, and the
+/// spread of each view's recorded stage position and current. For the errors-in-variables
+/// estimator the spreads are its priors; for the paper's (which takes the recorded values
+/// as exact) they are the errors its covariance adds (docs/METHOD.md, "Uncertainty of the
+/// paper estimator"), absent when it accounts for the pixel noise alone.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CovarianceNoise {
+    /// Pixel noise standard deviation, px (given, or estimated from the residuals).
+    pub sigma_px: f64,
+    /// Standard deviation of a view's recorded stage position, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_z_mm: Option<f64>,
+    /// Standard deviation of a view's recorded current, mA.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_e_ma: Option<f64>,
+}
+
+impl CovarianceNoise {
+    /// A finite pixel noise >= 0 and finite spreads > 0, or the message naming the field.
+    fn validate(&self) -> std::result::Result<(), String> {
+        if !(self.sigma_px.is_finite() && self.sigma_px >= 0.0) {
+            return Err(format!("covariance_noise.sigma_px = {} must be a finite number >= 0", self.sigma_px));
+        }
+        for (key, v) in [("sigma_z_mm", self.sigma_z_mm), ("sigma_e_ma", self.sigma_e_ma)] {
+            if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(format!("covariance_noise.{key} = {v} must be a finite number > 0"));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A corner left out of a calibration as a gross outlier (`outliers`: of the observations'
@@ -493,6 +531,7 @@ impl Calibration {
             initial_rms_px: 0.0,
             views: vec![],
             covariance: None,
+            covariance_noise: None,
             focus_law: None,
             model_selection: None,
         }
@@ -758,6 +797,9 @@ impl Calibration {
         }
         if let Err(e) = self.std.checked_params(&model.layout()) {
             return bad(e);
+        }
+        if let Some(n) = &self.covariance_noise {
+            n.validate().or_else(bad)?;
         }
         self.validate_covariance(&model.layout()).or_else(bad)
     }

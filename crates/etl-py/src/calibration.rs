@@ -412,6 +412,23 @@ impl Calibration {
         (!self.file.estimator.is_empty()).then(|| self.file.estimator.clone())
     }
 
+    /// What the covariance accounts for: a dict with "sigma_px" (the pixel noise, px) and,
+    /// where the covariance includes the errors of the recorded stage positions and
+    /// currents, "sigma_z_mm" and "sigma_e_ma" (the "eiv" priors, or the "paper"
+    /// estimator's input noise). None for files written before it was recorded (a
+    /// "paper" covariance there is of the pixel noise alone) and for models given.
+    #[getter]
+    fn covariance_noise<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(n) = &self.file.covariance_noise else { return Ok(None) };
+        let d = PyDict::new(py);
+        d.set_item("sigma_px", n.sigma_px)?;
+        if let (Some(z), Some(e)) = (n.sigma_z_mm, n.sigma_e_ma) {
+            d.set_item("sigma_z_mm", z)?;
+            d.set_item("sigma_e_ma", e)?;
+        }
+        Ok(Some(d))
+    }
+
     /// Bundle-adjustment iterations (0 when not estimated).
     #[getter]
     fn iterations(&self) -> usize {

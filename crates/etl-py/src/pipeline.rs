@@ -59,9 +59,10 @@ impl Spelling for Keywords {
 ///     robust: None, "huber" or "cauchy" (a robust loss on each point's error).
 ///     robust_k_px: threshold / scale of the robust loss, px (> 0; used with robust;
 ///         None: 1 px).
-///     sigma_z_mm: "eiv" prior on the stage position, mm (None: the paper's 0.010).
-///     sigma_e_ma: "eiv" prior on the current, mA (None: the paper's 0.4).
-///     sigma_px: "eiv" pixel noise, px (None: estimated from a plain solution).
+///     sigma_z_mm: spread of a view's recorded stage position, mm (None: the paper's
+///         0.010): the "eiv" prior, and the error the "paper" covariance accounts for.
+///     sigma_e_ma: the same for the recorded current, mA (None: the paper's 0.4).
+///     sigma_px: pixel noise, px (None: estimated from the residuals).
 ///     method: "proposed" (the paper's method, above) or "per-setting" (the paper's
 ///         baseline of section 5.2.3: Zhang at each current of the observations'
 ///         setting views, >= 3 views at each of >= 3 currents, then a cubic through

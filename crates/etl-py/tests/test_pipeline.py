@@ -85,6 +85,25 @@ def test_the_default_estimator_is_errors_in_variables(sim: etlcal.Simulation) ->
     assert all(v["dz_mm"] == 0.0 for v in paper.views)
 
 
+def test_the_covariance_says_what_noise_it_accounts_for(sim: etlcal.Simulation) -> None:
+    # Both estimators' covariances include the recorded stage and current errors (the
+    # paper's takes them as exact in its fit, not in its uncertainty); the spreads are the
+    # same sigma_z_mm / sigma_e_ma for both, the paper's by default.
+    eiv = etlcal.calibrate(sim.observations, sim.a0)
+    paper = etlcal.calibrate(sim.observations, sim.a0, estimator="paper")
+    for cal in (eiv, paper):
+        noise = cal.covariance_noise
+        assert noise is not None and noise["sigma_z_mm"] == 0.010 and noise["sigma_e_ma"] == 0.4
+        assert 0.15 < noise["sigma_px"] < 0.25, noise  # the simulation's 0.2 px (and 1 um corners)
+        assert json.loads(cal.to_json())["covariance_noise"] == noise
+    # The paper estimator's stds grow with the stage spread it is told of; its estimate does not move.
+    loose = etlcal.calibrate(sim.observations, sim.a0, estimator="paper", sigma_z_mm=0.05)
+    assert np.array_equal(loose.kf_x, paper.kf_x)
+    assert np.all(loose.std["kf_x"] > 1.5 * paper.std["kf_x"])
+    # A model given, not estimated, records none.
+    assert etlcal.Calibration.paper_rig().covariance_noise is None
+
+
 def test_the_centre_fixed_moving_and_bad(sim: etlcal.Simulation, tmp_path: pathlib.Path) -> None:
     # centre="fixed" is the default; "moving" fits dz(E) and the principal point's move
     # (Eq. C1-C3), recorded as the file's "centre"; a bad word is refused naming centre=.
@@ -95,9 +114,13 @@ def test_the_centre_fixed_moving_and_bad(sim: etlcal.Simulation, tmp_path: pathl
     c = moving.centre
     assert c is not None and c["dz_mm"][0] == 0.0 and len(c["dz_mm"]) == 3
     assert c["principal_point_px"][0][0] == moving.principal_point[0]
-    # The paper rig's centre does not move: noise-free, the move over 80..225 mA is 0.
+    # The paper rig's centre does not move: noise-free, the move over 80..225 mA is 0. The
+    # stage positions and currents are exact too, and the covariance is told so (with the
+    # paper's 10 um and 0.4 mA it would say the move is undetermined, as it is on that rig).
     clean = etlcal.simulate.paper_rig(seed=0, noise="none")
-    exact = etlcal.calibrate(clean.observations, clean.a0, estimator="paper", centre="moving")
+    exact = etlcal.calibrate(
+        clean.observations, clean.a0, estimator="paper", centre="moving", sigma_z_mm=1e-9, sigma_e_ma=1e-9
+    )
     still = exact.centre
     assert still is not None
     assert not any("centre's move" in w for w in exact.warnings), exact.warnings

@@ -32,7 +32,9 @@ impl Provenance {
     pub fn priors_of(estimator: &etl_core::calib::Estimator) -> String {
         match estimator {
             etl_core::calib::Estimator::Paper => {
-                "none: the paper's estimator takes the recorded stage positions and currents as exact".into()
+                "none in the fit: the paper's estimator takes the recorded stage positions and currents as exact \
+                 (its covariance accounts for their errors: see covariance)"
+                    .into()
             }
             etl_core::calib::Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px } => format!(
                 "errors-in-variables: stage position std {:.1} um, current std {sigma_e_ma} mA, pixel noise {}",

@@ -107,6 +107,28 @@ fn curve_table(d: &Data) -> String {
     t + "</table>\n"
 }
 
+/// What the calibration's covariance accounts for, in words (`"covariance_noise"`).
+fn covariance_text(cal: &etl_formats::calibration::Calibration, recorded: bool) -> String {
+    if !recorded {
+        return "absent: no bands, no uncertainty map, no correlations".into();
+    }
+    let n = cal.model().map_or(0, |m| m.layout().len());
+    let accounts = match &cal.covariance_noise {
+        Some(c) => {
+            let inputs = match (c.sigma_z_mm, c.sigma_e_ma) {
+                (Some(z), Some(e)) => format!(", stage position {:.1} um and current {e} mA per view", z * 1000.0),
+                _ => ", the recorded stage positions and currents taken as exact".into(),
+            };
+            format!("pixel noise {:.3} px{inputs}", c.sigma_px)
+        }
+        None if cal.estimator == "paper" => {
+            "the pixel noise alone (written before covariance_noise was recorded)".into()
+        }
+        None => "not recorded in the file".into(),
+    };
+    format!("recorded ({n} x {n}); accounts for {accounts}")
+}
+
 /// What each figure shows and what to look for.
 fn caption(stem: &str, d: &Data) -> String {
     match stem {
@@ -252,11 +274,7 @@ fn provenance_html(d: &Data, p: &Provenance) -> String {
         d.cal.iterations,
         d.cal.rms_reprojection_px,
         d.cal.initial_rms_px,
-        if d.covariance.is_some() {
-            "recorded (25 x 25)"
-        } else {
-            "absent: no bands, no uncertainty map, no correlations"
-        }
+        esc(&covariance_text(&d.cal, d.covariance.is_some()))
     )
 }
 

@@ -147,20 +147,22 @@ pub struct Args {
     // estimator the user gave (the baseline has no bundle adjustment), as Python does.
     #[arg(long, value_enum)]
     pub estimator: Option<EstimatorArg>,
-    /// Prior standard deviation of the stage position for --estimator eiv, um
-    /// [default: 10, the paper's].
+    /// Standard deviation of a view's recorded stage position, um [default: 10, the
+    /// paper's]: the prior of --estimator eiv, and the error --estimator paper's
+    /// covariance accounts for.
     // The sigmas are Options: their defaults are the request's (defined once, in etl-calib).
     #[arg(long, value_name = "UM")]
     pub sigma_z_um: Option<f64>,
     /// The same prior in mm [default: 0.010] (Python's `sigma_z_mm`); not with --sigma-z-um.
     #[arg(long, value_name = "MM", conflicts_with = "sigma_z_um")]
     pub sigma_z_mm: Option<f64>,
-    /// Prior standard deviation of the current for --estimator eiv, mA [default: 0.4, the
-    /// paper's].
+    /// Standard deviation of a view's recorded current, mA [default: 0.4, the paper's]:
+    /// the prior of --estimator eiv, and the error --estimator paper's covariance accounts
+    /// for.
     #[arg(long, value_name = "MA")]
     pub sigma_e_ma: Option<f64>,
-    /// Pixel noise standard deviation for --estimator eiv, px [default: estimated from a
-    /// plain solution].
+    /// Pixel noise standard deviation, px [default: estimated: --estimator eiv from a plain
+    /// solution, --estimator paper from its residuals with the input errors' share out].
     #[arg(long, value_name = "PX")]
     pub sigma_px: Option<f64>,
     /// Hold A0 (kf0x, kf0y, u0, v0) fixed in the bundle adjustment.

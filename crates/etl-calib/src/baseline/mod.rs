@@ -272,6 +272,7 @@ fn calibration_of(
         // fits whose cross-covariances are not computed; a block-diagonal matrix would
         // claim independence it does not have. Downstream uncertainty is refused instead.
         covariance: None,
+        covariance_noise: None,
         iterations: settings.iter().map(|s| s.zhang.iterations).max().unwrap_or(0),
         initial_rms_px: rms,
         // Each setting's boards are in their own frames and the calibration has no pose:

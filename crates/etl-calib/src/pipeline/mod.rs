@@ -19,10 +19,14 @@ mod view_focal;
 pub use planar_views::{detect_views, PlanarViews};
 pub use view_focal::view_focal;
 
-use etl_core::calib::{BundleAdjustOptions, BundleAdjustReport, Estimator, Layout, ParamMask, RobustLoss, View, A0};
+use etl_core::calib::{
+    BundleAdjustOptions, BundleAdjustReport, Estimator, InputNoise, Layout, ParamMask, RobustLoss, View, A0,
+};
 use etl_core::model::{CameraModel, OpenCvFlags};
 
-use etl_formats::calibration::{Calibration, ModelStd, TemperatureCompensation, ThermalRef, ViewSummary};
+use etl_formats::calibration::{
+    Calibration, CovarianceNoise, ModelStd, TemperatureCompensation, ThermalRef, ViewSummary,
+};
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
 
@@ -42,6 +46,10 @@ pub struct CalibrateOptions {
     pub layout: Layout,
     /// OpenCV's fix-k3 and zero-tangent flags (the opencv family only; default none).
     pub flags: OpenCvFlags,
+    /// The spread of the recorded stage positions and currents that the paper
+    /// estimator's covariance accounts for (default: the paper's, [`InputNoise::PAPER`];
+    /// [`BundleAdjustOptions::input_noise`]). Errors-in-variables takes its priors instead.
+    pub input_noise: Option<InputNoise>,
 }
 
 impl Default for CalibrateOptions {
@@ -54,6 +62,7 @@ impl Default for CalibrateOptions {
             robust: None,
             layout: Layout::PAPER,
             flags: OpenCvFlags::NONE,
+            input_noise: Some(InputNoise::PAPER),
         }
     }
 }
@@ -69,6 +78,7 @@ impl CalibrateOptions {
             estimator: self.estimator,
             hold: a0 | flags,
             robust: self.robust,
+            input_noise: self.input_noise,
             ..BundleAdjustOptions::default()
         })
     }
@@ -86,6 +96,17 @@ pub struct CalibrationResult {
     /// Why the calibration has no focus law (`calibration.focus_law` is `None`), e.g. too
     /// few distinct currents; `None` when it has one. Front ends print it as a warning.
     pub focus_law_warning: Option<String>,
+}
+
+/// What the covariance accounts for: the pixel noise the solve used or estimated, and the
+/// spread of the recorded stage positions and currents (the errors-in-variables priors,
+/// or the paper estimator's [`CalibrateOptions::input_noise`]; absent when it is none).
+fn covariance_noise(options: &CalibrateOptions, report: &BundleAdjustReport) -> CovarianceNoise {
+    let inputs = match options.estimator {
+        Estimator::Eiv { sigma_z_mm, sigma_e_ma, .. } => Some((sigma_z_mm, sigma_e_ma)),
+        Estimator::Paper => options.input_noise.map(|n| (n.sigma_z_mm, n.sigma_e_ma)),
+    };
+    CovarianceNoise { sigma_px: report.sigma_px, sigma_z_mm: inputs.map(|i| i.0), sigma_e_ma: inputs.map(|i| i.1) }
 }
 
 /// Refuses an image whose size is not the `expected` one, which `whose` names (e.g. "the
@@ -243,6 +264,7 @@ fn calibration_of(
     // The covariance of the 25 shared numbers (for errors-in-variables, with the view
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.
     calibration.set_covariance(&report.covariance)?;
+    calibration.covariance_noise = Some(covariance_noise(options, &report));
     calibration.warnings.extend(centre::undetermined_move(&m, &report.covariance, views));
     Ok(CalibrationResult { calibration, report, initial, focus_law_warning })
 }

@@ -1,7 +1,7 @@
 //! [`CalibrationRequest`]: every option of a calibration, its defaults, its validation and
 //! its run.
 
-use etl_core::calib::{Estimator, Layout, RobustLoss, A0};
+use etl_core::calib::{Estimator, InputNoise, Layout, RobustLoss, A0};
 use etl_core::model::{DistortionModel, OpenCvFlags, MAX_FOCAL_DEGREE, PAPER_FOCAL_DEGREE};
 use etl_formats::calibration::{Calibration, ThermalRef};
 use etl_formats::observations::Observations;
@@ -280,24 +280,32 @@ impl CalibrationRequest {
     }
 
     /// The estimator run: the paper's, or errors-in-variables with each prior given or the
-    /// paper's ([`Estimator::EIV_PAPER`]).
+    /// paper's ([`Estimator::EIV_PAPER`]: [`Self::input_noise`]).
     pub fn estimator(&self) -> Estimator {
         if self.estimator == Some(EstimatorChoice::Paper) {
             return Estimator::Paper;
         }
-        let mut eiv = Estimator::EIV_PAPER;
-        if let Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px } = &mut eiv {
-            let p = &self.priors;
-            *sigma_z_mm = p.sigma_z.map_or(*sigma_z_mm, StageSigma::mm);
-            *sigma_e_ma = p.sigma_e_ma.unwrap_or(*sigma_e_ma);
-            *sigma_px = p.sigma_px.or(*sigma_px);
+        let n = self.input_noise();
+        Estimator::Eiv { sigma_z_mm: n.sigma_z_mm, sigma_e_ma: n.sigma_e_ma, sigma_px: n.sigma_px }
+    }
+
+    /// The spread of the recorded stage positions and currents the paper estimator's
+    /// covariance accounts for: the priors given, or the paper's ([`InputNoise::PAPER`];
+    /// the same flags and defaults as errors-in-variables' priors).
+    pub fn input_noise(&self) -> InputNoise {
+        let p = &self.priors;
+        let paper = InputNoise::PAPER;
+        InputNoise {
+            sigma_z_mm: p.sigma_z.map_or(paper.sigma_z_mm, StageSigma::mm),
+            sigma_e_ma: p.sigma_e_ma.unwrap_or(paper.sigma_e_ma),
+            sigma_px: p.sigma_px,
         }
-        eiv
     }
 
     /// The bundle adjustment's options (the layout is the paper's until a model is fixed).
     pub fn options(&self) -> CalibrateOptions {
         CalibrateOptions {
+            input_noise: Some(self.input_noise()),
             estimator: self.estimator(),
             hold_a0: self.hold_a0,
             robust: self.robust,

@@ -27,7 +27,7 @@ pub mod rac;
 pub mod uncertainty;
 
 pub use bundle_adjust::{
-    bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, RobustLoss,
+    bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, InputNoise, RobustLoss,
     ViewCorrection, ViewScratch,
 };
 pub use initialise::{initialise, initialise_model, A0};

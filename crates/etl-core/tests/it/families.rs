@@ -71,10 +71,12 @@ fn exact_a0(truth: &CameraModel) -> A0 {
 }
 
 /// Initialises `layout` from `a0` and bundle-adjusts (the paper's estimator), holding
-/// what OpenCV's `flags` hold.
+/// what OpenCV's `flags` hold. The views have pixel noise only (exact stage positions and
+/// currents), so the covariance accounts for that alone.
 fn calibrate(views: &[View], a0: &A0, layout: Layout, flags: OpenCvFlags) -> BundleAdjustReport {
     let init = initialise_model(views, a0, layout, flags).unwrap();
-    let options = BundleAdjustOptions { hold: layout.opencv_mask(flags).unwrap(), ..BundleAdjustOptions::default() };
+    let hold = layout.opencv_mask(flags).unwrap();
+    let options = BundleAdjustOptions { hold, input_noise: None, ..BundleAdjustOptions::default() };
     let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
     bundle_adjust(views, &init, &options, &mut scratch).unwrap()
 }

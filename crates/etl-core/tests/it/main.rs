@@ -5,6 +5,7 @@ mod common;
 
 mod centre;
 mod families;
+mod input_noise;
 mod lm;
 mod nist;
 mod no_panic;

@@ -130,6 +130,59 @@ fn a_bad_covariance_is_refused_naming_it_and_nothing_is_written() {
     }
 }
 
+/// `covariance_noise` (what the covariance accounts for) round-trips, is optional, and a
+/// bad one is refused naming its field, by the writer and by the reader, with nothing
+/// written.
+#[test]
+fn covariance_noise_round_trips_and_a_bad_one_is_refused_naming_the_field() {
+    use etl_formats::calibration::CovarianceNoise;
+    let dir = tempfile::tempdir().unwrap();
+    let mut good = with_principal_point_covariance();
+    good.covariance_noise = Some(CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.01), sigma_e_ma: Some(0.4) });
+    let path = dir.path().join("good.json");
+    good.save(&path).unwrap();
+    assert_eq!(Calibration::load(&path).unwrap(), good);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("\"covariance_noise\": {\n    \"sigma_px\": 0.2,"), "{text}");
+    let bads: [(&str, CovarianceNoise, &str); 4] = [
+        (
+            "px",
+            CovarianceNoise { sigma_px: -0.1, sigma_z_mm: None, sigma_e_ma: None },
+            "covariance_noise.sigma_px = -0.1",
+        ),
+        (
+            "px-nan",
+            CovarianceNoise { sigma_px: f64::NAN, sigma_z_mm: None, sigma_e_ma: None },
+            "covariance_noise.sigma_px = NaN",
+        ),
+        (
+            "z",
+            CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.0), sigma_e_ma: Some(0.4) },
+            "covariance_noise.sigma_z_mm = 0",
+        ),
+        (
+            "e",
+            CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.01), sigma_e_ma: Some(-1.0) },
+            "covariance_noise.sigma_e_ma = -1",
+        ),
+    ];
+    for (name, noise, message) in bads {
+        let mut c = good.clone();
+        c.covariance_noise = Some(noise);
+        let out = dir.path().join(format!("{name}.json"));
+        let e = c.save(&out).unwrap_err();
+        assert!(e.to_string().contains(message) && e.to_string().lines().count() == 1, "{name}: {e}");
+        assert!(!out.exists(), "{name}: a refused calibration was written");
+    }
+    // The reader refuses the same (a file edited by hand).
+    let edited = text.replace("\"sigma_px\": 0.2", "\"sigma_px\": -3");
+    let bad = dir.path().join("edited.json");
+    std::fs::write(&bad, edited).unwrap();
+    let e = Calibration::load(&bad).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Parse);
+    assert!(e.to_string().contains("covariance_noise.sigma_px = -3"), "{e}");
+}
+
 /// The temperature trust policy: inside the calibrated ranges the camera is
 /// returned; outside, the quantity that left its range is named; extrapolation is explicit
 /// and marked.

@@ -77,6 +77,12 @@ fn both_estimators_show_every_figure_and_each_file_exists() {
         for name in ["kf0x", "a9", "px/mA²", "etlcal version", "priors", "|r| &gt; 0.9"] {
             assert!(html.contains(name), "{estimator:?}: index.html lacks {name}");
         }
+        // What the covariance accounts for, from the file's covariance_noise.
+        let noise = "px, stage position 10.0 um and current 0.4 mA per view";
+        assert!(
+            html.contains("recorded (25 x 25); accounts for pixel noise 0.") && html.contains(noise),
+            "{estimator:?}"
+        );
         // The distortion triples are nearly collinear in w: strongly correlated (the
         // paper's own a-values are poorly determined), so pairs are listed.
         assert!(
@@ -99,6 +105,13 @@ fn a_calibration_without_covariance_or_observations_says_what_is_missing() {
     assert!(html.contains("has no covariance"));
     assert!(html.contains("No observations were given"));
     assert!(html.contains("not recorded in the calibration file"), "priors unknown: said so");
+    // A paper file of before covariance_noise: its covariance was of the pixel noise alone.
+    let mut old = calibrated(&sim, Estimator::Paper);
+    old.covariance_noise = None;
+    let dir = tempfile::tempdir().unwrap();
+    write_report(&old, None, None, &Provenance::default(), dir.path()).unwrap();
+    let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
+    assert!(html.contains("accounts for the pixel noise alone (written before covariance_noise was recorded)"));
 }
 
 #[test]

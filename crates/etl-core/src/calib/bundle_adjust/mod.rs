@@ -5,7 +5,10 @@
 //! R (Rodrigues), T, kf_x, kf_y, (u0, v0), the a_i, treating each view's recorded stage
 //! position Z_W and current E as exact. Solved by the dense LM of [`crate::lm::solve`]
 //! (MINPACK column scaling makes the 12 orders of magnitude between the raw parameters
-//! harmless: the step is computed in scaled variables).
+//! harmless: the step is computed in scaled variables). Its covariance accounts for the
+//! errors of the recorded positions and currents it takes as exact
+//! ([`BundleAdjustOptions::input_noise`], [`input_noise`]): the pixel noise alone made its
+//! standard deviations 5-6.6 times too small.
 //!
 //! **Errors-in-variables** (beyond the paper): maximum likelihood under the full noise
 //! model of docs/METHOD.md. Each view j gets a correction dZ_j of its stage position and dE_j of
@@ -42,10 +45,12 @@
 //! storage) and the loop stops when the estimate no longer moves (at most
 //! [`IRLS_MAX_ROUNDS`] rounds).
 
+pub mod input_noise;
 mod normal;
 mod problems;
 mod scratch;
 
+pub use input_noise::{covariance_with_input_noise, InputNoise, InputNoiseCovariance};
 pub use scratch::ViewScratch;
 
 use self::problems::{projector, Eiv, Plain};
@@ -127,6 +132,13 @@ pub struct BundleAdjustOptions {
     pub hold: ParamMask,
     /// Robust loss (default: none, least squares).
     pub robust: Option<RobustLoss>,
+    /// What the paper estimator's covariance accounts for besides the pixel noise: the
+    /// spread of the recorded stage positions and currents (default: the paper's,
+    /// [`InputNoise::PAPER`], the errors-in-variables priors' defaults). `None`: the pixel
+    /// noise alone, as if the recorded values were exact (an underestimate whenever they
+    /// are not). The errors-in-variables estimator models these errors itself, from the
+    /// priors of [`Estimator::Eiv`], and does not read this.
+    pub input_noise: Option<InputNoise>,
     /// Solver options.
     pub lm: Options,
 }
@@ -137,6 +149,7 @@ impl Default for BundleAdjustOptions {
             estimator: Estimator::Paper,
             hold: ParamMask::NONE,
             robust: None,
+            input_noise: Some(InputNoise::PAPER),
             lm: Options {
                 max_iterations: 100,
                 ftol: 1e-10,
@@ -184,7 +197,9 @@ pub struct BundleAdjustReport {
     pub evaluations: usize,
     /// Why the LM stopped.
     pub stop: StopReason,
-    /// Pixel noise standard deviation used (errors-in-variables) or estimated (paper).
+    /// Pixel noise standard deviation used (errors-in-variables) or estimated (paper:
+    /// with [`BundleAdjustOptions::input_noise`], the residuals' share of the input errors
+    /// taken out; without, the plain residual standard deviation).
     pub sigma_px: f64,
 }
 
@@ -384,7 +399,7 @@ where
     let plain = solve_plain::<N, O, P>(views, x0, options, basis)?;
     let sigma_plain = libm::sqrt(plain.sigma2);
     let (sigma_z_mm, sigma_e_ma, sigma_px) = match options.estimator {
-        Estimator::Paper => return report_of(views, basis, &plain, initial_rms_px, sigma_plain, None),
+        Estimator::Paper => return paper_report(views, basis, &plain, initial_rms_px, options),
         Estimator::Eiv { sigma_z_mm, sigma_e_ma, sigma_px } => {
             (sigma_z_mm, sigma_e_ma, sigma_px.unwrap_or(sigma_plain))
         }
@@ -411,6 +426,26 @@ where
         (sigma_px, start) = (next, solved.x);
     };
     report_of(views, basis, &unscaled(solved), initial_rms_px, sigma_px, Some(scratch))
+}
+
+/// The paper estimator's report, its covariance under [`BundleAdjustOptions::input_noise`].
+fn paper_report<const N: usize>(
+    views: &[View<'_>],
+    basis: &Basis,
+    plain: &lm::Report<N>,
+    initial_rms_px: f64,
+    options: &BundleAdjustOptions,
+) -> Result<BundleAdjustReport> {
+    let mut report = report_of(views, basis, plain, initial_rms_px, libm::sqrt(plain.sigma2), None)?;
+    if let Some(noise) = &options.input_noise {
+        let honest = covariance_with_input_noise(views, &report, options.robust, noise)?;
+        report.covariance = honest.covariance;
+        for (i, (s, row)) in report.std.iter_mut().zip(report.covariance.iter()).enumerate() {
+            *s = libm::sqrt(row.get(i).copied().unwrap_or(0.0).max(0.0));
+        }
+        report.sigma_px = honest.sigma_px;
+    }
+    Ok(report)
 }
 
 /// Rounds of the errors-in-variables solve with sigma_px re-estimated (module docs).
