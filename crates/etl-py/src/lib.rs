@@ -59,6 +59,8 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
     m.add_function(wrap_pyfunction!(focus::autofocus, m)?)?;
     m.add_function(wrap_pyfunction!(zhang::zhang, m)?)?;
+    // Private (not in __all__): reached through ZhangResult.projection_std only.
+    m.setattr("_ZhangProjection", m.py().get_type::<zhang::ZhangProjection>())?;
     m.add_function(wrap_pyfunction!(diff::diff, m)?)?;
     m.add_function(wrap_pyfunction!(studies::study, m)?)?;
     m.add_class::<lens::Lens>()?;

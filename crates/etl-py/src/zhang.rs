@@ -4,12 +4,12 @@
 //! as `etlcal zhang --model --fix-k3 --zero-tangent` does.
 
 use etl_calib::request::ZhangRequest;
-use etl_calib::zhang::{PlanarView, ZhangResult};
+use etl_calib::zhang::{PlanarView, ZhangResult, ZhangUncertainty};
 use etl_core::model::DistortionModel;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{mat3_out, vec_out};
+use crate::arrays::{mat3_out, points, points_out, vec_out};
 use crate::errors::{invalid, invalid_value, CoreResultExt};
 use crate::pipeline::Keywords;
 
@@ -105,7 +105,7 @@ fn result<'py>(py: Python<'py>, r: &ZhangResult) -> PyResult<Bound<'py, PyAny>> 
     d.set_item("views_used", r.views_used)?;
     d.set_item("poses", r.poses.iter().map(|(om, t)| (om.to_vec(), t.to_vec())).collect::<Vec<_>>())?;
     let Some(dist) = r.dist_coeffs() else {
-        return crate::results::make(py, "ZhangResult", &d);
+        return with_projection(py, crate::results::make(py, "ZhangResult", &d)?, r);
     };
     d.set_item("model", r.options.model.name())?;
     d.set_item("k2", dist[1])?;
@@ -113,5 +113,60 @@ fn result<'py>(py: Python<'py>, r: &ZhangResult) -> PyResult<Bound<'py, PyAny>> 
     d.set_item("camera_matrix", mat3_out(py, r.camera_matrix()))?;
     d.set_item("dist_coeffs", vec_out(py, &dist))?;
     d.set_item("per_view_rms_px", r.per_view_rms_px.clone())?;
-    crate::results::make(py, "ZhangOpenCvResult", &d)
+    with_projection(py, crate::results::make(py, "ZhangOpenCvResult", &d)?, r)
+}
+
+/// `obj` (a frozen result) with the Rust result behind its `projection_std`.
+fn with_projection<'py>(py: Python<'py>, obj: Bound<'py, PyAny>, r: &ZhangResult) -> PyResult<Bound<'py, PyAny>> {
+    let Some(inner) = r.uncertainty.clone() else { return Ok(obj) };
+    let handle = Bound::new(py, ZhangProjection { inner })?;
+    py.import("builtins")?.getattr("object")?.call_method1("__setattr__", (&obj, "_projection", handle))?;
+    Ok(obj)
+}
+
+/// What `ZhangResult.projection_std` asks: the camera, poses and blocks of J^T J of the
+/// Rust result it came from (private; the result object holds it, and pickles it as JSON).
+#[pyclass(frozen, module = "etlcal", name = "_ZhangProjection")]
+pub struct ZhangProjection {
+    inner: ZhangUncertainty,
+}
+
+#[pymethods]
+impl ZhangProjection {
+    /// `ZhangResult.projection_std` (see there): the standard deviations of u and v, px,
+    /// of the re-projection of the point seen at each pixel at `distance_mm` along its ray
+    /// (None: the direction, a point at infinity); (N, 2), or (2,) for one pixel.
+    #[pyo3(signature = (pixels, distance_mm=None))]
+    fn projection_std<'py>(
+        &self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        distance_mm: Option<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let p = points::<2>(pixels, "pixels")?;
+        let out = crate::pool::detach(py, || {
+            p.points
+                .iter()
+                .map(|q| self.inner.projection_std(*q, distance_mm).map(|u| u.std_px))
+                .collect::<etl_calib::Result<Vec<[f64; 2]>>>()
+        })
+        .py()?;
+        points_out(py, out, p.single)
+    }
+
+    /// Rebuilds a pickled handle from its JSON (checked: lengths and finite numbers).
+    #[staticmethod]
+    fn _from_json(text: &str) -> PyResult<Self> {
+        let inner: ZhangUncertainty =
+            serde_json::from_str(text).map_err(|e| invalid("uncertainty", format!("not a Zhang uncertainty: {e}")))?;
+        inner.validate().py()?;
+        Ok(ZhangProjection { inner })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        crate::errors::guarded("_ZhangProjection.__reduce__", || {
+            let text = serde_json::to_string(&slf.get().inner).map_err(|e| invalid("uncertainty", e.to_string()))?;
+            Ok((slf.py().get_type::<ZhangProjection>().getattr("_from_json")?, (text,)))
+        })
+    }
 }

@@ -24,6 +24,15 @@
 //! ([i, j] on the board's corner grid), `id` (the corner's id: a ChArUco board's, a
 //! checkerboard's row-major `j * cols + i`) and `residual_px` (its distance from the
 //! model's projection, px).
+//!
+//! Both models' `--json` hold `"projection_std_px"`: the projection uncertainty in mrcal's
+//! sense (`ZhangResult::projection_std`: where a calibration re-solved from new corner
+//! noise projects the point seen at a pixel, the point held in the boards' frames) on a 5 x 5
+//! grid spanning the image, centre and corners included (`u = i (w - 1) / 4`, `v = j (h - 1) / 4`,
+//! row-major from the top left): `{"grid": [5, 5], "pixels": [[u, v], ...], "at_infinity":
+//! [[std_u, std_v], ...], "views_distance_mm", "at_views_distance": [...]}`, px, at infinity
+//! (a direction) and at the mean distance of the views' boards; `null` where a pixel does
+//! not unproject.
 
 use std::path::PathBuf;
 
@@ -125,6 +134,8 @@ pub fn run(args: Args) -> Result<()> {
             opencv_json(&z, &used)
         }
     };
+    let grid = projection_grid(&z, size);
+    j["projection_std_px"] = grid.json();
     let outliers = outliers_json(&z.outliers, &found, &args.images, &board);
     if !outliers.is_empty() {
         j["outliers"] = Value::Array(outliers.clone());
@@ -151,6 +162,7 @@ pub fn run(args: Args) -> Result<()> {
             outln!("dist_coeffs (k1, k2, p1, p2, k3) {c0:.6}, {c1:.6}, {c2:.6}, {c3:.6}, {c4:.6}; rms {rms:.4} px over {n} views")
         }
     }
+    grid.print();
     if !outliers.is_empty() {
         outln!("left out {} outlier corners:", outliers.len());
     }
@@ -158,6 +170,49 @@ pub fn run(args: Args) -> Result<()> {
         outln!("  {} corner {} ({:.2} px)", o["image"].as_str().unwrap_or("?"), o["corner"], o["residual_px"]);
     }
     Ok(())
+}
+
+/// The columns and rows of the `--json` projection-uncertainty grid.
+const GRID: [usize; 2] = [5, 5];
+
+/// The projection uncertainty of `z` on [`GRID`] over an image of `size`.
+struct ProjectionGrid {
+    pixels: Vec<[f64; 2]>,
+    at_infinity: Vec<Option<[f64; 2]>>,
+    views_distance_mm: f64,
+    at_views_distance: Vec<Option<[f64; 2]>>,
+}
+
+fn projection_grid(z: &ZhangResult, size: [u32; 2]) -> ProjectionGrid {
+    let [w, h] = [size[0].max(1) as f64 - 1.0, size[1].max(1) as f64 - 1.0];
+    let pixels: Vec<[f64; 2]> = (0..GRID[1])
+        .flat_map(|j| {
+            (0..GRID[0]).map(move |i| [i as f64 * w / (GRID[0] - 1) as f64, j as f64 * h / (GRID[1] - 1) as f64])
+        })
+        .collect();
+    let views_distance_mm = z.poses.iter().map(|(_, t)| t.iter().map(|v| v * v).sum::<f64>().sqrt()).sum::<f64>()
+        / z.poses.len().max(1) as f64;
+    let at = |d: Option<f64>| pixels.iter().map(|&q| z.projection_std(q, d).ok().map(|u| u.std_px)).collect();
+    ProjectionGrid { at_infinity: at(None), at_views_distance: at(Some(views_distance_mm)), pixels, views_distance_mm }
+}
+
+impl ProjectionGrid {
+    fn json(&self) -> Value {
+        json!({"grid": GRID, "pixels": self.pixels, "at_infinity": self.at_infinity,
+            "views_distance_mm": self.views_distance_mm, "at_views_distance": self.at_views_distance})
+    }
+
+    /// One line: the uncertainty at the centre and the worst on the grid.
+    fn print(&self) {
+        let norm = |s: &Option<[f64; 2]>| s.map(|s| s[0].hypot(s[1]));
+        let worst = self.at_infinity.iter().filter_map(norm).fold(0.0, f64::max);
+        let centre = norm(&self.at_infinity[GRID[0] * (GRID[1] / 2) + GRID[0] / 2]).unwrap_or(f64::NAN);
+        outln!(
+            "projection uncertainty at infinity (mrcal's sense): {centre:.3} px at the centre, {worst:.3} px at worst on a {} x {} grid",
+            GRID[0],
+            GRID[1]
+        );
+    }
 }
 
 /// Zhang's outliers (indices into `found.views`) as the JSON of the verb: each with the

@@ -36,6 +36,10 @@ use etl_formats::{Error, Result};
 
 use crate::robust::{homography_inliers, outlier_limit_px};
 
+mod uncertainty;
+pub use uncertainty::ZhangUncertainty;
+use uncertainty::{invert_pose_block, ViewBlocks};
+
 /// One view: board points (mm, on Z = 0) and their observed pixels.
 #[derive(Debug, Clone, Default)]
 pub struct PlanarView {
@@ -89,9 +93,27 @@ pub struct ZhangResult {
     /// The points left out as gross outliers (view and point indices into the input),
     /// with their distances under the result; empty when there are none.
     pub outliers: Vec<Outlier>,
+    /// The blocks of J^T J that [`Self::projection_std`] needs (intrinsics and every
+    /// pose jointly; `None` only in a result built by hand).
+    pub uncertainty: Option<ZhangUncertainty>,
 }
 
 impl ZhangResult {
+    /// The shared numbers: fx, fy, u0, v0, the coefficients.
+    fn shared(&self) -> Shared {
+        let mut z = [0.0; SHARED_MAX];
+        z[..4].copy_from_slice(&[self.fx, self.fy, self.u0, self.v0]);
+        z[4..].copy_from_slice(&self.coefficients);
+        z
+    }
+
+    /// The fitted camera as an ETL camera model at E = 0 (fx(E) = fx, fy(E) = fy, each
+    /// coefficient the constant of its Eq. 18 quadratic), at the identity pose: its world
+    /// frame is the camera frame, so `project` takes camera-frame points.
+    pub fn camera(&self) -> CameraModel {
+        model_at(self.options.model, &self.shared(), &[0.0; 6])
+    }
+
     /// The lens-off intrinsics A0.
     pub fn a0(&self) -> A0 {
         A0 { kf0x: self.fx, kf0y: self.fy, u0: self.u0, v0: self.v0 }
@@ -281,6 +303,7 @@ struct Refined {
     cov: [[f64; SHARED_MAX]; SHARED_MAX],
     iterations: usize,
     poses: Vec<[f64; 6]>,
+    uncertainty: ZhangUncertainty,
 }
 
 /// Step 3 for `N` free numbers (see [`refine`]).
@@ -311,8 +334,36 @@ fn refine_n<const N: usize>(
             cov[i][j] = r.covariance[a][b] * scale;
         }
     }
-    let z = problem.shared(&r.x);
-    Ok(Refined { z, cov, iterations: r.iterations, poses: scratch.iter().map(|b| *b.y()).collect() })
+    let (z, poses): (Shared, Vec<[f64; 6]>) = (problem.shared(&r.x), scratch.iter().map(|b| *b.y()).collect());
+    let uncertainty = joint_blocks(&mut problem, &r, &scratch, r.cost / dof, poses.clone())?;
+    Ok(Refined { z, cov, iterations: r.iterations, poses, uncertainty })
+}
+
+/// The blocks of J^T J at the solution `r` (poses in `scratch`) for
+/// [`ZhangResult::projection_std`], with the pixel noise variance `sigma2_px`.
+fn joint_blocks<const N: usize>(
+    problem: &mut Refine<'_, N>,
+    r: &etl_core::lm::BlockReport<N>,
+    scratch: &[BlockScratch<N, 6>],
+    sigma2_px: f64,
+    poses: Vec<[f64; 6]>,
+) -> Result<ZhangUncertainty> {
+    let free = problem.free;
+    let unscale = if r.sigma2 > 0.0 { 1.0 / r.sigma2 } else { 0.0 };
+    let mut s_inv = [[0.0; SHARED_MAX]; SHARED_MAX];
+    for (a, &i) in free.iter().enumerate() {
+        for (b, &j) in free.iter().enumerate() {
+            s_inv[i][j] = r.covariance[a][b] * unscale;
+        }
+    }
+    let (mut w, mut v_inv) = (vec![], vec![]);
+    for (b, block) in scratch.iter().enumerate() {
+        let mut sink = ViewBlocks { free: &free, w: [[0.0; 6]; SHARED_MAX], v: [[0.0; 6]; 6] };
+        problem.eval_block(b, &r.x, block.y(), true, &mut sink).map_err(Error::Core)?;
+        v_inv.push(invert_pose_block(&sink.v)?);
+        w.push(sink.w);
+    }
+    Ok(ZhangUncertainty { model: problem.model, shared: problem.shared(&r.x), poses, s_inv, w, v_inv, sigma2_px })
 }
 
 /// Step 3: the LM refinement of the free shared numbers and every view's pose from `z0`
@@ -484,6 +535,7 @@ fn summarise(
         iterations: r.iterations,
         views_used: views.len(),
         outliers,
+        uncertainty: Some(r.uncertainty),
     }
 }
 

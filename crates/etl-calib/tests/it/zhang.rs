@@ -139,3 +139,76 @@ fn lens_off_outliers_are_reported_and_leave_a0_unmoved() {
     }
     assert!((z.rms_px / want.rms_px - 1.0).abs() < 1e-6, "rms {} vs {}", z.rms_px, want.rms_px);
 }
+
+/// One seed's lens-off Zhang calibration against the truth: per test pixel and axis,
+/// (re-projection - truth, predicted std) in mrcal's sense (the point held in the boards'
+/// frames, mapped through the estimated poses: `ZhangResult::projection_std`).
+fn zhang_projection_trial(seed: u64, tests: &[([f64; 2], Option<f64>)]) -> Vec<(f64, f64)> {
+    use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
+    let sim = paper_rig(&NoiseModel::PAPER, seed);
+    let z = a0_from_offstate(&sim.observations).unwrap();
+    let mut truth = CameraModel::paper_rig();
+    truth.rotation_rodrigues = [0.0; 3];
+    truth.translation_mm = [0.0; 3];
+    let poses = etl_sim::simulate::lens_off_poses(&CameraModel::paper_rig());
+    assert_eq!(z.poses.len(), poses.len());
+    let est = z.camera();
+    let mut out = vec![];
+    for &(q, distance) in tests {
+        let ray = truth.ray(q, 0.0).unwrap();
+        let p = distance.map_or(ray.direction, |s| ray.at(s));
+        // Through each view's board frame: the true pose in, the estimated pose out.
+        let mut mean = [0.0; 3];
+        for (t, e) in poses.iter().zip(&z.poses) {
+            let (rt, tt) = (rodrigues_to_matrix(t.rotation_rodrigues), t.translation_mm);
+            let rel = if distance.is_some() { [p[0] - tt[0], p[1] - tt[1], p[2] - tt[2]] } else { p };
+            let board: [f64; 3] = core::array::from_fn(|c| (0..3).map(|r| rt[r][c] * rel[r]).sum());
+            let back = mat_vec(&rodrigues_to_matrix(e.0), board);
+            for c in 0..3 {
+                mean[c] += (back[c] + if distance.is_some() { e.1[c] } else { 0.0 }) / poses.len() as f64;
+            }
+        }
+        let got = est.project(mean, 0.0).unwrap();
+        let s = z.projection_std(q, distance).unwrap();
+        for axis in 0..2 {
+            out.push((got[axis] - q[axis], s.std_px[axis]));
+        }
+    }
+    out
+}
+
+/// `ZhangResult::projection_std` is honest on simulated monofocal sets with a known
+/// camera (the paper rig's 10 lens-off views, 0.2 px and 1 um corner noise, 300 seeds): at
+/// the centre, the corners and an edge of the image, at the views' distance and at
+/// infinity, the spread of the re-projection over its median predicted std is within
+/// 0.8-1.25 and the one-sigma intervals cover the truth 68 % +- 5 % of the time (pooled).
+#[test]
+fn zhangs_projection_std_matches_the_monte_carlo_spread() {
+    use rayon::prelude::*;
+    let [w, h] = [CameraModel::PAPER_IMAGE_SIZE[0] as f64, CameraModel::PAPER_IMAGE_SIZE[1] as f64];
+    let pixels = [[w / 2.0, h / 2.0], [40.0, 40.0], [w - 40.0, h - 40.0], [40.0, h - 40.0], [w - 40.0, h / 2.0]];
+    let tests: Vec<([f64; 2], Option<f64>)> = pixels.iter().flat_map(|&q| [(q, Some(125.0)), (q, None)]).collect();
+    let runs: Vec<Vec<(f64, f64)>> =
+        (0..300u64).into_par_iter().map(|s| zhang_projection_trial(700 + s, &tests)).collect();
+    let (mut inside, mut n) = (0usize, 0usize);
+    for k in 0..runs[0].len() {
+        let errs: Vec<f64> = runs.iter().map(|t| t[k].0).collect();
+        let mean = errs.iter().sum::<f64>() / errs.len() as f64;
+        let spread = (errs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (errs.len() - 1) as f64).sqrt();
+        let mut stds: Vec<f64> = runs.iter().map(|t| t[k].1).collect();
+        stds.sort_by(f64::total_cmp);
+        let ratio = spread / stds[stds.len() / 2];
+        let (q, d) = tests[k / 2];
+        eprintln!(
+            "pixel {q:?} at {d:?} mm, axis {}: spread {spread:.4} px, std {:.4} px, ratio {ratio:.3}",
+            k % 2,
+            stds[stds.len() / 2]
+        );
+        assert!((0.8..=1.25).contains(&ratio), "pixel {q:?} at {d:?}: spread / std {ratio:.3}");
+        inside += runs.iter().filter(|t| t[k].0.abs() <= t[k].1).count();
+        n += runs.len();
+    }
+    let cover = inside as f64 / n as f64;
+    eprintln!("coverage {cover:.3}");
+    assert!((cover - 0.6827).abs() <= 0.05, "coverage {cover:.3}");
+}

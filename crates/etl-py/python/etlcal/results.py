@@ -97,6 +97,12 @@ class _Result(Mapping[str, Any]):
         return tuple(f.name for f in dataclasses.fields(cls))
 
 
+def _error() -> Any:
+    from . import _etlcal  # the extension, imported when needed (this module loads first)
+
+    return _etlcal.Error
+
+
 def _same(a: Any, b: Any) -> bool:
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))
@@ -121,6 +127,31 @@ class ZhangResult(_Result):
     iterations: int
     views_used: int
     poses: List[Tuple[List[float], List[float]]]
+    # The Rust result behind `projection_std`, set by `zhang` after construction: not a
+    # field (no key, no repr, no comparison), absent (None) in a result built by hand.
+    _projection: ClassVar[Any] = None
+
+    def projection_std(self, pixels: npt.ArrayLike, distance_mm: Optional[float] = None) -> _F64:
+        """The projection uncertainty in mrcal's sense: the standard deviations of u and v
+        (px) of where a calibration re-solved from new corner noise projects the point seen
+        at each pixel, at `distance_mm` along its viewing ray (None: in its direction, a
+        point at infinity), the point held in the boards' frames (mrcal's
+        `projection_uncertainty`; docs/METHOD.md, "Projection uncertainty of a Zhang
+        calibration"). First order, with the result's noise estimate (its `std`'s).
+
+        Args:
+            pixels: an (N, 2) array of pixels, or one pixel of shape (2,).
+            distance_mm: a finite distance > 0, or None.
+
+        Returns: an (N, 2) float64 array (or (2,)).
+
+        Raises: InputError for a bad distance or a pixel outside the distortion's domain;
+        etlcal.Error for a result built by hand (no covariance blocks).
+        """
+        if self._projection is None:
+            raise _error()("this ZhangResult was built by hand: it carries no covariance blocks")
+        out: _F64 = self._projection.projection_std(pixels, distance_mm)
+        return out
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -68,3 +68,39 @@ fn opencv_flags_with_the_paper_model_are_refused_naming_the_flag() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("brown"));
 }
+
+/// `--json`'s `"projection_std_px"`: the documented 5 x 5 grid spanning the image (centre
+/// and corners included), at infinity and at the views' distance, the image's edges less
+/// certain than the centre, and the text output's summary line. This wide lens's 5-term
+/// model folds over beyond the corners it saw (k1 < -0.3): the pixels at the left and right
+/// edges do not unproject and are null, as documented.
+#[test]
+fn the_json_holds_the_projection_uncertainty_on_a_grid() {
+    let out = zhang(&["--model", "opencv", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let p = &v["projection_std_px"];
+    assert_eq!(p["grid"], serde_json::json!([5, 5]));
+    let pixels = p["pixels"].as_array().unwrap();
+    assert_eq!(pixels.len(), 25);
+    assert_eq!(pixels[0], serde_json::json!([0.0, 0.0]));
+    let size = [752.0, 480.0];
+    assert_eq!(pixels[12], serde_json::json!([(size[0] - 1.0) / 2.0, (size[1] - 1.0) / 2.0]), "the centre");
+    assert_eq!(pixels[24], serde_json::json!([size[0] - 1.0, size[1] - 1.0]));
+    let norm = |s: &serde_json::Value| s[0].as_f64().unwrap().hypot(s[1].as_f64().unwrap());
+    for key in ["at_infinity", "at_views_distance"] {
+        let s = p[key].as_array().unwrap();
+        assert_eq!(s.len(), 25);
+        let centre = norm(&s[12]);
+        assert!(centre > 0.0 && centre < 0.5, "{key}: {centre} px at the centre");
+        let (nulls, worst) =
+            s.iter().fold((0, 0.0f64), |(n, w), x| if x.is_null() { (n + 1, w) } else { (n, w.max(norm(x))) });
+        assert_eq!(nulls, 10, "{key}: the left and right edges: {s:?}");
+        assert!(s.iter().enumerate().all(|(k, x)| x.is_null() == (k % 5 == 0 || k % 5 == 4)), "{key}: {s:?}");
+        assert!(worst > 2.5 * centre, "{key}: worst {worst} px, centre {centre} px");
+    }
+    assert!(p["views_distance_mm"].as_f64().unwrap() > 1.0);
+    let text = zhang(&["--model", "opencv"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("projection uncertainty at infinity (mrcal's sense): "), "{text}");
+}
