@@ -340,8 +340,10 @@ pub fn calibrate_edited(data: &[u8]) -> bool {
             5 => view.e_com_ma = Some(view.e_in_ma + value),
             6 => view.points.truncate(p % n),
             _ => {
-                let keep = p % n;
-                view.points.swap(0, keep);
+                // A view emptied by an earlier truncation has nothing to swap.
+                if !view.points.is_empty() {
+                    view.points.swap(0, p % n);
+                }
             }
         }
     }
