@@ -1,6 +1,6 @@
 //! etl-report: everything etlcal draws. The calibration report (figures with the
 //! calibration's uncertainty, and an index.html, [`write_report`]) and the figures of the
-//! studies ([`figure`]).
+//! studies ([`figure`]), and the page of a monofocal calibration ([`zhang`]).
 
 mod calibration;
 mod data;
@@ -9,6 +9,7 @@ pub mod heat_map;
 mod html;
 mod plots;
 mod uncertainty;
+pub mod zhang;
 
 pub use calibration::*;
 pub use data::{Provenance, REPORT_FIGURES};

@@ -1,5 +1,5 @@
 //! `etlcal zhang IMAGE... (--pattern CxR --square MM | --board FILE) [--model paper|opencv]
-//! [--fix-k3] [--zero-tangent] [--json]`: monofocal calibration of one fixed-focus camera
+//! [--fix-k3] [--zero-tangent] [--report DIR] [--json]`: monofocal calibration of one fixed-focus camera
 //! (Zhang 2000) from a whole checkerboard or a ChArUco board (each view the corners it
 //! shows, no hints).
 //!
@@ -33,6 +33,12 @@
 //! [[std_u, std_v], ...], "views_distance_mm", "at_views_distance": [...]}`, px, at infinity
 //! (a direction) and at the mean distance of the views' boards; `null` where a pixel does
 //! not unproject.
+//!
+//! `--report DIR` also writes `index.html` (the numbers with their standard deviations) and
+//! the projection uncertainty in its worst direction over a 32 x 24 grid of cells as two PNG
+//! heat maps, `uncertainty_infinity.png` and `uncertainty_views_distance.png`, on one
+//! logarithmic scale stated on the page (`etl_report::zhang`); the directory is replaced as
+//! a set, and `--json` lists the files under `"report"`.
 
 use std::path::PathBuf;
 
@@ -47,6 +53,7 @@ use etl_calib::zhang::ZhangResult;
 use etl_core::model::DistortionModel;
 use etl_formats::board::Board;
 use etl_formats::calibration::Outlier;
+use etl_formats::output::Output;
 use etl_formats::{Error, Result};
 
 /// The distortion model of `--model`.
@@ -77,6 +84,11 @@ pub struct Args {
     /// Hold p1 = p2 = 0 (OpenCV's CALIB_ZERO_TANGENT_DIST; --model opencv only).
     #[arg(long)]
     pub zero_tangent: bool,
+    /// Also write a report into DIR (created if missing, replaced as a set): index.html
+    /// with the numbers and their standard deviations, and the projection uncertainty over
+    /// the image as two heat maps (at infinity and at the views' distance).
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -111,6 +123,8 @@ pub fn run(args: Args) -> Result<()> {
     let request = args.request();
     // Refused before any image is read.
     request.validate(&FlagSpelling::default())?;
+    let outputs: Vec<Output<'_>> = args.report.iter().map(|d| Output::Dir(d)).collect();
+    crate::output::check(args.images.iter().map(|p| Some(p.as_path())), &outputs)?;
     let board = args.board.board()?;
     let found = detect_views(&args.images, &board, &crate::progress::Bar::new(!args.json))?;
     for m in &found.skipped {
@@ -136,6 +150,16 @@ pub fn run(args: Args) -> Result<()> {
     };
     let grid = projection_grid(&z, size);
     j["projection_std_px"] = grid.json();
+    if let Some(dir) = &args.report {
+        let files = crate::output::write_dir_set(dir, &etl_report::zhang::ZHANG_REPORT_FILES, |staging| {
+            let files = etl_report::zhang::write_zhang_report(&z, size, staging)?;
+            Ok(crate::output::moved(files, staging, dir))
+        })?;
+        j["report"] = json!(files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
+        if !args.json {
+            outln!("wrote the report to {} (open index.html)", dir.display());
+        }
+    }
     let outliers = outliers_json(&z.outliers, &found, &args.images, &board);
     if !outliers.is_empty() {
         j["outliers"] = Value::Array(outliers.clone());

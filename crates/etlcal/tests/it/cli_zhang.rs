@@ -104,3 +104,31 @@ fn the_json_holds_the_projection_uncertainty_on_a_grid() {
     let text = String::from_utf8_lossy(&text.stdout);
     assert!(text.contains("projection uncertainty at infinity (mrcal's sense): "), "{text}");
 }
+
+/// `--report DIR`: index.html with the numbers and the two uncertainty maps (PNG, 32 x 24
+/// cells of 20 px), the paths in `--json`'s `"report"`; a DIR that is a file is refused
+/// before any image is read, and the file is left as it was.
+#[test]
+fn the_report_holds_the_numbers_and_two_uncertainty_maps() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("zhang-report");
+    let out = zhang(&["--model", "opencv", "--json", "--report", report.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["report"].as_array().unwrap().len(), 3, "{v}");
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    for text in ["Projection uncertainty", "At infinity", "views' distance", "k3", "uncertainty_infinity.png"] {
+        assert!(html.contains(text), "index.html lacks {text}");
+    }
+    for png in ["uncertainty_infinity.png", "uncertainty_views_distance.png"] {
+        let img = image::open(report.join(png)).unwrap();
+        assert_eq!((img.width(), img.height()), (32 * 20, 24 * 20), "{png}");
+    }
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "keep me").unwrap();
+    let out = zhang(&["--report", file.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep me");
+}
