@@ -11,7 +11,13 @@ Images:
     exact homography, 8 x 8 area sampling, blur sigma 1.5 px, noise 2 grey levels) in 3 poses,
     squares of 35-60 px.
 
-Both detectors must find every board (the script exits 1 otherwise). Per image the median of
+ChArUco: etlcal's `detect_corners(image, Board.charuco(...))` against OpenCV 5's
+`cv2.aruco.CharucoDetector.detectBoard` on renders of the 12 x 9 board of
+benches/charuco_opencv.py (DICT_5X5_100, its renderer) at the three sizes, the whole board in
+view, squares of 6 % of the width, 3 poses, blur 1.5 px.
+
+Both checkerboard detectors must find every board (the script exits 1 otherwise); for ChArUco
+the corners each finds are printed beside its time. Per image the median of
 --repeat calls of each; per size the median over its images, and etlcal / OpenCV.
 
 Then the first call in a fresh process against a warm call (etlcal only; its first call pays
@@ -37,6 +43,7 @@ import numpy as np
 import etlcal
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import charuco_opencv as co  # noqa: E402  (its ChArUco renderer, likewise)
 import opencv_detect as od  # noqa: E402  (the renderer, with its size set per run)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -70,6 +77,29 @@ def renders(w, h):
     square = 60.0 * w / 1936.0 * 1.3
     return [(f"render {w}x{h} pose {k}", od.render(od.homography(rot, square), 1.5, 100 + k), (od.COLS, od.ROWS))
             for k, rot in enumerate(RENDER_POSES)]
+
+
+CHARUCO_POSES = [(0.05, -0.04, 0.03), (0.35, -0.25, 0.1), (-0.3, 0.4, -0.3)]
+
+
+def charuco_renders(w, h):
+    co.W, co.H = w, h
+    bits = co.marker_bits(co.SQUARES[0] * co.SQUARES[1] // 2)
+    centre = (co.SQUARES[0] * co.SQUARE_MM / 2, co.SQUARES[1] * co.SQUARE_MM / 2)
+    return [(f"charuco {w}x{h} pose {k}", co.render(co.homography(rot, 0.06 * w, centre, (0.5, 0.5)), 1.5, 7 + k, bits))
+            for k, rot in enumerate(CHARUCO_POSES)]
+
+
+def measure_charuco(name, img, board, detector, repeat):
+    etl, ocv, n = [], [], [0, 0]
+    for _ in range(repeat):
+        dt, d = timed(lambda: etlcal.detect_corners(img, board))
+        etl.append(dt)
+        dt, (cc, _, _, _) = timed(lambda: detector.detectBoard(img))
+        ocv.append(dt)
+        n = [len(d.corners_px), 0 if cc is None else len(cc)]
+    return {"image": name, "size": [img.shape[1], img.shape[0]], "etlcal_ms": 1e3 * statistics.median(etl),
+            "opencv_ms": 1e3 * statistics.median(ocv), "corners": {"etlcal": n[0], "opencv": n[1]}}
 
 
 def opencv(img, pattern):
@@ -108,6 +138,11 @@ def main():
     load_before = os.getloadavg()
     groups = {"640 x 480": real_images(), "1280 x 960": renders(1280, 960), "1936 x 1458": renders(1936, 1458)}
     rows = {g: [measure(n, img, p, args.repeat) for n, img, p in imgs] for g, imgs in groups.items()}
+    board = etlcal.Board.charuco(co.SQUARES, co.SQUARE_MM, co.MARKER_MM, co.DICT)
+    detector = co.opencv_detector()
+    for w, h in [(640, 480), (1280, 960), (1936, 1458)]:
+        rows[f"ChArUco {w} x {h}"] = [measure_charuco(n, img, board, detector, args.repeat)
+                                      for n, img in charuco_renders(w, h)]
     fresh = []
     name, _, pattern = groups["640 x 480"][0]
     for _ in range(args.fresh):
@@ -130,6 +165,9 @@ def main():
         for g, s in result["sizes"].items():
             print(f"{g}: {s['images']} images, median etlcal {s['etlcal_ms']:.2f} ms, OpenCV {s['opencv_ms']:.2f} ms, "
                   f"etlcal / OpenCV {s['ratio']:.2f}; etlcal slower on {len(s['images_where_etlcal_is_slower'])}")
+            for r in s["per_image"]:
+                if "corners" in r:
+                    print(f"    {r['image']}: corners etlcal {r['corners']['etlcal']}, OpenCV {r['corners']['opencv']}")
         f = result["first_call_over_warm"]
         print(f"first call in a fresh process / warm call: median {f['median']:.2f} over {len(f['all'])} processes")
     return 0
