@@ -35,7 +35,6 @@ pub mod zhang;
 fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     pool::prepare();
-    pool::warm_detector();
     errors::register(m)?;
     // A test hook, private: set as an attribute so that it stays out of `__all__`.
     m.setattr("_raise_rust_error", wrap_pyfunction!(errors::_raise_rust_error, m)?)?;

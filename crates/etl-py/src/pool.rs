@@ -43,32 +43,6 @@ pub fn prepare() {
     let _ = pool();
 }
 
-/// One checkerboard detection on a drawn 640 x 480 board, on this process's pool, at
-/// import: a process's first detection pays for the first touch of the detector's buffers
-/// and code (twice a warm call's time, benches/detect_sizes.py); after this, the user's first
-/// call costs what the later ones do. About a millisecond; its result is not kept.
-pub fn warm_detector() {
-    let (w, h, square) = (640usize, 480usize, 60usize);
-    let img: Vec<u8> = (0..w * h)
-        .map(|k| {
-            let (x, y) = (k % w, k / w);
-            let (i, j) = (x.wrapping_sub(80) / square, y.wrapping_sub(60) / square);
-            if x >= 80 && y >= 60 && i < 8 && j < 6 && (i + j) % 2 == 0 {
-                40
-            } else {
-                210
-            }
-        })
-        .collect();
-    let Some(view) = etl_image::grey::GrayView::new(w, h, &img) else { return };
-    let Ok(pattern) = etl_image::checkerboard::Pattern::new(7, 5) else { return };
-    let run = || etl_image::checkerboard::detect_view(view, pattern).is_ok();
-    let _ = match pool() {
-        Some(p) => p.install(run),
-        None => run(),
-    };
-}
-
 /// `py.detach(f)` with `f`'s parallel parts on this process's pool.
 pub fn detach<T: Send, F: FnOnce() -> T + Send>(py: Python<'_>, f: F) -> T {
     let pool = pool();
