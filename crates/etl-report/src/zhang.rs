@@ -36,19 +36,13 @@ fn uncertainty_map(z: &ZhangResult, size: [u32; 2], distance_mm: Option<f64>) ->
         .collect()
 }
 
-/// The mean distance of the views' boards from the camera, mm.
-fn views_distance_mm(z: &ZhangResult) -> f64 {
-    let n = z.poses.len().max(1) as f64;
-    z.poses.iter().map(|(_, t)| (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()).sum::<f64>() / n
-}
-
 /// Writes [`ZHANG_REPORT_FILES`] for `z` (an image of `size`) into `dir` (which exists);
 /// returns their paths. The two maps share one logarithmic colour scale, from the smaller
 /// of their smallest values to the larger of their largest (the corners' uncertainty is
 /// often a hundred times the centre's), stated on the page. Errors: a file that cannot be
 /// written.
 pub fn write_zhang_report(z: &ZhangResult, size: [u32; 2], dir: &Path) -> Result<Vec<PathBuf>> {
-    let d = views_distance_mm(z);
+    let d = z.views_distance_mm();
     let maps = [uncertainty_map(z, size, None), uncertainty_map(z, size, Some(d))];
     let finite = || maps.iter().flatten().copied().filter(|v| v.is_finite() && *v > 0.0);
     let (lo, hi) = (finite().fold(f64::INFINITY, f64::min), finite().fold(0.0f64, f64::max));

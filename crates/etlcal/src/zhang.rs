@@ -214,8 +214,7 @@ fn projection_grid(z: &ZhangResult, size: [u32; 2]) -> ProjectionGrid {
             (0..GRID[0]).map(move |i| [i as f64 * w / (GRID[0] - 1) as f64, j as f64 * h / (GRID[1] - 1) as f64])
         })
         .collect();
-    let views_distance_mm = z.poses.iter().map(|(_, t)| t.iter().map(|v| v * v).sum::<f64>().sqrt()).sum::<f64>()
-        / z.poses.len().max(1) as f64;
+    let views_distance_mm = z.views_distance_mm();
     let at = |d: Option<f64>| pixels.iter().map(|&q| z.projection_std(q, d).ok().map(|u| u.std_px)).collect();
     ProjectionGrid { at_infinity: at(None), at_views_distance: at(Some(views_distance_mm)), pixels, views_distance_mm }
 }

@@ -24,7 +24,7 @@
 use etl_core::calib::jacobian::Projector;
 use etl_core::calib::{Layout, A0};
 use etl_core::linalg::svd::Svd;
-use etl_core::lm::{solve_blocks, BlockProblem, BlockRowSink, BlockScratch, Options, StopReason};
+use etl_core::lm::{solve_blocks, BlockNormal, BlockProblem, BlockRowSink, BlockScratch, Options, StopReason};
 use etl_core::model::rotation::{matrix_to_rodrigues, rotation_from_two_columns};
 use etl_core::model::{
     CameraModel, Distortion, DistortionA, DistortionModel, FocalPoly, OpenCvFlags, MAX_COEFFICIENTS,
@@ -37,8 +37,8 @@ use etl_formats::{Error, Result};
 use crate::robust::{homography_inliers, outlier_limit_px};
 
 mod uncertainty;
+use uncertainty::invert_pose_block;
 pub use uncertainty::ZhangUncertainty;
-use uncertainty::{invert_pose_block, ViewBlocks};
 
 /// One view: board points (mm, on Z = 0) and their observed pixels.
 #[derive(Debug, Clone, Default)]
@@ -112,6 +112,13 @@ impl ZhangResult {
     /// frame is the camera frame, so `project` takes camera-frame points.
     pub fn camera(&self) -> CameraModel {
         model_at(self.options.model, &self.shared(), &[0.0; 6])
+    }
+
+    /// The mean distance of the views' boards from the camera, mm (of their poses'
+    /// translations; 0 without views).
+    pub fn views_distance_mm(&self) -> f64 {
+        let n = self.poses.len().max(1) as f64;
+        self.poses.iter().map(|(_, t)| (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()).sum::<f64>() / n
     }
 
     /// The lens-off intrinsics A0.
@@ -335,18 +342,19 @@ fn refine_n<const N: usize>(
         }
     }
     let (z, poses): (Shared, Vec<[f64; 6]>) = (problem.shared(&r.x), scratch.iter().map(|b| *b.y()).collect());
-    let uncertainty = joint_blocks(&mut problem, &r, &scratch, r.cost / dof, poses.clone())?;
+    let uncertainty = joint_blocks(&mut problem, &r, &scratch, r.cost / dof, (z, poses.clone()))?;
     Ok(Refined { z, cov, iterations: r.iterations, poses, uncertainty })
 }
 
 /// The blocks of J^T J at the solution `r` (poses in `scratch`) for
-/// [`ZhangResult::projection_std`], with the pixel noise variance `sigma2_px`.
+/// [`ZhangResult::projection_std`], with the pixel noise variance `sigma2_px` and the
+/// solution's shared numbers and poses.
 fn joint_blocks<const N: usize>(
     problem: &mut Refine<'_, N>,
     r: &etl_core::lm::BlockReport<N>,
     scratch: &[BlockScratch<N, 6>],
     sigma2_px: f64,
-    poses: Vec<[f64; 6]>,
+    (shared, poses): (Shared, Vec<[f64; 6]>),
 ) -> Result<ZhangUncertainty> {
     let free = problem.free;
     let unscale = if r.sigma2 > 0.0 { 1.0 / r.sigma2 } else { 0.0 };
@@ -358,12 +366,18 @@ fn joint_blocks<const N: usize>(
     }
     let (mut w, mut v_inv) = (vec![], vec![]);
     for (b, block) in scratch.iter().enumerate() {
-        let mut sink = ViewBlocks { free: &free, w: [[0.0; 6]; SHARED_MAX], v: [[0.0; 6]; 6] };
+        let (mut u, mut gx, mut wb, mut v, mut gy) = ([[0.0; N]; N], [0.0; N], [[0.0; 6]; N], [[0.0; 6]; 6], [0.0; 6]);
+        let mut sink = BlockNormal { u: &mut u, gx: &mut gx, w: &mut wb, v: &mut v, gy: &mut gy, cost: 0.0, rows: 0 };
         problem.eval_block(b, &r.x, block.y(), true, &mut sink).map_err(Error::Core)?;
-        v_inv.push(invert_pose_block(&sink.v)?);
-        w.push(sink.w);
+        v_inv.push(invert_pose_block(&v)?);
+        // W_i's rows of the free numbers, at their places among the shared ones.
+        let mut at_shared = [[0.0; 6]; SHARED_MAX];
+        for (&i, row) in free.iter().zip(wb) {
+            at_shared[i] = row;
+        }
+        w.push(at_shared);
     }
-    Ok(ZhangUncertainty { model: problem.model, shared: problem.shared(&r.x), poses, s_inv, w, v_inv, sigma2_px })
+    Ok(ZhangUncertainty { model: problem.model, shared, poses, s_inv, w, v_inv, sigma2_px })
 }
 
 /// Step 3: the LM refinement of the free shared numbers and every view's pose from `z0`

@@ -26,8 +26,7 @@
 
 use etl_core::calib::jacobian::Projector;
 use etl_core::calib::uncertainty::PixelUncertainty;
-use etl_core::lm::BlockRowSink;
-use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
+use etl_core::model::rotation::{mat_t_vec, mat_vec, rodrigues_to_matrix};
 use etl_core::model::{CameraModel, DistortionModel};
 use etl_formats::{Error, Result};
 use nalgebra::{Matrix6, SMatrix};
@@ -56,34 +55,10 @@ pub struct ZhangUncertainty {
     pub(super) sigma2_px: f64,
 }
 
-/// Accumulates a view's W_i and V_i from its streamed rows (shared columns mapped to
-/// [`super::Shared`] indices by `free`).
-pub(super) struct ViewBlocks<'a, const N: usize> {
-    pub free: &'a [usize; N],
-    pub w: [[f64; 6]; SHARED_MAX],
-    pub v: [[f64; 6]; 6],
-}
-
-impl<const N: usize> BlockRowSink<N, 6> for ViewBlocks<'_, N> {
-    fn push(&mut self, _r: f64, jac_x: &[f64; N], jac_y: &[f64; 6]) {
-        for (&i, &jx) in self.free.iter().zip(jac_x.iter()) {
-            if let Some(row) = self.w.get_mut(i) {
-                for (w, &jy) in row.iter_mut().zip(jac_y.iter()) {
-                    *w += jx * jy;
-                }
-            }
-        }
-        for (row, &ja) in self.v.iter_mut().zip(jac_y.iter()) {
-            for (v, &jb) in row.iter_mut().zip(jac_y.iter()) {
-                *v += ja * jb;
-            }
-        }
-    }
-}
-
-/// V^-1 of a view's pose block, or why it has none.
+/// V^-1 of a view's pose block given by its upper triangle (as `etl_core::lm::BlockNormal`
+/// accumulates it), or why it has none.
 pub(super) fn invert_pose_block(v: &[[f64; 6]; 6]) -> Result<[[f64; 6]; 6]> {
-    let m = Matrix6::from_fn(|i, j| v[i][j]);
+    let m = Matrix6::from_fn(|i, j| v[i.min(j)][i.max(j)]);
     let inv = m
         .try_inverse()
         .ok_or(Error::Core(etl_core::Error::Degenerate { what: "a view's pose is not determined by its corners" }))?;
@@ -204,7 +179,7 @@ fn pose_gradient(pose: &[f64; 6], p: [f64; 3], finite: bool, dq_dp: &[[f64; 3]; 
     let r_t = rodrigues_to_matrix(om);
     // p_i = R^T (p - t) for a point, R^T p for a direction.
     let rel = if finite { [p[0] - t[0], p[1] - t[1], p[2] - t[2]] } else { p };
-    let p_i: [f64; 3] = core::array::from_fn(|c| (0..3).map(|r| r_t[r][c] * rel[r]).sum());
+    let p_i = mat_t_vec(&r_t, rel);
     let d_om = rotation_derivative(om, p_i);
     let mut g = [[0.0; 6]; 2];
     for (gr, dr) in g.iter_mut().zip(dq_dp.iter()) {

@@ -144,7 +144,7 @@ fn lens_off_outliers_are_reported_and_leave_a0_unmoved() {
 /// (re-projection - truth, predicted std) in mrcal's sense (the point held in the boards'
 /// frames, mapped through the estimated poses: `ZhangResult::projection_std`).
 fn zhang_projection_trial(seed: u64, tests: &[([f64; 2], Option<f64>)]) -> Vec<(f64, f64)> {
-    use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
+    use etl_core::model::rotation::{mat_t_vec, mat_vec, rodrigues_to_matrix};
     let sim = paper_rig(&NoiseModel::PAPER, seed);
     let z = a0_from_offstate(&sim.observations).unwrap();
     let mut truth = CameraModel::paper_rig();
@@ -162,7 +162,7 @@ fn zhang_projection_trial(seed: u64, tests: &[([f64; 2], Option<f64>)]) -> Vec<(
         for (t, e) in poses.iter().zip(&z.poses) {
             let (rt, tt) = (rodrigues_to_matrix(t.rotation_rodrigues), t.translation_mm);
             let rel = if distance.is_some() { [p[0] - tt[0], p[1] - tt[1], p[2] - tt[2]] } else { p };
-            let board: [f64; 3] = core::array::from_fn(|c| (0..3).map(|r| rt[r][c] * rel[r]).sum());
+            let board = mat_t_vec(&rt, rel);
             let back = mat_vec(&rodrigues_to_matrix(e.0), board);
             for c in 0..3 {
                 mean[c] += (back[c] + if distance.is_some() { e.1[c] } else { 0.0 }) / poses.len() as f64;

@@ -24,7 +24,6 @@
 //! H^-1 is the solver's (covariance / sigma2, hold rows included, so a held number keeps a
 //! zero variance); with a robust loss every row carries its IRLS weight at the estimate.
 
-use super::problems::robust_scale;
 use super::{BundleAdjustReport, RobustLoss};
 use crate::calib::jacobian::Projector;
 use crate::calib::observations::{point_count, View};
@@ -60,30 +59,31 @@ pub struct InputNoiseCovariance {
     pub sigma_px: f64,
 }
 
-/// Per view: W_j = J_j^T B_j (as its two columns) and B_j^T B_j, with the rows' weights.
+/// Per view: W_j = J_j^T B_j (as its two columns) and the diagonal of B_j^T B_j (all the
+/// input share needs), with the rows' weights.
 struct ViewTerms {
     w: [[f64; MAX_PARAMS]; 2],
-    btb: [[f64; 2]; 2],
+    btb_diagonal: [f64; 2],
 }
 
-/// Accumulates view `view`'s [`ViewTerms`] and its weighted squared residuals at `proj`.
+/// Accumulates view `view`'s [`ViewTerms`] and its weighted squared residuals at `proj`
+/// (the robust weight from the same projection: the estimate is the reference).
 fn view_terms(proj: &Projector, view: &View<'_>, robust: Option<RobustLoss>, rss: &mut f64) -> Result<ViewTerms> {
-    let mut t = ViewTerms { w: [[0.0; MAX_PARAMS]; 2], btb: [[0.0; 2]; 2] };
+    let mut t = ViewTerms { w: [[0.0; MAX_PARAMS]; 2], btb_diagonal: [0.0; 2] };
     for p in view.points {
         let pr = proj.project(p.world_mm, view.e_com_ma, true)?;
-        let f = robust_scale(robust, Some(proj), p.world_mm, view.e_com_ma, p.pixel)?;
-        let rows = pr.d_params.iter().zip(pr.d_z_w.iter().zip(pr.d_e.iter())).zip(pr.pixel.iter().zip(p.pixel.iter()));
-        for ((j_row, (&dz, &de)), (&projected, &observed)) in rows {
-            let e = f * (projected - observed);
+        let (du, dv) = (pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]);
+        let f = robust.map_or(1.0, |loss| libm::sqrt(loss.weight(du * du + dv * dv)));
+        let rows = pr.d_params.iter().zip(pr.d_z_w.iter().zip(pr.d_e.iter())).zip([du, dv]);
+        for ((j_row, (&dz, &de)), d) in rows {
+            let e = f * d;
             *rss += e * e;
             let b = [f * dz, f * de];
-            for ((wk, btbk), &bk) in t.w.iter_mut().zip(t.btb.iter_mut()).zip(b.iter()) {
+            for ((wk, btbk), &bk) in t.w.iter_mut().zip(t.btb_diagonal.iter_mut()).zip(b.iter()) {
                 for (w, &j) in wk.iter_mut().zip(j_row.iter()) {
                     *w += f * j * bk;
                 }
-                for (btbkl, &bl) in btbk.iter_mut().zip(b.iter()) {
-                    *btbkl += bk * bl;
-                }
+                *btbk += bk * bk;
             }
         }
     }
@@ -146,7 +146,7 @@ pub fn covariance_with_input_noise(
     let (mut m, mut rss, mut input_share) = ([[0.0; MAX_PARAMS]; MAX_PARAMS], 0.0, 0.0);
     for view in views {
         let t = view_terms(&proj, view, robust, &mut rss)?;
-        input_share += q[0] * t.btb[0][0] + q[1] * t.btb[1][1];
+        input_share += q[0] * t.btb_diagonal[0] + q[1] * t.btb_diagonal[1];
         for (wk, &qk) in t.w.iter().zip(q.iter()) {
             for (mi, &wi) in m.iter_mut().zip(wk.iter()) {
                 if wi != 0.0 {
@@ -166,6 +166,8 @@ pub fn covariance_with_input_noise(
         Some(s) => s * s,
         None => ((rss - explained) / dof).max(0.0),
     };
+    // (H^-1 M) H^-1, from the product the trace took: `uncertainty::sandwich` computes the
+    // same with another order of sums, which moves the paper file's covariance by 1e-11.
     let mut covariance = product(&hm, &h_inv);
     for (c_row, h_row) in covariance.iter_mut().zip(h_inv.iter()) {
         for (c, &h) in c_row.iter_mut().zip(h_row.iter()) {
