@@ -3,10 +3,13 @@
 same linear start, in one run. Prints both times, the ratio and both final costs.
 
     python3 -m venv /tmp/venv-ba && /tmp/venv-ba/bin/pip install scipy
-    /tmp/venv-ba/bin/python benches/ba_scipy.py
+    /tmp/venv-ba/bin/python benches/ba_scipy.py [--rounds 3] [--json]
 """
+import argparse
 import json
+import os
 import pathlib
+import statistics
 import subprocess
 import time
 
@@ -14,6 +17,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
+TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
 
 
 def rodrigues(om):
@@ -42,10 +46,16 @@ def residuals(x, world, pix, e):
     return np.concatenate([ud + x[14] - pix[:, 0], vd + x[15] - pix[:, 1]])
 
 
-def main():
+def etlcal_problem():
+    """One run of etl-sim's `ba_problem` example: the problem, etlcal's time, cost and iterations."""
+    out = subprocess.run([str(TARGET / "release/examples/ba_problem")], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout)
+
+
+def measure(rounds):
+    """`rounds` interleaved rounds (etlcal's example, scipy 'lm', scipy 'trf'); medians of the rounds."""
     subprocess.run(["cargo", "build", "--release", "-q", "-p", "etl-sim", "--example", "ba_problem"], cwd=ROOT, check=True)
-    out = subprocess.run([str(ROOT / "target/release/examples/ba_problem")], capture_output=True, text=True, check=True).stdout
-    prob = json.loads(out)
+    prob = etlcal_problem()
     world, pix, e = [], [], []
     for v in prob["observations"]["views"]:
         for p in v["points"]:
@@ -54,20 +64,38 @@ def main():
             e.append(v["e_com_ma"])
     world, pix, e = np.array(world), np.array(pix), np.array(e)
     x0 = np.array(prob["start"])
-    print(f"points: {len(e)}; start cost {np.sum(residuals(x0, world, pix, e) ** 2):.6f}")
+    times = {"etlcal": [], "lm": [], "trf": []}
+    costs = {}
+    for _ in range(rounds):
+        run = etlcal_problem()
+        times["etlcal"].append(run["etlcal_seconds"])
+        costs["etlcal"], iterations = run["etlcal_cost"], run["etlcal_iterations"]
+        for method in ["lm", "trf"]:
+            t = time.perf_counter()
+            r = least_squares(residuals, x0, args=(world, pix, e), method=method, xtol=1e-15, ftol=1e-15,
+                              gtol=1e-15, x_scale="jac")
+            times[method].append(time.perf_counter() - t)
+            costs[method] = float(np.sum(r.fun**2))
+    return {"points": len(e), "rounds": rounds, "etlcal_iterations": iterations,
+            "seconds": {k: statistics.median(v) for k, v in times.items()}, "cost": costs}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    res = measure(args.rounds)
+    if args.json:
+        print(json.dumps(res))
+        return
+    et = res["seconds"]["etlcal"]
+    print(f"points: {res['points']}; etlcal {1e3 * et:.2f} ms, cost {res['cost']['etlcal']:.9f}, "
+          f"{res['etlcal_iterations']} iterations")
     for method in ["lm", "trf"]:
-        kw = dict(x_scale="jac") if method == "trf" else dict(x_scale="jac")
-        t = time.perf_counter()
-        runs = 3
-        for _ in range(runs):
-            r = least_squares(residuals, x0, args=(world, pix, e), method=method, xtol=1e-15, ftol=1e-15, gtol=1e-15, **kw)
-        secs = (time.perf_counter() - t) / runs
-        cost = float(np.sum(r.fun**2))
-        rel = abs(cost - prob["etlcal_cost"]) / prob["etlcal_cost"]
-        print(f"scipy {method}: {1e3 * secs:.1f} ms, cost {cost:.9f}, nfev {r.nfev}")
-        print(f"  etlcal: {1e3 * prob['etlcal_seconds']:.2f} ms, cost {prob['etlcal_cost']:.9f}, "
-              f"{prob['etlcal_iterations']} iterations; ratio {secs / prob['etlcal_seconds']:.0f}x; "
-              f"cost difference {rel:.1e} relative")
+        secs, cost = res["seconds"][method], res["cost"][method]
+        rel = abs(cost - res["cost"]["etlcal"]) / res["cost"]["etlcal"]
+        print(f"scipy {method}: {1e3 * secs:.1f} ms ({secs / et:.0f}x), cost {cost:.9f} ({rel:.1e} relative)")
 
 
 if __name__ == "__main__":

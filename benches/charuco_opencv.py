@@ -173,7 +173,9 @@ def main():
     ap.add_argument("--phone", action="store_true",
                     help="also two sharp views of 80-90 px squares processed as a phone does (unsharp mask 0.8, "
                          "JPEG quality 90)")
+    ap.add_argument("--json", action="store_true", help="print the per-blur summary as one JSON object instead")
     args = ap.parse_args()
+    say = (lambda *a, **k: None) if args.json else print
     os.makedirs(args.out, exist_ok=True)
     cv2.setNumThreads(2)
     bits = marker_bits(SQUARES[0] * SQUARES[1] // 2)
@@ -206,7 +208,7 @@ def main():
         out = subprocess.run(cmd + [v[0] for v in views], capture_output=True, text=True)
         for e in json.loads(out.stdout)["images"]:
             etl[e["path"]] = e
-    print(f"{'view':<28} {'in frame':>8} | {'OpenCV found':>12} {'RMS px':>8} {'wrong':>5} {'ms med [min-max]':>20} | "
+    say(f"{'view':<28} {'in frame':>8} | {'OpenCV found':>12} {'RMS px':>8} {'wrong':>5} {'ms med [min-max]':>20} | "
           f"{'etlcal found':>12} {'RMS px':>8} {'wrong':>5}")
     for path, pi, blur, t in views:
         img = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
@@ -230,8 +232,11 @@ def main():
             line += (f" | {s[0]:>5} ({100 * s[0] / n_in:4.1f}%) "
                      f"{np.sqrt(np.mean(s[2])) if s[2] else float('nan'):>8.4f} {s[1]:>5}")
         results[path] = row
-        print(line)
-    print("\nper blur (all poses):")
+        say(line)
+    say("\nper blur (all poses):")
+    summary = {"opencv": cv2.__version__, "blurs": {}, "views": {}}
+    for path, row in results.items():
+        summary["views"][os.path.basename(path)] = {"opencv_ms": statistics.median(row["opencv_ms"])}
     for blur in BLURS + (["phone"] if args.phone else []):
         rows = [r for r in results.values() if r["blur"] == blur]
         n_in = sum(r["in_frame"] for r in rows)
@@ -241,12 +246,18 @@ def main():
             found = sum(r[who][0] for r in rows)
             wrong = sum(r[who][1] for r in rows)
             sq = [x for r in rows for x in r[who][2]]
+            s = {"found": found, "in_frame": n_in, "wrong_ids": wrong, "rms_px": float(np.sqrt(np.mean(sq))),
+                 "max_px": float(np.sqrt(max(sq)))}
             extra = ""
             if who == "opencv":
                 med = [statistics.median(r["opencv_ms"]) for r in rows]
+                s["ms_median_of_views"] = statistics.median(med)
                 extra = f", {statistics.median(med):.1f} ms per image (median of the views' medians; views {min(med):.1f}-{max(med):.1f})"
-            print(f"  blur {blur}: {who:<7} {found}/{n_in} = {100 * found / n_in:.1f} % of the in-frame corners, "
-                  f"RMS {np.sqrt(np.mean(sq)):.4f} px, max {np.sqrt(max(sq)):.4f} px, wrong ids {wrong}{extra}")
+            summary["blurs"].setdefault(str(blur), {})[who] = s
+            say(f"  blur {blur}: {who:<7} {found}/{n_in} = {100 * found / n_in:.1f} % of the in-frame corners, "
+                  f"RMS {s['rms_px']:.4f} px, max {s['max_px']:.4f} px, wrong ids {wrong}{extra}")
+    if args.json:
+        sys.stdout.write(json.dumps(summary) + "\n")
 
 
 if __name__ == "__main__":

@@ -46,11 +46,14 @@ def etlcal_corners(exe: str, board: dict, image: pathlib.Path) -> dict:
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--etlcal", default=str(ROOT / "target" / "release" / "etlcal"))
+    p.add_argument("--json", action="store_true")
     args = p.parse_args()
+    rows = []
     recorded = json.loads((FIXTURES / "opencv.json").read_text())
-    print(f"OpenCV {recorded['opencv']} (recorded); etlcal {args.etlcal}")
-    print("| photograph | corners | etlcal - OpenCV RMS | degree | etlcal residual | OpenCV residual |")
-    print("|---|---|---|---|---|---|")
+    if not args.json:
+        print(f"OpenCV {recorded['opencv']} (recorded); etlcal {args.etlcal}")
+        print("| photograph | corners | etlcal - OpenCV RMS | degree | etlcal residual | OpenCV residual |")
+        print("|---|---|---|---|---|---|")
     for im in recorded["images"]:
         if im["source"] != "photograph" or len(im["ids"]) < 30:
             continue
@@ -62,8 +65,15 @@ def main() -> None:
         po, pc = np.array([ours[i] for i in ids]), np.array([theirs[i] for i in ids])
         diff = float(np.sqrt(((po - pc) ** 2).sum(1).mean()))
         for degree in (3, 4, 5, 6):
+            rows.append({"photograph": im["file"], "corners": len(ids), "difference_rms_px": diff, "degree": degree,
+                         "etlcal_residual_px": smooth_residual_px(b, po, degree),
+                         "opencv_residual_px": smooth_residual_px(b, pc, degree)})
+            if args.json:
+                continue
             print(f"| {im['file']} | {len(ids)} | {diff:.3f} px | {degree} | "
                   f"{smooth_residual_px(b, po, degree):.4f} px | {smooth_residual_px(b, pc, degree):.4f} px |")
+    if args.json:
+        print(json.dumps({"opencv": recorded["opencv"], "rows": rows}))
 
 
 if __name__ == "__main__":

@@ -99,7 +99,7 @@ def scipy_lre(name, start, method):
 
 
 def ours():
-    out = subprocess.run(["cargo", "test", "--release", "-q", "-p", "etl-core", "--test", "nist", "--", "--nocapture", "--test-threads=1"],
+    out = subprocess.run(["cargo", "test", "--release", "-q", "-p", "etl-core", "--test", "it", "nist::", "--", "--nocapture", "--test-threads=1"],
                          cwd=ROOT, capture_output=True, text=True, check=True).stdout
     res = {}
     for line in out.splitlines():
@@ -109,24 +109,35 @@ def ours():
     return res
 
 
-def main():
+def measure():
+    """LRE per problem and start: {problem: {"etlcal": [s1, s2], "lm": [...], "trf": [...]}}."""
     mine = ours()
+    return {name: {"etlcal": list(mine[name]),
+                   "lm": [scipy_lre(name, 0, "lm"), scipy_lre(name, 1, "lm")],
+                   "trf": [scipy_lre(name, 0, "trf"), scipy_lre(name, 1, "trf")]} for name in ORDER}
+
+
+def main():
+    import argparse
+    import json
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--json", action="store_true", help="print the LREs as one JSON object")
+    args = ap.parse_args()
+    res = measure()
+    if args.json:
+        print(json.dumps({"problems": res, "order": ORDER}))
+        return 0
     print("| problem | etlcal s1 | etlcal s2 | scipy lm s1 | scipy lm s2 | scipy trf s1 | scipy trf s2 |")
     print("|---|---|---|---|---|---|---|")
-    count = {k: [0, 0] for k in ["etlcal", "lm", "trf"]}
-    count4 = {k: [0, 0] for k in ["etlcal", "lm", "trf"]}
     for name in ORDER:
-        row = [mine[name][0], mine[name][1], scipy_lre(name, 0, "lm"), scipy_lre(name, 1, "lm"),
-               scipy_lre(name, 0, "trf"), scipy_lre(name, 1, "trf")]
-        for k, (a, b) in zip(["etlcal", "lm", "trf"], [row[0:2], row[2:4], row[4:6]]):
-            count[k][0] += a >= 6
-            count[k][1] += b >= 6
-            count4[k][0] += a >= 4
-            count4[k][1] += b >= 4
+        row = res[name]["etlcal"] + res[name]["lm"] + res[name]["trf"]
         print(f"| {name} | " + " | ".join(f"{v:.1f}" for v in row) + " |")
-    for k in count:
-        print(f"{k}: LRE >= 6 on {count[k][0]}/27 (start 1), {count[k][1]}/27 (start 2); "
-              f"LRE >= 4 on {count4[k][0]}/27, {count4[k][1]}/27")
+    for k in ["etlcal", "lm", "trf"]:
+        c6 = [sum(res[n][k][s] >= 6 for n in ORDER) for s in (0, 1)]
+        c4 = [sum(res[n][k][s] >= 4 for n in ORDER) for s in (0, 1)]
+        print(f"{k}: LRE >= 6 on {c6[0]}/27 (start 1), {c6[1]}/27 (start 2); LRE >= 4 on {c4[0]}/27, {c4[1]}/27")
+    return 0
 
 
 if __name__ == "__main__":

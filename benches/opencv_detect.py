@@ -119,9 +119,12 @@ def main():
     ap.add_argument("--sb", action="store_true", help="include findChessboardCornersSB (1-2 s per image)")
     ap.add_argument("--real", nargs="*", default=None, help="real images: NAME:CxR pairs")
     ap.add_argument("--square", type=float, default=66.0)
+    ap.add_argument("--json", action="store_true", help="print the results as one JSON object instead")
     args = ap.parse_args()
+    out = {"opencv": cv2.__version__, "synthetic": {}, "real": []}
+    say = (lambda *a: None) if args.json else print
     methods = ["cv 11x11", "cv 21x21"] + (["cv SB accurate"] if args.sb else []) + ["etlcal"]
-    print(f"OpenCV {cv2.__version__}, threads {cv2.getNumThreads()}, 2-core machine")
+    say(f"OpenCV {cv2.__version__}, threads {cv2.getNumThreads()}, 2-core machine")
     with tempfile.TemporaryDirectory() as tmp:
         for blur in BLURS:
             errs = {m: [] for m in methods}
@@ -155,7 +158,10 @@ def main():
                 e = np.array(errs[m])
                 rms = np.sqrt(np.mean(e**2)) if len(e) else float("nan")
                 mx = e.max() if len(e) else float("nan")
-                print(
+                out["synthetic"].setdefault(str(blur), {})[m] = {
+                    "found": found[m], "images": len(POSES), "rms_px": float(rms), "max_px": float(mx),
+                    "ms_per_image": float(1000 * np.mean(times[m]))}
+                say(
                     f"blur {blur}: {m:15s} found {found[m]}/{len(POSES)}  rms {rms:.4f} px  max {mx:.3f} px  "
                     f"time {1000 * np.mean(times[m]):.1f} ms/image"
                 )
@@ -178,7 +184,11 @@ def main():
                 cv_found += int(ok)
             res, _ = etlcal(args.etlcal, paths, f"{cc}x{rr}")
             et_found = sum(int(x["found"]) for x in res)
-            print(f"real {pat} boards, asking {cc}x{rr} ({label}): OpenCV found {cv_found}/{len(paths)}, etlcal {et_found}/{len(paths)}")
+            out["real"].append({"pattern": pat, "asked": f"{cc}x{rr}", "label": label, "images": len(paths),
+                                "opencv_found": cv_found, "etlcal_found": et_found})
+            say(f"real {pat} boards, asking {cc}x{rr} ({label}): OpenCV found {cv_found}/{len(paths)}, etlcal {et_found}/{len(paths)}")
+    if args.json:
+        print(json.dumps(out))
 
 
 if __name__ == "__main__":

@@ -25,13 +25,18 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
 
 
+RUN_BENCHES = True
+
+
 def rust_median_ns(bench: str, name: str, package: str = "etl-core") -> float:
-    subprocess.run(
-        ["cargo", "bench", "-q", "-p", package, "--features", "bench", "--bench", bench, "--", name, "--exact"],
-        cwd=ROOT,
-        check=True,
-        stdout=subprocess.DEVNULL,
-    )
+    """Criterion's median of one bench; run here unless `--no-bench` (benches/all.py has just run it)."""
+    if RUN_BENCHES:
+        subprocess.run(
+            ["cargo", "bench", "-q", "-p", package, "--features", "bench", "--bench", bench, "--", name, "--exact"],
+            cwd=ROOT,
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
     est = json.loads((TARGET / "criterion" / name / "new" / "estimates.json").read_text())
     return est["median"]["point_estimate"]
 
@@ -44,7 +49,7 @@ def python_ns(stmt, number: int) -> float:
 
 def rust_detect_ms(png: pathlib.Path, warm: bool) -> float:
     """Best per-call time of the `detect_timing` example of etl-py (a fresh process)."""
-    args = ["cargo", "run", "-q", "--release", "-p", "etl-py", "--example", "detect_timing", "--", str(png)]
+    args = [str(TARGET / "release" / "examples" / "detect_timing"), str(png)]
     out = subprocess.run(args + (["--warm"] if warm else []), cwd=ROOT, check=True, capture_output=True, text=True)
     return float(out.stdout.split()[0])
 
@@ -68,43 +73,56 @@ def python_detect_ms(png: pathlib.Path, warm: bool) -> float:
     return float(subprocess.run(args, check=True, capture_output=True, text=True).stdout)
 
 
-def main() -> None:
+def measure() -> list:
+    """Rows (call, Rust ns, Python ns), both sides measured now."""
+    subprocess.run(["cargo", "build", "-q", "--release", "-p", "etl-py", "--example", "detect_timing"], cwd=ROOT, check=True)
     cal = etlcal.Calibration.paper_rig()
     board = np.array([[1.5 * i, 1.5 * j, 48.0] for j in range(12) for i in range(14)])
     pixels = cal.project(board, 100.0)
     rows = []
     rust = rust_median_ns("model", "project_168_points")
     py = python_ns(lambda: cal.project(board, 100.0), 20000)
-    rows.append(("project, 168 points", rust, py))
+    rows.append(("Calibration.project, 168 points", rust, py))
     rust = rust_median_ns("model", "undistort_168_points")
     py = python_ns(lambda: cal.undistort(pixels, 100.0), 2000)
-    rows.append(("undistort, 168 points", rust, py))
+    rows.append(("Calibration.undistort, 168 points", rust, py))
     s = etlcal.ThermalSurface.paper()
     rust = rust_median_ns("model", "e_com_one")
     py = python_ns(lambda: s.e_com(143.2, 31.7), 200000)
-    rows.append(("ThermalSurface.e_com, one", rust, py))
-    # detect_corners on the very image the Rust bench detects (it writes it next to its
-    # estimates); OpenCV only reads the PNG here. The criterion median is taken after the
-    # bench rendered its image, which leaves glibc's malloc "warm" (its mmap threshold
-    # raised by a large free), so the detector's large temporaries come from the heap; in a
-    # fresh process each of them is a new mmap whose pages fault on first touch (~3x the
-    # time). Compare like with like: both sides in fresh processes, cold and warmed by one
-    # 16 MiB allocation, same timing loop (best of 7 repeats of 5 calls).
+    rows.append(("ThermalSurface.e_com, one float", rust, py))
     rust = rust_median_ns("detect", "detect_1936x1458_14x12/blur_1.5", package="etl-image")
     png = TARGET / "criterion" / "detect_view_blur_1.5.png"
     for warm in [False, True]:
         r_ms = rust_detect_ms(png, warm)
         p_ms = python_detect_ms(png, warm)
-        state = "warm malloc" if warm else "fresh process"
+        state = "malloc warmed (one 16 MiB block freed first)" if warm else "fresh process"
         rows.append((f"detect_corners, 1936 x 1458, {state}", r_ms * 1e6, p_ms * 1e6))
     import cv2
 
     img = cv2.imread(str(png), cv2.IMREAD_GRAYSCALE)
     py = python_ns(lambda: etlcal.detect_corners(img, "14x12"), 5)
-    rows.append(("detect_corners, 1936 x 1458, vs criterion (this process)", rust, py))
+    rows.append(("detect_corners, 1936 x 1458, this process against criterion", rust, py))
+    return rows
+
+
+def main() -> None:
+    import argparse
+
+    global RUN_BENCHES
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--no-bench", action="store_true", help="read criterion's last results instead of running it")
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    RUN_BENCHES = not args.no_bench
+    rows = measure()
+    if args.json:
+        print(json.dumps({"rows": [{"call": n, "rust_ns": r, "python_ns": p} for n, r, p in rows],
+                          "python": sys.version.split()[0], "numpy": np.__version__}))
+        return
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, etlcal {etlcal.__version__}")
     print("| call | Rust | Python (best of 7) | overhead |")
     print("|---|---|---|---|")
+
     def fmt(ns: float) -> str:
         return f"{ns:.0f} ns" if abs(ns) < 1000 else f"{ns / 1000:.2f} us"
 

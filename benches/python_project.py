@@ -14,6 +14,7 @@ alternate within each repeat so that a change of machine load hits both.
 Prints one line per path and the ratio (docs/BENCHMARKS.md, "Python: CameraAt.project").
 """
 import argparse
+import json
 import platform
 import timeit
 
@@ -36,6 +37,7 @@ def main() -> None:
     parser.add_argument("--points", type=int, default=100_000)
     parser.add_argument("--number", type=int, default=20)
     parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
 
     cal = etlcal.Calibration.paper_rig()
@@ -58,6 +60,9 @@ def main() -> None:
         for name, call in paths.items():
             t = timeit.timeit(call, number=args.number) / args.number
             best[name] = min(best[name], t)
+    if args.json:
+        print(json.dumps({"points": args.points, "ns_per_point": {n: t / args.points * 1e9 for n, t in best.items()}}))
+        return
     print(f"{args.points} points, best of {args.repeat} x {args.number} calls; "
           f"Python {platform.python_version()}, numpy {np.__version__}, etlcal {etlcal.__version__}")
     base = best["Calibration.project(world, e_com_ma)"]

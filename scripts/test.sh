@@ -89,6 +89,9 @@ export ETLCAL_TEST_BINARY="$target/debug/etlcal"
 "$venv/bin/python" -m pytest -q --durations=10
 stage_done "pytest"
 cd "$root"
+# docs/BENCHMARKS.md is benches/all.sh's output, never edited by hand.
+"$venv/bin/python" -m pytest -q benches/test_benchdoc.py
+stage_done "benchmark document"
 
 echo "== hostile-user battery (fast part)"
 # The wide net of docs/RELIABILITY.md: the fast part of scripts/hostile/ (its README); a

@@ -4,7 +4,7 @@
 //! loops before), and the closed form of Zhang's method (the right singular vector of the
 //! smallest singular value of the stacked 2n x 6 constraints: etl-core's Jacobi SVD of
 //! V^T V, kept; faer's thin SVD of V, the alternative that moved the golden outputs, was
-//! measured here and is recorded in docs/BENCHMARKS.md, "nalgebra and faer").
+//! measured here and is recorded in docs/PERFORMANCE-HISTORY.md, "nalgebra and faer").
 //! The `hand` module is the code of before, kept here only as the reference of the bench.
 use criterion::{criterion_group, criterion_main, Criterion};
 use etl_core::linalg::svd::Svd;

@@ -2,7 +2,7 @@
 //! temperature query, rate of current commands, and the compensation loop's rate against
 //! what 115200 baud allows for its commands (10 bits per byte on the wire).
 //!
-//! `cargo bench -p etl-hw --bench link` (prints one line per figure).
+//! `cargo bench -p etl-hw --bench link` (prints one JSON object; benches/all.py reads it).
 #[cfg(unix)]
 use std::time::{Duration, Instant};
 
@@ -38,19 +38,29 @@ fn main() {
     }
     client.current_ma().expect("sync");
     let set_rate = n as f64 / t.elapsed().as_secs_f64();
-    // Bytes of one loop step on the wire: the temperature query, its reply, one current.
+    // Bytes on the wire at 10 bits per byte. A current command is confirmed by reading it
+    // back (`Aw`, then `Ar` and its reply), so each is one round trip; a hold step adds the
+    // temperature query and its reply before it.
+    let byte_s = 10.0 / 115_200.0;
     let query = Command::Temperature.encode().len();
     let reply = Reply::Temperature { raw: 27 * 16 }.encode().len();
     let set = Command::SetCurrent { code: 2000 }.encode().len();
-    let baud_steps = 115_200.0 / 10.0 / (query.max(reply) + set) as f64;
+    let read = Command::GetCurrent.encode().len();
+    let current = Reply::Current { code: 2000 }.encode().len();
+    let command_bytes = set + read + current;
+    let step_bytes = query + reply + command_bytes;
     let cfg = HoldConfig { e_com_ma: 150.0, rate_hz: 0.0, duration: Some(Duration::from_secs(2)) };
     let r = hold(&mut client, &ThermalCalibration::PAPER, &cfg, |_| true).expect("hold");
-    println!("temperature query round trip: {:.1} us", rtt * 1e6);
-    println!("current commands: {set_rate:.0} per s (115200 baud allows {:.0} per s)", 115_200.0 / 10.0 / set as f64);
-    println!(
-        "hold loop (query + reply + command per step): {:.0} steps per s; 115200 baud allows {baud_steps:.0} per s \
-         (full duplex: the longer of query and reply, plus the command): {:.0} %",
-        r.achieved_rate_hz,
-        100.0 * r.achieved_rate_hz / baud_steps
-    );
+    let figures = [
+        ("temperature_round_trip_us", rtt * 1e6),
+        ("temperature_round_trip_wire_us", (query + reply) as f64 * byte_s * 1e6),
+        ("current_commands_per_s", set_rate),
+        ("current_command_bytes", command_bytes as f64),
+        ("current_commands_per_s_at_115200_baud", 1.0 / (command_bytes as f64 * byte_s)),
+        ("hold_steps_per_s", r.achieved_rate_hz),
+        ("hold_step_bytes", step_bytes as f64),
+        ("hold_steps_per_s_at_115200_baud", 1.0 / (step_bytes as f64 * byte_s)),
+    ];
+    let fields: Vec<String> = figures.iter().map(|(k, v)| format!("\"{k}\": {v}")).collect();
+    println!("{{{}}}", fields.join(", "));
 }

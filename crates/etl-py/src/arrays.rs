@@ -92,6 +92,17 @@ pub fn points<const K: usize>(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Po
     Ok(Points { points, single })
 }
 
+/// Sets up rust-numpy's lazy state now (at import): its first use in a process imports
+/// `numpy.lib` to read numpy's version, publishes the borrow-checking capsule and creates
+/// the type that owns arrays handed to numpy, 0.15-0.2 ms that the first `detect_corners`
+/// (or any first call taking an array) paid otherwise. numpy is imported anyway (by
+/// `etlcal.results`). A failure is left for that first call to report.
+pub fn prepare(py: Python<'_>) {
+    if let Ok(a) = points_out(py, vec![[0.0f64; 2]], false) {
+        let _ = a.extract::<numpy::PyReadonlyArray2<'_, f64>>();
+    }
+}
+
 /// (N, K) float64 array from points (or (K,) when `single`).
 pub fn points_out<'py, const K: usize>(
     py: Python<'py>,

@@ -773,6 +773,45 @@ impl Calibration {
         Self::camera_at_e_com(slf, e_com_ma, allow_extrapolation)?.projection_std(world_mm)
     }
 
+    /// The standard deviation of the re-projection of the point seen at each pixel, in
+    /// mrcal's sense (`mrcal.projection_uncertainty`; `ZhangResult.projection_std` for a
+    /// monofocal calibration): the point at `distance_mm` from the projection centre along
+    /// the pixel's ray at `e_com_ma`, or for None in that direction (a point at infinity),
+    /// held fixed in the stage frame while the calibration varies within its covariance.
+    ///
+    /// Args:
+    ///     pixels: pixels, px: an (N, 2) array (or one pixel of shape (2,)).
+    ///     e_com_ma: compensated current, mA.
+    ///     distance_mm: the distance along the ray, mm, a number > 0; None: the direction.
+    ///     allow_extrapolation: outside the calibrated E_com range too (keyword only).
+    ///
+    /// Returns: the standard deviations of u and of v, px: an (N, 2) float64 array (or
+    /// (2,)).
+    ///
+    /// Raises: InputError for a calibration without a covariance, a NaN, a distance that
+    /// is not a finite number > 0, a pixel that does not unproject, a current outside the
+    /// calibrated range (unless allow_extrapolation).
+    #[pyo3(signature = (pixels, e_com_ma, distance_mm=None, *, allow_extrapolation=false))]
+    fn pixel_projection_std<'py>(
+        &self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        e_com_ma: f64,
+        distance_mm: Option<f64>,
+        allow_extrapolation: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let p = crate::arrays::points::<2>(pixels, "pixels")?;
+        let (file, trust) = (&self.file, trust(allow_extrapolation));
+        let out = crate::pool::detach(py, || {
+            p.points
+                .iter()
+                .map(|q| file.pixel_projection_std(*q, e_com_ma, distance_mm, trust).map(|u| u.std_px))
+                .collect::<etl_formats::Result<Vec<[f64; 2]>>>()
+        })
+        .map_err(crate::errors::calib_err)?;
+        crate::arrays::points_out(py, out, p.single)
+    }
+
     /// The camera at one current in OpenCV's conventions, for `cv2.projectPoints`,
     /// `cv2.undistortPoints`, `cv2.initUndistortRectifyMap`, `cv2.solvePnP`
     /// (`CameraAt.to_opencv` at each current).

@@ -445,6 +445,31 @@ def test_projection_std_is_the_principal_points_for_its_covariance() -> None:
         _with_covariance(etlcal.Calibration.paper_rig(), bad, np.sqrt(np.diag(cov)))
 
 
+def test_pixel_projection_std_is_that_of_the_point_seen_there(sim: etlcal.Simulation) -> None:
+    """mrcal's sense: the point seen at a pixel at a distance along its ray is a world point,
+    and a direction is the limit of far points; bad distances are refused by name."""
+    cal = etlcal.calibrate(sim.observations, sim.a0)
+    e = 150.0
+    pixels = np.array([[968.0, 729.0], [150.0, 120.0], [1800.0, 1350.0]])
+    for q in pixels:
+        origin, direction = cal.ray((float(q[0]), float(q[1])), e)
+        for d in (22.0, 300.0):
+            world = origin + d * direction
+            assert np.allclose(cal.pixel_projection_std(q, e, d), cal.projection_std(world, e), rtol=1e-9)
+    far = cal.pixel_projection_std(pixels, e, 1e9)
+    at_infinity = cal.pixel_projection_std(pixels, e)
+    assert at_infinity.shape == (3, 2) and np.allclose(at_infinity, far, rtol=1e-6)
+    # Near the board the translation's uncertainty adds to the pixel's.
+    assert not np.allclose(cal.pixel_projection_std(pixels, e, 22.0), at_infinity, rtol=1e-3)
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(etlcal.InputError, match="distance_mm = .* must be a finite number > 0"):
+            cal.pixel_projection_std(pixels, e, bad)
+    with pytest.raises(etlcal.InputError, match="outside"):
+        cal.pixel_projection_std(pixels, 400.0)
+    with pytest.raises(etlcal.InputError, match="no covariance"):
+        etlcal.Calibration.paper_rig().pixel_projection_std(pixels, e)
+
+
 def test_calibrate_records_the_covariance_and_measures_with_it(sim: etlcal.Simulation) -> None:
     cal = etlcal.calibrate(sim.observations, sim.a0)
     c = cal.covariance

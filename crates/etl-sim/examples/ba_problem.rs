@@ -15,9 +15,10 @@ fn main() {
     let e: Vec<f64> = sim.observations.views.iter().map(|v| v.e_com_ma.unwrap_or(v.e_in_ma)).collect();
     let views: Vec<View> = pts.iter().zip(&e).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let init = initialise(&views, &sim.a0).expect("initialise");
-    let opts = BundleAdjustOptions::default();
+    // The solve alone, as scipy's least_squares does it: no covariance with the input errors.
+    let opts = BundleAdjustOptions { input_noise: None, ..BundleAdjustOptions::default() };
     let mut scratch = vec![ViewScratch::ZERO; bundle_adjust_scratch(views.len())];
-    let runs = 50;
+    let runs = 20;
     let t = Instant::now();
     let mut report = None;
     for _ in 0..runs {

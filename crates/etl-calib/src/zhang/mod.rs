@@ -259,7 +259,7 @@ fn closed_form(views: &[PlanarView], image_size: [u32; 2]) -> Result<([f64; 4], 
         hs.push(h);
     }
     // etl-core's Jacobi SVD of V^T V, not faer's SVD of V: the latter moves A0 in the last
-    // bits and the golden outputs of `calibrate` and `demo` beyond 1e-12 (docs/BENCHMARKS.md).
+    // bits and the golden outputs of `calibrate` and `demo` beyond 1e-12 (docs/PERFORMANCE-HISTORY.md).
     let svd = Svd::of_rows(&vtv);
     let kmin = (0..6).min_by(|&a, &b| svd.s[a].total_cmp(&svd.s[b])).unwrap_or(0);
     let b = svd.v[kmin];

@@ -140,7 +140,7 @@ fn an_opencv_flag_with_the_paper_model_is_refused_naming_it() {
 /// corners: every image is used, the RMS is below OpenCV's end to end (its own corners,
 /// cornerSubPix 11x11), and the camera is OpenCV 5.0.0's calibrateCamera on the same
 /// corners to within 0.01 of its standard deviations. Reference numbers: the run of
-/// `benches/zhang_opencv.py --wide` recorded in docs/BENCHMARKS.md;
+/// `benches/zhang_opencv.py --wide` recorded in docs/PERFORMANCE-HISTORY.md (the current run: docs/BENCHMARKS.md);
 /// crates/etl-py/tests/test_zhang_opencv.py makes the same comparison live with cv2.
 #[test]
 fn wide_lens_image_sets_reproduce_opencv_on_the_same_corners() {

@@ -2,7 +2,7 @@
 //!
 //! The public API keeps plain arrays (row-major `[[f64; 3]; 3]`, `[f64; 3]`); the
 //! arithmetic is nalgebra's fixed-size `Matrix3` / `Vector3` (no_std, no heap). Three
-//! pieces stay hand-written (docs/BENCHMARKS.md, "nalgebra and faer"):
+//! pieces stay hand-written (docs/PERFORMANCE-HISTORY.md, "nalgebra and faer"):
 //! [`rodrigues_to_matrix`] (nalgebra's `Rotation3` moves the golden outputs),
 //! [`matrix_to_rodrigues`] (nalgebra's `Rotation3::scaled_axis` takes the angle from
 //! `acos`, losing half the digits near 0) and the SVD inside
@@ -36,7 +36,7 @@ pub fn from_matrix3(m: &Matrix3<f64>) -> Mat3 {
 ///
 /// Hand-written, not nalgebra's `Rotation3::from_scaled_axis` (which normalises the axis
 /// first): that changes the last bits of R, and the PnP refinement of `etlcal demo`
-/// amplifies them beyond the golden test's 1e-12 (docs/BENCHMARKS.md).
+/// amplifies them beyond the golden test's 1e-12 (docs/PERFORMANCE-HISTORY.md).
 pub fn rodrigues_to_matrix(om: [f64; 3]) -> Mat3 {
     let t2 = om[0] * om[0] + om[1] * om[1] + om[2] * om[2];
     let t = libm::sqrt(t2);
@@ -101,7 +101,7 @@ pub fn matrix_to_rodrigues(r: &Mat3) -> [f64; 3] {
 /// The rotation nearest to `m` in the Frobenius norm (the orthogonal polar factor):
 /// R = U D V^T from m = U S V^T, D = diag(1, 1, det(U V^T)) on the smallest singular
 /// value, so that det R = +1. The SVD is etl-core's one-sided Jacobi ([`Svd`]): nalgebra's
-/// SVD has panic paths the no-panic gate rejects (docs/BENCHMARKS.md); the products are
+/// SVD has panic paths the no-panic gate rejects (docs/PERFORMANCE-HISTORY.md); the products are
 /// nalgebra's.
 ///
 /// Precondition: `m` finite (a non-finite `m` gives a non-finite matrix, which callers'

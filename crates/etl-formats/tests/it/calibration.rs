@@ -503,3 +503,26 @@ fn a_bad_centre_is_refused_naming_the_field_and_nothing_is_written() {
     c.centre = None;
     assert!(c.save(&dir.path().join("x.json")).unwrap_err().to_string().contains("std"), "std.centre alone");
 }
+
+/// The point seen at a pixel, at a distance or in its direction: with the covariance on
+/// (u0, v0) alone every such point's std is (u0, v0)'s own; a distance that is not a finite
+/// number > 0, a file without a covariance and a current outside the range are refused.
+#[test]
+fn pixel_projection_std_refuses_bad_distances_and_passes_the_principal_point() {
+    let c = with_principal_point_covariance();
+    let refuse = etl_formats::Trust::Refuse;
+    for d in [Some(40.0), Some(1e6), None] {
+        let p = c.pixel_projection_std([300.0, 1200.0], 150.0, d, refuse).unwrap();
+        assert!((p.std_px[0] - 2.0).abs() < 1e-12 && (p.std_px[1] - 0.5).abs() < 1e-12, "{d:?}: {:?}", p.std_px);
+    }
+    for d in [0.0, -3.0, f64::NAN, f64::INFINITY] {
+        let e = c.pixel_projection_std([300.0, 1200.0], 150.0, Some(d), refuse).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("must be a finite number > 0"), "{e}");
+    }
+    let e = c.pixel_projection_std([300.0, 1200.0], 400.0, None, refuse).unwrap_err();
+    assert!(e.to_string().contains("e_com_ma = 400 is outside [75, 230]"), "{e}");
+    let e =
+        Calibration::load(&fixture()).unwrap().pixel_projection_std([300.0, 1200.0], 150.0, None, refuse).unwrap_err();
+    assert!(e.to_string().contains("no covariance"), "{e}");
+}

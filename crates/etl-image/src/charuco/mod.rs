@@ -35,8 +35,8 @@
 //!
 //! Accuracy (1936 x 1458 renders, squares of 150-200 px, noise 2 grey levels): RMS
 //! 0.007-0.011 px at blur sigma 0.5 to 3 px, 96 % of the corners in the frame; OpenCV 5's
-//! `CharucoDetector` on the same images 0.026-0.052 px and 76 %, at 4-10x the time
-//! (docs/BENCHMARKS.md, tests/charuco.rs).
+//! `CharucoDetector` on the same images 0.026-0.052 px and 76 %, and slower
+//! (docs/PERFORMANCE-HISTORY.md, tests/charuco.rs; current figures: docs/BENCHMARKS.md).
 //!
 //! Pixel (0, 0) is the centre of the top-left pixel. Ids, board layout and marker corner
 //! order are OpenCV's (see [`etl_core::board`]; OpenCV's legacy layout of boards with an even

@@ -29,11 +29,18 @@ pub(crate) fn saddles(s: &Plane) -> Vec<Saddle> {
     if w < 8 || h < 8 {
         return Vec::new();
     }
-    let mut r = vec![0.0f32; w * h];
-    r.par_chunks_exact_mut(w).enumerate().skip(1).take(h - 2).for_each(|(y, out)| {
+    // A reused buffer (the smoothing's intermediate plane, just dropped): every sample is
+    // written, the border ones with zeros.
+    let mut plane = Plane::scratch(w, h);
+    plane.data.par_chunks_exact_mut(w).enumerate().for_each(|(y, out)| {
+        if y == 0 || y == h - 1 {
+            out.fill(0.0);
+            return;
+        }
         let up = &s.data[(y - 1) * w..y * w];
         let mid = &s.data[y * w..(y + 1) * w];
         let dn = &s.data[(y + 1) * w..(y + 2) * w];
+        (out[0], out[w - 1]) = (0.0, 0.0);
         for x in 1..w - 1 {
             let c = mid[x];
             let ixx = mid[x + 1] - 2.0 * c + mid[x - 1];
@@ -42,6 +49,7 @@ pub(crate) fn saddles(s: &Plane) -> Vec<Saddle> {
             out[x] = ixy * ixy - ixx * iyy;
         }
     });
+    let r = &plane.data;
     let rmax = r.iter().fold(0.0f32, |a, &b| a.max(b));
     let thr = RESPONSE_FLOOR.max(RESPONSE_RELATIVE * rmax);
     let mut out = Vec::new();

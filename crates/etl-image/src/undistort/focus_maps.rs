@@ -48,7 +48,7 @@ impl OutputChoice {
 /// and the time is that of [`super::undistort_maps_into`] (buffers reused, the loops
 /// dispatched to AVX-512 or AVX2 where the CPU has them): for 1936 x 1458, 0.7 ms of one
 /// core with AVX-512 (3.1 ms with the baseline's SSE2), 1.9 ms median on the 2 shared cores
-/// under a load average of 12 (docs/BENCHMARKS.md, "Undistortion").
+/// under a load average of 12 (docs/PERFORMANCE-HISTORY.md, "Undistortion"; current: docs/BENCHMARKS.md).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FocusMaps {
     model: CameraModel,

@@ -5,7 +5,7 @@
 //! Why: etl-core's maps and remap loops are written to vectorise, but a library is
 //! compiled for the baseline, where a vector holds two f64 or four f32. The same loops
 //! compiled for AVX-512 take the maps of a 1936 x 1458 image from 3.1 to 0.7 ms and the
-//! remap from 7.5 to 5.3 ms on one core of the project's machine (docs/BENCHMARKS.md,
+//! remap from 7.5 to 5.3 ms on one core of the project's machine (docs/PERFORMANCE-HISTORY.md,
 //! "Undistortion"). The numbers do not change: the loops are IEEE f32/f64 additions and
 //! multiplications in a fixed order (Rust never fuses them into FMAs), whatever the width.
 //!

@@ -80,7 +80,7 @@ fn score(r: &Rendered, d: &CharucoDetection) -> (usize, usize, Vec<f64>, usize) 
 /// The acceptance: at blur sigma 0.5, 1.5 and 3 px, at least 90 % of the corners
 /// in the frame found, RMS at most 0.02 px, no wrong id (measured: 96-98 % found, RMS
 /// 0.006-0.010 px; OpenCV's CharucoDetector on such views: 70-83 %, 0.025-0.063 px,
-/// docs/BENCHMARKS.md).
+/// docs/PERFORMANCE-HISTORY.md).
 #[test]
 fn rendered_views_overflowing_the_frame_at_three_blurs() {
     let board = *board_12x9().as_charuco().expect("charuco");

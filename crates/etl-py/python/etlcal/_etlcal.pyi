@@ -488,6 +488,9 @@ class Calibration:
     @property
     def covariance(self) -> Optional[_F64]: ...
     def projection_std(self, world_mm: _ArrayLike, e_com_ma: float, *, allow_extrapolation: bool = False) -> _F64: ...
+    def pixel_projection_std(
+        self, pixels: _ArrayLike, e_com_ma: float, distance_mm: Optional[float] = None, *, allow_extrapolation: bool = False
+    ) -> _F64: ...
     def to_opencv(
         self, e_com_ma: Union[float, _Currents], *, allow_extrapolation: bool = False
     ) -> OpenCvCamera:

@@ -17,7 +17,7 @@
 //! and the block's pixels whose neighbourhood is not wholly inside, if any, are done again
 //! one by one with the border ([`fix_edges`]). Splitting the gathers (which no x86-64
 //! baseline instruction vectorises) from the arithmetic (which SSE2 does 4 to 16 lanes at a
-//! time) is what makes it fast (docs/BENCHMARKS.md, "Undistortion"). The numbers are those
+//! time) is what makes it fast (docs/PERFORMANCE-HISTORY.md, "Undistortion"). The numbers are those
 //! of the one-pass scalar loop it replaces, bit for bit: the same f32 operations in the
 //! same order.
 
