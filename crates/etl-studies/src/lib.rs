@@ -13,7 +13,9 @@
 //! - [`crlb`]: the Cramer-Rao bound of every parameter and of fx(E) against the Monte
 //!   Carlo spread of etlcal's estimates (statistical efficiency);
 //! - [`strong`]: the same on the strong-distortion rig for OpenCV's distortion family,
-//!   with the paper family's bias there (`crlb --rig strong`).
+//!   with the paper family's bias there (`crlb --rig strong`);
+//! - [`optics`]: a 2 mm move by PnP on the ray-traced rigs, the ETL model against a
+//!   per-current calibration, and ([`optics::floor`]) what any central model can reach there.
 //!
 //! Each study returns a result struct; its `output()` gives the `--json` object, a
 //! markdown summary and the plots ([`common::StudyOutput`]).

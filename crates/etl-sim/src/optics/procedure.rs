@@ -30,11 +30,35 @@ fn gauss(sigma: f64, rng: &mut ChaCha8Rng) -> f64 {
     }
 }
 
+/// Which point of a traced spot stands for the corner.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CornerAs {
+    /// The spot's centroid ([`Setting::pixel`]): what the procedure records.
+    Centroid,
+    /// The chief ray's hit ([`Setting::chief_pixel`]): the ray through the stop's centre,
+    /// a central projection but for the pupil's own aberration; to compare what the fan
+    /// (defocus, coma, vignetting) adds.
+    Chief,
+}
+
 /// The corners of `board` (its frame: first inner corner at the origin, Z = `z_mm`) seen
 /// at `setting` through `pose`: every corner whose traced centroid lies inside the image
 /// (a corner whose chief ray a surface's aperture stops is not seen), noise-free.
 /// `world_mm` of each point is the board-frame (X, Y, `z_mm`).
 pub fn board_view(rig: &OpticalRig, setting: &Setting, board: &BoardSpec, pose: &Pose, z_mm: f64) -> Vec<PointObs> {
+    board_view_as(rig, setting, board, pose, z_mm, CornerAs::Centroid)
+}
+
+/// [`board_view`] with each corner's pixel taken as `corner` says; which corners are seen
+/// does not depend on it (the centroid inside the image decides).
+pub fn board_view_as(
+    rig: &OpticalRig,
+    setting: &Setting,
+    board: &BoardSpec,
+    pose: &Pose,
+    z_mm: f64,
+    corner: CornerAs,
+) -> Vec<PointObs> {
     let [cols, rows] = board.inner_corners;
     let r = rodrigues_to_matrix(pose.0);
     let [w, h] = rig.file.sensor.size_px.map(|n| n as f64 - 1.0);
@@ -45,8 +69,13 @@ pub fn board_view(rig: &OpticalRig, setting: &Setting, board: &BoardSpec, pose: 
         .par_iter()
         .map(|&p| {
             let c = mat_vec(&r, p);
-            let px = setting.pixel([c[0] + pose.1[0], c[1] + pose.1[1], c[2] + pose.1[2]]).ok()?;
-            ((0.0..=w).contains(&px[0]) && (0.0..=h).contains(&px[1])).then_some(px)
+            let spot = setting.spot([c[0] + pose.1[0], c[1] + pose.1[1], c[2] + pose.1[2]]).ok()?;
+            let px = setting.to_pixel(spot.centroid_mm);
+            let inside = (0.0..=w).contains(&px[0]) && (0.0..=h).contains(&px[1]);
+            inside.then_some(match corner {
+                CornerAs::Centroid => px,
+                CornerAs::Chief => setting.to_pixel(spot.chief_mm),
+            })
         })
         .collect();
     corners.iter().zip(pixels).filter_map(|(&world_mm, px)| Some(PointObs { world_mm, pixel: px? })).collect()

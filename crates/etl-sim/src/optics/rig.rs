@@ -55,6 +55,11 @@ impl Setting {
         Ok(self.to_pixel(self.spot(camera_mm)?.centroid_mm))
     }
 
+    /// The pixel of a camera-frame point's chief ray (through the stop's centre).
+    pub fn chief_pixel(&self, camera_mm: V3) -> std::result::Result<[f64; 2], OpticsError> {
+        Ok(self.to_pixel(self.spot(camera_mm)?.chief_mm))
+    }
+
     /// Sensor-local mm to pixels (see the module docs).
     pub fn to_pixel(&self, sensor_mm: [f64; 2]) -> [f64; 2] {
         [self.centre_px[0] - sensor_mm[0] / self.pitch_mm, self.centre_px[1] + sensor_mm[1] / self.pitch_mm]

@@ -24,3 +24,19 @@ fn a_per_current_calibration_measures_the_move_and_the_fixed_centre_does_not() {
     assert!((5.0..60.0).contains(&held.abs()), "{table}");
     assert!(default.abs() > 100.0, "{table}");
 }
+
+/// The floor of any central model (`etl_studies::optics::floor`), Cooke rig at 150 mA,
+/// noise-free: a per-current pinhole fits the chief rays to a few thousandths of a pixel
+/// and measures the move to under 1 um with them; the spots' centroids it fits ten times
+/// worse, and the move comes out microns off (docs/RESULTS.md, "The floor of any central
+/// model on these rigs").
+#[test]
+fn a_central_model_fits_the_chief_rays_and_not_the_spots_centroids() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/optics/cooke-16mm-centred.json");
+    let rig = OpticalRig::new(OpticsFile::load(&path).unwrap()).unwrap();
+    let floor = etl_studies::optics::floor::central_floor(&rig, &[150.0]).unwrap();
+    let (row, table) = (floor.rows[0], floor.markdown());
+    assert!(row.chief.rms_px < 0.01 && row.chief.move_error_um.abs() < 1.0, "{table}");
+    assert!(row.centroid.rms_px > 0.04 && row.centroid.move_error_um.abs() > 2.0, "{table}");
+    assert!((row.centroid.fx_px / row.chief.fx_px - 1.0).abs() > 1e-3, "{table}");
+}

@@ -16,6 +16,8 @@
 //!
 //! Run: `cargo run --release -p etl-studies --example optics_pnp -- SEEDS` (docs/RESULTS.md).
 
+pub mod floor;
+
 use etl_calib::request::{CalibrationRequest, CentreChoice, EstimatorChoice, KeySpelling};
 use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions};
 use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly, OpenCvFlags};
@@ -68,7 +70,7 @@ pub struct OpticsPnp {
 
 /// The camera of a Zhang calibration in OpenCV's family as a model with a constant focal
 /// length and constant coefficients (each a_i's w^0 term), for [`solve_pnp`] at any current.
-fn monofocal(z: &etl_calib::zhang::ZhangResult) -> Result<CameraModel> {
+pub(crate) fn monofocal(z: &etl_calib::zhang::ZhangResult) -> Result<CameraModel> {
     let dist =
         z.dist_coeffs().ok_or_else(|| Error::invalid("model", "the per-current calibration is OpenCV's family"))?;
     let mut a = [0.0; 15];
@@ -100,7 +102,7 @@ fn views_at(obs: &Observations, e_ma: f64) -> Vec<PlanarView> {
 
 /// The measured length of the move between the two views, mm, by PnP with `model` at
 /// `e_ma` (board points at Z = 0 of the board frame).
-fn measured_mm(model: &CameraModel, e_ma: f64, views: &[Vec<PointObs>; 2]) -> Result<f64> {
+pub(crate) fn measured_mm(model: &CameraModel, e_ma: f64, views: &[Vec<PointObs>; 2]) -> Result<f64> {
     let pose = |v: &Vec<PointObs>| {
         let board: Vec<[f64; 3]> = v.iter().map(|p| [p.world_mm[0], p.world_mm[1], 0.0]).collect();
         let pixels: Vec<[f64; 2]> = v.iter().map(|p| p.pixel).collect();
