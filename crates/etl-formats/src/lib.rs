@@ -53,6 +53,7 @@ mod error;
 pub mod export;
 mod input_value;
 mod json_path;
+pub mod lens_dynamics;
 pub mod memory;
 pub mod model_selection;
 pub mod observations;
@@ -72,6 +73,7 @@ pub use dataset::Dataset;
 pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
 pub use etl_core::runtime::{Camera, CameraAt, Extrapolated, Trust};
 pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
+pub use lens_dynamics::LensDynamicsFile;
 pub use observations::Observations;
 pub use thermal::ThermalFile;
 

@@ -40,6 +40,10 @@ pub struct VirtualCamera<'a> {
     board: Checkerboard,
     board_depth_mm: f64,
     frames: u64,
+    /// How long the camera waits for the lens to settle before each frame, model s (the
+    /// model's clock jumps ahead by it: no wall time is spent). 0: the frame is taken at
+    /// once, which a lens with dynamics punishes.
+    pub settle_s: f64,
 }
 
 impl<'a> VirtualCamera<'a> {
@@ -55,6 +59,7 @@ impl<'a> VirtualCamera<'a> {
             board: Checkerboard { inner_corners: [5, 4], square_mm: 1.5 },
             board_depth_mm: 150.0,
             frames: 0,
+            settle_s: 0.0,
         }
     }
 
@@ -77,6 +82,7 @@ impl<'a> VirtualCamera<'a> {
 
 impl Camera for VirtualCamera<'_> {
     fn capture(&mut self) -> Result<GrayImage> {
+        self.lens.device().advance_s(self.settle_s);
         let focus = self.focus_distance_mm(self.lens.state().e_com_ma)?;
         let f_px = IMAGE_DISTANCE_MM / PIXEL_MM;
         let [w, h] = self.image_size;
@@ -103,6 +109,8 @@ impl Camera for VirtualCamera<'_> {
     }
 
     fn place_board_in_focus(&mut self) -> Result<()> {
+        // The board is placed for the lens at rest, after the same wait as a frame.
+        self.lens.device().advance_s(self.settle_s);
         self.board_depth_mm = self.focus_distance_mm(self.lens.state().e_com_ma)?;
         Ok(())
     }
@@ -152,6 +160,19 @@ pub fn surface_error_ma(
     }
     Ok(((referenced / n as f64).sqrt(), (absolute / n as f64).sqrt()))
 }
+/// The longest wait before a frame, s.
+pub const MAX_SETTLE_S: f64 = 10.0;
+
+/// How the virtual rig's lens behaves and how long its camera waits for it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VirtualRigLens {
+    /// The lens's dynamics (None: the optics follow the current at once).
+    pub dynamics: Option<etl_core::physics::dynamics::LensDynamics>,
+    /// The camera's wait before each frame, s, in 0..=[`MAX_SETTLE_S`]
+    /// ([`VirtualCamera::settle_s`]).
+    pub settle_s: f64,
+}
+
 /// The temperature procedure run on the virtual rig, and how far its surface is from the
 /// virtual lens's true one.
 #[derive(Debug, Clone)]
@@ -168,15 +189,25 @@ pub struct VirtualProcedure {
 }
 
 /// Runs the section 4.1 procedure with `options` on a virtual lens (the paper's physics
-/// and thermal surface) served on a pseudo-terminal and driven through the real serial
-/// client, the synthetic camera looking through it and its climate; compares the fitted
-/// surface with the truth over the procedure's ranges.
-pub fn run_virtual_procedure(options: &ProcedureOptions, progress: &dyn Progress) -> Result<VirtualProcedure> {
-    let config = etl_hw::virtual_lens::VirtualLensConfig::default();
+/// and thermal surface, and `dynamics` if given: the camera then sees the lens where its
+/// response has got to at each frame) served on a pseudo-terminal and driven through the
+/// real serial client, the synthetic camera looking through it and its climate; compares
+/// the fitted surface with the truth over the procedure's ranges.
+pub fn run_virtual_procedure(
+    options: &ProcedureOptions,
+    lens: &VirtualRigLens,
+    progress: &dyn Progress,
+) -> Result<VirtualProcedure> {
+    if !(lens.settle_s.is_finite() && (0.0..=MAX_SETTLE_S).contains(&lens.settle_s)) {
+        let message = format!("settle_s {} s must lie in 0..={MAX_SETTLE_S} s", lens.settle_s);
+        return Err(Error::invalid_value("settle_s", lens.settle_s, message));
+    }
+    let config = etl_hw::virtual_lens::VirtualLensConfig { dynamics: lens.dynamics, ..Default::default() };
     let truth = config.surface;
     let device = VirtualLens::spawn(config).map_err(Error::lens)?;
     let mut client = LensClient::open(device.path(), OpenOptions::default()).map_err(Error::lens)?;
     let mut camera = VirtualCamera::new(&device);
+    camera.settle_s = lens.settle_s;
     let mut climate = VirtualClimate(&device);
     let result = run_procedure(&mut client, &mut camera, &mut climate, options, progress)?;
     let t_ref_c = options.temperatures_c.first().copied().unwrap_or(27.0);

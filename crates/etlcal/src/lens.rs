@@ -58,6 +58,10 @@ pub struct Target {
     /// An in-process virtual lens (paper physics and thermal surface).
     #[arg(long = "virtual", global = true)]
     pub virtual_lens: bool,
+    /// With `--virtual`: the lens's dynamics (`etlcal.lens-dynamics/1`: step response,
+    /// creep, hysteresis, self-heating); without it the optics follow the current at once.
+    #[arg(long, value_name = "FILE", global = true)]
+    pub dynamics: Option<PathBuf>,
 }
 
 /// The subcommands of `etlcal lens`.
@@ -190,6 +194,12 @@ fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
     let target = match (&args.target.port, args.target.virtual_lens) {
         (Some(_), true) => return Err(Error::invalid("--port", "pass --port PATH or --virtual, not both")),
         (None, false) => return Err(Error::invalid("--port", "pass --port PATH (a Lens Driver 4) or --virtual")),
+        (Some(_), false) if args.target.dynamics.is_some() => {
+            return Err(Error::invalid(
+                "--dynamics",
+                "--dynamics FILE describes the virtual lens: pass it with --virtual",
+            ));
+        }
         (Some(p), false) => (None, p.clone()),
         (None, true) => {
             let time_scale = match &args.command {
@@ -199,6 +209,7 @@ fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
             let config = VirtualLensConfig {
                 time_scale,
                 thermal: ThermalModel { ambient_c: 27.0, ..Default::default() },
+                dynamics: crate::lens_sim::dynamics(args.target.dynamics.as_deref())?,
                 ..Default::default()
             };
             crate::signals::remove_lens_folders_on_signal()?;

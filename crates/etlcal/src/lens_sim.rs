@@ -10,7 +10,8 @@ use etl_hw::virtual_lens::{ThermalModel, VirtualLens, VirtualLensConfig, MAX_TIM
 use serde_json::json;
 
 use super::print_json;
-use etl_formats::{compact, Error, Result};
+use etl_core::physics::dynamics::LensDynamics;
+use etl_formats::{compact, Error, LensDynamicsFile, Result};
 
 /// Arguments of `etlcal lens-sim`.
 #[derive(clap::Args, Debug)]
@@ -28,9 +29,19 @@ pub struct Args {
     /// Lower software current limit, mA.
     #[arg(long, default_value_t = -292.84, value_name = "MA")]
     pub lower_limit: f64,
+    /// The lens's dynamics (`etlcal.lens-dynamics/1`: step response, creep, hysteresis,
+    /// self-heating; fixtures/lens-dynamics has the published EL-10-30's). Without it the
+    /// optics follow the current at once.
+    #[arg(long, value_name = "FILE")]
+    pub dynamics: Option<std::path::PathBuf>,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
+}
+
+/// The dynamics of `--dynamics FILE` (checked as the format says), or None.
+pub fn dynamics(path: Option<&std::path::Path>) -> Result<Option<LensDynamics>> {
+    path.map(|p| LensDynamicsFile::load(p).map(|f| f.dynamics())).transpose()
 }
 
 /// Runs `etlcal lens-sim` (does not return unless spawning fails).
@@ -58,7 +69,9 @@ pub fn run(args: Args) -> Result<()> {
             format!("--time-scale {} must lie in (0, 1e6]", compact(args.time_scale)),
         ));
     }
+    let dynamics = dynamics(args.dynamics.as_deref())?;
     let config = VirtualLensConfig {
+        dynamics,
         time_scale: args.time_scale,
         thermal: ThermalModel { ambient_c: args.ambient, ..Default::default() },
         upper_limit_code: current_code(hi, 292.84),

@@ -24,7 +24,7 @@ use super::print_json;
 use etl_formats::calibration::ThermalRef;
 use etl_formats::output::Output;
 use etl_formats::thermal::{read_thermal_table, ThermalFile};
-use etl_formats::Result;
+use etl_formats::{compact, Error, Result};
 
 /// Arguments of `etlcal thermal`.
 #[derive(clap::Args, Debug)]
@@ -53,6 +53,14 @@ pub struct CalibrateArgs {
     /// synthetic camera. Required: a real rig needs a camera binding (from Python or Rust).
     #[arg(long, required = true)]
     pub r#virtual: bool,
+    /// The virtual lens's dynamics (`etlcal.lens-dynamics/1`); without it the optics
+    /// follow the current at once.
+    #[arg(long, value_name = "FILE")]
+    pub dynamics: Option<PathBuf>,
+    /// How long the camera waits for the lens to settle before each frame, ms (model time;
+    /// 0..=10000). With dynamics, a frame taken too early sees the lens still moving.
+    #[arg(long, default_value_t = 0.0, value_name = "MS")]
+    pub settle_ms: f64,
     /// Where to write the fitted surface (etlcal.thermal/1; its directory is created if
     /// missing).
     #[arg(long, value_name = "thermal.json")]
@@ -122,6 +130,15 @@ pub fn run(args: Args, json: bool) -> Result<()> {
 /// Runs `etlcal thermal calibrate --virtual`.
 pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
     use etl_calib::thermal_calibration::ProcedureOptions;
+    let max_ms = 1000.0 * etl_sim::virtual_rig::MAX_SETTLE_S;
+    if !(args.settle_ms.is_finite() && (0.0..=max_ms).contains(&args.settle_ms)) {
+        let message = format!("--settle-ms {} must lie in 0..={} ms", compact(args.settle_ms), compact(max_ms));
+        return Err(Error::invalid_value("--settle-ms", args.settle_ms, message));
+    }
+    let lens = etl_sim::virtual_rig::VirtualRigLens {
+        dynamics: crate::lens_sim::dynamics(args.dynamics.as_deref())?,
+        settle_s: args.settle_ms / 1000.0,
+    };
     crate::signals::remove_lens_folders_on_signal()?;
     let table = args.table.clone().unwrap_or_else(|| args.out.with_extension("csv"));
     crate::output::check([], &[Output::File(&args.out), Output::File(&table)])?;
@@ -133,8 +150,8 @@ pub fn run_calibrate(args: CalibrateArgs) -> Result<()> {
         options.e_in_grid_ma = vec![40.0, 90.0, 140.0, 190.0, 240.0];
         options.temperatures_c = vec![27.0, 29.5, 32.0, 34.5, 37.0];
     }
-    let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &crate::progress::Bar::new(!args.json))
-        // The option the user sets is the flag, in `what` and in the message.
+    let v = etl_sim::virtual_rig::run_virtual_procedure(&options, &lens, &crate::progress::Bar::new(!args.json))
+        // The options the user sets are flags, in `what` and in the message.
         .map_err(|e| e.rename_input("search_half_width_ma", "--search-ma"))?;
     let (r, t0) = (&v.result, v.t_ref_c);
     let (referenced, absolute) = (v.surface_error_ma, v.surface_error_absolute_ma);

@@ -129,6 +129,25 @@ pub extern "C" fn etl_gate_physics(e_ma: f64, dp: f64, nu: f64) -> f64 {
         + l.gravity_coefficient(e_ma, dp, nu).unwrap_or(0.0)
 }
 
+/// The lens's dynamics: a caller's numbers validated, a shaped step and a plain one
+/// advanced, the effective current returned (NaN when the numbers are refused).
+#[unsafe(no_mangle)]
+pub extern "C" fn etl_gate_dynamics(f_hz: f64, zeta: f64, step_ma: f64, t_s: f64) -> f64 {
+    use etl_core::physics::dynamics::{LensDynamics, LensResponse};
+    use etl_core::physics::shaping::ZvShaper;
+    let d = LensDynamics { natural_frequency_hz: f_hz, damping: zeta, ..LensDynamics::PUBLISHED };
+    if d.validate().is_err() {
+        return f64::NAN;
+    }
+    let mut lens = LensResponse::at_rest(0.0);
+    let shaper = ZvShaper::of(&d).unwrap_or(ZvShaper { first_fraction: 1.0, delay_s: 0.0 });
+    lens.command(shaper.command_ma(0.0, step_ma, 0.0), &d);
+    lens.advance(shaper.delay_s, &d);
+    lens.command(step_ma, &d);
+    lens.advance(t_s, &d);
+    lens.effective_ma() + lens.rate_ma_per_s() + lens.resting_ma()
+}
+
 /// The whole calibration chain on a small synthetic rig: 3 views of 12 points, then the
 /// linear initialisation, the bundle adjustment (plain or errors-in-variables) and PnP.
 /// Returns the refined kf1x (or NaN on error).

@@ -14,12 +14,17 @@
 //! current in focus is a quadratic in the vergence to 0.055 mA RMS over 80..225 mA (an affine
 //! law leaves 1.1 mA). docs/METHOD.md, "The focus law".
 //!
+//! [`dynamics`] adds time: the step response, creep and hysteresis of the membrane, and
+//! [`shaping`] a command that settles a step faster.
+//!
 //! Units: pressures in Pa, lengths in mm, currents in mA (the paper's E_com: apply the
 //! temperature compensation first, Eq. 8).
 
 pub mod compound;
+pub mod dynamics;
 pub mod gravity;
 pub mod lens;
 pub mod membrane;
+pub mod shaping;
 
 pub use lens::LensPhysics;

@@ -4,6 +4,7 @@
 mod common;
 
 mod centre;
+mod dynamics;
 mod families;
 mod input_noise;
 mod lm;

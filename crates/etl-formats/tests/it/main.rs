@@ -9,6 +9,7 @@ mod support {
 mod bad_input;
 mod calibration;
 mod focus_law;
+mod lens_dynamics;
 mod optics;
 mod readers_mutations;
 mod readers_prop;

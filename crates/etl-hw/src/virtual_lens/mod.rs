@@ -29,6 +29,7 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
+use etl_core::physics::dynamics::{LensDynamics, LensResponse};
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::ThermalSurface;
 
@@ -86,6 +87,10 @@ pub struct VirtualLensConfig {
     pub sensor_period_s: f64,
     /// Model seconds per wall second.
     pub time_scale: f64,
+    /// The membrane's dynamics (`etlcal.lens-dynamics/1`; None: the optics follow the
+    /// command at once). With them the optics lag each command (step response, creep,
+    /// hysteresis) and the lens heats as they say ([`model`]).
+    pub dynamics: Option<LensDynamics>,
 }
 
 impl Default for VirtualLensConfig {
@@ -110,6 +115,7 @@ impl Default for VirtualLensConfig {
             has_sensor: true,
             sensor_period_s: 0.1,
             time_scale: 1.0,
+            dynamics: None,
         }
     }
 }
@@ -163,7 +169,7 @@ impl VirtualDevice {
     ///
     /// Errors: an invalid configuration (non-finite or non-positive time scale, sensor
     /// period or time constant; limits outside +-4095 or lower > upper; max current <= 0;
-    /// invalid physics or surface) as [`HwError::Core`].
+    /// invalid physics, surface or dynamics) as [`HwError::Core`].
     pub fn new(config: VirtualLensConfig) -> Result<VirtualDevice> {
         validate(&config)?;
         let t0 = config.initial_temperature_c.unwrap_or(config.thermal.ambient_c);
@@ -184,6 +190,7 @@ impl VirtualDevice {
             mode: Mode::Current,
             fp_code: 0,
             temperature_limits_x16: None,
+            dynamics: config.dynamics.map(|d| (d, LensResponse::at_rest(0.0))),
         };
         let shared =
             Shared { config, model, faults: Faults::default(), received: Received::default(), wall: Instant::now() };
@@ -288,6 +295,9 @@ fn validate(c: &VirtualLensConfig) -> Result<()> {
         return Err(E::InvalidArgument { what: "time_scale must lie in (0, 1e6] model s per wall s" }.into());
     }
     positive(c.sensor_period_s, "sensor_period_s must be finite and > 0")?;
+    if let Some(d) = &c.dynamics {
+        d.validate()?;
+    }
     positive(c.thermal.tau_s, "thermal.tau_s must be finite and > 0")?;
     positive(c.thermal.thermal_resistance_k_per_w, "thermal resistance must be finite and > 0")?;
     if !(c.thermal.coil_resistance_ohm.is_finite() && c.thermal.coil_resistance_ohm >= 0.0) {

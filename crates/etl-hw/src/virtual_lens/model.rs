@@ -2,7 +2,15 @@
 //! driven at E_com = E_in - E_T(T, E_in) (Eq. 8), a first-order thermal model (ambient,
 //! coil heating, a heater/Peltier element, one time constant) and the lens's digital
 //! sensor (1/16 degC steps, a new value every 0.1 s).
+//!
+//! With dynamics ([`LensDynamics`], `etlcal.lens-dynamics/1`) the optics follow the
+//! commanded current through the membrane's step response, creep and hysteresis
+//! ([`etl_core::physics::dynamics`], D1-D3): the state's `effective_ma` is what they follow,
+//! and E_com = y - E_T(T, y) of it. The lens then heats linearly with the current
+//! (T_eq = ambient + s |E_in| + R_th P_heater, time constant `thermal_tau_s`) instead of the
+//! coil's I^2 R. Without dynamics the optics follow the command at once, as before.
 
+use etl_core::physics::dynamics::{LensDynamics, LensResponse};
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::ThermalSurface;
 
@@ -39,13 +47,17 @@ pub struct LensState {
     pub e_in_ma: f64,
     /// The current code the driver outputs.
     pub current_code: i16,
+    /// The current the optics follow, mA: `e_in_ma` itself without dynamics, else where
+    /// the membrane's response to the commands has got to (D1-D3).
+    pub effective_ma: f64,
     /// True lens temperature, degC.
     pub temperature_c: f64,
     /// What the lens's sensor reports, degC (quantised, updated every sensor period).
     pub sensor_c: f64,
-    /// E_T(T, E_in) of the configured surface, mA (NaN outside its domain).
+    /// E_T(T, E) of the configured surface at the effective current, mA (NaN outside its
+    /// domain).
     pub e_t_ma: f64,
-    /// E_com = E_in - E_T, mA: the current the optics respond to.
+    /// E_com = E - E_T at the effective current E, mA: the current the optics respond to.
     pub e_com_ma: f64,
     /// Focal length of the liquid lens f_liq(E_com) (Eq. 5), mm (NaN outside the model's range).
     pub f_liq_mm: f64,
@@ -78,6 +90,8 @@ pub(crate) struct Model {
     pub mode: Mode,
     pub fp_code: i16,
     pub temperature_limits_x16: Option<(i16, i16)>,
+    /// The membrane's dynamics and its state (None: the optics follow the command at once).
+    pub dynamics: Option<(LensDynamics, LensResponse)>,
 }
 
 impl Model {
@@ -89,15 +103,30 @@ impl Model {
         current_ma(self.code, self.max_current_ma())
     }
 
+    fn thermal_tau_s(&self) -> f64 {
+        self.dynamics.as_ref().map_or(self.thermal.tau_s, |(d, _)| d.thermal_tau_s)
+    }
+
+    /// The equilibrium temperature at the present current and heater power: the coil's
+    /// I^2 R through the thermal resistance, or with dynamics the linear self-heating.
     fn t_eq_c(&self) -> f64 {
-        let i_a = self.e_in_ma() / 1000.0;
-        self.thermal.ambient_c
-            + self.thermal.thermal_resistance_k_per_w * (i_a * i_a * self.thermal.coil_resistance_ohm + self.heater_w)
+        let th = &self.thermal;
+        match &self.dynamics {
+            Some((d, _)) => {
+                th.ambient_c
+                    + d.self_heating_c_per_ma * self.e_in_ma().abs()
+                    + th.thermal_resistance_k_per_w * self.heater_w
+            }
+            None => {
+                let i_a = self.e_in_ma() / 1000.0;
+                th.ambient_c + th.thermal_resistance_k_per_w * (i_a * i_a * th.coil_resistance_ohm + self.heater_w)
+            }
+        }
     }
 
     fn temperature_after(&self, dt_s: f64) -> f64 {
         let t_eq = self.t_eq_c();
-        t_eq + (self.temperature_c - t_eq) * (-dt_s / self.thermal.tau_s).exp()
+        t_eq + (self.temperature_c - t_eq) * (-dt_s / self.thermal_tau_s()).exp()
     }
 
     /// Advances the model by `dt_s` at constant inputs; the sensor samples the true
@@ -115,25 +144,48 @@ impl Model {
         }
         self.temperature_c = self.temperature_after(dt_s);
         self.time_s += dt_s;
+        if let Some((d, r)) = &mut self.dynamics {
+            r.advance(dt_s, d);
+        }
     }
 
-    /// Jumps to thermal equilibrium at the present inputs (the sensor follows at once).
+    /// Jumps to thermal equilibrium at the present inputs (the sensor follows at once), and
+    /// the membrane to rest where the present command leaves it.
     pub fn settle(&mut self) {
+        if let Some((_, r)) = &mut self.dynamics {
+            r.settle();
+        }
         self.temperature_c = self.t_eq_c();
         self.sensor_raw = temperature_raw(self.temperature_c);
     }
 
     /// The heater power that makes the equilibrium temperature `t_c` at the present current.
     pub fn heater_for_c(&self, t_c: f64) -> f64 {
-        let i_a = self.e_in_ma() / 1000.0;
-        (t_c - self.thermal.ambient_c) / self.thermal.thermal_resistance_k_per_w
-            - i_a * i_a * self.thermal.coil_resistance_ohm
+        let th = &self.thermal;
+        match &self.dynamics {
+            Some((d, _)) => {
+                (t_c - th.ambient_c - d.self_heating_c_per_ma * self.e_in_ma().abs()) / th.thermal_resistance_k_per_w
+            }
+            None => {
+                let i_a = self.e_in_ma() / 1000.0;
+                (t_c - th.ambient_c) / th.thermal_resistance_k_per_w - i_a * i_a * th.coil_resistance_ohm
+            }
+        }
     }
 
     /// Sets the output code as the firmware does: clamped to +-4095 and to the software
     /// limits.
     pub fn apply_code(&mut self, code: i16) {
         self.code = code.clamp(-4095, 4095).clamp(self.lower_limit_code, self.upper_limit_code);
+        let e_in_ma = self.e_in_ma();
+        if let Some((d, r)) = &mut self.dynamics {
+            r.command(e_in_ma, d);
+        }
+    }
+
+    /// The current the optics follow now, mA (the command itself without dynamics).
+    pub fn effective_ma(&self) -> f64 {
+        self.dynamics.as_ref().map_or(self.e_in_ma(), |(_, r)| r.effective_ma())
     }
 
     pub fn sensor_c(&self) -> f64 {
@@ -166,15 +218,16 @@ impl Model {
     }
 
     pub fn state(&self) -> LensState {
-        let e_in_ma = self.e_in_ma();
-        let e_t_ma = self.surface.e_t_ma(e_in_ma, self.temperature_c).unwrap_or(f64::NAN);
-        let e_com_ma = e_in_ma - e_t_ma;
+        let (e_in_ma, effective_ma) = (self.e_in_ma(), self.effective_ma());
+        let e_t_ma = self.surface.e_t_ma(effective_ma, self.temperature_c).unwrap_or(f64::NAN);
+        let e_com_ma = effective_ma - e_t_ma;
         let f_liq_mm = self.physics.f_liq_mm(e_com_ma).unwrap_or(f64::NAN);
         let f_com_mm = self.physics.f_com_mm(e_com_ma).unwrap_or(f64::NAN);
         LensState {
             model_time_s: self.time_s,
             e_in_ma,
             current_code: self.code,
+            effective_ma,
             temperature_c: self.temperature_c,
             sensor_c: self.sensor_c(),
             e_t_ma,
@@ -210,6 +263,7 @@ mod tests {
             mode: Mode::Current,
             fp_code: 0,
             temperature_limits_x16: None,
+            dynamics: None,
         }
     }
 

@@ -8,4 +8,5 @@ mod faults;
 mod fuzz_corpus;
 mod hold;
 mod transcript;
+mod virtual_dynamics;
 mod virtual_transport;

@@ -55,3 +55,30 @@ fn bad_options_are_refused_before_any_command() {
     }
     assert_eq!(device.received().commands, commands_before);
 }
+
+/// The procedure on a virtual lens with the published dynamics (fixtures/lens-dynamics):
+/// frames grabbed as soon as the current is read back see the lens still moving, and the
+/// first refocus runs off its window; a camera that waits 50 ms (model time) for the lens
+/// to settle refocuses and recovers the surface, to within the loop's hysteresis and the
+/// creep the procedure does not yet handle (docs/RESULTS.md, "The lens's dynamics").
+#[test]
+fn a_lens_with_dynamics_needs_the_camera_to_wait_for_it() {
+    use etl_core::physics::dynamics::LensDynamics;
+    use etl_sim::virtual_rig::{run_virtual_procedure, VirtualRigLens};
+    let options = ProcedureOptions {
+        e_in_grid_ma: vec![40.0, 107.0, 173.0, 240.0],
+        temperatures_c: vec![27.0, 30.0, 33.0, 36.0],
+        ..ProcedureOptions::default()
+    };
+    let no_progress = &etl_core::progress::NoProgress;
+    let hasty = VirtualRigLens { dynamics: Some(LensDynamics::PUBLISHED), settle_s: 0.0 };
+    let e = run_virtual_procedure(&options, &hasty, no_progress).unwrap_err().to_string();
+    assert!(e.contains("ended at the edge of its window"), "{e}");
+    let patient = VirtualRigLens { settle_s: 0.05, ..hasty };
+    let v = run_virtual_procedure(&options, &patient, no_progress).unwrap();
+    assert_eq!(v.result.samples.len(), 16);
+    assert!(v.surface_error_ma < 1.0, "{} mA", v.surface_error_ma);
+    let bad = VirtualRigLens { settle_s: -1.0, ..hasty };
+    let e = run_virtual_procedure(&options, &bad, no_progress).unwrap_err().to_string();
+    assert!(e.contains("settle_s -1 s must lie in 0..=10 s"), "{e}");
+}

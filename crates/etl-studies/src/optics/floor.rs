@@ -1,5 +1,5 @@
 //! What any per-current central camera model can reach on a ray-traced rig, noise-free:
-//! the floor under the moving-centre model's acceptance figures (issue 27).
+//! the floor under any figure a model of every current can reach on those optics.
 //!
 //! At each current, Zhang's method in OpenCV's family on that current's tilted views
 //! (`setting_views`, traced without noise) calibrates a camera for that current alone,

@@ -188,3 +188,39 @@ fn a_stopped_lens_sim_removes_its_folder_and_a_killed_ones_is_swept_by_the_next(
     assert!(!dir.exists(), "the next lens sweeps {}", dir.display());
     drop(next);
 }
+
+/// The published dynamics fixture (fixtures/lens-dynamics).
+fn published_dynamics() -> String {
+    let p =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/lens-dynamics/el-10-30-published.json");
+    p.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn the_virtual_lens_takes_dynamics_and_refuses_bad_ones_in_one_line() {
+    let good = published_dynamics();
+    let (code, out, err) = etlcal(&["lens", "--virtual", "--dynamics", &good, "--json", "set-current", "120"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(serde_json::from_str::<Value>(&out).unwrap()["commanded_ma"].as_f64().is_some(), "{out}");
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    let text = std::fs::read_to_string(&good).unwrap().replace("\"damping\": 0.28", "\"damping\": 0");
+    std::fs::write(&bad, text).unwrap();
+    let bad = bad.to_str().unwrap();
+    refused(&["lens", "--virtual", "--dynamics", bad, "info"], "damping");
+    refused(&["lens-sim", "--dynamics", bad], "damping");
+    refused(
+        &["lens", "--port", "/dev/null", "--dynamics", &good, "info"],
+        "--dynamics FILE describes the virtual lens",
+    );
+    refused(&["lens", "--virtual", "--dynamics", "/nonexistent/d.json", "info"], "/nonexistent/d.json");
+}
+
+#[cfg(unix)]
+#[test]
+fn lens_sim_serves_a_lens_with_dynamics() {
+    let sim = Sim::spawn(&["--dynamics", &published_dynamics()]);
+    let (code, out, err) = etlcal(&["lens", "--port", &sim.1, "--json", "set-current", "150"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("commanded_ma"), "{out}");
+}

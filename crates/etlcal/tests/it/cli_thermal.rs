@@ -41,3 +41,29 @@ fn a_refocus_at_the_edge_of_its_window_names_the_flag_and_writes_nothing() {
     assert!(!err.contains("search_half_width_ma"), "{err}");
     assert!(!out.exists() && !out.with_extension("csv").exists());
 }
+
+/// `--dynamics` and `--settle-ms`: a bad dynamics file or wait is refused in one line
+/// naming it before the lens is touched, and nothing is written.
+#[test]
+fn bad_dynamics_or_settling_are_refused_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("thermal.json");
+    let bad = dir.path().join("dynamics.json");
+    let fixture =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/lens-dynamics/el-10-30-published.json");
+    let text = std::fs::read_to_string(fixture).unwrap().replace("\"creep_fraction\": 0.01", "\"creep_fraction\": 2");
+    std::fs::write(&bad, text).unwrap();
+    let base = ["thermal", "calibrate", "--virtual", "--quick", "--out", out.to_str().unwrap()];
+    for (extra, want) in [
+        (vec!["--dynamics", bad.to_str().unwrap()], "creep_fraction = 2 is outside [0, 0.5]"),
+        (vec!["--settle-ms", "-1"], "--settle-ms -1 must lie in 0..=10000 ms"),
+        (vec!["--settle-ms", "NaN"], "--settle-ms NaN must lie in 0..=10000 ms"),
+    ] {
+        let args: Vec<&str> = base.iter().copied().chain(extra.iter().copied()).collect();
+        let (code, stdout, err) = super::common::etlcal_run(&args);
+        assert_eq!((code, stdout.as_str()), (1, ""), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(want), "{err}");
+        assert!(!out.exists() && !out.with_extension("csv").exists());
+    }
+}
