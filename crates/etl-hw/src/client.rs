@@ -108,6 +108,21 @@ pub struct Unsolicited {
     pub after: &'static str,
 }
 
+/// Bit 2 of status byte #1: no temperature limits received (controlled mode).
+pub const STATUS_NO_TEMPERATURE_LIMITS: u8 = 0b100;
+
+/// The meaning of each bit of status byte #1, bit 0 first (docs/PROTOCOL.md, section 4.7).
+pub const STATUS_BITS: [&str; 8] = [
+    "not all hardware available",
+    "no or faulty EEPROM",
+    "no temperature limits received",
+    "cannot reach focal power",
+    "focal-power inversion",
+    "temperature outside product specification",
+    "focal power outside the guaranteed range",
+    "temperature outside the user range",
+];
+
 /// The focal-power range controlled mode reports.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ControlledRange {
@@ -117,6 +132,13 @@ pub struct ControlledRange {
     pub min_dpt: f64,
     /// Largest reachable focal power, dpt.
     pub max_dpt: f64,
+}
+
+impl ControlledRange {
+    /// The status bits set, by their meaning ([`STATUS_BITS`]).
+    pub fn status_flags(&self) -> Vec<&'static str> {
+        STATUS_BITS.iter().enumerate().filter(|(bit, _)| self.status & (1 << bit) != 0).map(|(_, s)| *s).collect()
+    }
 }
 
 struct Inner<T> {
@@ -129,6 +151,9 @@ struct Inner<T> {
     firmware: FirmwareType,
     legacy_temperature: bool,
     fp_range_dpt: Option<(f64, f64)>,
+    /// The temperature window (min, max) degC this client sent (`PwTA`) and the driver
+    /// accepted: the mode switch needs it first.
+    temperature_window_c: Option<(f64, f64)>,
     /// The command that timed out, whose reply may still come (see
     /// [`LensClient::transact`]).
     desynchronised: Option<&'static str>,
@@ -235,6 +260,7 @@ impl<T: Transport> LensClient<T> {
                 firmware: FirmwareType::Other(b'?'),
                 legacy_temperature: false,
                 fp_range_dpt: None,
+                temperature_window_c: None,
                 desynchronised: None,
             }),
         };
@@ -583,9 +609,28 @@ impl<T: Transport> LensClient<T> {
             min_x16: crate::codec::scaling::temperature_raw(min_c),
         };
         match self.transact(cmd)? {
-            Some(Reply::TemperatureLimits { status, max_fp, min_fp }) => Ok(self.range(status, min_fp, max_fp)),
+            Some(Reply::TemperatureLimits { status, max_fp, min_fp }) => {
+                if status & STATUS_NO_TEMPERATURE_LIMITS == 0 {
+                    self.lock().temperature_window_c = Some((min_c, max_c));
+                }
+                Ok(self.range(status, min_fp, max_fp))
+            }
             other => Err(unexpected(cmd, other)),
         }
+    }
+
+    /// Enters focal-power controlled mode in the documented order: the temperature window
+    /// (`PwTA`, [`Self::set_temperature_limits_c`]), then the mode switch (`MwCA`,
+    /// [`Self::enter_controlled_mode`]). The range returned is where
+    /// [`Self::set_focal_power_dpt`] accepts a power; a narrower window gives a wider one.
+    pub fn enter_focal_power_mode(&self, max_c: f64, min_c: f64) -> Result<ControlledRange> {
+        self.set_temperature_limits_c(max_c, min_c)?;
+        self.enter_controlled_mode()
+    }
+
+    /// The temperature window (min, max) degC this client sent and the driver accepted.
+    pub fn temperature_window_c(&self) -> Option<(f64, f64)> {
+        self.lock().temperature_window_c
     }
 
     fn range(&self, status: u8, min_fp: i16, max_fp: i16) -> ControlledRange {
@@ -593,14 +638,22 @@ impl<T: Transport> LensClient<T> {
         ControlledRange { status, min_dpt: fw.fp_dpt(min_fp), max_dpt: fw.fp_dpt(max_fp) }
     }
 
-    /// Enters focal-power controlled mode (`MwCA`); send the temperature limits first.
-    /// Errors with [`HwError::ControlledModeRefused`] when the status says the mode was
-    /// refused (bit 2: no temperature limits).
+    /// Enters focal-power controlled mode (`MwCA`). Refused without sending anything when
+    /// this client has not sent an accepted temperature window first (the firmware needs it
+    /// to compensate temperature, and public drivers that skip it leave the lens in a mode
+    /// that holds nothing); [`Self::enter_focal_power_mode`] does both in order. Errors with
+    /// [`HwError::ControlledModeRefused`] when the driver's status still refuses it.
     pub fn enter_controlled_mode(&self) -> Result<ControlledRange> {
+        if self.temperature_window_c().is_none() {
+            return Err(etl_core::Error::InvalidArgument {
+                what: "send the temperature window (PwTA) before switching to focal-power mode",
+            }
+            .into());
+        }
         match self.transact(Command::SetMode(Mode::Controlled))? {
             Some(Reply::ControlledMode { status, max_fp, min_fp }) => {
                 let r = self.range(status, min_fp, max_fp);
-                if status & 0b100 != 0 {
+                if status & STATUS_NO_TEMPERATURE_LIMITS != 0 {
                     return Err(HwError::ControlledModeRefused { status });
                 }
                 self.lock().fp_range_dpt = Some((r.min_dpt, r.max_dpt));
@@ -611,8 +664,11 @@ impl<T: Transport> LensClient<T> {
     }
 
     /// Sets the focal power in controlled mode (`PwDA`, fire-and-forget), dioptres,
-    /// encoded for the firmware type and clamped to the range `MwCA` reported. Errors on
-    /// NaN and when controlled mode was not entered through this client.
+    /// encoded for the firmware type; returns the power the code stands for. Refused
+    /// (nothing sent) on NaN, outside the range `MwCA` reported (`OutOfRange` with the
+    /// range: unlike a current, a power the lens cannot hold at every temperature of the
+    /// window is not clamped silently), and when controlled mode was not entered through
+    /// this client.
     pub fn set_focal_power_dpt(&self, dpt: f64) -> Result<f64> {
         let dpt = etl_core::error::finite(dpt, "focal power (dpt)")?;
         let (fw, range) = {
@@ -625,7 +681,11 @@ impl<T: Transport> LensClient<T> {
             }
             .into());
         };
-        let code = fw.fp_code(dpt.clamp(lo.min(hi), hi.max(lo)));
+        let (min, max) = (lo.min(hi), hi.max(lo));
+        if !(min..=max).contains(&dpt) {
+            return Err(etl_core::Error::OutOfRange { what: "focal power (dpt)", value: dpt, min, max }.into());
+        }
+        let code = fw.fp_code(dpt);
         self.transact(Command::SetFocalPower { code })?;
         Ok(fw.fp_dpt(code))
     }

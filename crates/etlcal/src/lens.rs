@@ -83,6 +83,14 @@ pub enum LensCommand {
     /// Hold a compensated current E_com while the temperature changes (section 2.2.1 iii).
     #[command(allow_negative_numbers = true)]
     Hold(HoldArgs),
+    /// Focal-power mode: send the temperature window, switch the mode, set the power (dpt).
+    #[command(allow_negative_numbers = true)]
+    SetFocalPower(crate::lens_focal::SetFocalPowerArgs),
+    /// The focal power the driver reports, dpt.
+    FocalPower,
+    /// Switch the driver to current or focal-power mode (the latter with its window).
+    #[command(allow_negative_numbers = true)]
+    Mode(crate::lens_focal::ModeArgs),
 }
 
 /// Arguments of `etlcal lens hold`.
@@ -185,6 +193,9 @@ pub fn run(args: Args) -> Result<()> {
             print_reading(args.json, "temperature_c", client.temperature_c().map_err(Error::lens)?, "degC")
         }
         LensCommand::Hold(h) => run_hold(&client, device.as_ref(), h, args.json)?,
+        LensCommand::SetFocalPower(a) => crate::lens_focal::set_focal_power(&client, &a, args.json)?,
+        LensCommand::FocalPower => crate::lens_focal::focal_power(&client, args.json)?,
+        LensCommand::Mode(a) => crate::lens_focal::mode(&client, &a, args.json)?,
     }
     Ok(())
 }

@@ -100,8 +100,15 @@ fn modes_and_controlled_focal_power() {
     assert_eq!(client.mode().unwrap(), Some(Mode::Sinusoidal));
     client.set_mode(Mode::Current).unwrap();
     assert_eq!(client.mode().unwrap(), Some(Mode::Current));
-    // Controlled mode needs temperature limits first.
-    assert!(matches!(client.enter_controlled_mode(), Err(HwError::ControlledModeRefused { status: 0b100 })));
+    // Controlled mode needs temperature limits first: the client refuses before sending,
+    // and the driver itself refuses a bare `MwCA` with status bit 2.
+    let e = client.enter_controlled_mode().unwrap_err();
+    assert!(e.to_string().contains("send the temperature window (PwTA) before"), "{e}");
+    match client.transact(etl_hw::codec::Command::SetMode(Mode::Controlled)).unwrap() {
+        Some(etl_hw::codec::Reply::ControlledMode { status, .. }) => assert_eq!(status, 0b100),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(client.mode().unwrap(), Some(Mode::Current));
     assert!(client.set_focal_power_dpt(12.0).is_err());
     assert!(client.set_temperature_limits_c(20.0, 40.0).is_err()); // min >= max
     let lim = client.set_temperature_limits_c(40.0, 20.0).unwrap();
@@ -115,13 +122,21 @@ fn modes_and_controlled_focal_power() {
     assert!((got - 12.5).abs() < 0.01, "{got}");
     assert!((device.state().focal_power_dpt - 12.5).abs() < 0.01);
     assert!(client.set_focal_power_dpt(f64::NAN).is_err());
+    // Outside the reported range: refused with the range, nothing sent, the power kept.
+    let commands = device.received().commands;
+    let e = client.set_focal_power_dpt(range.max_dpt + 0.5).unwrap_err();
+    assert!(matches!(e, HwError::Core(etl_core::Error::OutOfRange { what: "focal power (dpt)", .. })), "{e:?}");
+    assert!(!e.to_string().contains('\n'), "{e}");
+    assert_eq!(device.received().commands, commands);
+    assert!((client.focal_power_dpt().unwrap() - 12.5).abs() < 0.01);
 }
 
 #[test]
 fn firmware_type_a_focal_power_encoding() {
     let (_device, client) = spawn(VirtualLensConfig { firmware_type: b'A', ..Default::default() });
-    client.set_temperature_limits_c(45.0, 20.0).unwrap();
-    client.enter_controlled_mode().unwrap();
+    let range = client.enter_focal_power_mode(45.0, 20.0).unwrap();
+    assert!(range.status_flags().is_empty(), "{:?}", range.status_flags());
+    assert_eq!(client.temperature_window_c(), Some((20.0, 45.0)));
     client.set_focal_power_dpt(10.0).unwrap();
     assert!((client.focal_power_dpt().unwrap() - 10.0).abs() < 0.01);
 }

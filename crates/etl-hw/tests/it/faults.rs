@@ -78,10 +78,9 @@ fn error_frames_in_reply_and_unsolicited() {
     assert!(client.take_unsolicited().is_empty());
     // After another fire-and-forget write (`PwDA`) the error frame is unsolicited: drained
     // before the next command and reported.
-    client.set_temperature_limits_c(60.0, 10.0).unwrap();
-    client.enter_controlled_mode().unwrap();
+    let range = client.enter_focal_power_mode(60.0, 10.0).unwrap();
     device.with_faults(|f| f.error_frame_next = Some(1));
-    client.set_focal_power_dpt(1.0).unwrap();
+    client.set_focal_power_dpt(range.min_dpt).unwrap();
     std::thread::sleep(Duration::from_millis(20));
     assert!(client.mode().is_ok());
     let u = client.take_unsolicited();

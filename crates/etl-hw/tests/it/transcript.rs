@@ -324,12 +324,13 @@ fn silence_times_out_after_the_configured_time() {
 fn an_error_frame_after_a_focal_power_write_is_drained_as_unsolicited() {
     // `PwDA` has no reply; the E 01 it provoked waits on the line until the next command.
     let then = [
+        (hex("50 77 54 41 02 D0 01 40 33 C1"), reply(b"PT\x00\x0B\xB8\x07\xD0")),
         (hex("4D 77 43 41 56 76"), reply(b"MCA\x00\x0B\xB8\x07\xD0")),
         (frame(b"PwDA\x09\xC4\x00\x00"), reply(b"E\x01")), // 12.5 dpt -> code 2500
         (ar(), a_reply(1398)),
     ];
     run(&then, |client| {
-        client.enter_controlled_mode().unwrap();
+        client.enter_focal_power_mode(45.0, 20.0).unwrap();
         client.set_focal_power_dpt(12.5).unwrap();
         assert!((client.current_ma().unwrap() - ma(1398)).abs() < 1e-12);
         assert_eq!(client.take_unsolicited(), vec![Unsolicited { reply: Reply::Error(1), after: "PwDA" }]);
@@ -359,11 +360,15 @@ fn impossible_calibrations_are_typed_protocol_errors() {
 }
 
 #[test]
-fn controlled_mode_without_temperature_limits_is_refused() {
-    // `MwCA` (`4D 77 43 41 56 76`) answered `MCA` + status 0b100 + max FP + min FP.
-    let then = [(hex("4D 77 43 41 56 76"), reply(b"MCA\x04\x0B\xB8\x07\xD0"))];
+fn controlled_mode_the_driver_refuses_is_a_refusal() {
+    // A window accepted, then `MwCA` (`4D 77 43 41 56 76`) answered `MCA` + status 0b100 +
+    // max FP + min FP all the same (a driver that lost the limits).
+    let then = [
+        (hex("50 77 54 41 02 D0 01 40 33 C1"), reply(b"PT\x00\x0B\xB8\x07\xD0")),
+        (hex("4D 77 43 41 56 76"), reply(b"MCA\x04\x0B\xB8\x07\xD0")),
+    ];
     run(&then, |client| {
-        let e = client.enter_controlled_mode().unwrap_err();
+        let e = client.enter_focal_power_mode(45.0, 20.0).unwrap_err();
         assert!(matches!(e, HwError::ControlledModeRefused { status: 0b100 }), "{e:?}");
         assert_eq!(e.kind(), LensErrorKind::Refused);
     });
@@ -386,4 +391,64 @@ fn timeouts_outside_their_range_are_refused_before_anything_is_sent() {
         assert_eq!(e.to_string(), "invalid argument: reply timeout must lie in 1..=60000 ms");
         assert!(written.lock().unwrap().is_empty());
     }
+}
+
+/// Entering focal-power mode and setting 5.0 dpt, byte for byte, for each firmware type:
+/// the temperature window first (`PwTA`, max then min: the sheet's 45/20 degC example
+/// frame), then the mode switch (`MwCA`), then the fire-and-forget `PwDA` encoded for the
+/// type: type A (dpt + 5) x 200 = 2000 (`07 D0`, the sheet's example), the others
+/// dpt x 200 = 1000 (`03 E8`). The ranges the replies carry are encoded the same way.
+#[test]
+fn entering_focal_power_mode_and_setting_5_dpt_for_each_firmware_type() {
+    for (letter, code, range) in [(b'A', b"\x07\xD0", b"\x0F\xA0\x03\xE8"), (b'C', b"\x03\xE8", b"\x0B\xB8\x00\xC8")] {
+        let mut reads = calibration_reads();
+        reads[3].1 = reply(&[b'H', letter]);
+        let then = vec![
+            (hex("50 77 54 41 02 D0 01 40 33 C1"), reply(&[&b"PT\x00"[..], range].concat())),
+            (hex("4D 77 43 41 56 76"), reply(&[&b"MCA\x00"[..], range].concat())),
+            (frame(&[&b"PwDA"[..], code, b"\x00\x00"].concat()), vec![]),
+        ];
+        let exchanges = [reads, then].concat();
+        let (link, written) = script(&exchanges);
+        let client = LensClient::from_transport(link, options()).unwrap();
+        let r = client.enter_focal_power_mode(45.0, 20.0).unwrap();
+        // Type A: 4000 -> 15 dpt, 1000 -> 0 dpt; type C: 3000 -> 15 dpt, 200 -> 1 dpt.
+        assert_eq!((r.max_dpt, r.status), (15.0, 0), "type {}", letter as char);
+        assert_eq!(client.set_focal_power_dpt(5.0).unwrap(), 5.0);
+        assert_eq!(*written.lock().unwrap(), outs(&exchanges), "type {}", letter as char);
+    }
+}
+
+/// The client refuses, in one line and without a byte on the line, a mode switch before
+/// the temperature window, and a focal power outside the range the switch reported.
+#[test]
+fn a_mode_switch_without_the_window_and_a_power_outside_the_range_are_refused_unsent() {
+    let then = [
+        (hex("50 77 54 41 02 D0 01 40 33 C1"), reply(b"PT\x00\x0B\xB8\x07\xD0")),
+        (hex("4D 77 43 41 56 76"), reply(b"MCA\x00\x0B\xB8\x07\xD0")),
+    ];
+    run(&then, |client| {
+        let e = client.enter_controlled_mode().unwrap_err().to_string();
+        assert!(e.contains("send the temperature window (PwTA) before switching to focal-power mode"), "{e}");
+        assert!(client.set_focal_power_dpt(12.0).is_err());
+        let range = client.enter_focal_power_mode(45.0, 20.0).unwrap();
+        assert_eq!((range.min_dpt, range.max_dpt), (10.0, 15.0));
+        for dpt in [9.99, 15.01, -1.0] {
+            let e = client.set_focal_power_dpt(dpt).unwrap_err();
+            assert!(!e.to_string().contains('\n') && e.to_string().contains("focal power (dpt)"), "{e}");
+        }
+    });
+}
+
+/// A window the driver refuses (its status bit 2 set) does not count as sent: the mode
+/// switch is still refused by the client, and the status bits are named.
+#[test]
+fn a_refused_window_does_not_open_the_mode_switch() {
+    let then = [(hex("50 77 54 41 02 D0 01 40 33 C1"), reply(b"PT\x14\x0B\xB8\x07\xD0"))];
+    run(&then, |client| {
+        let r = client.set_temperature_limits_c(45.0, 20.0).unwrap();
+        assert_eq!(r.status_flags(), vec!["no temperature limits received", "focal-power inversion"]);
+        assert_eq!(client.temperature_window_c(), None);
+        assert!(client.enter_controlled_mode().is_err());
+    });
 }

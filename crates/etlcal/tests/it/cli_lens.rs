@@ -224,3 +224,35 @@ fn lens_sim_serves_a_lens_with_dynamics() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("commanded_ma"), "{out}");
 }
+
+#[test]
+fn focal_power_mode_in_the_documented_order_and_its_refusals_in_one_line() {
+    let (code, out, err) = etlcal(&["lens", "--virtual", "--json", "set-focal-power", "12.5", "--window", "20", "40"]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&out).unwrap();
+    for key in ["focal_power_dpt", "requested_dpt", "read_back_dpt", "window_c", "range_dpt", "status", "mode"] {
+        assert!(j.get(key).is_some(), "set-focal-power lacks {key}: {j}");
+    }
+    assert_eq!(j["focal_power_dpt"], 12.5);
+    assert!((j["read_back_dpt"].as_f64().unwrap() - 12.5).abs() < 0.01, "{j}");
+    assert_eq!(j["window_c"], serde_json::json!([20.0, 40.0]));
+    // Without --window: the lens's temperature +-10 degC, said on stderr.
+    let (code, out, err) = etlcal(&["lens", "--virtual", "--json", "mode", "focal-power"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("temperature window 17..37 degC (the lens's 27 degC +-10"), "{err}");
+    let j: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(j["mode"], "focal-power");
+    let (code, out, _) = etlcal(&["lens", "--virtual", "--json", "mode", "current"]);
+    assert_eq!((code, out.trim()), (0, r#"{"mode":"current"}"#));
+    let (code, out, _) = etlcal(&["lens", "--virtual", "--json", "focal-power"]);
+    assert_eq!(code, 0);
+    assert!(serde_json::from_str::<Value>(&out).unwrap()["focal_power_dpt"].as_f64().is_some());
+    let w = ["--window", "20", "40"];
+    refused(&[&["lens", "--virtual", "set-focal-power", "40"][..], &w].concat(), "focal power (dpt) = 40 is outside [");
+    refused(
+        &["lens", "--virtual", "set-focal-power", "12", "--window", "40", "20"],
+        "--window 40 20 degC must satisfy",
+    );
+    refused(&["lens", "--virtual", "mode", "focal-power", "--window", "0", "200"], "--window 0 200 degC");
+    refused(&[&["lens", "--virtual", "set-focal-power", "NaN"][..], &w].concat(), "focal power NaN dpt must be finite");
+}
