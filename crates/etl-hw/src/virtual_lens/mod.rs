@@ -34,7 +34,7 @@ use etl_core::physics::LensPhysics;
 use etl_core::thermal::ThermalSurface;
 
 pub use faults::Faults;
-pub use model::{LensState, ThermalModel};
+pub use model::{FocalPowerCompensation, LensState, ThermalModel};
 #[cfg(unix)]
 pub use pty::VirtualLens;
 
@@ -91,6 +91,8 @@ pub struct VirtualLensConfig {
     /// command at once). With them the optics lag each command (step response, creep,
     /// hysteresis) and the lens heats as they say ([`model`]).
     pub dynamics: Option<LensDynamics>,
+    /// The firmware's temperature compensation in focal-power mode (a stated residual).
+    pub fp_compensation: FocalPowerCompensation,
 }
 
 impl Default for VirtualLensConfig {
@@ -116,6 +118,7 @@ impl Default for VirtualLensConfig {
             sensor_period_s: 0.1,
             time_scale: 1.0,
             dynamics: None,
+            fp_compensation: FocalPowerCompensation::default(),
         }
     }
 }
@@ -191,6 +194,8 @@ impl VirtualDevice {
             fp_code: 0,
             temperature_limits_x16: None,
             dynamics: config.dynamics.map(|d| (d, LensResponse::at_rest(0.0))),
+            fp_compensation: config.fp_compensation,
+            fp_target_dpt: None,
         };
         let shared =
             Shared { config, model, faults: Faults::default(), received: Received::default(), wall: Instant::now() };
@@ -297,6 +302,16 @@ fn validate(c: &VirtualLensConfig) -> Result<()> {
     positive(c.sensor_period_s, "sensor_period_s must be finite and > 0")?;
     if let Some(d) = &c.dynamics {
         d.validate()?;
+    }
+    let fp = c.fp_compensation;
+    if !((0.0..=1.0).contains(&fp.residual_fraction)
+        && SENSOR_RANGE_C[0] <= fp.reference_c
+        && fp.reference_c <= SENSOR_RANGE_C[1])
+    {
+        return Err(E::InvalidArgument {
+            what: "fp_compensation needs a residual fraction in 0..=1 and a reference in -40..=125 degC",
+        }
+        .into());
     }
     positive(c.thermal.tau_s, "thermal.tau_s must be finite and > 0")?;
     positive(c.thermal.thermal_resistance_k_per_w, "thermal resistance must be finite and > 0")?;

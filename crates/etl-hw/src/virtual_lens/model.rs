@@ -14,7 +14,7 @@ use etl_core::physics::dynamics::{LensDynamics, LensResponse};
 use etl_core::physics::LensPhysics;
 use etl_core::thermal::ThermalSurface;
 
-use crate::codec::scaling::{current_ma, temperature_raw};
+use crate::codec::scaling::{current_code, current_ma, temperature_raw};
 use crate::codec::Mode;
 
 /// The thermal model: dT/dt = (T_eq - T) / tau with
@@ -35,6 +35,30 @@ impl Default for ThermalModel {
     /// 25 degC ambient, 8 K/W, a 12 ohm coil (+5.5 K at 240 mA), tau = 60 s.
     fn default() -> Self {
         ThermalModel { ambient_c: 25.0, thermal_resistance_k_per_w: 8.0, coil_resistance_ohm: 12.0, tau_s: 60.0 }
+    }
+}
+
+/// How the virtual driver's firmware compensates temperature in focal-power mode.
+///
+/// A real driver reads the lens's EEPROM and re-computes the current for the commanded
+/// power at each new reading of the lens's sensor. The virtual one does the same with a
+/// model of the lens that misses a fraction of the thermal drift since the EEPROM's
+/// reference temperature: it takes E_T_fw(T, E) = E_T(T, E) - r (E_T(T, E) - E_T(T_ref, E)),
+/// so the power held drifts by r times what it would drift at a fixed current.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FocalPowerCompensation {
+    /// r, the fraction of the drift left (0: perfect compensation).
+    pub residual_fraction: f64,
+    /// T_ref, where the firmware's model is exact, degC.
+    pub reference_c: f64,
+}
+
+impl Default for FocalPowerCompensation {
+    /// r = 0.04 at T_ref = 25 degC: Optotune states a reproducibility of typically 0.1 dpt
+    /// over 10..50 degC with compensation (MAN16 section 4.3), where an EL-10-30 drifts
+    /// about 0.067 dpt/degC uncompensated, 2.7 dpt over that range: 0.1 / 2.7 = 4 %.
+    fn default() -> Self {
+        FocalPowerCompensation { residual_fraction: 0.04, reference_c: 25.0 }
     }
 }
 
@@ -92,6 +116,10 @@ pub(crate) struct Model {
     pub temperature_limits_x16: Option<(i16, i16)>,
     /// The membrane's dynamics and its state (None: the optics follow the command at once).
     pub dynamics: Option<(LensDynamics, LensResponse)>,
+    /// The firmware's temperature compensation in focal-power mode.
+    pub fp_compensation: FocalPowerCompensation,
+    /// The focal power commanded in focal-power mode, dpt (None: none yet).
+    pub fp_target_dpt: Option<f64>,
 }
 
 impl Model {
@@ -144,6 +172,9 @@ impl Model {
         }
         self.temperature_c = self.temperature_after(dt_s);
         self.time_s += dt_s;
+        if ticks_after > ticks_before {
+            self.hold_focal_power();
+        }
         if let Some((d, r)) = &mut self.dynamics {
             r.advance(dt_s, d);
         }
@@ -181,6 +212,30 @@ impl Model {
         if let Some((d, r)) = &mut self.dynamics {
             r.command(e_in_ma, d);
         }
+    }
+
+    /// In focal-power mode with a power commanded: the firmware sets the current that holds
+    /// it at the sensor's reading, by its own model of the lens ([`FocalPowerCompensation`]).
+    /// A power out of reach leaves the current as it is.
+    pub fn hold_focal_power(&mut self) {
+        let (Mode::Controlled, Some(dpt)) = (self.mode, self.fp_target_dpt) else { return };
+        if let Some(e_in) = self.e_com_for_power(dpt).and_then(|e_com| self.firmware_e_in_ma(e_com)) {
+            self.apply_code(current_code(e_in, self.max_current_ma()));
+        }
+    }
+
+    /// The driver current the firmware's model says gives `e_com_ma` at the sensor's
+    /// reading: E_in = E_com + E_T_fw(T, E_in) by fixed-point iteration from the true
+    /// surface's answer (|dE_T/dE| is a few hundredths: it converges at once).
+    fn firmware_e_in_ma(&self, e_com_ma: f64) -> Option<f64> {
+        let t = self.sensor_c();
+        let FocalPowerCompensation { residual_fraction: r, reference_c: t_ref } = self.fp_compensation;
+        let mut e_in = self.surface.e_in_for_e_com(e_com_ma, t).ok()?;
+        for _ in 0..20 {
+            let (now, at_ref) = (self.surface.e_t_ma(e_in, t).ok()?, self.surface.e_t_ma(e_in, t_ref).ok()?);
+            e_in = e_com_ma + now - r * (now - at_ref);
+        }
+        e_in.is_finite().then_some(e_in)
     }
 
     /// The current the optics follow now, mA (the command itself without dynamics).
@@ -264,6 +319,8 @@ mod tests {
             fp_code: 0,
             temperature_limits_x16: None,
             dynamics: None,
+            fp_compensation: FocalPowerCompensation::default(),
+            fp_target_dpt: None,
         }
     }
 

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use super::model::Model;
 use super::{lock, Shared};
-use crate::codec::scaling::{current_code, current_ma, FirmwareType, NO_SENSOR_RAW};
+use crate::codec::scaling::{current_ma, FirmwareType, NO_SENSOR_RAW};
 use crate::codec::{Command, DecodeError, Mode, Reply};
 
 /// Appends the bytes the host sent to the command buffer `buf`, losing those the
@@ -130,6 +130,7 @@ fn execute(s: &mut Shared, cmd: Command, buf: &mut Vec<u8>) -> Option<Reply> {
             let status = if m.temperature_limits_x16.is_none() { 0b100 } else { 0 };
             if status == 0 {
                 m.mode = Mode::Controlled;
+                m.hold_focal_power();
             }
             let (min_fp, max_fp) = fp_range(m, fw);
             Some(Reply::ControlledMode { status, max_fp, min_fp })
@@ -141,15 +142,10 @@ fn execute(s: &mut Shared, cmd: Command, buf: &mut Vec<u8>) -> Option<Reply> {
         Command::ReadMode => Some(Reply::ActiveMode { code: m.mode.active_code() }),
         Command::SetFocalPower { code } => {
             m.fp_code = code;
-            if m.mode == Mode::Controlled {
-                // Hold the power at the present temperature: E_com from the optics, then E_in.
-                if let Some(e_com) = m.e_com_for_power(fw.fp_dpt(code)) {
-                    if let Ok(e_in) = m.surface.e_in_for_e_com(e_com, m.temperature_c) {
-                        let c = current_code(e_in, m.max_current_ma());
-                        m.apply_code(c);
-                    }
-                }
-            }
+            // Stored in any mode, applied (and held as the lens's temperature changes) in
+            // controlled mode only (XLSX #0310).
+            m.fp_target_dpt = Some(fw.fp_dpt(code));
+            m.hold_focal_power();
             None
         }
         Command::GetFocalPower => {

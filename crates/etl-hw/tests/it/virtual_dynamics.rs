@@ -115,3 +115,38 @@ fn bad_dynamics_are_refused_naming_the_field() {
     assert!(matches!(&e, HwError::Core(etl_core::Error::OutOfRange { what: "damping", .. })), "{e:?}");
     assert!(e.to_string().contains("damping"), "{e}");
 }
+
+/// Focal-power mode holds the power as the lens warms, as the firmware does from the
+/// sensor's readings, to the stated residual: with r = 0.04 the power drifts 4 % of what a
+/// fixed current drifts over the same warming, with r = 0 not beyond the code's steps.
+#[test]
+fn focal_power_mode_holds_the_power_to_the_firmware_s_residual() {
+    use etl_hw::virtual_lens::FocalPowerCompensation;
+    let drift = |fp: Option<f64>| {
+        let config = VirtualLensConfig {
+            time_scale: 1e-6,
+            fp_compensation: FocalPowerCompensation { residual_fraction: fp.unwrap_or(0.04), reference_c: 25.0 },
+            ..VirtualLensConfig::default()
+        };
+        let device = VirtualDevice::new(config).unwrap();
+        let client = LensClient::from_transport(device.transport(), OpenOptions::default()).unwrap();
+        device.set_target_temperature_c(25.0);
+        device.settle();
+        if fp.is_some() {
+            client.enter_focal_power_mode(50.0, 20.0).unwrap();
+            client.set_focal_power_dpt(12.5).unwrap();
+        } else {
+            client.set_current_ma(100.0).unwrap();
+        }
+        let before = device.state().focal_power_dpt;
+        device.set_target_temperature_c(40.0);
+        device.settle();
+        device.advance_s(0.2); // two readings of the sensor at the new temperature
+        device.state().focal_power_dpt - before
+    };
+    let fixed_current = drift(None);
+    let (residual, perfect) = (drift(Some(0.04)), drift(Some(0.0)));
+    assert!(fixed_current.abs() > 0.3, "{fixed_current} dpt");
+    assert!((residual / fixed_current - 0.04).abs() < 0.01, "{residual} of {fixed_current} dpt");
+    assert!(perfect.abs() < 0.01, "{perfect} dpt");
+}
