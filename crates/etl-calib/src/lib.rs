@@ -6,6 +6,7 @@
 
 pub mod baseline;
 pub mod diff;
+pub mod lens_dynamics;
 pub mod pipeline;
 pub mod request;
 pub mod robust;

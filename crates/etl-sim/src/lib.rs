@@ -3,6 +3,7 @@
 //! ([`rig`], [`simulate`]) and the virtual rig of the temperature procedure
 //! ([`virtual_rig`]); the printable board ([`print`]: SVG at true size, exact raster).
 
+pub mod lens_camera;
 pub mod optics;
 pub mod print;
 pub mod render;

@@ -91,6 +91,8 @@ pub enum LensCommand {
     /// Switch the driver to current or focal-power mode (the latter with its window).
     #[command(allow_negative_numbers = true)]
     Mode(crate::lens_focal::ModeArgs),
+    /// Measure the lens's dynamics from frames: settling, hysteresis, creep, repeatability.
+    Characterise(crate::lens_characterise::CharacteriseArgs),
 }
 
 /// Arguments of `etlcal lens hold`.
@@ -136,7 +138,7 @@ pub fn run(args: Args) -> Result<()> {
         timeout: Duration::from_millis(args.timeout_ms),
         ..Default::default()
     };
-    let client = LensClient::open(&path, options).map_err(Error::lens)?;
+    let mut client = LensClient::open(&path, options).map_err(Error::lens)?;
     match args.command {
         LensCommand::Info => {
             let info = client.identify().map_err(Error::lens)?;
@@ -196,6 +198,10 @@ pub fn run(args: Args) -> Result<()> {
         LensCommand::SetFocalPower(a) => crate::lens_focal::set_focal_power(&client, &a, args.json)?,
         LensCommand::FocalPower => crate::lens_focal::focal_power(&client, args.json)?,
         LensCommand::Mode(a) => crate::lens_focal::mode(&client, &a, args.json)?,
+        LensCommand::Characterise(a) => {
+            let dynamics = args.target.dynamics.is_some();
+            crate::lens_characterise::run(&mut client, device.as_ref(), dynamics, &a, args.json)?
+        }
     }
     Ok(())
 }
@@ -215,6 +221,9 @@ fn open_target(args: &Args) -> Result<(Option<VirtualLens>, PathBuf)> {
         (None, true) => {
             let time_scale = match &args.command {
                 LensCommand::Hold(h) => h.time_scale,
+                // The simulated camera drives the model's clock frame by frame: wall time
+                // (serial round trips) must not move it.
+                LensCommand::Characterise(_) => 1e-6,
                 _ => 1.0,
             };
             let config = VirtualLensConfig {

@@ -35,6 +35,7 @@ pub mod diff;
 pub mod export;
 pub mod focus;
 pub mod lens;
+pub mod lens_characterise;
 pub mod lens_focal;
 pub mod lens_sim;
 pub mod measure;

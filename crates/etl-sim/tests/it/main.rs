@@ -3,6 +3,7 @@
 
 mod autofocus;
 mod focus_law;
+mod lens_dynamics;
 mod optics;
 mod render;
 mod rig_images;

@@ -256,3 +256,39 @@ fn focal_power_mode_in_the_documented_order_and_its_refusals_in_one_line() {
     refused(&["lens", "--virtual", "mode", "focal-power", "--window", "0", "200"], "--window 0 200 degC");
     refused(&[&["lens", "--virtual", "set-focal-power", "NaN"][..], &w].concat(), "focal power NaN dpt must be finite");
 }
+
+#[test]
+fn characterise_prints_the_documented_keys_writes_the_dynamics_and_refuses_what_it_cannot_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("measured.json");
+    let f = published_dynamics();
+    let args = [
+        "lens",
+        "--virtual",
+        "--dynamics",
+        &f,
+        "--json",
+        "characterise",
+        "--camera",
+        "sim",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let (code, stdout, err) = etlcal(&args);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    for key in ["settling_ms", "hysteresis_ma", "creep_tau_s", "creep_fraction", "repeatability_ma"] {
+        assert!(j.get(key).is_some(), "characterise lacks {key}: {j}");
+    }
+    let up = j["settling_ms"]["up"].as_f64().unwrap();
+    assert!((10.0..20.0).contains(&up) && j["settling_ms"]["down"].as_f64().is_some(), "{j}");
+    let written = etl_formats::LensDynamicsFile::load(&out).unwrap();
+    assert!((written.natural_frequency_hz - 150.0).abs() < 15.0, "{written:?}");
+    assert!(written.source.unwrap().contains("not measured: the published defaults"));
+    refused(&["lens", "--virtual", "characterise", "--camera", "sim"], "nothing to characterise");
+    refused(&["lens", "--virtual", "--dynamics", &f, "characterise", "--camera", "basler:1"], "only `sim` exists yet");
+    refused(
+        &["lens", "--virtual", "--dynamics", &f, "characterise", "--camera", "sim", "--frame-rate", "0"],
+        "--frame-rate",
+    );
+}
