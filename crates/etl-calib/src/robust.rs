@@ -79,21 +79,76 @@ fn apply(h: &[[f64; 3]; 3], b: [f64; 2]) -> [f64; 2] {
     [(h[0][0] * b[0] + h[0][1] * b[1] + h[0][2]) / w, (h[1][0] * b[0] + h[1][1] * b[1] + h[1][2]) / w]
 }
 
+/// Squared distance, px^2, of pixel `p` from board point `b`'s image under H.
+fn distance_sq(h: &[[f64; 3]; 3], b: [f64; 2], p: [f64; 2]) -> f64 {
+    let q = apply(h, b);
+    (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)
+}
+
+/// Distance, px, of pixel `p` from board point `b`'s image under H (infinite where it is
+/// not finite).
+fn distance(h: &[[f64; 3]; 3], b: [f64; 2], p: [f64; 2]) -> f64 {
+    let d = distance_sq(h, b, p).sqrt();
+    if d.is_finite() {
+        d
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Distances, px, of every pixel from its board point's image under H.
 fn distances(h: &[[f64; 3]; 3], board: &[[f64; 2]], pixels: &[[f64; 2]]) -> Vec<f64> {
-    board
-        .iter()
-        .zip(pixels)
-        .map(|(b, p)| {
-            let q = apply(h, *b);
-            let d = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
-            if d.is_finite() {
-                d
-            } else {
-                f64::INFINITY
-            }
-        })
-        .collect()
+    board.iter().zip(pixels).map(|(b, p)| distance(h, *b, *p)).collect()
+}
+
+/// The least squared distance t whose distance is not below `m` (>= 0, not NaN): the
+/// square root is correctly rounded, hence monotone, so [`distance`] < m exactly when
+/// [`distance_sq`] < t (both false for a non-finite square, both true for every finite
+/// one when m is infinite). t is m^2 moved by the few ulps its rounding needs; 0 (no
+/// square below) when m is not positive.
+fn square_bound(m: f64) -> f64 {
+    if !(m > 0.0) {
+        return 0.0;
+    }
+    // Neighbouring doubles of a positive t: its bit pattern plus or minus one.
+    let (down, up) = (|t: f64| f64::from_bits(t.to_bits() - 1), |t: f64| f64::from_bits(t.to_bits() + 1));
+    let mut t = m * m;
+    while t > 0.0 && down(t).sqrt() >= m {
+        t = down(t);
+    }
+    while t.sqrt() < m {
+        t = up(t);
+    }
+    t
+}
+
+/// The median distance under H (element n / 2 of the ascending order) if it is below
+/// `bound` (any when `None`), else `None`; `d` is working storage.
+///
+/// The median is below the bound exactly when more than n / 2 distances are (they are
+/// never NaN, so `<` orders them as `total_cmp` does); that count is taken on the squared
+/// distances against [`square_bound`], without a square root, and only a hypothesis that
+/// passes has its distances computed and selected: most LMedS samples are no better than
+/// the best so far.
+fn median_below(
+    h: &[[f64; 3]; 3],
+    board: &[[f64; 2]],
+    pixels: &[[f64; 2]],
+    bound: Option<f64>,
+    d: &mut Vec<f64>,
+) -> Option<f64> {
+    let n = board.len();
+    if let Some(m) = bound {
+        let t = square_bound(m);
+        let below = board.iter().zip(pixels).filter(|&(b, p)| distance_sq(h, *b, *p) < t).count();
+        if below <= n / 2 {
+            return None;
+        }
+    }
+    d.clear();
+    d.extend(board.iter().zip(pixels).map(|(b, p)| distance(h, *b, *p)));
+    let (_, med, _) = d.select_nth_unstable_by(n / 2, f64::total_cmp);
+    Some(*med)
 }
 
 /// LMedS hypotheses drawn per view: with 6 points a sample, the chance that none of 100
@@ -127,6 +182,7 @@ pub fn homography_inliers(board: &[[f64; 2]], pixels: &[[f64; 2]]) -> Vec<bool> 
         (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as usize
     };
     let mut best: Option<(f64, [[f64; 3]; 3])> = None;
+    let mut d = Vec::with_capacity(n);
     for _ in 0..SAMPLES {
         let mut idx = [0usize; SAMPLE_POINTS];
         for k in 0..SAMPLE_POINTS {
@@ -136,12 +192,10 @@ pub fn homography_inliers(board: &[[f64; 2]], pixels: &[[f64; 2]]) -> Vec<bool> 
             }
             idx[k] = i;
         }
-        let (b, p): (Vec<[f64; 2]>, Vec<[f64; 2]>) = idx.iter().map(|&i| (board[i], pixels[i])).unzip();
+        let (b, p) = (idx.map(|i| board[i]), idx.map(|i| pixels[i]));
         let Ok(h) = homography(&b, &p) else { continue };
-        let mut d = distances(&h, board, pixels);
-        let (_, med, _) = d.select_nth_unstable_by(n / 2, f64::total_cmp);
-        if best.is_none_or(|(m, _)| *med < m) {
-            best = Some((*med, h));
+        if let Some(med) = median_below(&h, board, pixels, best.map(|(m, _)| m), &mut d) {
+            best = Some((med, h));
         }
     }
     let Some((_, mut h)) = best else { return all };
@@ -163,4 +217,28 @@ pub fn homography_inliers(board: &[[f64; 2]], pixels: &[[f64; 2]]) -> Vec<bool> 
         }
     }
     inliers
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The squared test of `median_below` decides as the distances themselves would: for
+    /// squares within a few ulps of every bound's square, sqrt(s) < m exactly when s < t.
+    #[test]
+    fn square_bound_splits_the_squares_as_the_square_root_does() {
+        // The distance of a square as `distance` gives it: infinite where not finite.
+        let root = |s: f64| if s.sqrt().is_finite() { s.sqrt() } else { f64::INFINITY };
+        let bounds = [0.0, -1.0, f64::NAN, 1e-300, 0.1, 0.25, 0.6180339887, 1.0, 3.2, 10.0, 1e10, 1e154, f64::INFINITY];
+        // And a dense sweep over the distances a screen meets, 1e-3 px to 3e3 px.
+        let sweep = (0..2000).map(|k| 1e-3 * 1.0075f64.powi(k));
+        for m in bounds.into_iter().chain(sweep) {
+            let t = square_bound(m);
+            let centre = if (m * m).is_finite() { m * m } else { f64::MAX };
+            let near = (-8i64..=8).map(|k| f64::from_bits(centre.to_bits().saturating_add_signed(k)));
+            for s in near.chain([0.0, f64::INFINITY, f64::NAN]) {
+                assert_eq!(s < t, root(s) < m, "m {m:e}, s {s:e}, t {t:e}");
+            }
+        }
+    }
 }

@@ -29,6 +29,7 @@ use etl_formats::calibration::{
 };
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result};
+use rayon::prelude::*;
 
 /// Options of [`calibrate`]. The default is errors-in-variables with the paper's noise
 /// levels ([`Estimator::EIV_PAPER`]), no robust loss, A0 free, the paper's model (its
@@ -200,18 +201,13 @@ pub fn calibrate(
     calibration_of(obs, &views, solved, thermal, options)
 }
 
-/// The calibration file's content from the solve's result.
-fn calibration_of(
-    obs: &Observations,
-    views: &[View<'_>],
-    solved: solve::Solved,
-    thermal: Option<&ThermalRef>,
-    options: &CalibrateOptions,
-) -> Result<CalibrationResult> {
-    let (report, initial) = (solved.report, solved.initial);
-    let m = report.model;
-    let summaries = views
-        .iter()
+/// Each view's summary under the calibrated `m`: its points in the solve, their RMS
+/// distance, its corrections and its own focal lengths ([`view_focal`], from its points
+/// in the solve, not its outliers). The views in parallel (rayon): each summary is its
+/// own computation, the same whatever the threads.
+fn view_summaries(m: &CameraModel, views: &[View<'_>], solved: &solve::Solved) -> Vec<ViewSummary> {
+    views
+        .par_iter()
         .zip(&solved.corrections)
         .zip(&solved.distances_px)
         .zip(&solved.used)
@@ -223,10 +219,9 @@ fn calibration_of(
                     (s, n)
                 }
             });
-            // The view's own focal lengths from its points in the solve, not its outliers.
             let kept: Vec<_> = v.points.iter().zip(used).filter(|&(_, &u)| u).map(|(p, _)| *p).collect();
             let kept_view = View { e_com_ma: v.e_com_ma, points: &kept };
-            let (fx_px, fy_px) = view_focal(&m, &kept_view, c.dz_mm).unwrap_or((0.0, 0.0));
+            let (fx_px, fy_px) = view_focal(m, &kept_view, c.dz_mm).unwrap_or((0.0, 0.0));
             ViewSummary {
                 e_com_ma: v.e_com_ma,
                 points: used.iter().filter(|&&u| u).count(),
@@ -237,7 +232,20 @@ fn calibration_of(
                 fy_px,
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The calibration file's content from the solve's result.
+fn calibration_of(
+    obs: &Observations,
+    views: &[View<'_>],
+    solved: solve::Solved,
+    thermal: Option<&ThermalRef>,
+    options: &CalibrateOptions,
+) -> Result<CalibrationResult> {
+    let (report, initial) = (solved.report, solved.initial);
+    let m = report.model;
+    let summaries = view_summaries(&m, views, &solved);
     let (focus_law, focus_law_warning) = match focus_law::fit_focus_law(&m, views) {
         Ok(law) => (Some(law), None),
         Err(why) => (None, Some(why)),

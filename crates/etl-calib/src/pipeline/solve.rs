@@ -10,6 +10,8 @@ use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, Outlier};
 use etl_formats::Result;
 
+use rayon::prelude::*;
+
 use super::CalibrateOptions;
 use crate::robust::{homography_inliers, outlier_limit_px, OUTLIER_FLOOR_PX, OUTLIER_SIGMAS};
 
@@ -83,10 +85,12 @@ fn distances(model: &CameraModel, views: &[View<'_>], corrections: &[ViewCorrect
 }
 
 /// The homography screen of every view whose points share one Z_W (a board on the
-/// stage); other views keep all their points.
+/// stage); other views keep all their points. The views in parallel (rayon): each view's
+/// screen is its own deterministic computation, so the result does not depend on the
+/// threads, and the 100 LMedS hypotheses per view are a fifth of a calibration's time.
 fn screen(views: &[View<'_>]) -> Vec<Vec<bool>> {
     views
-        .iter()
+        .par_iter()
         .map(|v| {
             let z = v.points.first().map_or(0.0, |p| p.world_mm[2]);
             if v.points.iter().any(|p| p.world_mm[2] != z) {

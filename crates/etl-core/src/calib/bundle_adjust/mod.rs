@@ -413,7 +413,8 @@ where
     let (mut sigma_px, mut start) = (sigma_px, plain.x);
     let mut round = 0;
     let solved = loop {
-        let mut problem = Eiv::<N, O, P> { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
+        let mut problem =
+            Eiv::<N, O, P> { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference, at: None };
         let solved = lm::solve_blocks(&mut problem, start, &options.lm, &mut *scratch)?;
         round += 1;
         if !estimate_sigma || round >= SIGMA_ROUNDS {
@@ -592,7 +593,8 @@ mod tests {
         with_three_views::<N>(truth, RobustLoss::Cauchy { k_px: 1.0 }, |views, basis, x0, x, options| {
             let (sigma_px, sigma_z_mm, sigma_e_ma) = (0.3, 0.01, 0.4);
             let reference = Some(Projector::new(truth));
-            let mut eiv = Eiv::<N, O, P> { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference };
+            let mut eiv =
+                Eiv::<N, O, P> { views, basis, x0, options, sigma_px, sigma_z_mm, sigma_e_ma, reference, at: None };
             check_folded_blocks(&mut eiv, &x);
         });
     }

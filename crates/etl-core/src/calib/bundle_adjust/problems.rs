@@ -120,7 +120,10 @@ impl<const N: usize, const O: usize, const P: usize> Problem<N> for Plain<'_, '_
         for view in self.views {
             let mut normal = ViewNormal::<O, P>::new();
             for p in view.points {
-                let pr = proj.project_reduced(p.world_mm, view.e_com_ma, true)?;
+                // Read in place: moving the projection (16 + 240 bytes) out of its
+                // Result was a memcpy per point.
+                let projected = proj.project_reduced(p.world_mm, view.e_com_ma, true);
+                let pr = projected.as_ref().map_err(|e| *e)?;
                 let f = robust_scale(self.options.robust, self.reference.as_ref(), p.world_mm, view.e_com_ma, p.pixel)?;
                 let r = [f * (pr.pixel[0] - p.pixel[0]), f * (pr.pixel[1] - p.pixel[1])];
                 out.cost += r[0] * r[0] + r[1] * r[1];
@@ -135,8 +138,31 @@ impl<const N: usize, const O: usize, const P: usize> Problem<N> for Plain<'_, '_
     }
 }
 
-/// A view and, at the internal parameters z, dx/dz, x and x's projector.
-type AtView<'v, 'b, const N: usize> = (&'v View<'b>, [[f64; N]; N], [f64; N], Projector);
+/// What every view's rows need at the internal parameters z: dx/dz, x = to_params(z) and
+/// x's projector. The solver evaluates all views at one z in turn, so [`Eiv`] keeps them
+/// for the last z instead of recomputing them per view (dx/dz alone, 25 x 25, cost about
+/// a tenth of the errors-in-variables pipeline when it was recomputed for each of the 15
+/// views of the paper rig); the same functions of the same z, so the same numbers.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct AtZ<const N: usize> {
+    z: [f64; N],
+    dxdz: [[f64; N]; N],
+    x: [f64; N],
+    proj: Projector,
+}
+
+impl<const N: usize> AtZ<N> {
+    /// dx/dz, x and the projector of `basis` at `z`.
+    fn new(basis: &Basis, z: &[f64; N]) -> Self {
+        let x = basis.to_params(z);
+        AtZ { z: *z, dxdz: basis.params_jacobian(z), x, proj: projector(&basis.layout(), &x) }
+    }
+
+    /// Whether these are the quantities at `z` (bit for bit: -0.0 is not 0.0 here).
+    fn is_at(&self, z: &[f64; N]) -> bool {
+        self.z.iter().zip(z).all(|(a, b)| a.to_bits() == b.to_bits())
+    }
+}
 
 /// The errors-in-variables problem: the shared z and, per view, its correction
 /// y = (dZ mm, dE mA) with Gaussian priors; rows normalised by their standard deviations.
@@ -150,6 +176,8 @@ pub(super) struct Eiv<'a, 'b, const N: usize, const O: usize, const P: usize> {
     pub sigma_z_mm: f64,
     pub sigma_e_ma: f64,
     pub reference: Option<Projector>,
+    /// The quantities at the last z evaluated ([`AtZ`]); `None` to start with.
+    pub at: Option<AtZ<N>>,
 }
 
 impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<'_, '_, N, O, P> {
@@ -165,22 +193,30 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
         jacobian: bool,
         sink: &mut dyn BlockRowSink<N, 2>,
     ) -> Result<()> {
-        let (view, dxdz, x, proj) = self.at_view(block, x)?;
-        let x = &x;
+        self.refresh(x);
+        let (view, at) = self.at_view(block)?;
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
         for p in view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + y[0]];
-            let pr = proj.project(w, e_ma, jacobian)?;
+            if !jacobian {
+                // Trial points need only the cost: the same pixel without any gradient.
+                let pr = at.proj.project_reduced(w, e_ma, false)?;
+                let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
+                sink.push(f * (pr.pixel[0] - p.pixel[0]), &[0.0; N], &[0.0; 2]);
+                sink.push(f * (pr.pixel[1] - p.pixel[1]), &[0.0; N], &[0.0; 2]);
+                continue;
+            }
+            let pr = at.proj.project(w, e_ma, jacobian)?;
             let e = [pr.pixel[0] - p.pixel[0], pr.pixel[1] - p.pixel[1]];
             let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
             for row in 0..2 {
-                let mut j = row_in(&dxdz, &pr.d_params[row]);
+                let mut j = row_in(&at.dxdz, &pr.d_params[row]);
                 j.iter_mut().for_each(|v| *v *= f);
                 sink.push(f * e[row], &j, &[f * pr.d_z_w[row], f * pr.d_e[row]]);
             }
         }
-        self.prior_rows(block, x, &dxdz, y, sink);
+        self.prior_rows(block, &at.x, &at.dxdz, y, sink);
         Ok(())
     }
 
@@ -194,14 +230,17 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
         y: &[f64; 2],
         out: &mut BlockNormal<'_, N, 2>,
     ) -> Result<bool> {
-        let (view, dxdz, x, proj) = self.at_view(block, x)?;
-        let x = &x;
+        self.refresh(x);
+        let (view, at) = self.at_view(block)?;
+        let (dxdz, proj) = (&at.dxdz, &at.proj);
         let is = 1.0 / self.sigma_px;
         let e_ma = view.e_com_ma + y[1];
         let mut normal = ViewNormal::<O, P>::new();
         for p in view.points {
             let w = [p.world_mm[0], p.world_mm[1], p.world_mm[2] + y[0]];
-            let pr = proj.project_reduced(w, e_ma, true)?;
+            // Read in place, as in Plain::normal_equations.
+            let projected = proj.project_reduced(w, e_ma, true);
+            let pr = projected.as_ref().map_err(|e| *e)?;
             let f = robust_scale(self.options.robust, self.reference.as_ref(), w, e_ma, p.pixel)? * is;
             let r = [f * (pr.pixel[0] - p.pixel[0]), f * (pr.pixel[1] - p.pixel[1])];
             out.cost += r[0] * r[0] + r[1] * r[1];
@@ -209,7 +248,7 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
             normal.add_point(&pr.d_reduced, f, r);
         }
         let (a, g) = normal.expand();
-        let c = proj.chain_in(e_ma, &dxdz)?;
+        let c = proj.chain_in(e_ma, dxdz)?;
         fold_view(O + 2, &a, &g, &c, out.u, out.gx);
         // W = C^T a C_y, V = C_y^T a C_y, g_y = C_y^T g.
         let cy = proj.shift_chain(e_ma);
@@ -234,18 +273,25 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
                 }
             }
         }
-        self.prior_rows(block, x, &dxdz, y, out);
+        self.prior_rows(block, &at.x, dxdz, y, out);
         Ok(true)
     }
 }
 
 impl<'b, const N: usize, const O: usize, const P: usize> Eiv<'_, 'b, N, O, P> {
-    /// The view of `block` and what its rows need at the internal parameters `z`: dx/dz,
-    /// the model's parameters x and their projector.
-    fn at_view(&self, block: usize, z: &[f64; N]) -> Result<AtView<'_, 'b, N>> {
+    /// Makes [`Eiv::at`] the quantities at the internal parameters `z` (computed only when
+    /// `z` is not the last one's).
+    fn refresh(&mut self, z: &[f64; N]) {
+        if !self.at.as_ref().is_some_and(|at| at.is_at(z)) {
+            self.at = Some(AtZ::new(self.basis, z));
+        }
+    }
+
+    /// The view of `block` and what its rows need at the z of the last [`Eiv::refresh`].
+    fn at_view(&self, block: usize) -> Result<(&'_ View<'b>, &AtZ<N>)> {
         let view = self.views.get(block).ok_or(Error::InvalidArgument { what: "block index out of range" })?;
-        let x = self.basis.to_params(z);
-        Ok((view, self.basis.params_jacobian(z), x, projector(&self.basis.layout(), &x)))
+        let at = self.at.as_ref().ok_or(Error::InvalidArgument { what: "errors-in-variables rows before refresh" })?;
+        Ok((view, at))
     }
 
     /// The rows of the priors on the view's corrections, and (once) the hold rows.
