@@ -356,10 +356,20 @@ pub struct VirtualLens {
 
 #[pymethods]
 impl VirtualLens {
+    /// `dynamics`: the path of an `etlcal.lens-dynamics/1` file (the membrane's step
+    /// response, creep, hysteresis and self-heating; `fixtures/lens-dynamics` has the
+    /// published EL-10-30's); None: the optics follow the current at once.
     #[new]
-    fn new() -> PyResult<Self> {
+    #[pyo3(signature = (dynamics=None))]
+    fn new(dynamics: Option<std::path::PathBuf>) -> PyResult<Self> {
         crate::errors::guarded("VirtualLens.__new__", || {
-            let device = Device::spawn(VirtualLensConfig::default()).map_err(hw_err)?;
+            use crate::errors::CoreResultExt as _;
+            let dynamics = match dynamics {
+                Some(path) => Some(etl_formats::LensDynamicsFile::load(&path).py()?.dynamics()),
+                None => None,
+            };
+            let device =
+                Device::spawn(VirtualLensConfig { dynamics, ..VirtualLensConfig::default() }).map_err(hw_err)?;
             Ok(VirtualLens { device })
         })
     }
@@ -371,11 +381,13 @@ impl VirtualLens {
     }
 
     /// The true state: a LensState (attributes, also dict keys) with `e_in_ma` (the
-    /// current the driver outputs), `temperature_c` (the true lens temperature, degC),
-    /// `e_t_ma`, `e_com_ma` (mA) and `f_com_mm` (the ETL group's focal length f_com(E_com),
-    /// Eq. 10, mm).
+    /// current the driver outputs), `effective_ma` (the current the optics follow: with
+    /// dynamics, where the membrane has got to), `temperature_c` (the true lens
+    /// temperature, degC), `e_t_ma`, `e_com_ma` (mA, of the effective current) and
+    /// `f_com_mm` (the ETL group's focal length f_com(E_com), Eq. 10, mm).
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        fields_object!(py, "LensState", self.device.state(), [e_in_ma, temperature_c, e_t_ma, e_com_ma, f_com_mm])
+        let s = self.device.state();
+        fields_object!(py, "LensState", s, [e_in_ma, effective_ma, temperature_c, e_t_ma, e_com_ma, f_com_mm])
     }
 
     /// Heats the mount so that the lens settles at `t_c` degC, and jumps to equilibrium.

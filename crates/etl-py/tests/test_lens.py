@@ -1,5 +1,6 @@
 """`Lens` against `VirtualLens` through a pseudo-terminal, from Python."""
 import math
+import pathlib
 import time
 from typing import List, Optional
 
@@ -330,3 +331,21 @@ def test_virtual_lens_temperatures_and_time_steps_are_range_checked() -> None:
     assert device.state().temperature_c == before
     device.set_temperature_c(40.0)
     assert device.state().temperature_c == pytest.approx(40.0, abs=0.05)
+
+
+def test_a_virtual_lens_with_dynamics_lags_its_current_and_bad_dynamics_are_refused(tmp_path: pathlib.Path) -> None:
+    fixture = pathlib.Path(__file__).resolve().parents[3] / "fixtures" / "lens-dynamics" / "el-10-30-published.json"
+    device = etlcal.VirtualLens(dynamics=fixture)
+    with etlcal.Lens(device.port) as lens:
+        got = lens.set_current_ma(150.0)
+        device.advance_s(30.0)  # past the ringing and the creep (2 s)
+        s = device.state()
+        # Approached from below: the loop's lower branch, half its 0.5 mA width under.
+        assert s.e_in_ma == pytest.approx(got)
+        assert s.effective_ma == pytest.approx(got - 0.25, abs=1e-6)
+        assert s.e_com_ma == pytest.approx(s.effective_ma - s.e_t_ma)
+    assert etlcal.VirtualLens().state().effective_ma == etlcal.VirtualLens().state().e_in_ma
+    bad = tmp_path / "bad.json"
+    bad.write_text(fixture.read_text().replace('"damping": 0.28', '"damping": 0'))
+    with pytest.raises(etlcal.Error, match="damping"):
+        etlcal.VirtualLens(dynamics=bad)

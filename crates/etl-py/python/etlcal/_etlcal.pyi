@@ -761,8 +761,9 @@ class Lens:
 
 @final
 class VirtualLens:
-    """The simulated lens and driver on a pseudo-terminal (paper physics and thermal surface)."""
-    def __new__(cls) -> VirtualLens: ...
+    """The simulated lens and driver on a pseudo-terminal (paper physics and thermal surface);
+    `dynamics`: an etlcal.lens-dynamics/1 file (step response, creep, hysteresis, self-heating)."""
+    def __new__(cls, dynamics: Optional[Union[str, "os.PathLike[str]"]] = None) -> VirtualLens: ...
     @property
     def port(self) -> str: ...
     @property

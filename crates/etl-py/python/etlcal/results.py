@@ -274,11 +274,14 @@ class ProjectionDiff(_Result):
 @dataclass(frozen=True, eq=False, repr=False)
 class LensState(_Result):
     """`VirtualLens.state()`, the simulated lens's truth: `e_in_ma` (the current the driver
-    outputs, mA), `temperature_c` (the true lens temperature, degC), `e_t_ma`, `e_com_ma`
-    (E_T(T, E_in) and E_com = E_in - E_T, mA) and `f_com_mm` (the ETL group's focal length
-    f_com(E_com), mm)."""
+    outputs, mA), `effective_ma` (the current the optics follow: `e_in_ma` itself, or with
+    dynamics where the membrane has got to, mA), `temperature_c` (the true lens
+    temperature, degC), `e_t_ma`, `e_com_ma` (E_T(T, E) and E_com = E - E_T of the
+    effective current E, mA) and `f_com_mm` (the ETL group's focal length f_com(E_com),
+    mm)."""
 
     e_in_ma: float
+    effective_ma: float
     temperature_c: float
     e_t_ma: float
     e_com_ma: float
