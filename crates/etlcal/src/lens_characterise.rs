@@ -99,6 +99,7 @@ pub fn run(
         "natural_frequency_hz": c.natural_frequency_hz,
         "damping": c.damping,
         "scale_px_per_ma": c.scale_px_per_ma,
+        "shaped_settling_ms": c.shaped_settling_s.map(|s| json!({"up": 1000.0 * s[0], "down": 1000.0 * s[1]})),
         "steps": steps,
     });
     if json_out {

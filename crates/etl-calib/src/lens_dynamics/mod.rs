@@ -19,6 +19,10 @@
 //!   exponential beside a linear drift, the lens warming at its new current
 //!   ([`analysis::exponential_fit`]).
 //!
+//! Last, the largest step is taken again with the command split by the zero-vibration
+//! shaper of the fitted membrane ([`ZvShaper`]), and its settling timed the same way:
+//! what shaping gains on this lens, measured in frames.
+//!
 //! Choices: levels are read after `rest_s` (several creep time constants, so creep does
 //! not bias them); the step window starts at the command (the camera's own latency is
 //! not corrected).
@@ -26,6 +30,8 @@
 pub mod analysis;
 
 use etl_core::lens::Lens;
+use etl_core::physics::dynamics::LensDynamics;
+use etl_core::physics::shaping::ZvShaper;
 use etl_core::progress::Progress;
 use etl_formats::{Error, Result};
 use etl_image::checkerboard::detect_corners;
@@ -124,6 +130,10 @@ pub struct Characterisation {
     pub damping: f64,
     /// Image scale per mA, px/mA (the conversion every figure went through).
     pub scale_px_per_ma: f64,
+    /// The largest step's settling time up and down with the command split by the
+    /// zero-vibration shaper of the fitted membrane (`etl_core::physics::shaping`), s;
+    /// None when the fit is not underdamped (nothing to cancel).
+    pub shaped_settling_s: Option<[f64; 2]>,
 }
 
 /// The board's scale in `image`: the mean distance of its corners from their centroid,
@@ -142,11 +152,14 @@ struct Rig<'a, L: Lens, C: TimedCamera> {
     options: &'a CharacteriseOptions,
     /// (scale at `base_ma`, px per mA).
     map: (f64, f64),
+    /// The current last commanded, mA.
+    commanded: f64,
 }
 
 impl<L: Lens, C: TimedCamera> Rig<'_, L, C> {
     fn set(&mut self, e_ma: f64) -> Result<()> {
-        self.lens.set_current_ma(e_ma).map(|_| ()).map_err(Error::lens)
+        self.commanded = self.lens.set_current_ma(e_ma).map_err(Error::lens)?;
+        Ok(())
     }
 
     /// The board's scale averaged over `level_frames` frames after `rest_s`.
@@ -168,9 +181,19 @@ impl<L: Lens, C: TimedCamera> Rig<'_, L, C> {
     /// Commands `to_ma` and frames the response for `window_s`; the first sample is a
     /// frame just before the command (negative time), the level the step starts from.
     fn step(&mut self, to_ma: f64) -> Result<Vec<Sample>> {
+        self.step_shaped(to_ma, None)
+    }
+
+    /// [`Rig::step`], the command split by `shaper` when given: its first fraction at
+    /// once, the rest after its delay (waited, not framed: a real rig sleeps).
+    fn step_shaped(&mut self, to_ma: f64, shaper: Option<&ZvShaper>) -> Result<Vec<Sample>> {
         let before = self.camera.grab()?;
-        self.set(to_ma)?;
         let t0 = self.camera.now_s();
+        if let Some(z) = shaper {
+            self.set(z.command_ma(self.commanded, to_ma, 0.0))?;
+            self.camera.wait_s(z.delay_s)?;
+        }
+        self.set(to_ma)?;
         let mut samples = vec![(before.0 - t0, before.1)];
         loop {
             let (t, image) = self.camera.grab()?;
@@ -301,7 +324,7 @@ pub fn characterise<L: Lens, C: TimedCamera>(
 ) -> Result<Characterisation> {
     check(options)?;
     progress.start(4, "characterise");
-    let mut rig = Rig { lens, camera, options, map: (0.0, 1.0) };
+    let mut rig = Rig { lens, camera, options, map: (0.0, 1.0), commanded: f64::NAN };
     rig.map = scale_map(&mut rig)?;
     progress.advance(1);
     let steps = step_responses(&mut rig)?;
@@ -317,7 +340,10 @@ pub fn characterise<L: Lens, C: TimedCamera>(
     let (natural_frequency_hz, damping) = up
         .and_then(|s| analysis::second_order_fit(&s.samples, s.samples[0].1, analysis::final_level(&s.samples, 0.1)))
         .ok_or_else(|| Error::invalid("steps_ma", "the step responses do not determine a second-order fit"))?;
+    let fitted = LensDynamics { natural_frequency_hz, damping, ..LensDynamics::PUBLISHED };
+    let shaped = ZvShaper::of(&fitted).map(|z| shaped_steps(&mut rig, &z)).transpose()?;
     Ok(Characterisation {
+        shaped_settling_s: shaped,
         settling_s: [up.map_or(0.0, |s| s.settling_s), down.map_or(0.0, |s| s.settling_s)],
         steps,
         hysteresis_ma,
@@ -328,4 +354,19 @@ pub fn characterise<L: Lens, C: TimedCamera>(
         damping,
         scale_px_per_ma: rig.map.1,
     })
+}
+
+/// The largest step up and back down, each shaped by `shaper`: their settling times, s,
+/// by the same definition as the plain steps'.
+fn shaped_steps<L: Lens, C: TimedCamera>(rig: &mut Rig<'_, L, C>, shaper: &ZvShaper) -> Result<[f64; 2]> {
+    let o = rig.options;
+    let step = o.steps_ma.iter().copied().fold(0.0, f64::max);
+    let mut out = [0.0; 2];
+    for (k, (from, to)) in [(o.base_ma, o.base_ma + step), (o.base_ma + step, o.base_ma)].into_iter().enumerate() {
+        rig.set(from)?;
+        rig.camera.wait_s(o.rest_s)?;
+        let samples = rig.step_shaped(to, Some(shaper))?;
+        out[k] = analysis::settling_s(&samples, analysis::final_level(&samples, 0.1), o.tolerance_fraction * step);
+    }
+    Ok(out)
 }

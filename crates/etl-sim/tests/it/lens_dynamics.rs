@@ -1,7 +1,8 @@
 //! `etl_calib::lens_dynamics::characterise` on the virtual lens with known dynamics,
 //! framed by `etl_sim::lens_camera::SimLensCamera`: the settling times within 10 % of the
 //! model's own (same tolerance, same window), the loop's width within 10 %, the creep's
-//! time constant within 20 %, measured from rendered frames alone.
+//! time constant within 20 %, measured from rendered frames alone; the shaped step at
+//! least twice as fast as the plain one.
 
 use std::time::Duration;
 
@@ -64,4 +65,9 @@ fn characterise_recovers_the_virtual_lens_s_dynamics_from_frames() {
     assert!((c.natural_frequency_hz / d.natural_frequency_hz - 1.0).abs() < 0.1, "{summary}");
     assert!((c.damping / d.damping - 1.0).abs() < 0.15, "{summary}");
     assert!(c.repeatability_ma < 0.1, "{summary}");
+    // The zero-vibration shaper of the fitted membrane settles the 50 mA step at least
+    // twice as fast, measured in frames.
+    let shaped = c.shaped_settling_s.unwrap();
+    println!("shaped settling {shaped:?} s");
+    assert!(2.0 * shaped[0] <= c.settling_s[0] && 2.0 * shaped[1] <= c.settling_s[1], "{shaped:?} {summary}");
 }

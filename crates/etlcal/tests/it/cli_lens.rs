@@ -281,6 +281,7 @@ fn characterise_prints_the_documented_keys_writes_the_dynamics_and_refuses_what_
         assert!(j.get(key).is_some(), "characterise lacks {key}: {j}");
     }
     let up = j["settling_ms"]["up"].as_f64().unwrap();
+    assert!(j["shaped_settling_ms"]["up"].as_f64().unwrap() * 2.0 <= up, "{j}");
     assert!((10.0..20.0).contains(&up) && j["settling_ms"]["down"].as_f64().is_some(), "{j}");
     let written = etl_formats::LensDynamicsFile::load(&out).unwrap();
     assert!((written.natural_frequency_hz - 150.0).abs() < 15.0, "{written:?}");
