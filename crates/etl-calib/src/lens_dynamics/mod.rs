@@ -78,6 +78,13 @@ pub struct CharacteriseOptions {
     pub creep_frames: usize,
 }
 
+impl CharacteriseOptions {
+    /// The largest of `steps_ma`, mA.
+    pub fn largest_step_ma(&self) -> f64 {
+        self.steps_ma.iter().copied().fold(0.0, f64::max)
+    }
+}
+
 impl Default for CharacteriseOptions {
     /// Steps of 10, 25 and 50 mA from 100 mA framed for 60 ms, a 2 % tolerance, 10 s of
     /// rest, a 25 mA approach, 5 repeats, 10 s of creep in 60 frames.
@@ -178,15 +185,14 @@ impl<L: Lens, C: TimedCamera> Rig<'_, L, C> {
         self.options.base_ma + (scale - self.map.0) / self.map.1
     }
 
-    /// Commands `to_ma` and frames the response for `window_s`; the first sample is a
-    /// frame just before the command (negative time), the level the step starts from.
-    fn step(&mut self, to_ma: f64) -> Result<Vec<Sample>> {
-        self.step_shaped(to_ma, None)
-    }
-
-    /// [`Rig::step`], the command split by `shaper` when given: its first fraction at
-    /// once, the rest after its delay (waited, not framed: a real rig sleeps).
-    fn step_shaped(&mut self, to_ma: f64, shaper: Option<&ZvShaper>) -> Result<Vec<Sample>> {
+    /// From rest at `from_ma` (`rest_s` after commanding it), commands `to_ma` and frames
+    /// the response for `window_s`, the command split by `shaper` when given (its first
+    /// fraction at once, the rest after its delay, waited, not framed: a real rig sleeps).
+    /// The first sample is a frame just before the command (negative time), the level the
+    /// step starts from; the settling time is read to `tolerance_fraction` of the step.
+    fn respond(&mut self, from_ma: f64, to_ma: f64, shaper: Option<&ZvShaper>) -> Result<StepResponse> {
+        self.set(from_ma)?;
+        self.camera.wait_s(self.options.rest_s)?;
         let before = self.camera.grab()?;
         let t0 = self.camera.now_s();
         if let Some(z) = shaper {
@@ -194,16 +200,23 @@ impl<L: Lens, C: TimedCamera> Rig<'_, L, C> {
             self.camera.wait_s(z.delay_s)?;
         }
         self.set(to_ma)?;
-        let mut samples = vec![(before.0 - t0, before.1)];
+        let mut frames = vec![(before.0 - t0, before.1)];
         loop {
             let (t, image) = self.camera.grab()?;
-            samples.push((t - t0, image));
+            frames.push((t - t0, image));
             if t - t0 >= self.options.window_s {
                 break;
             }
         }
         let pattern = self.camera.pattern();
-        samples.into_iter().map(|(t, img)| Ok((t, self.ma_of(board_scale(&img, pattern)?)))).collect()
+        let samples: Vec<Sample> = frames
+            .into_iter()
+            .map(|(t, img)| Ok((t, self.ma_of(board_scale(&img, pattern)?))))
+            .collect::<Result<_>>()?;
+        let step_ma = to_ma - from_ma;
+        let level = analysis::final_level(&samples, 0.1);
+        let settling_s = analysis::settling_s(&samples, level, self.options.tolerance_fraction * step_ma.abs());
+        Ok(StepResponse { step_ma, samples, settling_s })
     }
 }
 
@@ -211,7 +224,7 @@ impl<L: Lens, C: TimedCamera> Rig<'_, L, C> {
 /// the largest step, each at rest.
 fn scale_map<L: Lens, C: TimedCamera>(rig: &mut Rig<'_, L, C>) -> Result<(f64, f64)> {
     let o = rig.options;
-    let top = o.base_ma + o.steps_ma.iter().copied().fold(0.0, f64::max);
+    let top = o.base_ma + o.largest_step_ma();
     rig.set(o.base_ma - o.hysteresis_approach_ma)?;
     rig.camera.wait_s(o.rest_s)?;
     rig.set(o.base_ma)?;
@@ -233,14 +246,8 @@ fn step_responses<L: Lens, C: TimedCamera>(rig: &mut Rig<'_, L, C>) -> Result<Ve
     let o = rig.options;
     let mut out = vec![];
     for &step in &o.steps_ma {
-        for (from, to) in [(o.base_ma, o.base_ma + step), (o.base_ma + step, o.base_ma)] {
-            rig.set(from)?;
-            rig.camera.wait_s(o.rest_s)?;
-            let samples = rig.step(to)?;
-            let level = analysis::final_level(&samples, 0.1);
-            let settling_s = analysis::settling_s(&samples, level, o.tolerance_fraction * step);
-            out.push(StepResponse { step_ma: to - from, samples, settling_s });
-        }
+        out.push(rig.respond(o.base_ma, o.base_ma + step, None)?);
+        out.push(rig.respond(o.base_ma + step, o.base_ma, None)?);
     }
     Ok(out)
 }
@@ -272,7 +279,7 @@ fn hysteresis<L: Lens, C: TimedCamera>(rig: &mut Rig<'_, L, C>) -> Result<(f64, 
 /// (from 10 window lengths on).
 fn creep<L: Lens, C: TimedCamera>(rig: &mut Rig<'_, L, C>) -> Result<(f64, f64)> {
     let o = rig.options;
-    let step = o.steps_ma.iter().copied().fold(0.0, f64::max);
+    let step = o.largest_step_ma();
     rig.set(o.base_ma)?;
     rig.camera.wait_s(o.rest_s)?;
     rig.set(o.base_ma + step)?;
@@ -359,14 +366,6 @@ pub fn characterise<L: Lens, C: TimedCamera>(
 /// The largest step up and back down, each shaped by `shaper`: their settling times, s,
 /// by the same definition as the plain steps'.
 fn shaped_steps<L: Lens, C: TimedCamera>(rig: &mut Rig<'_, L, C>, shaper: &ZvShaper) -> Result<[f64; 2]> {
-    let o = rig.options;
-    let step = o.steps_ma.iter().copied().fold(0.0, f64::max);
-    let mut out = [0.0; 2];
-    for (k, (from, to)) in [(o.base_ma, o.base_ma + step), (o.base_ma + step, o.base_ma)].into_iter().enumerate() {
-        rig.set(from)?;
-        rig.camera.wait_s(o.rest_s)?;
-        let samples = rig.step_shaped(to, Some(shaper))?;
-        out[k] = analysis::settling_s(&samples, analysis::final_level(&samples, 0.1), o.tolerance_fraction * step);
-    }
-    Ok(out)
+    let (base, top) = (rig.options.base_ma, rig.options.base_ma + rig.options.largest_step_ma());
+    Ok([rig.respond(base, top, Some(shaper))?.settling_s, rig.respond(top, base, Some(shaper))?.settling_s])
 }

@@ -135,21 +135,20 @@ impl Model {
         self.dynamics.as_ref().map_or(self.thermal.tau_s, |(d, _)| d.thermal_tau_s)
     }
 
-    /// The equilibrium temperature at the present current and heater power: the coil's
-    /// I^2 R through the thermal resistance, or with dynamics the linear self-heating.
-    fn t_eq_c(&self) -> f64 {
-        let th = &self.thermal;
+    /// The power that heats the lens at the present current, W: the coil's I^2 R, or with
+    /// dynamics their linear self-heating expressed through the thermal resistance.
+    fn coil_power_w(&self) -> f64 {
         match &self.dynamics {
-            Some((d, _)) => {
-                th.ambient_c
-                    + d.self_heating_c_per_ma * self.e_in_ma().abs()
-                    + th.thermal_resistance_k_per_w * self.heater_w
-            }
+            Some((d, _)) => d.self_heating_c_per_ma * self.e_in_ma().abs() / self.thermal.thermal_resistance_k_per_w,
             None => {
                 let i_a = self.e_in_ma() / 1000.0;
-                th.ambient_c + th.thermal_resistance_k_per_w * (i_a * i_a * th.coil_resistance_ohm + self.heater_w)
+                i_a * i_a * self.thermal.coil_resistance_ohm
             }
         }
+    }
+
+    fn t_eq_c(&self) -> f64 {
+        self.thermal.ambient_c + self.thermal.thermal_resistance_k_per_w * (self.coil_power_w() + self.heater_w)
     }
 
     fn temperature_after(&self, dt_s: f64) -> f64 {
@@ -192,16 +191,7 @@ impl Model {
 
     /// The heater power that makes the equilibrium temperature `t_c` at the present current.
     pub fn heater_for_c(&self, t_c: f64) -> f64 {
-        let th = &self.thermal;
-        match &self.dynamics {
-            Some((d, _)) => {
-                (t_c - th.ambient_c - d.self_heating_c_per_ma * self.e_in_ma().abs()) / th.thermal_resistance_k_per_w
-            }
-            None => {
-                let i_a = self.e_in_ma() / 1000.0;
-                (t_c - th.ambient_c) / th.thermal_resistance_k_per_w - i_a * i_a * th.coil_resistance_ohm
-            }
-        }
+        (t_c - self.thermal.ambient_c) / self.thermal.thermal_resistance_k_per_w - self.coil_power_w()
     }
 
     /// Sets the output code as the firmware does: clamped to +-4095 and to the software

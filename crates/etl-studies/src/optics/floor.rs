@@ -21,12 +21,12 @@
 
 use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions, ZhangResult};
 use etl_core::model::{DistortionModel, OpenCvFlags};
-use etl_formats::observations::PointObs;
 use etl_formats::Result;
 use etl_sim::optics::procedure::{board_view_as, setting_poses, CornerAs};
+use etl_sim::optics::rig::Setting;
 use etl_sim::optics::OpticalRig;
 
-use super::{measured_mm, monofocal, MOVE_MM};
+use super::{measured_mm, monofocal, planar, MOVE_MM};
 
 /// The floor at one current, for one kind of corner.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,25 +65,20 @@ pub struct CentralFloor {
     pub rows: Vec<FloorRow>,
 }
 
-/// The floor at `e_ma` with the corners as `corner`.
-fn floor_at(rig: &OpticalRig, e_ma: f64, corner: CornerAs) -> Result<(f64, Floor)> {
+/// The floor at `setting` (its focus `distance_mm` found once for both kinds of corner:
+/// the search is the costly part) with the corners as `corner`.
+fn floor_at(rig: &OpticalRig, setting: &Setting, distance_mm: f64, corner: CornerAs) -> Result<Floor> {
     let p = &rig.file.procedure;
-    let setting = rig.at(e_ma)?;
-    let distance_mm = rig.focus_distance_mm(e_ma)?;
-    let planar = |points: Vec<PointObs>| PlanarView {
-        board_mm: points.iter().map(|q| [q.world_mm[0], q.world_mm[1]]).collect(),
-        pixels: points.iter().map(|q| q.pixel).collect(),
-    };
     let views: Vec<PlanarView> = setting_poses(&p.board, distance_mm, p.setting_views_per_current, p.setting_tilt_deg)
         .iter()
-        .map(|pose| planar(board_view_as(rig, &setting, &p.board, pose, 0.0, corner)))
+        .map(|pose| planar(&board_view_as(rig, setting, &p.board, pose, 0.0, corner)))
         .collect();
     let options = ZhangOptions { model: DistortionModel::OpenCv, flags: OpenCvFlags::NONE };
     let z: ZhangResult = zhang_with(&views, rig.file.sensor.size_px, &options)?;
     let stage_z = rig.stage_z_at_distance_mm(distance_mm);
-    let at = |dz: f64| board_view_as(rig, &setting, &p.board, &rig.stage_pose(), stage_z + dz, corner);
-    let moved = measured_mm(&monofocal(&z)?, e_ma, &[at(-MOVE_MM / 2.0), at(MOVE_MM / 2.0)])?;
-    Ok((distance_mm, Floor { rms_px: z.rms_px, fx_px: z.fx, move_error_um: (moved - MOVE_MM) * 1000.0 }))
+    let at = |dz: f64| board_view_as(rig, setting, &p.board, &rig.stage_pose(), stage_z + dz, corner);
+    let moved = measured_mm(&monofocal(&z)?, setting.e_ma, &[at(-MOVE_MM / 2.0), at(MOVE_MM / 2.0)])?;
+    Ok(Floor { rms_px: z.rms_px, fx_px: z.fx, move_error_um: (moved - MOVE_MM) * 1000.0 })
 }
 
 /// The study on `rig` at `currents` (mA). Errors: a failed trace, Zhang fit or PnP.
@@ -91,8 +86,9 @@ pub fn central_floor(rig: &OpticalRig, currents: &[f64]) -> Result<CentralFloor>
     let rows = currents
         .iter()
         .map(|&e| {
-            let (distance_mm, centroid) = floor_at(rig, e, CornerAs::Centroid)?;
-            let (_, chief) = floor_at(rig, e, CornerAs::Chief)?;
+            let (setting, distance_mm) = (rig.at(e)?, rig.focus_distance_mm(e)?);
+            let centroid = floor_at(rig, &setting, distance_mm, CornerAs::Centroid)?;
+            let chief = floor_at(rig, &setting, distance_mm, CornerAs::Chief)?;
             Ok(FloorRow { e_com_ma: e, distance_mm, centroid, chief })
         })
         .collect::<Result<Vec<_>>>()?;

@@ -88,15 +88,20 @@ pub(crate) fn monofocal(z: &etl_calib::zhang::ZhangResult) -> Result<CameraModel
     })
 }
 
+/// A board view (board-frame points at Z = 0) as Zhang's planar view.
+pub(crate) fn planar(points: &[PointObs]) -> PlanarView {
+    PlanarView {
+        board_mm: points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect(),
+        pixels: points.iter().map(|p| p.pixel).collect(),
+    }
+}
+
 /// The setting views of `obs` at `e_ma` as Zhang's planar views.
 fn views_at(obs: &Observations, e_ma: f64) -> Vec<PlanarView> {
     obs.setting_views
         .iter()
         .filter(|v| v.e_com_ma.is_some_and(|e| (e - e_ma).abs() < 1e-6))
-        .map(|v| PlanarView {
-            board_mm: v.points.iter().map(|p| [p.world_mm[0], p.world_mm[1]]).collect(),
-            pixels: v.points.iter().map(|p| p.pixel).collect(),
-        })
+        .map(|v| planar(&v.points))
         .collect()
 }
 
