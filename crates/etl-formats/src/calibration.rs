@@ -22,7 +22,7 @@ use etl_core::calib::params::{Layout, MAX_PARAMS};
 use etl_core::calib::{projection_uncertainty, PixelUncertainty};
 use etl_core::focus::FocusLaw;
 use etl_core::model::{CameraModel, DistortionA, DistortionModel, FocalPoly, MovingCentre};
-use etl_core::runtime::{Camera, CameraAt, ThermalTrust, Trust};
+use etl_core::runtime::{Camera, CameraAt, SettingKind, ThermalTrust, Trust};
 use etl_core::thermal::{ThermalCalibration, ThermalSurface};
 use serde::{Deserialize, Serialize};
 
@@ -298,15 +298,21 @@ impl ThermalRef {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ViewSummary {
-    /// E_com of the view, mA.
+    /// E_com of the view, mA (absent, NaN here, in a focal-power calibration).
+    #[serde(default = "crate::lens_setting::absent", skip_serializing_if = "crate::lens_setting::is_absent")]
     pub e_com_ma: f64,
+    /// The view's commanded focal power, dpt (a focal-power calibration, instead of
+    /// `e_com_ma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_power_dpt: Option<f64>,
     /// Points used.
     pub points: usize,
     /// RMS reprojection error of the view, px.
     pub rms_px: f64,
     /// Estimated stage correction, mm (errors-in-variables; 0 otherwise).
     pub dz_mm: f64,
-    /// Estimated current correction, mA (errors-in-variables; 0 otherwise).
+    /// Estimated current correction, mA (errors-in-variables; 0 otherwise); in a
+    /// focal-power calibration the focal-power correction, in dpt.
     pub de_ma: f64,
     /// The view's own estimate of fx, px: fx refitted to this view alone with every other
     /// number of the calibration held (0 when not computed).
@@ -357,6 +363,16 @@ enum Direction {
     EInForECom,
 }
 
+/// An absent range (a focal-power calibration's `e_com_range_ma`): NaN.
+fn absent_range() -> [f64; 2] {
+    [f64::NAN; 2]
+}
+
+/// Whether a range is absent ([`absent_range`]): then it is not written.
+fn is_absent_range(r: &[f64; 2]) -> bool {
+    r[0].is_nan() && r[1].is_nan()
+}
+
 /// The whole file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -393,8 +409,23 @@ pub struct Calibration {
     /// existed (which read and write as before).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub temperature_compensation: Option<TemperatureCompensation>,
-    /// The range of E_com the calibration saw, mA.
+    /// What the calibration's setting is (`"setting"`): absent or `"current"` for E_com,
+    /// `"focal_power"` for the commanded focal power ([`SettingKind`]); written only for a
+    /// focal power, so that current calibrations read and write as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub setting: Option<SettingKind>,
+    /// The range of E_com the calibration saw, mA (absent, NaN here, in a focal-power
+    /// calibration).
+    #[serde(default = "absent_range", skip_serializing_if = "is_absent_range")]
     pub e_com_range_ma: [f64; 2],
+    /// The range of focal power the calibration saw, dpt (a focal-power calibration only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_power_range_dpt: Option<[f64; 2]>,
+    /// The lens temperatures of a focal-power calibration's views, degC: where the
+    /// driver's compensation was calibrated (a current calibration's are its thermal
+    /// part's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_power_t_range_c: Option<[f64; 2]>,
     /// RMS reprojection error, px (sqrt of the mean squared point distance).
     pub rms_reprojection_px: f64,
     /// One standard deviation of each number.
@@ -466,6 +497,10 @@ pub struct CovarianceNoise {
     /// Standard deviation of a view's recorded current, mA.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sigma_e_ma: Option<f64>,
+    /// Standard deviation of a view's focal power, dpt (a focal-power calibration, in place
+    /// of `sigma_e_ma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_p_dpt: Option<f64>,
 }
 
 impl CovarianceNoise {
@@ -474,7 +509,9 @@ impl CovarianceNoise {
         if !(self.sigma_px.is_finite() && self.sigma_px >= 0.0) {
             return Err(format!("covariance_noise.sigma_px = {} must be a finite number >= 0", self.sigma_px));
         }
-        for (key, v) in [("sigma_z_mm", self.sigma_z_mm), ("sigma_e_ma", self.sigma_e_ma)] {
+        for (key, v) in
+            [("sigma_z_mm", self.sigma_z_mm), ("sigma_e_ma", self.sigma_e_ma), ("sigma_p_dpt", self.sigma_p_dpt)]
+        {
             if let Some(v) = v.filter(|v| !(v.is_finite() && *v > 0.0)) {
                 return Err(format!("covariance_noise.{key} = {v} must be a finite number > 0"));
             }
@@ -524,7 +561,10 @@ impl Calibration {
             centre: model.centre.as_ref().map(|c| CentreField::of(c, model.principal_point)),
             thermal: None,
             temperature_compensation: None,
+            setting: None,
             e_com_range_ma,
+            focal_power_range_dpt: None,
+            focal_power_t_range_c: None,
             rms_reprojection_px: 0.0,
             std: ModelStd::zero(&layout),
             estimator: String::new(),
@@ -539,6 +579,44 @@ impl Calibration {
             focus_law: None,
             model_selection: None,
         }
+    }
+
+    /// This calibration made a focal-power one: `setting` says so, the range moves from
+    /// `e_com_range_ma` to `focal_power_range_dpt`, `t_range_c` is that of the views, and
+    /// each view summary's setting moves from `e_com_ma` to `focal_power_dpt`.
+    pub fn into_focal_power(mut self, t_range_c: Option<[f64; 2]>) -> Self {
+        self.setting = Some(SettingKind::FocalPower);
+        self.focal_power_range_dpt = Some(self.e_com_range_ma);
+        self.e_com_range_ma = absent_range();
+        self.focal_power_t_range_c = t_range_c;
+        self.temperature_compensation = None;
+        for v in &mut self.views {
+            v.focal_power_dpt = Some(v.e_com_ma);
+            v.e_com_ma = f64::NAN;
+        }
+        if let Some(n) = &mut self.covariance_noise {
+            n.sigma_p_dpt = n.sigma_e_ma.take();
+        }
+        self
+    }
+
+    /// What the calibration's setting is ([`SettingKind`]; absent means a current).
+    pub fn setting_kind(&self) -> SettingKind {
+        self.setting.unwrap_or_default()
+    }
+
+    /// The calibrated range of the setting, in its unit: `e_com_range_ma`, or
+    /// `focal_power_range_dpt` (NaN when the file lacks it, which validation refuses).
+    pub fn setting_range(&self) -> [f64; 2] {
+        match self.setting_kind() {
+            SettingKind::Current => self.e_com_range_ma,
+            SettingKind::FocalPower => self.focal_power_range_dpt.unwrap_or_else(absent_range),
+        }
+    }
+
+    /// The setting of each view summary, in the setting's unit (E_com or focal power).
+    pub fn view_settings(&self) -> Vec<f64> {
+        self.views.iter().map(|v| v.focal_power_dpt.unwrap_or(v.e_com_ma)).collect()
     }
 
     /// The distortion family: `"distortion_model"`, the paper's when absent. Errors: a
@@ -745,7 +823,22 @@ impl Calibration {
     /// The run-time camera of this calibration (etl-core, no allocation): model, thermal
     /// part with its ranges, calibrated E_com range.
     pub fn camera(&self) -> Result<Camera> {
-        Ok(Camera::new(self.model()?, self.thermal.as_ref().map(ThermalRef::trust), self.e_com_range_ma)?)
+        Ok(match self.setting_kind() {
+            SettingKind::Current => {
+                Camera::new(self.model()?, self.thermal.as_ref().map(ThermalRef::trust), self.e_com_range_ma)?
+            }
+            SettingKind::FocalPower => {
+                Camera::new_focal_power(self.model()?, self.setting_range(), self.focal_power_t_range_c)?
+            }
+        })
+    }
+
+    /// The camera of a focal-power calibration at commanded focal power
+    /// `focal_power_dpt` and lens temperature `temperature_c`, refused outside the
+    /// calibrated power and temperature ranges unless `trust` is [`Trust::Extrapolate`]
+    /// ([`Camera::at_focal_power_with`]). A current calibration refuses it.
+    pub fn at_focal_power(&self, focal_power_dpt: f64, temperature_c: f64, trust: Trust) -> Result<CameraAt> {
+        Ok(self.camera()?.at_focal_power_with(focal_power_dpt, temperature_c, trust)?)
     }
 
     /// The camera at driver current `e_in_ma` and temperature `temperature_c`, refused
@@ -787,16 +880,7 @@ impl Calibration {
         if let Err(e) = crate::check_image_size(self.image_size, "image_size") {
             return bad(e.to_string());
         }
-        let [lo, hi] = self.e_com_range_ma;
-        let [e0, e1] = etl_core::thermal::E_IN_DOMAIN_MA;
-        // Within the driver's range: a range of 1e308 would also hang a plot's axis.
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi && e0 <= lo && hi <= e1) {
-            return bad(format!(
-                "e_com_range_ma [{}, {}] must be a [min, max] within the lens driver's [{e0}, {e1}] mA",
-                crate::compact(lo),
-                crate::compact(hi)
-            ));
-        }
+        self.validate_setting().or_else(bad)?;
         if let Some(t) = &self.thermal {
             if let Err(e) = t.trust().validate() {
                 return bad(format!("thermal: {e}"));
@@ -838,6 +922,45 @@ impl Calibration {
         self.validate_covariance(&model.layout()).or_else(bad)
     }
 
+    /// The setting's fields (`validate`): a current calibration's `e_com_range_ma` within
+    /// the driver's `E_IN_DOMAIN_MA`, and no focal-power field; a focal-power calibration's
+    /// `focal_power_range_dpt` within `FOCAL_POWER_DOMAIN_DPT`, its temperature range
+    /// ordered, and neither `e_com_range_ma` nor a thermal part.
+    fn validate_setting(&self) -> std::result::Result<(), String> {
+        let (key, [lo, hi], [d0, d1], unit) = match self.setting_kind() {
+            SettingKind::Current => {
+                if self.focal_power_range_dpt.is_some() || self.focal_power_t_range_c.is_some() {
+                    return Err("focal_power_range_dpt or focal_power_t_range_c in a current calibration: \
+                                give \"setting\": \"focal_power\" or remove them"
+                        .into());
+                }
+                ("e_com_range_ma", self.e_com_range_ma, etl_core::thermal::E_IN_DOMAIN_MA, "mA")
+            }
+            SettingKind::FocalPower => {
+                if !is_absent_range(&self.e_com_range_ma) || self.thermal.is_some() {
+                    return Err("a focal-power calibration has neither e_com_range_ma nor a thermal part (the \
+                                driver compensates the temperature): remove them"
+                        .into());
+                }
+                let t = self.focal_power_t_range_c.unwrap_or([0.0; 2]);
+                if !(t[0].is_finite() && t[1].is_finite() && t[0] <= t[1]) {
+                    return Err("focal_power_t_range_c must be a finite [min, max] degC".into());
+                }
+                let range = self.focal_power_range_dpt.unwrap_or_else(absent_range);
+                ("focal_power_range_dpt", range, crate::lens_setting::FOCAL_POWER_DOMAIN_DPT, "dpt")
+            }
+        };
+        // Within the driver's range: a range of 1e308 would also hang a plot's axis.
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi && d0 <= lo && hi <= d1) {
+            return Err(format!(
+                "{key} [{}, {}] must be a [min, max] within the lens driver's [{d0}, {d1}] {unit}",
+                crate::compact(lo),
+                crate::compact(hi)
+            ));
+        }
+        Ok(())
+    }
+
     /// The focus law, or an error saying that this calibration has none.
     pub fn focus_law(&self) -> Result<&FocusLaw> {
         self.focus_law.as_ref().ok_or_else(|| {
@@ -859,6 +982,23 @@ impl Calibration {
     pub fn focus_e_in(&self, distance_mm: f64, temperature_c: f64, trust: Trust) -> Result<f64> {
         let e_com_ma = self.focus_law()?.e_com_ma(distance_mm)?;
         self.focus_thermal(e_com_ma, temperature_c, Direction::EInForECom, trust)
+    }
+
+    /// The focal power (dpt) that focuses a focal-power calibration's camera at
+    /// `distance_mm` (as [`Self::focus_e_in`]) at lens temperature `temperature_c`: the
+    /// law's power there, the driver compensating the temperature. The law is in dioptres:
+    /// P = c0 + c1 V + c2 V^2 with the vergence V = 1000 / distance (docs/METHOD.md, "The
+    /// focus law in dioptres": thin lenses add their powers, so the power that brings a
+    /// plane at vergence V into focus on a fixed sensor is V plus a constant, to first
+    /// order, and c2 takes the ETL's distance from the pupil).
+    ///
+    /// Errors: not a focal-power calibration; no focus law; a distance outside the law's
+    /// calibrated distances (+- 2 %); a power or temperature outside the calibrated ranges
+    /// unless `trust` is [`Trust::Extrapolate`] ([`Self::at_focal_power`]).
+    pub fn focus_focal_power_dpt(&self, distance_mm: f64, temperature_c: f64, trust: Trust) -> Result<f64> {
+        let dpt = self.focus_law()?.e_com_ma(distance_mm)?;
+        self.at_focal_power(dpt, temperature_c, trust)?;
+        Ok(dpt)
     }
 
     /// The distance in focus (mm, as [`Self::focus_e_in`]) at driver current `e_in_ma` and

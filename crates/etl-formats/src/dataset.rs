@@ -16,6 +16,8 @@
 //! moves the board along Z_W); a checkerboard's inner corner (i, j), i along the `cols`
 //! direction, is at (i * square_mm, j * square_mm).
 //! `e_com_ma` is optional as in the observations. `offstate_board` defaults to `board`.
+//! A view taken in the lens driver's focal-power mode gives `"focal_power_dpt"` instead of
+//! `e_in_ma`, as in the observations ([`crate::lens_setting`]).
 //! `setting_views` are the per-setting baseline's views (several per current, board in a
 //! free pose each).
 //!
@@ -40,6 +42,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
 pub use crate::board::{Board, Checkerboard};
+use crate::lens_setting::{self, SettingKind};
 use crate::{Error, Result};
 
 /// The format tag.
@@ -66,8 +69,13 @@ macro_rules! image_entry {
         image_entry! {
             $(#[$doc])*
             $name {
-                /// Commanded lens current, mA.
+                /// Commanded lens current, mA (absent, NaN here, in a focal-power view).
+                #[serde(default = "lens_setting::absent", skip_serializing_if = "lens_setting::is_absent")]
                 e_in_ma: f64,
+                /// Commanded focal power, dpt (a focal-power view, instead of `e_in_ma`;
+                /// [`crate::lens_setting`]).
+                #[serde(default, skip_serializing_if = "Option::is_none")]
+                focal_power_dpt: Option<f64>,
                 /// Lens temperature, degC.
                 temperature_c: f64,
                 /// Compensated current, mA (optional; used as is when present).
@@ -164,6 +172,23 @@ impl Dataset {
         write_json(path, self)
     }
 
+    /// The one kind of setting of the ETL and setting views, each view's setting checked
+    /// ([`lens_setting::view_setting_kind`]); an error naming the first view that differs.
+    pub fn setting_kind(&self) -> Result<SettingKind> {
+        let mut kinds = vec![];
+        for (key, list) in [
+            ("views", self.views.iter().map(|v| (v.e_in_ma, v.focal_power_dpt, v.e_com_ma)).collect::<Vec<_>>()),
+            ("setting_views", self.setting_views.iter().map(|v| (v.e_in_ma, v.focal_power_dpt, v.e_com_ma)).collect()),
+        ] {
+            for (i, (e_in, p, e_com)) in list.into_iter().enumerate() {
+                let name = format!("{} {i}", if key == "views" { "view" } else { "setting view" });
+                let kind = lens_setting::view_setting_kind(e_in, p, e_com, |f| format!("{key}[{i}].{f}"), &name)?;
+                kinds.push((kind, format!("{key}[{i}]")));
+            }
+        }
+        Ok(lens_setting::common_kind(kinds)?.unwrap_or_default())
+    }
+
     /// The lens-off board.
     pub fn offstate_board(&self) -> Board {
         self.offstate_board.unwrap_or(self.board)
@@ -209,8 +234,10 @@ impl Dataset {
         if self.views.is_empty() && self.setting_views.is_empty() {
             return Err(Error::invalid("views", "the dataset holds no views"));
         }
+        self.setting_kind()?;
         for (i, v) in self.views.iter().enumerate() {
-            let numbers = [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c))]
+            let e_in = (v.focal_power_dpt.is_none()).then_some(v.e_in_ma);
+            let numbers = [("e_in_ma", e_in), ("temperature_c", Some(v.temperature_c))]
                 .into_iter()
                 .chain([("z_w_mm", Some(v.z_w_mm)), ("e_com_ma", v.e_com_ma)]);
             if let Some((key, x)) = crate::first_not_finite(numbers) {
@@ -219,8 +246,8 @@ impl Dataset {
             }
         }
         for (i, v) in self.setting_views.iter().enumerate() {
-            let numbers =
-                [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
+            let e_in = (v.focal_power_dpt.is_none()).then_some(v.e_in_ma);
+            let numbers = [("e_in_ma", e_in), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
             if let Some((key, x)) = crate::first_not_finite(numbers) {
                 let message = format!("setting view {i}: current or temperature is not finite");
                 return Err(Error::invalid_value(format!("setting_views[{i}].{key}"), x, message));

@@ -68,7 +68,7 @@ pub fn export_text(cal: &Calibration, camera: &CameraAt, format: ExportFormat) -
     let text = match format {
         ExportFormat::OpenCv => opencv_yaml(&header, cal.image_size, &camera_matrix, &fit.dist_coeffs),
         ExportFormat::Ros => ros_yaml(&header, cal.image_size, &camera_matrix, &fit.dist_coeffs),
-        ExportFormat::Mrcal => mrcal_model(&header, cal, camera.e_com_ma(), &camera_matrix, &fit.dist_coeffs)?,
+        ExportFormat::Mrcal => mrcal_model(&header, cal, camera.setting_value(), &camera_matrix, &fit.dist_coeffs)?,
     };
     Ok(Exported { text, camera_matrix, fit })
 }
@@ -85,7 +85,15 @@ fn header(c: &CameraAt, fit: &OpenCvFit) -> String {
     if c.e_in_ma().is_finite() {
         let _ = write!(h, ", E_in {} mA at {} degC", num(c.e_in_ma()), num(c.temperature_c()));
     }
-    let _ = write!(h, ", E_com {} mA", num(c.e_com_ma()));
+    let _ = match c.setting_kind() {
+        crate::SettingKind::Current => write!(h, ", E_com {} mA", num(c.e_com_ma())),
+        crate::SettingKind::FocalPower => write!(
+            h,
+            ", focal power {} dpt at {} degC (setting: focal_power)",
+            num(c.focal_power_dpt()),
+            num(c.temperature_c())
+        ),
+    };
     if c.extrapolated() {
         h.push_str(" (EXTRAPOLATED beyond the calibrated ranges)");
     }

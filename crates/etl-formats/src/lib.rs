@@ -54,6 +54,7 @@ pub mod export;
 mod input_value;
 mod json_path;
 pub mod lens_dynamics;
+pub mod lens_setting;
 pub mod memory;
 pub mod model_selection;
 pub mod observations;
@@ -71,7 +72,7 @@ pub use board::{Board, Checkerboard};
 pub use calibration::{Calibration, ThermalRef};
 pub use dataset::Dataset;
 pub use etl_core::model::{CameraModel, Distortion, Intrinsics};
-pub use etl_core::runtime::{Camera, CameraAt, Extrapolated, Trust};
+pub use etl_core::runtime::{Camera, CameraAt, Extrapolated, SettingKind, Trust};
 pub use etl_core::thermal::{Compensation, ThermalCalibration, ThermalSurface};
 pub use lens_dynamics::LensDynamicsFile;
 pub use observations::Observations;
@@ -282,6 +283,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         return Err(io(e));
     }
     Ok(())
+}
+
+/// The setting of a camera in words, as messages name it: `"E_com 148.900 mA"` (to the
+/// uA), or `"focal power 12.5000 dpt"` (to 1e-4 dpt, the driver's resolution is 5e-3)
+/// for a focal-power calibration's camera.
+pub fn setting_label(c: &CameraAt) -> String {
+    match c.setting_kind() {
+        SettingKind::Current => format!("E_com {:.3} mA", c.e_com_ma()),
+        SettingKind::FocalPower => format!("focal power {:.4} dpt", c.focal_power_dpt()),
+    }
 }
 
 #[cfg(test)]

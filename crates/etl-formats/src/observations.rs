@@ -9,7 +9,9 @@
 //! ```
 //!
 //! `e_com_ma` is optional: if present it is used as is, else E_com is computed from
-//! `e_in_ma` and `temperature_c` through the thermal surface.
+//! `e_in_ma` and `temperature_c` through the thermal surface. A view taken in the lens
+//! driver's focal-power mode gives `"focal_power_dpt"` instead of `e_in_ma` (and no
+//! `e_com_ma`); every view of a file has the same kind of setting ([`crate::lens_setting`]).
 
 use std::path::Path;
 
@@ -20,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
 pub use crate::checks::{check_image_size, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE_PX};
+use crate::lens_setting::{self, SettingKind};
 use crate::{Error, Result};
 
 /// The format tag this module reads and writes.
@@ -35,12 +38,16 @@ pub struct PointObs {
     pub pixel: [f64; 2],
 }
 
-/// One ETL view.
+/// One ETL view, at a current or at a focal power ([`crate::lens_setting`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ViewObs {
-    /// Commanded lens current, mA.
+    /// Commanded lens current, mA (absent, NaN here, in a focal-power view).
+    #[serde(default = "lens_setting::absent", skip_serializing_if = "lens_setting::is_absent")]
     pub e_in_ma: f64,
+    /// Commanded focal power, dpt (a focal-power view, instead of `e_in_ma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_power_dpt: Option<f64>,
     /// Lens temperature, degC.
     pub temperature_c: f64,
     /// Compensated current, mA (optional; used as is when present).
@@ -205,6 +212,7 @@ impl Observations {
                 check_points(&v.points, view, self.image_size, planar)?;
             }
         }
+        self.setting_kind()?;
         for (i, v) in self.offstate_views.iter().enumerate() {
             check_points(
                 &v.points,
@@ -222,16 +230,25 @@ impl Observations {
         self.setting_views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, view(i), thermal)).collect()
     }
 
-    /// E_com of every view: as recorded, or compensated ([`view_e_com_ma`]).
+    /// E_com of every view: as recorded, or compensated ([`view_e_com_ma`]); the focal
+    /// power (dpt) of focal-power views, the setting their calibration is in.
     pub fn e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
         let view = |i| ViewRef { name: "view", key: "views", i };
         self.views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, view(i), thermal)).collect()
     }
 
-    /// Whether some ETL or setting view has no recorded E_com (so a thermal calibration
-    /// must be chosen to calibrate it).
+    /// Whether some ETL or setting view has a current but no recorded E_com (so a thermal
+    /// calibration must be chosen to calibrate it); never for focal-power views.
     pub fn needs_thermal(&self) -> bool {
-        self.views.iter().chain(&self.setting_views).any(|v| v.e_com_ma.is_none())
+        self.views.iter().chain(&self.setting_views).any(|v| v.e_com_ma.is_none() && v.focal_power_dpt.is_none())
+    }
+
+    /// The one kind of setting of the ETL and setting views (a current when there are
+    /// none); an error naming the first view of another kind.
+    pub fn setting_kind(&self) -> Result<SettingKind> {
+        let views = self.views.iter().enumerate().map(|(i, v)| (v.kind(), format!("views[{i}]")));
+        let settings = self.setting_views.iter().enumerate().map(|(i, v)| (v.kind(), format!("setting_views[{i}]")));
+        Ok(lens_setting::common_kind(views.chain(settings))?.unwrap_or_default())
     }
 
     /// The points of every view as core [`Point`]s.
@@ -243,15 +260,29 @@ impl Observations {
     }
 }
 
-/// Checks a view's currents and temperature against the lens driver's domain.
+impl ViewObs {
+    /// The kind of the view's setting: a focal power when it gives one.
+    pub fn kind(&self) -> SettingKind {
+        match self.focal_power_dpt {
+            Some(_) => SettingKind::FocalPower,
+            None => SettingKind::Current,
+        }
+    }
+}
+
+/// Checks a view's setting ([`lens_setting::view_setting_kind`]), its currents and
+/// temperature against the lens driver's domain.
 fn check_view_setting(v: &ViewObs, view: ViewRef<'_>) -> Result<()> {
-    let setting = [("e_in_ma", Some(v.e_in_ma)), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
+    let name = view.to_string();
+    let kind = lens_setting::view_setting_kind(v.e_in_ma, v.focal_power_dpt, v.e_com_ma, |f| view.field(f), &name)?;
+    let e_in = (kind == SettingKind::Current).then_some(v.e_in_ma);
+    let setting = [("e_in_ma", e_in), ("temperature_c", Some(v.temperature_c)), ("e_com_ma", v.e_com_ma)];
     if let Some((key, x)) = crate::first_not_finite(setting) {
         return Err(Error::invalid_value(view.field(key), x, format!("{view}: current or temperature is not finite")));
     }
     let [e0, e1] = E_IN_DOMAIN_MA;
     let [t0, t1] = T_DOMAIN_C;
-    for (value, key) in [(Some(v.e_in_ma), "e_in_ma"), (v.e_com_ma, "e_com_ma")] {
+    for (value, key) in [(e_in, "e_in_ma"), (v.e_com_ma, "e_com_ma")] {
         match value {
             Some(e) if !(e0..=e1).contains(&e) => {
                 return Err(Error::invalid_value(
@@ -276,7 +307,22 @@ fn check_view_setting(v: &ViewObs, view: ViewRef<'_>) -> Result<()> {
 /// E_com of one view: its recorded `e_com_ma`, or E_in - E_T(T, E_in) through `thermal`,
 /// refused outside the thermal calibration's ranges. No surface is assumed: a view without
 /// E_com and no thermal calibration chosen is an error naming the view.
+///
+/// A focal-power view's setting is its focal power, dpt: the thermal calibration is refused
+/// for it (the driver compensated the temperature).
 fn view_e_com_ma(v: &ViewObs, view: ViewRef<'_>, thermal: Option<&ThermalRef>) -> Result<f64> {
+    if let Some(p) = v.focal_power_dpt {
+        if thermal.is_some() {
+            return Err(Error::invalid(
+                view.field("focal_power_dpt"),
+                format!(
+                    "{view} is at a focal power, which the lens driver compensates for temperature itself: a \
+                     thermal calibration does not apply (leave out --thermal)"
+                ),
+            ));
+        }
+        return Ok(p);
+    }
     if let Some(e) = v.e_com_ma {
         return Ok(e);
     }

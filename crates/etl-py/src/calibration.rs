@@ -357,15 +357,74 @@ impl Calibration {
     /// Args:
     ///     e_in_ma: driver current, mA.
     ///     temperature_c: lens temperature, degC.
+    ///     focal_power_dpt: the commanded focal power, dpt, instead of `e_in_ma`, for a
+    ///         focal-power calibration (`setting == "focal_power"`; keyword only).
     ///     allow_extrapolation: return the camera outside the calibrated temperature,
-    ///         E_in and E_com ranges too (then `extrapolated` is True).
+    ///         E_in and E_com (or focal-power) ranges too (then `extrapolated` is True).
     ///
     /// Raises: InputError naming the quantity outside its calibrated range (margins:
-    /// 1 degC, 5 mA, 5 mA), or when the calibration has no thermal part (then use
-    /// `at_e_com` with a known E_com).
-    #[pyo3(signature = (e_in_ma, temperature_c, *, allow_extrapolation=false))]
-    fn at(slf: &Bound<'_, Self>, e_in_ma: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<CameraAt> {
-        Self::camera_at_setting(slf, e_in_ma, temperature_c, allow_extrapolation)
+    /// 1 degC, 5 mA, 5 mA, 0.25 dpt), when the calibration has no thermal part (then use
+    /// `at_e_com` with a known E_com), or when not exactly one of `e_in_ma` and
+    /// `focal_power_dpt` is given, or the one given is not the calibration's setting.
+    #[pyo3(signature = (e_in_ma=None, temperature_c=None, *, focal_power_dpt=None, allow_extrapolation=false))]
+    fn at(
+        slf: &Bound<'_, Self>,
+        e_in_ma: Option<f64>,
+        temperature_c: Option<f64>,
+        focal_power_dpt: Option<f64>,
+        allow_extrapolation: bool,
+    ) -> PyResult<CameraAt> {
+        let Some(temperature_c) = temperature_c else {
+            return Err(invalid("temperature_c", "give the lens temperature temperature_c, degC"));
+        };
+        let focal = slf.get().file.setting_kind() == etl_formats::SettingKind::FocalPower;
+        match (e_in_ma, focal_power_dpt) {
+            (Some(e_in_ma), None) if !focal => {
+                Self::camera_at_setting(slf, e_in_ma, temperature_c, allow_extrapolation)
+            }
+            (None, Some(dpt)) if focal => {
+                let cal = slf.get();
+                let inner = cal.camera()?.at_focal_power_with(dpt, temperature_c, trust(allow_extrapolation)).py()?;
+                Ok(CameraAt::new(inner, slf.clone().into_any().unbind(), cal.file.clone()))
+            }
+            (Some(_), Some(_)) | (None, None) => {
+                Err(invalid("e_in_ma", "give exactly one of e_in_ma (mA) and focal_power_dpt (dpt)"))
+            }
+            (_, None) => Err(invalid(
+                "focal_power_dpt",
+                "this calibration's setting is the focal power: give focal_power_dpt=, not e_in_ma",
+            )),
+            (None, _) => Err(invalid(
+                "e_in_ma",
+                "this calibration's setting is the lens current: give e_in_ma, not focal_power_dpt",
+            )),
+        }
+    }
+
+    /// What the calibration's setting is: "current" (its polynomials are in E_com, mA) or
+    /// "focal_power" (in the focal power commanded in the driver's focal-power mode, dpt).
+    #[getter]
+    fn setting(&self) -> &'static str {
+        self.file.setting_kind().name()
+    }
+
+    /// (min, max) focal power a focal-power calibration covers, dpt; None for a current
+    /// calibration.
+    #[getter]
+    fn focal_power_range_dpt(&self) -> Option<(f64, f64)> {
+        self.file.focal_power_range_dpt.map(|[a, b]| (a, b))
+    }
+
+    /// The focal power (dpt) that focuses a focal-power calibration's camera at
+    /// `distance_mm` at lens temperature `temperature_c` (the law in dioptres; the driver
+    /// compensates the temperature).
+    ///
+    /// Raises: InputError when the calibration is not a focal-power one or has no focus
+    /// law, for a distance outside the law's calibrated distances (+- 2 %), or a power or
+    /// temperature outside the calibrated ranges unless `allow_extrapolation`.
+    #[pyo3(signature = (distance_mm, temperature_c, *, allow_extrapolation=false))]
+    fn focus_focal_power_dpt(&self, distance_mm: f64, temperature_c: f64, allow_extrapolation: bool) -> PyResult<f64> {
+        self.file.focus_focal_power_dpt(distance_mm, temperature_c, trust(allow_extrapolation)).py()
     }
 
     /// The camera at a known compensated current `e_com_ma` (a calibration without
@@ -957,7 +1016,18 @@ impl Calibration {
     /// The run-time camera of this calibration (the model kept, not rebuilt from the file):
     /// model, thermal part with its ranges, calibrated E_com range.
     pub(crate) fn camera(&self) -> PyResult<Camera> {
-        Camera::new(self.model, self.file.thermal.as_ref().map(ThermalRef::trust), self.file.e_com_range_ma).py()
+        match self.file.setting_kind() {
+            etl_formats::SettingKind::Current => {
+                Camera::new(self.model, self.file.thermal.as_ref().map(ThermalRef::trust), self.file.e_com_range_ma)
+                    .py()
+            }
+            etl_formats::SettingKind::FocalPower => Camera::new_focal_power(
+                self.model,
+                self.file.setting_range(),
+                self.file.focal_power_t_range_c,
+            )
+            .py(),
+        }
     }
 
     /// A per-current model function `f` (`crate::camera`'s `*_parts`, the ones `CameraAt`

@@ -140,20 +140,34 @@ impl CameraAt {
 
 #[pymethods]
 impl CameraAt {
-    /// Driver current, mA (None for a camera at a known E_com, `Calibration.at_e_com`).
+    /// Driver current, mA (None for a camera at a known E_com, `Calibration.at_e_com`, and
+    /// at a focal power).
     #[getter]
     fn e_in_ma(&self) -> Option<f64> {
-        (!self.given_e_com()).then(|| self.inner.e_in_ma())
+        let e = self.inner.e_in_ma();
+        (!e.is_nan()).then_some(e)
     }
     /// Lens temperature, degC (None for a camera at a known E_com).
     #[getter]
     fn temperature_c(&self) -> Option<f64> {
-        (!self.given_e_com()).then(|| self.inner.temperature_c())
+        let t = self.inner.temperature_c();
+        (!t.is_nan()).then_some(t)
     }
-    /// Compensated current E_com, mA.
+    /// Compensated current E_com, mA (NaN for a focal-power calibration's camera).
     #[getter]
     fn e_com_ma(&self) -> f64 {
         self.inner.e_com_ma()
+    }
+    /// The commanded focal power, dpt (None for a current calibration's camera).
+    #[getter]
+    fn focal_power_dpt(&self) -> Option<f64> {
+        let p = self.inner.focal_power_dpt();
+        (!p.is_nan()).then_some(p)
+    }
+    /// What the setting is: "current" or "focal_power" (the calibration's).
+    #[getter]
+    fn setting(&self) -> &'static str {
+        self.inner.setting_kind().name()
     }
     /// The calibration this camera is a setting of.
     #[getter]
@@ -171,7 +185,7 @@ impl CameraAt {
     #[getter]
     fn extrapolated_quantities(&self) -> Vec<&'static str> {
         let f = self.inner.flags();
-        [(f.temperature, "temperature_c"), (f.e_in, "e_in_ma"), (f.e_com, "e_com_ma")]
+        [(f.temperature, "temperature_c"), (f.e_in, "e_in_ma"), (f.e_com, "e_com_ma"), (f.focal_power, "focal_power_dpt")]
             .into_iter()
             .filter_map(|(on, name)| on.then_some(name))
             .collect()
@@ -204,7 +218,7 @@ impl CameraAt {
     /// Raises: InputError for a NaN or a point at or behind the camera.
     pub(crate) fn project<'py>(&self, world_mm: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         let p = points::<3>(world_mm, "world_mm")?;
-        let (py, model, e_com_ma) = (world_mm.py(), *self.inner.model(), self.inner.e_com_ma());
+        let (py, model, e_com_ma) = (world_mm.py(), *self.inner.model(), self.inner.setting_value());
         let mut out = vec![[0.0; 2]; p.points.len()];
         // Rotation, K and distortion once for all points, not once per point.
         let run = |out: &mut [[f64; 2]]| model.project_many(&p.points, e_com_ma, out);
@@ -250,7 +264,7 @@ impl CameraAt {
         let at = self.inner;
         let (pose, u) = crate::pool::detach(py, || {
             let pose = at.solve_pnp(&b.points, &p.points)?;
-            let u = pose_uncertainty(at.model(), at.e_com_ma(), &b.points, &p.points, &pose, noise)?;
+            let u = pose_uncertainty(at.model(), at.setting_value(), &b.points, &p.points, &pose, noise)?;
             Ok::<_, etl_core::Error>((pose, u))
         })
         .py()?;
@@ -266,7 +280,7 @@ impl CameraAt {
         let p = points::<3>(world_mm, "world_mm")?;
         let py = world_mm.py();
         let cov = self.file.require_covariance().map_err(calib_err)?;
-        let (model, e_com_ma) = (*self.inner.model(), self.inner.e_com_ma());
+        let (model, e_com_ma) = (*self.inner.model(), self.inner.setting_value());
         let out = crate::pool::detach(py, || {
             p.points
                 .iter()
@@ -312,6 +326,8 @@ impl CameraAt {
         d.set_item("dist_coeffs", vec_out(py, &e.fit.dist_coeffs))?;
         d.set_item("fit_rms_px", e.fit.rms_px)?;
         d.set_item("fit_max_px", e.fit.max_px)?;
+        let p = self.inner.focal_power_dpt();
+        d.set_item("focal_power_dpt", (!p.is_nan()).then_some(p))?;
         crate::results::make(py, "ExportResult", &d)
     }
     fn __repr__(&self) -> PyResult<String> {

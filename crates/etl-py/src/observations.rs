@@ -51,6 +51,10 @@ pub struct Observations {
     pub(crate) file: ObsFile,
 }
 
+/// A view's setting as Python gives it: E_in, T, E_com, focal power (one of E_in and the
+/// focal power).
+type ViewSetting = (Option<f64>, Option<f64>, Option<f64>, Option<f64>);
+
 impl Observations {
     /// Appends the view of points `world_mm`, `pixels` taken at `setting` (E_in, T, E_com)
     /// to the list `list` picks (ETL or per-setting views: the same arguments), keeping it
@@ -61,9 +65,27 @@ impl Observations {
         list: impl Fn(&mut ObsFile) -> &mut Vec<ViewObs>,
         world_mm: &Bound<'_, PyAny>,
         pixels: &Bound<'_, PyAny>,
-        (e_in_ma, temperature_c, e_com_ma): (f64, f64, Option<f64>),
+        (e_in_ma, temperature_c, e_com_ma, focal_power_dpt): ViewSetting,
     ) -> PyResult<()> {
-        let v = ViewObs { e_in_ma, temperature_c, e_com_ma, points: view_points(world_mm, pixels)? };
+        let Some(temperature_c) = temperature_c else {
+            return Err(input_error("give the lens temperature temperature_c, degC"));
+        };
+        if e_in_ma.is_some() == focal_power_dpt.is_some() {
+            return Err(input_error("give exactly one of e_in_ma (mA) and focal_power_dpt (dpt)"));
+        }
+        if let Some(x) = e_in_ma.filter(|x| x.is_nan()) {
+            // NaN stands for "no current" in the file's view: a NaN given is refused as
+            // the number it is.
+            let view = list(&mut self.file).len();
+            return Err(invalid_value(
+                &format!("views[{view}].e_in_ma"),
+                x,
+                &format!("view {view}: current or temperature is not finite"),
+            ));
+        }
+        let e_in_ma = e_in_ma.unwrap_or(f64::NAN);
+        let points = view_points(world_mm, pixels)?;
+        let v = ViewObs { e_in_ma, focal_power_dpt, temperature_c, e_com_ma, points };
         list(&mut self.file).push(v);
         if let Err(e) = self.file.validate() {
             list(&mut self.file).pop();
@@ -120,7 +142,8 @@ impl Observations {
         }
         let mut o = Observations::new(image_size)?;
         for i in 0..n {
-            o.add_view(&world_mm[i], &pixels[i], e_in_ma[i], temperature_c[i], e_com_ma.as_ref().map(|e| e[i]))?;
+            let setting = (Some(e_in_ma[i]), Some(temperature_c[i]), e_com_ma.as_ref().map(|e| e[i]), None);
+            o.push_checked(|f| &mut f.views, &world_mm[i], &pixels[i], setting)?;
         }
         Ok(o)
     }
@@ -173,16 +196,21 @@ impl Observations {
     ///     e_in_ma: driver current, mA.
     ///     temperature_c: lens temperature, degC.
     ///     e_com_ma: compensated current, mA (optional: used as is when given).
-    #[pyo3(signature = (world_mm, pixels, e_in_ma, temperature_c, e_com_ma=None))]
+    ///     focal_power_dpt: the commanded focal power, dpt, instead of `e_in_ma` (a view
+    ///         in the driver's focal-power mode; keyword only; every view of a set has
+    ///         the same kind of setting).
+    #[pyo3(signature = (world_mm, pixels, e_in_ma=None, temperature_c=None, e_com_ma=None, *, focal_power_dpt=None))]
     fn add_view(
         &mut self,
         world_mm: &Bound<'_, PyAny>,
         pixels: &Bound<'_, PyAny>,
-        e_in_ma: f64,
-        temperature_c: f64,
+        e_in_ma: Option<f64>,
+        temperature_c: Option<f64>,
         e_com_ma: Option<f64>,
+        focal_power_dpt: Option<f64>,
     ) -> PyResult<()> {
-        self.push_checked(|f| &mut f.views, world_mm, pixels, (e_in_ma, temperature_c, e_com_ma))
+        let setting = (e_in_ma, temperature_c, e_com_ma, focal_power_dpt);
+        self.push_checked(|f| &mut f.views, world_mm, pixels, setting)
     }
 
     /// Adds a lens-off view of a planar board (points with Z = 0), for A0.
@@ -221,7 +249,8 @@ impl Observations {
         temperature_c: f64,
         e_com_ma: Option<f64>,
     ) -> PyResult<()> {
-        self.push_checked(|f| &mut f.setting_views, world_mm, pixels, (e_in_ma, temperature_c, e_com_ma))
+        let setting = (Some(e_in_ma), Some(temperature_c), e_com_ma, None);
+        self.push_checked(|f| &mut f.setting_views, world_mm, pixels, setting)
     }
 
     /// Number of ETL views.
@@ -327,9 +356,10 @@ impl Observations {
 /// A view as `Observations.view` returns it (an `etlcal.results.View`).
 fn view_dict<'py>(py: Python<'py>, v: &ViewObs) -> PyResult<Bound<'py, PyAny>> {
     let d = points_dict(py, &v.points)?;
-    d.set_item("e_in_ma", v.e_in_ma)?;
+    d.set_item("e_in_ma", (!v.e_in_ma.is_nan()).then_some(v.e_in_ma))?;
     d.set_item("temperature_c", v.temperature_c)?;
     d.set_item("e_com_ma", v.e_com_ma)?;
+    d.set_item("focal_power_dpt", v.focal_power_dpt)?;
     crate::results::make(py, "View", &d)
 }
 

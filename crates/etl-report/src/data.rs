@@ -248,7 +248,7 @@ pub(crate) fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Opt
             depth_source: "",
         },
     };
-    let r = cal.e_com_range_ma;
+    let r = cal.setting_range();
     d.map_currents = [r[0], 0.5 * (r[0] + r[1]), r[1]];
     d.covariance = cal.covariance_matrix();
     d.depth_source = map_depth(&d, d.map_currents[1]).1;

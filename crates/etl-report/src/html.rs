@@ -375,7 +375,7 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
     format!(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>etlcal calibration report</title>\
          <style>{STYLE}</style></head><body>\n<h1>etlcal calibration report</h1>\n{notes}\n\
-         <p>Estimator <b>{}</b>, {} views, E_com {:.1} .. {:.1} mA, RMS reprojection error <b>{:.4} px</b>; \
+         <p>Estimator <b>{}</b>, {} views, {} {:.1} .. {:.1} {}, RMS reprojection error <b>{:.4} px</b>; \
          model: {} distortion, focal degree {} ({} numbers), {flagged} of them flagged as not determined \
          (|value| &lt; 2 std).</p>\n{}\
          <ul><li><a href=\"#parameters\">Parameters</a></li>{toc}<li><a href=\"#views\">Views</a></li>\
@@ -393,8 +393,13 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
          <h2 id=\"views\">Views</h2>\n{}\n{}<h2 id=\"provenance\">Provenance</h2>\n{}</body></html>\n",
         esc(&c.estimator),
         c.views.len().max(d.views.len()),
-        c.e_com_range_ma[0],
-        c.e_com_range_ma[1],
+        match c.setting_kind() {
+            etl_formats::SettingKind::Current => "E_com",
+            etl_formats::SettingKind::FocalPower => "setting: commanded focal power",
+        },
+        c.setting_range()[0],
+        c.setting_range()[1],
+        c.setting_kind().unit(),
         c.rms_reprojection_px,
         d.model.distortion_model().name(),
         d.model.focal_degree(),

@@ -138,7 +138,7 @@ fn draw_band<DB: Canvas>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: boo
 /// (E, values, stds) of the curves ([`curve_names`]) at 101 currents over the calibrated
 /// range; zero std without a covariance.
 fn curves(d: &Data) -> Vec<(f64, CurveSet, CurveSet)> {
-    let r = d.cal.e_com_range_ma;
+    let r = d.cal.setting_range();
     (0..=100)
         .map(|k| r[0] + (r[1] - r[0]) * k as f64 / 100.0)
         .map(|e| {

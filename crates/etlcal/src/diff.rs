@@ -94,11 +94,11 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&j);
     } else {
         outln!(
-            "{} against {} at E_com {:.3} mA over {}x{} pixels: intrinsics only rms {:.4} px, max {:.4} px; \
+            "{} against {} at {} over {}x{} pixels: intrinsics only rms {:.4} px, max {:.4} px; \
              after the best rotation rms {:.4} px, max {:.4} px{}",
             args.b.display(),
             args.a.display(),
-            b.e_com_ma(),
+            etl_formats::setting_label(&b),
             d.grid[0],
             d.grid[1],
             d.rms_px,

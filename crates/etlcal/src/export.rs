@@ -53,10 +53,10 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&j);
     } else {
         outln!(
-            "wrote {} ({} at E_com {:.3} mA{}); OpenCV distortion fit: rms {:.4} px, max {:.4} px",
+            "wrote {} ({} at {}{}); OpenCV distortion fit: rms {:.4} px, max {:.4} px",
             args.out.display(),
             args.format,
-            camera.e_com_ma(),
+            etl_formats::setting_label(&camera),
             if camera.extrapolated() { ", EXTRAPOLATED" } else { "" },
             e.fit.rms_px,
             e.fit.max_px

@@ -9,7 +9,9 @@
 //! temperature and current ranges (unless `--allow-extrapolation`), or a calibration
 //! without a focus law is a one-line error (exit status 1); so is a calibration without
 //! temperature compensation, whose message gives the E_com in focus (for `--e-com`).
-//! `--json` prints `{"e_in_ma", "e_com_ma", "distance_mm"}`.
+//! `--json` prints `{"e_in_ma", "e_com_ma", "distance_mm"}`; for a focal-power calibration
+//! (`"setting": "focal_power"`) the focal power to command instead:
+//! `{"focal_power_dpt", "distance_mm", "extrapolated"}`.
 
 use std::path::PathBuf;
 
@@ -45,6 +47,9 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let cal = Calibration::load(&args.calibration)?;
     let trust = crate::trust(args.allow_extrapolation);
+    if cal.setting_kind() == etl_formats::SettingKind::FocalPower {
+        return focal_power(&cal, &args, trust);
+    }
     if cal.thermal.is_none() {
         // No E_in can be had without the thermal part; the E_com in focus still can, and
         // is what the run-time verbs take.
@@ -69,6 +74,23 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         outln!(
             "E_in {e_in_ma:.3} mA (E_com {e_com_ma:.3} mA) focuses at {distance_mm} mm at {} degC",
+            args.temperature_c
+        );
+    }
+    Ok(())
+}
+
+/// `etlcal focus` on a focal-power calibration: the focal power in focus
+/// ([`Calibration::focus_focal_power_dpt`]).
+fn focal_power(cal: &Calibration, args: &Args, trust: etl_formats::Trust) -> Result<()> {
+    let dpt = cal.focus_focal_power_dpt(args.distance_mm, args.temperature_c, trust)?;
+    let extrapolated = cal.at_focal_power(dpt, args.temperature_c, trust)?.extrapolated();
+    let distance_mm = args.distance_mm;
+    if args.json {
+        print_json(&json!({"focal_power_dpt": dpt, "distance_mm": distance_mm, "extrapolated": extrapolated}));
+    } else {
+        outln!(
+            "focal power {dpt:.4} dpt focuses at {distance_mm} mm at {} degC (the driver compensates)",
             args.temperature_c
         );
     }

@@ -1,11 +1,12 @@
 //! The flags shared by the verbs that use a calibration at one lens setting (`measure`,
-//! `export`, `undistort`): `--calibration FILE (--e-in MA --t C | --e-com MA)
-//! [--allow-extrapolation]`.
+//! `export`, `undistort`, `diff`): `--calibration FILE (--e-in MA --t C | --e-com MA |
+//! --dpt DPT --t C) [--allow-extrapolation]`.
 //!
-//! The setting is given in exactly one of two forms (clap's group `setting`: anything else
-//! is a one-line usage error, exit 2): the driver current and the lens temperature, turned
-//! into E_com by the calibration's thermal part, or a known compensated current E_com
-//! (a calibration without temperature compensation, or E_com compensated elsewhere).
+//! The setting is given in exactly one of three forms (clap's group `setting`: anything
+//! else is a one-line usage error, exit 2): the driver current and the lens temperature,
+//! turned into E_com by the calibration's thermal part; a known compensated current E_com
+//! (a calibration without temperature compensation, or E_com compensated elsewhere); or,
+//! for a focal-power calibration, the commanded focal power and the lens temperature.
 
 use std::path::{Path, PathBuf};
 
@@ -26,14 +27,18 @@ pub struct SettingArgs {
 /// `(--e-in MA --t C | --e-com MA) [--allow-extrapolation]`: the setting of any number of
 /// calibrations (`diff` takes two).
 #[derive(clap::Args, Debug, Clone)]
-#[command(group(clap::ArgGroup::new("setting").required(true).args(["e_in_ma", "e_com_ma"])))]
+#[command(group(clap::ArgGroup::new("setting").required(true).args(["e_in_ma", "e_com_ma", "focal_power_dpt"])))]
 pub struct SettingFlags {
     /// Driver current, mA (with --t; E_com through the calibration's thermal part).
     #[arg(long = "e-in", value_name = "MA", requires = "temperature_c")]
     pub e_in_ma: Option<f64>,
-    /// Lens temperature, degC (with --e-in).
-    #[arg(long = "t", value_name = "C", requires = "e_in_ma")]
+    /// Lens temperature, degC (with --e-in or --dpt).
+    #[arg(long = "t", value_name = "C")]
     pub temperature_c: Option<f64>,
+    /// Commanded focal power, dpt (with --t): for a focal-power calibration, whose setting
+    /// is the power the lens driver holds in its focal-power mode.
+    #[arg(long = "dpt", value_name = "DPT", requires = "temperature_c", allow_negative_numbers = true)]
+    pub focal_power_dpt: Option<f64>,
     /// A known compensated current E_com, mA (instead of --e-in and --t): for a calibration
     /// without temperature compensation ("temperature_compensation": "none").
     #[arg(long = "e-com", value_name = "MA", conflicts_with = "temperature_c")]
@@ -59,6 +64,13 @@ pub enum Setting {
         /// Compensated current, mA.
         e_com_ma: f64,
     },
+    /// `--dpt DPT --t C`.
+    FocalPower {
+        /// Commanded focal power, dpt.
+        focal_power_dpt: f64,
+        /// Lens temperature, degC.
+        temperature_c: f64,
+    },
 }
 
 impl SettingFlags {
@@ -69,10 +81,16 @@ impl SettingFlags {
 
     /// The setting (clap's groups have made sure exactly one form is given).
     pub fn setting(&self) -> Result<Setting> {
-        match (self.e_in_ma, self.temperature_c, self.e_com_ma) {
-            (Some(e_in_ma), Some(temperature_c), None) => Ok(Setting::DriverCurrent { e_in_ma, temperature_c }),
-            (None, None, Some(e_com_ma)) => Ok(Setting::Compensated { e_com_ma }),
-            _ => Err(Error::invalid("--e-com", "give the setting as --e-in MA --t C or as --e-com MA")),
+        match (self.e_in_ma, self.temperature_c, self.e_com_ma, self.focal_power_dpt) {
+            (Some(e_in_ma), Some(temperature_c), None, None) => Ok(Setting::DriverCurrent { e_in_ma, temperature_c }),
+            (None, None, Some(e_com_ma), None) => Ok(Setting::Compensated { e_com_ma }),
+            (None, Some(temperature_c), None, Some(focal_power_dpt)) => {
+                Ok(Setting::FocalPower { focal_power_dpt, temperature_c })
+            }
+            _ => Err(Error::invalid(
+                "--e-in",
+                "give the setting as one of --e-in MA --t C, --e-com MA, or --dpt DPT --t C",
+            )),
         }
     }
 
@@ -82,7 +100,17 @@ impl SettingFlags {
     /// `--e-com`.
     pub fn camera_of(&self, calibration: &Path) -> Result<(Calibration, CameraAt)> {
         let cal = Calibration::load(calibration)?;
-        let camera = match self.setting()? {
+        let setting = self.setting()?;
+        let focal = cal.setting_kind() == etl_formats::SettingKind::FocalPower;
+        if focal != matches!(setting, Setting::FocalPower { .. }) {
+            let (flag, why) = if focal {
+                ("--dpt", "its setting is the focal power: give --dpt DPT --t C, not a current")
+            } else {
+                ("--e-in", "its setting is the lens current: give --e-in MA --t C or --e-com MA, not --dpt")
+            };
+            return Err(Error::invalid(flag, format!("{}: {why}", calibration.display())));
+        }
+        let camera = match setting {
             Setting::DriverCurrent { .. } if cal.thermal.is_none() => {
                 return Err(Error::invalid(
                     "--e-in",
@@ -94,13 +122,25 @@ impl SettingFlags {
             }
             Setting::DriverCurrent { e_in_ma, temperature_c } => cal.at(e_in_ma, temperature_c, self.trust())?,
             Setting::Compensated { e_com_ma } => cal.at_e_com(e_com_ma, self.trust())?,
+            Setting::FocalPower { focal_power_dpt, temperature_c } => {
+                cal.at_focal_power(focal_power_dpt, temperature_c, self.trust())?
+            }
         };
         Ok((cal, camera))
     }
 
     /// The `--json` keys of the setting: `e_in_ma` and `temperature_c` as given (null for
-    /// `--e-com`), `e_com_ma` of the camera, `extrapolated`.
+    /// `--e-com`), `e_com_ma` of the camera, `extrapolated`; for `--dpt`, `"setting":
+    /// "focal_power"`, `focal_power_dpt` and `temperature_c` instead of the currents.
     pub fn json(&self, camera: &CameraAt) -> serde_json::Value {
+        if let Some(dpt) = self.focal_power_dpt {
+            return serde_json::json!({
+                "setting": "focal_power",
+                "focal_power_dpt": dpt,
+                "temperature_c": self.temperature_c,
+                "extrapolated": camera.extrapolated(),
+            });
+        }
         serde_json::json!({
             "e_in_ma": self.e_in_ma,
             "temperature_c": self.temperature_c,

@@ -21,6 +21,12 @@
 //! are not rendered, and the flags of the model's simulation (`--config`, the stage and
 //! current noises, `--setting-views`) are refused beside it.
 //!
+//! `--focal-power` runs the paper rig in the lens driver's focal-power mode
+//! (`etl_sim::simulate::focal_power`): its views record `focal_power_dpt` at 25, 30 and
+//! 35 degC instead of a current, the driver's firmware compensating the temperature with
+//! the virtual lens's 4 % residual; truth.json's `de_ma` are then each view's true
+//! focal-power error, dpt. Corners only (`--observations-only`), with the paper rig.
+//!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
 
@@ -37,6 +43,7 @@ use etl_formats::{Error, Result};
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
 use etl_sim::optics::truth::{setting_truths, TRUTH_FORMAT};
 use etl_sim::optics::{procedure, OpticalRig};
+use etl_sim::simulate::focal_power::{focal_power_rig, FOCAL_POWER_TEMPERATURES_C};
 use etl_sim::simulate::images::{dataset_truth, render_rig, ImageOptions};
 use etl_sim::simulate::{simulate, write_simulation, write_truth, SettingRig, SimConfig, SimRig};
 
@@ -74,6 +81,11 @@ pub struct Args {
     /// has one.
     #[arg(long)]
     pub setting_views: bool,
+    /// Run the paper rig in the lens driver's focal-power mode: views at focal powers
+    /// (dpt) at 25, 30 and 35 degC, the firmware compensating the temperature with a 4 %
+    /// residual (corners only: with --observations-only).
+    #[arg(long, requires = "observations_only", conflicts_with_all = ["optics", "setting_views"])]
+    pub focal_power: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -131,7 +143,15 @@ pub fn run(args: Args) -> Result<()> {
             "rendering the per-setting baseline's views is not supported: pass --observations-only with --setting-views",
         ));
     }
-    let sim = simulate(&config);
+    let sim = if args.focal_power {
+        if config.rig != SimRig::Paper {
+            return Err(Error::invalid("--focal-power", "the focal-power mode is simulated on the paper rig only"));
+        }
+        let compensation = etl_hw::virtual_lens::FocalPowerCompensation::default();
+        focal_power_rig(&config.noise, config.seed, &FOCAL_POWER_TEMPERATURES_C, &compensation)
+    } else {
+        simulate(&config)
+    };
     // Images, dataset, observations and truth of one run, swapped in whole: a dataset
     // beside another seed's observations would calibrate to a wrong answer silently.
     let images = write_dir_set(&args.out, SIMULATION_FILES, |staging| {

@@ -121,7 +121,7 @@ fn undistort_file(job: &Job, model: &CameraModel, e_com_ma: f64, to: &Path) -> R
 /// Runs `etlcal undistort`.
 pub fn run(args: Args) -> Result<()> {
     let (cal, camera) = args.setting.camera()?;
-    let e_com = camera.e_com_ma();
+    let e_com = camera.setting_value();
     let mut names = HashSet::new();
     let mut jobs = Vec::with_capacity(args.images.len());
     for input in &args.images {

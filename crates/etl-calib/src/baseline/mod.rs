@@ -251,7 +251,10 @@ fn calibration_of(
         centre: None,
         thermal: thermal.cloned(),
         temperature_compensation: TemperatureCompensation::of(thermal),
+        setting: None,
         e_com_range_ma: [es[0], es[es.len() - 1]],
+        focal_power_range_dpt: None,
+        focal_power_t_range_c: None,
         rms_reprojection_px: rms,
         std: ModelStd {
             rotation_rodrigues: [0.0; 3],
@@ -283,6 +286,7 @@ fn calibration_of(
             .iter()
             .map(|s| ViewSummary {
                 e_com_ma: s.e_com_ma,
+                focal_power_dpt: None,
                 points: s.points,
                 rms_px: s.zhang.rms_px,
                 dz_mm: 0.0,

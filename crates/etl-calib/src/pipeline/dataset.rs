@@ -149,6 +149,7 @@ pub fn observations_from_dataset(
                 summary.views_detected += 1;
                 obs.views.push(ViewObs {
                     e_in_ma: v.e_in_ma,
+                    focal_power_dpt: v.focal_power_dpt,
                     temperature_c: v.temperature_c,
                     e_com_ma: v.e_com_ma,
                     points,
@@ -159,6 +160,7 @@ pub fn observations_from_dataset(
                 let v = &dataset.setting_views[i];
                 obs.setting_views.push(ViewObs {
                     e_in_ma: v.e_in_ma,
+                    focal_power_dpt: v.focal_power_dpt,
                     temperature_c: v.temperature_c,
                     e_com_ma: v.e_com_ma,
                     points,
@@ -207,9 +209,10 @@ fn check_distinct_settings(obs: &Observations, summary: &DetectionSummary, views
     let mut currents: Vec<(f64, f64)> = obs
         .views
         .iter()
-        .map(|v| match v.e_com_ma {
-            Some(e) => (e, f64::NAN),
-            None => (v.e_in_ma, v.temperature_c),
+        .map(|v| match (v.focal_power_dpt, v.e_com_ma) {
+            (Some(p), _) => (p, f64::NAN),
+            (None, Some(e)) => (e, f64::NAN),
+            (None, None) => (v.e_in_ma, v.temperature_c),
         })
         .collect();
     currents.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));

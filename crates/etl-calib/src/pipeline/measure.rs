@@ -70,7 +70,7 @@ pub fn measure_displacement(
         let pts: Vec<[f64; 3]> = d.board_mm(board, [0, 0]).into_iter().map(|[x, y]| [x, y, 0.0]).collect();
         let px = d.pixels();
         let pose = camera.solve_pnp(&pts, &px)?;
-        let u = pose_uncertainty(camera.model(), camera.e_com_ma(), &pts, &px, &pose, PixelNoise::FromResidual)?;
+        let u = pose_uncertainty(camera.model(), camera.setting_value(), &pts, &px, &pose, PixelNoise::FromResidual)?;
         uncertainty.push(u);
         poses.push(pose);
     }
@@ -82,7 +82,7 @@ pub fn measure_displacement(
     let calibration_covariance = cal.covariance_matrix();
     let cov = displacement_covariance_mm2(&ua, &ub, calibration_covariance.as_ref())?;
     Ok(Measurement {
-        e_com_ma: camera.e_com_ma(),
+        e_com_ma: camera.setting_value(),
         extrapolated: camera.extrapolated(),
         poses: [a, b],
         displacement_mm: d,

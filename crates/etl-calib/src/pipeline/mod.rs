@@ -28,7 +28,7 @@ use etl_formats::calibration::{
     Calibration, CovarianceNoise, ModelStd, TemperatureCompensation, ThermalRef, ViewSummary,
 };
 use etl_formats::observations::Observations;
-use etl_formats::{Error, Result};
+use etl_formats::{Error, Result, SettingKind};
 use rayon::prelude::*;
 
 /// Options of [`calibrate`]. The default is errors-in-variables with the paper's noise
@@ -51,7 +51,17 @@ pub struct CalibrateOptions {
     /// estimator's covariance accounts for (default: the paper's, [`InputNoise::PAPER`];
     /// [`BundleAdjustOptions::input_noise`]). Errors-in-variables takes its priors instead.
     pub input_noise: Option<InputNoise>,
+    /// The views' kind of setting ([`SettingKind`]); [`calibrate`] sets it from the
+    /// observations. A focal power fits kf0 ([`etl_core::calib::Kf0::Solved`]) and puts
+    /// [`FOCAL_POWER_SIGMA_DPT`] in place of the current's prior.
+    pub setting: SettingKind,
 }
+
+/// The prior on a focal-power view's setting, dpt (the errors-in-variables prior, and
+/// the spread the paper estimator's covariance accounts for): half of the "typically
+/// 0.1 dpt" reproducibility Optotune states for the Lens Driver 4's temperature-compensated
+/// focal-power mode over 10-50 degC (MAN16 section 4.3), read as a 2-sigma band.
+pub const FOCAL_POWER_SIGMA_DPT: f64 = 0.05;
 
 impl Default for CalibrateOptions {
     fn default() -> Self {
@@ -64,11 +74,28 @@ impl Default for CalibrateOptions {
             layout: Layout::PAPER,
             flags: OpenCvFlags::NONE,
             input_noise: Some(InputNoise::PAPER),
+            setting: SettingKind::Current,
         }
     }
 }
 
 impl CalibrateOptions {
+    /// These options for views of `setting`: a focal power's prior on the setting is
+    /// [`FOCAL_POWER_SIGMA_DPT`] (in the estimator and in the input noise), a current's
+    /// is left as it is.
+    pub fn for_setting(&self, setting: SettingKind) -> CalibrateOptions {
+        let mut o = CalibrateOptions { setting, ..*self };
+        if setting == SettingKind::FocalPower {
+            if let Estimator::Eiv { sigma_e_ma, .. } = &mut o.estimator {
+                *sigma_e_ma = FOCAL_POWER_SIGMA_DPT;
+            }
+            if let Some(n) = &mut o.input_noise {
+                n.sigma_e_ma = FOCAL_POWER_SIGMA_DPT;
+            }
+        }
+        o
+    }
+
     /// The bundle adjustment's options: the estimator, the robust loss, and the numbers
     /// held (A0 if asked, and those OpenCV's flags hold). Errors: a flag with the paper
     /// family (naming it).
@@ -107,7 +134,12 @@ fn covariance_noise(options: &CalibrateOptions, report: &BundleAdjustReport) -> 
         Estimator::Eiv { sigma_z_mm, sigma_e_ma, .. } => Some((sigma_z_mm, sigma_e_ma)),
         Estimator::Paper => options.input_noise.map(|n| (n.sigma_z_mm, n.sigma_e_ma)),
     };
-    CovarianceNoise { sigma_px: report.sigma_px, sigma_z_mm: inputs.map(|i| i.0), sigma_e_ma: inputs.map(|i| i.1) }
+    CovarianceNoise {
+        sigma_px: report.sigma_px,
+        sigma_z_mm: inputs.map(|i| i.0),
+        sigma_e_ma: inputs.map(|i| i.1),
+        sigma_p_dpt: None,
+    }
 }
 
 /// Refuses an image whose size is not the `expected` one, which `whose` names (e.g. "the
@@ -194,11 +226,18 @@ pub fn calibrate(
             "no ETL views (views) in the observations: the proposed method needs the board on the stage at >= 3 currents",
         ));
     }
+    let options = &options.for_setting(obs.setting_kind()?);
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let solved = solve::solve_without_outliers(&views, a0, options)?;
-    calibration_of(obs, &views, solved, thermal, options)
+    let mut result = calibration_of(obs, &views, solved, thermal, options)?;
+    if options.setting == SettingKind::FocalPower {
+        let t = obs.views.iter().map(|v| v.temperature_c);
+        let t_range_c = [t.clone().fold(f64::INFINITY, f64::min), t.fold(f64::NEG_INFINITY, f64::max)];
+        result.calibration = result.calibration.into_focal_power(Some(t_range_c));
+    }
+    Ok(result)
 }
 
 /// Each view's summary under the calibrated `m`: its points in the solve, their RMS
@@ -224,6 +263,7 @@ fn view_summaries(m: &CameraModel, views: &[View<'_>], solved: &solve::Solved) -
             let (fx_px, fy_px) = view_focal(m, &kept_view, c.dz_mm).unwrap_or((0.0, 0.0));
             ViewSummary {
                 e_com_ma: v.e_com_ma,
+                focal_power_dpt: None,
                 points: used.iter().filter(|&&u| u).count(),
                 rms_px: if n > 0 { (s / n as f64).sqrt() } else { 0.0 },
                 dz_mm: c.dz_mm,

@@ -3,12 +3,12 @@
 //! re-solve without the outliers (see [`super::robust`]), and the plausibility warnings.
 
 use etl_core::calib::{
-    bundle_adjust, bundle_adjust_scratch, initialise_model, BundleAdjustOptions, BundleAdjustReport, Estimator, Point,
-    View, ViewCorrection, ViewScratch, A0,
+    bundle_adjust, bundle_adjust_scratch, initialise_model_with, BundleAdjustOptions, BundleAdjustReport, Estimator,
+    Kf0, Point, View, ViewCorrection, ViewScratch, A0,
 };
 use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, Outlier};
-use etl_formats::Result;
+use etl_formats::{Result, SettingKind};
 
 use rayon::prelude::*;
 
@@ -129,7 +129,11 @@ pub(super) fn solve_without_outliers(views: &[View<'_>], a0: &A0, options: &Cali
     let mut used = screen(views);
     let pts = subset(views, &used);
     let sub: Vec<View<'_>> = views.iter().zip(&pts).map(|(v, p)| View { e_com_ma: v.e_com_ma, points: p }).collect();
-    let initial = initialise_model(&sub, a0, options.layout, options.flags)?;
+    let kf0 = match options.setting {
+        SettingKind::Current => Kf0::Known([a0.kf0x, a0.kf0y]),
+        SettingKind::FocalPower => Kf0::Solved,
+    };
+    let initial = initialise_model_with(&sub, a0, kf0, options.layout, options.flags)?;
     let mut converged = false;
     let (mut report, mut corrections) = solve_once(views, &used, &initial, ba)?;
     let mut d = distances(&report.model, views, &corrections);

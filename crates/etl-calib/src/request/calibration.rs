@@ -311,6 +311,7 @@ impl CalibrationRequest {
             robust: self.robust,
             layout: Layout::PAPER,
             flags: self.flags(),
+            setting: etl_formats::SettingKind::Current,
         }
     }
 
@@ -406,13 +407,32 @@ impl CalibrationRequest {
         Ok(calibrated)
     }
 
+    /// Refuses the options that apply to currents only, for focal-power views
+    /// ([`Refusal::NotForFocalPower`]).
+    fn check_focal_power(&self) -> std::result::Result<(), Refusal> {
+        let current_only = [
+            (RequestOption::Thermal, self.thermal.is_some()),
+            (RequestOption::Method, self.method == Method::PerSetting),
+            (RequestOption::HoldA0, self.hold_a0),
+            (RequestOption::SigmaEMa, self.priors.sigma_e_ma.is_some()),
+        ];
+        match current_only.iter().find(|(_, given)| *given) {
+            Some(&(given, _)) => Err(Refusal::NotForFocalPower { given }),
+            None => Ok(()),
+        }
+    }
+
     /// [`Self::run`] without the conditioning check.
     fn run_unchecked(&self, obs: &Observations, spelling: &dyn Spelling) -> Result<Calibrated> {
         self.validate(spelling)?;
+        if obs.setting_kind()? == etl_formats::SettingKind::FocalPower {
+            self.check_focal_power().map_err(|r| r.to_error(spelling))?;
+        }
         let thermal = self.thermal.as_ref();
         if thermal.is_none() {
-            let without =
-                |views: &[etl_formats::observations::ViewObs]| views.iter().position(|v| v.e_com_ma.is_none());
+            let without = |views: &[etl_formats::observations::ViewObs]| {
+                views.iter().position(|v| v.e_com_ma.is_none() && v.focal_power_dpt.is_none())
+            };
             let missing = without(&obs.views).map(|view| (false, view));
             if let Some((setting, view)) = missing.or_else(|| without(&obs.setting_views).map(|view| (true, view))) {
                 return Err(Refusal::NoThermal { setting, view }.to_error(spelling));

@@ -99,7 +99,7 @@ fn principal_point_std_px(cal: &Calibration) -> [f64; 2] {
             g[slope.at(k)] = e;
             sandwich(&[g], &cov)[0][0].max(0.0).sqrt()
         };
-        cal.e_com_range_ma.iter().map(|&e| at(e)).fold(f64::NEG_INFINITY, f64::max)
+        cal.setting_range().iter().map(|&e| at(e)).fold(f64::NEG_INFINITY, f64::max)
     })
 }
 
@@ -110,7 +110,7 @@ fn poly(c: &[f64], x: f64) -> f64 {
 /// The first symptom of `cal` (module doc), `None` when it has none.
 pub fn ill_condition(cal: &Calibration) -> Option<IllCondition> {
     const SAMPLES: usize = 64;
-    let [lo, hi] = cal.e_com_range_ma;
+    let [lo, hi] = cal.setting_range();
     for k in 0..=SAMPLES {
         let e_com_ma = lo + (hi - lo) * k as f64 / SAMPLES as f64;
         for (axis, c) in [("fx", &cal.kf_x), ("fy", &cal.kf_y)] {
@@ -144,7 +144,7 @@ mod tests {
         assert_eq!(ill_condition(&good), None);
         let mut bad = good.clone();
         bad.kf_y = vec![-100.0, 1.0];
-        let hi = bad.e_com_range_ma[1];
+        let hi = bad.setting_range()[1];
         match ill_condition(&bad) {
             Some(IllCondition::FocalNotPositive { axis: "fy", e_com_ma, value_px }) => {
                 assert!(e_com_ma <= hi && value_px <= 0.0, "{e_com_ma} {value_px}");

@@ -62,6 +62,14 @@ pub enum Refusal {
         /// Its index there.
         view: usize,
     },
+    /// Focal-power views (the driver's focal-power mode) with an option that applies to
+    /// currents only: a thermal calibration (the driver compensated the temperature), the
+    /// per-setting baseline, A0 held (its kf0 is fx at the lens off, not at 0 dpt) or the
+    /// current prior (the focal-power prior is in dpt).
+    NotForFocalPower {
+        /// The option given.
+        given: RequestOption,
+    },
     /// A calibration the data do not determine (module `conditioning`), not accepted.
     IllConditioned {
         /// The symptom.
@@ -82,6 +90,7 @@ impl Refusal {
             Refusal::NoLensOffViews => RequestOption::A0,
             Refusal::NoSettingViews => RequestOption::Method,
             Refusal::NoThermal { .. } => RequestOption::Thermal,
+            Refusal::NotForFocalPower { given } => given,
             Refusal::IllConditioned { .. } => RequestOption::AcceptIllConditioned,
         }
     }
@@ -132,6 +141,16 @@ impl Refusal {
             Refusal::NoSettingViews => {
                 format!("{} needs setting_views (several board views at each current)", per_setting())
             }
+            Refusal::NotForFocalPower { given } => format!(
+                "{} does not apply to views at a focal power (focal_power_dpt): {}",
+                s.name(given),
+                match given {
+                    RequestOption::Thermal => "the lens driver compensates the temperature in focal-power mode",
+                    RequestOption::Method => "the per-setting baseline takes views at currents",
+                    RequestOption::HoldA0 => "A0's kf0 is fx at the lens off, not at 0 dpt, so kf0 is fitted",
+                    _ => "the prior on a focal-power view's setting is in dpt (FOCAL_POWER_SIGMA_DPT)",
+                }
+            ),
             Refusal::NoThermal { setting, view } => format!(
                 "{} {view} has no e_com_ma and no thermal calibration was chosen: give one ({} with a thermal \
                  calibration, or {} for the paper's surface)",

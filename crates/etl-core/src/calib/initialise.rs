@@ -1,7 +1,7 @@
 //! The linear initialisation chain: RAC -> focal polynomial -> distortion.
 
 use super::distortion_init::distortion_a;
-use super::focal_poly::focal_poly_of_degree;
+use super::focal_poly::{focal_poly_with, Kf0};
 use super::observations::View;
 use super::params::Layout;
 use super::rac::rac;
@@ -38,11 +38,28 @@ pub fn initialise(views: &[View<'_>], a0: &A0) -> Result<CameraModel> {
 /// Errors: those of [`rac`], [`focal_poly_of_degree`] and [`distortion_a`]; flags with
 /// the paper family.
 pub fn initialise_model(views: &[View<'_>], a0: &A0, layout: Layout, flags: OpenCvFlags) -> Result<CameraModel> {
-    all_finite(&[a0.kf0x, a0.kf0y, a0.u0, a0.v0], "A0 (kf0x, kf0y, u0, v0)")?;
+    initialise_model_with(views, a0, Kf0::Known([a0.kf0x, a0.kf0y]), layout, flags)
+}
+
+/// As [`initialise_model`], with kf0 from A0 or solved with the focal polynomial
+/// ([`Kf0`]): a focal-power calibration solves it, because 0 dpt is not the lens off. A0's
+/// principal point is used either way (the ETL at any power leaves it where the lens-off
+/// calibration found it, to the precision of the start).
+pub fn initialise_model_with(
+    views: &[View<'_>],
+    a0: &A0,
+    kf0: Kf0,
+    layout: Layout,
+    flags: OpenCvFlags,
+) -> Result<CameraModel> {
+    match kf0 {
+        Kf0::Known(_) => all_finite(&[a0.kf0x, a0.kf0y, a0.u0, a0.v0], "A0 (kf0x, kf0y, u0, v0)")?,
+        Kf0::Solved => all_finite(&[a0.u0, a0.v0], "A0 (u0, v0)")?,
+    }
     flags.check(layout.model())?;
     let pp = [a0.u0, a0.v0];
     let r = rac(views, pp)?;
-    let f = focal_poly_of_degree(views, &r, [a0.kf0x, a0.kf0y], pp, layout.focal_degree())?;
+    let f = focal_poly_with(views, &r, kf0, pp, layout.focal_degree())?;
     let mut model = CameraModel {
         rotation_rodrigues: r.rotation_rodrigues,
         translation_mm: [r.tx_mm, r.ty_mm, f.tz_mm],

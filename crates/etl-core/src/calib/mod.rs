@@ -30,7 +30,8 @@ pub use bundle_adjust::{
     bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, InputNoise, RobustLoss,
     ViewCorrection, ViewScratch,
 };
-pub use initialise::{initialise, initialise_model, A0};
+pub use focal_poly::Kf0;
+pub use initialise::{initialise, initialise_model, initialise_model_with, A0};
 pub use observations::{Point, View};
 pub use params::{Layout, ParamMask};
 pub use uncertainty::{projection_uncertainty, PixelUncertainty};

@@ -13,28 +13,70 @@ pub struct Extrapolated {
     pub e_in: bool,
     /// The compensated current is outside the calibrated E_com range.
     pub e_com: bool,
+    /// The focal power is outside the calibrated focal-power range (a focal-power
+    /// calibration, [`SettingKind::FocalPower`]).
+    pub focal_power: bool,
+}
+
+/// What a calibration's setting is: the quantity its polynomials (Eq. 15-18) are in.
+///
+/// A current calibration's setting is E_com, mA: the driver current compensated for the
+/// lens's temperature by the calibration's thermal part (Eq. 7). A focal-power calibration's
+/// is the focal power the Lens Driver 4 was commanded in its focal-power mode, dpt: the
+/// driver's firmware compensates the temperature itself from the lens's EEPROM, so the
+/// calibration has no thermal part. Its zero is not the lens off (the liquid lens has its
+/// own power with no current), so its kf0 is fitted, not taken from the lens-off views.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SettingKind {
+    /// E_com, mA.
+    #[default]
+    Current,
+    /// Commanded focal power, dpt.
+    FocalPower,
+}
+
+impl SettingKind {
+    /// The file's and the messages' name: `"current"` or `"focal_power"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            SettingKind::Current => "current",
+            SettingKind::FocalPower => "focal_power",
+        }
+    }
+
+    /// The setting's unit: `"mA"` or `"dpt"`.
+    pub const fn unit(self) -> &'static str {
+        match self {
+            SettingKind::Current => "mA",
+            SettingKind::FocalPower => "dpt",
+        }
+    }
 }
 
 impl Extrapolated {
     /// Inside every range.
-    pub const NONE: Extrapolated = Extrapolated { temperature: false, e_in: false, e_com: false };
+    pub const NONE: Extrapolated = Extrapolated { temperature: false, e_in: false, e_com: false, focal_power: false };
 
     /// Whether any range was left.
     pub fn any(&self) -> bool {
-        self.temperature || self.e_in || self.e_com
+        self.temperature || self.e_in || self.e_com || self.focal_power
     }
 }
 
-/// The camera at one setting: E_com, K(E_com), the distortion there, and the pose.
+/// The camera at one setting: the setting (E_com, or a focal power), K there, the
+/// distortion there, and the pose.
 ///
-/// Built by [`super::Camera::at`]; the methods are those of [`CameraModel`] at this
-/// `e_com_ma`, so they agree with it exactly.
+/// Built by [`super::Camera::at`] or [`super::Camera::at_focal_power`]; the methods are
+/// those of [`CameraModel`] at [`Self::setting_value`], so they agree with it exactly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CameraAt {
     model: CameraModel,
+    kind: SettingKind,
     e_in_ma: f64,
     temperature_c: f64,
-    e_com_ma: f64,
+    /// E_com (mA) or the focal power (dpt), as `kind` says: the model's abscissa.
+    setting: f64,
     intrinsics: Intrinsics,
     distortion: Distortion,
     flags: Extrapolated,
@@ -43,17 +85,17 @@ pub struct CameraAt {
 impl CameraAt {
     pub(super) fn new(
         model: &CameraModel,
+        (kind, setting): (SettingKind, f64),
         e_in_ma: f64,
         temperature_c: f64,
-        e_com_ma: f64,
         flags: Extrapolated,
     ) -> Result<Self> {
-        let intrinsics = model.intrinsics(e_com_ma)?;
-        let distortion = model.distortion(e_com_ma)?;
-        Ok(CameraAt { model: *model, e_in_ma, temperature_c, e_com_ma, intrinsics, distortion, flags })
+        let intrinsics = model.intrinsics(setting)?;
+        let distortion = model.distortion(setting)?;
+        Ok(CameraAt { model: *model, kind, e_in_ma, temperature_c, setting, intrinsics, distortion, flags })
     }
 
-    /// Driver current, mA (NaN when built from a known E_com).
+    /// Driver current, mA (NaN when built from a known E_com or a focal power).
     pub fn e_in_ma(&self) -> f64 {
         self.e_in_ma
     }
@@ -61,9 +103,28 @@ impl CameraAt {
     pub fn temperature_c(&self) -> f64 {
         self.temperature_c
     }
-    /// Compensated current E_com, mA (Eq. 7).
+    /// Compensated current E_com, mA (Eq. 7); NaN for a focal-power calibration's camera.
     pub fn e_com_ma(&self) -> f64 {
-        self.e_com_ma
+        match self.kind {
+            SettingKind::Current => self.setting,
+            SettingKind::FocalPower => f64::NAN,
+        }
+    }
+    /// The commanded focal power, dpt; NaN for a current calibration's camera.
+    pub fn focal_power_dpt(&self) -> f64 {
+        match self.kind {
+            SettingKind::Current => f64::NAN,
+            SettingKind::FocalPower => self.setting,
+        }
+    }
+    /// What the setting is ([`SettingKind`]).
+    pub fn setting_kind(&self) -> SettingKind {
+        self.kind
+    }
+    /// The setting the model is evaluated at: E_com in mA, or the focal power in dpt
+    /// ([`Self::setting_kind`]); what [`CameraModel`]'s functions take as their `e_com_ma`.
+    pub fn setting_value(&self) -> f64 {
+        self.setting
     }
     /// fx, fy, u0, v0 at E_com (Eq. 16).
     pub fn intrinsics(&self) -> &Intrinsics {
@@ -88,11 +149,11 @@ impl CameraAt {
 
     /// World point (mm) -> observed pixel ([`CameraModel::project`]).
     pub fn project(&self, world_mm: [f64; 3]) -> Result<[f64; 2]> {
-        self.model.project(world_mm, self.e_com_ma)
+        self.model.project(world_mm, self.setting)
     }
     /// Observed pixel -> undistorted pixel ([`CameraModel::undistort`]).
     pub fn undistort_point(&self, pixel: [f64; 2]) -> Result<[f64; 2]> {
-        self.model.undistort(pixel, self.e_com_ma)
+        self.model.undistort(pixel, self.setting)
     }
     /// Undistorts `pixels` into `out` (same length); on error `out` holds those before.
     pub fn undistort_points(&self, pixels: &[[f64; 2]], out: &mut [[f64; 2]]) -> Result<()> {
@@ -106,10 +167,10 @@ impl CameraAt {
     }
     /// The world ray of a pixel ([`CameraModel::ray`]).
     pub fn ray(&self, pixel: [f64; 2]) -> Result<Ray> {
-        self.model.ray(pixel, self.e_com_ma)
+        self.model.ray(pixel, self.setting)
     }
     /// The pose of a planar board (points on its Z = 0) from its pixels ([`solve_pnp`]).
     pub fn solve_pnp(&self, board_mm: &[[f64; 3]], pixels: &[[f64; 2]]) -> Result<BoardPose> {
-        solve_pnp(&self.model, self.e_com_ma, board_mm, pixels)
+        solve_pnp(&self.model, self.setting, board_mm, pixels)
     }
 }

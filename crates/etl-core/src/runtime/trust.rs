@@ -17,6 +17,10 @@ pub const E_IN_MARGIN_MA: f64 = 5.0;
 /// the paper rig changes by about 0.05 % over 5 mA past its ends, well below its own
 /// standard error there; `etlcal measure` has used this margin since its first version.
 pub const E_COM_MARGIN_MA: f64 = 5.0;
+/// Focal-power margin beyond a focal-power calibration's range, dpt: 5 mA of the paper's
+/// lens (about 0.046 dpt/mA at mid-range) is 0.23 dpt; 0.25 dpt is also the Lens Driver's
+/// stated focal-power repeatability band (+-0.1 dpt) with room for the last focus step.
+pub const FOCAL_POWER_MARGIN_DPT: f64 = 0.25;
 
 /// What to do with a setting outside the calibrated ranges (widened by their margins).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -81,7 +85,7 @@ impl ThermalTrust {
         let temperature = check_opt("temperature_c", temperature_c, self.t_range_c, T_MARGIN_C, trust)?;
         let e_in = check_opt("e_in_ma", e_in_ma, self.e_in_range_ma, E_IN_MARGIN_MA, trust)?;
         let e_t = self.surface.e_t_ma(e_in_ma, temperature_c)?;
-        Ok((e_t, Extrapolated { temperature, e_in, e_com: false }))
+        Ok((e_t, Extrapolated { temperature, e_in, ..Extrapolated::NONE }))
     }
 }
 

@@ -10,4 +10,5 @@ mod input_noise;
 mod lm;
 mod nist;
 mod no_panic;
+mod setting_offset;
 mod solvers;

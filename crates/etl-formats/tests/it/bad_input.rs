@@ -24,7 +24,7 @@ fn point(world_mm: [f64; 3], pixel: [f64; 2]) -> PointObs {
 }
 
 fn view(e_in_ma: f64, temperature_c: f64, points: Vec<PointObs>) -> ViewObs {
-    ViewObs { e_in_ma, temperature_c, e_com_ma: Some(e_in_ma), points }
+    ViewObs { e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma: Some(e_in_ma), points }
 }
 
 /// Observations with one good view of two points.
@@ -115,8 +115,12 @@ fn a_refused_save_keeps_what_and_value_under_the_file_named_in_the_line() {
     let (what, value, line) = fields(o.save(&path).unwrap_err());
     assert_eq!((what.as_str(), value.as_deref()), ("views[0].e_in_ma", Some("NaN")));
     // The line as before the fields: the file, then the validator's own line.
-    let expected =
-        format!("invalid input: {}: invalid input: view 0: current or temperature is not finite", path.display());
+    // A NaN current is no setting at all (an absent `e_in_ma` reads as NaN: a focal-power
+    // view has none): the line says which two keys give one.
+    let expected = format!(
+        "invalid input: {}: invalid input: view 0 has no lens setting: give e_in_ma (mA) or focal_power_dpt (dpt)",
+        path.display()
+    );
     assert_eq!(line, expected);
     assert!(!path.exists());
     // Read back past the check, the same file is a parse error (what the readers say).
@@ -131,7 +135,7 @@ fn a_board_is_named_where_it_stands_in_the_dataset() {
     let image = PathBuf::from("v0.png");
     d.views.push(DatasetView {
         image: image.clone(),
-        e_in_ma: 120.0,
+        e_in_ma: 120.0, focal_power_dpt: None,
         temperature_c: 30.0,
         e_com_ma: None,
         z_w_mm: 50.0,

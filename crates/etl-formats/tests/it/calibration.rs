@@ -138,7 +138,8 @@ fn covariance_noise_round_trips_and_a_bad_one_is_refused_naming_the_field() {
     use etl_formats::calibration::CovarianceNoise;
     let dir = tempfile::tempdir().unwrap();
     let mut good = with_principal_point_covariance();
-    good.covariance_noise = Some(CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.01), sigma_e_ma: Some(0.4) });
+    good.covariance_noise =
+        Some(CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.01), sigma_e_ma: Some(0.4), sigma_p_dpt: None });
     let path = dir.path().join("good.json");
     good.save(&path).unwrap();
     assert_eq!(Calibration::load(&path).unwrap(), good);
@@ -147,22 +148,22 @@ fn covariance_noise_round_trips_and_a_bad_one_is_refused_naming_the_field() {
     let bads: [(&str, CovarianceNoise, &str); 4] = [
         (
             "px",
-            CovarianceNoise { sigma_px: -0.1, sigma_z_mm: None, sigma_e_ma: None },
+            CovarianceNoise { sigma_px: -0.1, sigma_z_mm: None, sigma_e_ma: None, sigma_p_dpt: None },
             "covariance_noise.sigma_px = -0.1",
         ),
         (
             "px-nan",
-            CovarianceNoise { sigma_px: f64::NAN, sigma_z_mm: None, sigma_e_ma: None },
+            CovarianceNoise { sigma_px: f64::NAN, sigma_z_mm: None, sigma_e_ma: None, sigma_p_dpt: None },
             "covariance_noise.sigma_px = NaN",
         ),
         (
             "z",
-            CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.0), sigma_e_ma: Some(0.4) },
+            CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.0), sigma_e_ma: Some(0.4), sigma_p_dpt: None },
             "covariance_noise.sigma_z_mm = 0",
         ),
         (
             "e",
-            CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.01), sigma_e_ma: Some(-1.0) },
+            CovarianceNoise { sigma_px: 0.2, sigma_z_mm: Some(0.01), sigma_e_ma: Some(-1.0), sigma_p_dpt: None },
             "covariance_noise.sigma_e_ma = -1",
         ),
     ];

@@ -53,6 +53,23 @@ pub struct FocalPowerCompensation {
     pub reference_c: f64,
 }
 
+impl FocalPowerCompensation {
+    /// The driver current the firmware sets for compensated current `e_com_ma` at sensor
+    /// reading `t_c` on a lens whose true surface is `surface`: E_in = E_com + E_T_fw(T,
+    /// E_in) by fixed-point iteration from the true surface's answer (|dE_T/dE| is a few
+    /// hundredths: it converges at once). The lens then runs at E_in - E_T(T, E_in), off
+    /// `e_com_ma` by r (E_T(T, E_in) - E_T(T_ref, E_in)). None out of the surface's reach.
+    pub fn firmware_e_in_ma(&self, surface: &ThermalSurface, e_com_ma: f64, t_c: f64) -> Option<f64> {
+        let FocalPowerCompensation { residual_fraction: r, reference_c: t_ref } = *self;
+        let mut e_in = surface.e_in_for_e_com(e_com_ma, t_c).ok()?;
+        for _ in 0..20 {
+            let (now, at_ref) = (surface.e_t_ma(e_in, t_c).ok()?, surface.e_t_ma(e_in, t_ref).ok()?);
+            e_in = e_com_ma + now - r * (now - at_ref);
+        }
+        e_in.is_finite().then_some(e_in)
+    }
+}
+
 impl Default for FocalPowerCompensation {
     /// r = 0.04 at T_ref = 25 degC: Optotune states a reproducibility of typically 0.1 dpt
     /// over 10..50 degC with compensation (MAN16 section 4.3), where an EL-10-30 drifts
@@ -215,17 +232,9 @@ impl Model {
     }
 
     /// The driver current the firmware's model says gives `e_com_ma` at the sensor's
-    /// reading: E_in = E_com + E_T_fw(T, E_in) by fixed-point iteration from the true
-    /// surface's answer (|dE_T/dE| is a few hundredths: it converges at once).
+    /// reading ([`FocalPowerCompensation::firmware_e_in_ma`]).
     fn firmware_e_in_ma(&self, e_com_ma: f64) -> Option<f64> {
-        let t = self.sensor_c();
-        let FocalPowerCompensation { residual_fraction: r, reference_c: t_ref } = self.fp_compensation;
-        let mut e_in = self.surface.e_in_for_e_com(e_com_ma, t).ok()?;
-        for _ in 0..20 {
-            let (now, at_ref) = (self.surface.e_t_ma(e_in, t).ok()?, self.surface.e_t_ma(e_in, t_ref).ok()?);
-            e_in = e_com_ma + now - r * (now - at_ref);
-        }
-        e_in.is_finite().then_some(e_in)
+        self.fp_compensation.firmware_e_in_ma(&self.surface, e_com_ma, self.sensor_c())
     }
 
     /// The current the optics follow now, mA (the command itself without dynamics).

@@ -382,7 +382,21 @@ class Calibration:
         """How distortion="auto" / focal_degree="auto" chose the model: {"method", "rule",
         "candidates": [...]}; None when the model was given."""
         ...
-    def at(self, e_in_ma: float, temperature_c: float, *, allow_extrapolation: bool = False) -> CameraAt: ...
+    def at(
+        self,
+        e_in_ma: Optional[float] = None,
+        temperature_c: Optional[float] = None,
+        *,
+        focal_power_dpt: Optional[float] = None,
+        allow_extrapolation: bool = False,
+    ) -> CameraAt: ...
+    @property
+    def setting(self) -> Literal["current", "focal_power"]: ...
+    @property
+    def focal_power_range_dpt(self) -> Optional[Tuple[float, float]]: ...
+    def focus_focal_power_dpt(
+        self, distance_mm: float, temperature_c: float, *, allow_extrapolation: bool = False
+    ) -> float: ...
     def at_e_com(self, e_com_ma: float, *, allow_extrapolation: bool = False) -> CameraAt:
         """The camera at a known E_com (a calibration without temperature compensation)."""
         ...
@@ -527,6 +541,10 @@ class CameraAt:
     @property
     def e_com_ma(self) -> float: ...
     @property
+    def focal_power_dpt(self) -> Optional[float]: ...
+    @property
+    def setting(self) -> Literal["current", "focal_power"]: ...
+    @property
     def calibration(self) -> Calibration: ...
     @property
     def extrapolated(self) -> bool: ...
@@ -592,9 +610,11 @@ class Observations:
         self,
         world_mm: _ArrayLike,
         pixels: _ArrayLike,
-        e_in_ma: float,
-        temperature_c: float,
+        e_in_ma: Optional[float] = None,
+        temperature_c: Optional[float] = None,
         e_com_ma: Optional[float] = None,
+        *,
+        focal_power_dpt: Optional[float] = None,
     ) -> None: ...
     def add_offstate_view(self, world_mm: _ArrayLike, pixels: _ArrayLike) -> None: ...
     def add_setting_view(

@@ -332,8 +332,9 @@ class FocusLaw(_Result):
 
 @dataclass(frozen=True, eq=False, repr=False)
 class ExportResult(_Result):
-    """`Calibration.export`: `e_com_ma` (mA), `extrapolated`, `camera_matrix` (3 x 3, px),
-    `dist_coeffs` (k1, k2, p1, p2, k3) and the fit's error `fit_rms_px`, `fit_max_px` (px)."""
+    """`Calibration.export`: `e_com_ma` (mA; NaN at a focal power), `extrapolated`,
+    `camera_matrix` (3 x 3, px), `dist_coeffs` (k1, k2, p1, p2, k3), the fit's error
+    `fit_rms_px`, `fit_max_px` (px), and `focal_power_dpt` (dpt; None at a current)."""
 
     e_com_ma: float
     extrapolated: bool
@@ -341,19 +342,22 @@ class ExportResult(_Result):
     dist_coeffs: _F64
     fit_rms_px: float
     fit_max_px: float
+    focal_power_dpt: Optional[float] = None
 
 
 @dataclass(frozen=True, eq=False, repr=False)
 class View(_Result):
     """An ETL view of `Observations` (`obs[i]`, `obs.view(i)`, `obs.setting_view(i)`):
-    `world_mm` ((N, 3), mm), `pixels` ((N, 2), px), `e_in_ma` (mA), `temperature_c`
-    (degC), `e_com_ma` (mA, None when not recorded)."""
+    `world_mm` ((N, 3), mm), `pixels` ((N, 2), px), `e_in_ma` (mA; None at a focal power),
+    `temperature_c` (degC), `e_com_ma` (mA, None when not recorded), `focal_power_dpt`
+    (dpt; None at a current)."""
 
     world_mm: _F64
     pixels: _F64
-    e_in_ma: float
+    e_in_ma: Optional[float]
     temperature_c: float
     e_com_ma: Optional[float]
+    focal_power_dpt: Optional[float] = None
 
 
 @dataclass(frozen=True, eq=False, repr=False)

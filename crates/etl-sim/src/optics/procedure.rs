@@ -101,7 +101,7 @@ pub fn with_pixel_noise(obs: &Observations, sigma_px: f64, seed: u64) -> Observa
 /// paper rig does).
 fn view_obs(e_ma: f64, temperature_c: f64, points: Vec<PointObs>) -> ViewObs {
     let e_in = ThermalSurface::PAPER.e_in_for_e_com(e_ma, temperature_c).unwrap_or(e_ma);
-    ViewObs { e_in_ma: e_in, temperature_c, e_com_ma: Some(e_ma), points }
+    ViewObs { e_in_ma: e_in, focal_power_dpt: None, temperature_c, e_com_ma: Some(e_ma), points }
 }
 
 /// The stage board at stage position `z_mm` (world frame) at `setting`, noise-free.

@@ -2,6 +2,7 @@
 //! more than running them): each module is one former test file.
 
 mod autofocus;
+mod focal_power;
 mod focus_law;
 mod lens_dynamics;
 mod optics;

@@ -13,6 +13,7 @@ mod cli_dataset;
 mod cli_detect;
 mod cli_diff;
 mod cli_distortion;
+mod cli_focal_power;
 mod cli_focus;
 mod cli_lens;
 mod cli_measure;

@@ -151,6 +151,7 @@ fn view_summary() -> BoxedStrategy<ViewSummary> {
     (finite(), 0..5000usize, non_negative(), finite(), finite(), finite(), finite())
         .prop_map(|(e, points, rms_px, dz_mm, de_ma, fx_px, fy_px)| ViewSummary {
             e_com_ma: e,
+            focal_power_dpt: None,
             points,
             rms_px,
             dz_mm,
@@ -262,7 +263,7 @@ fn view_obs(size: [u32; 2], planar: bool) -> BoxedStrategy<ViewObs> {
         proptest::option::of(e),
         prop::collection::vec(point(size, planar), 1..5),
     )
-        .prop_map(|(e_in_ma, temperature_c, e_com_ma, points)| ViewObs { e_in_ma, temperature_c, e_com_ma, points })
+        .prop_map(|(e_in_ma, temperature_c, e_com_ma, points)| ViewObs { e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, points })
         .boxed()
 }
 
@@ -372,7 +373,7 @@ impl Format for Dataset {
                 first_corner(),
             )
                 .prop_map(|(image, e_in_ma, temperature_c, e_com_ma, z_w_mm, board, first_corner)| {
-                    DatasetView { image, e_in_ma, temperature_c, e_com_ma, z_w_mm, board, first_corner }
+                    DatasetView { image, e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, z_w_mm, board, first_corner }
                 });
         let offstate = (image_path(), proptest::option::of(board()), first_corner())
             .prop_map(|(image, board, first_corner)| OffstateImage { image, board, first_corner });
@@ -386,7 +387,7 @@ impl Format for Dataset {
         )
             .prop_map(|(image, e_in_ma, temperature_c, e_com_ma, board, first_corner)| SettingImage {
                 image,
-                e_in_ma,
+                e_in_ma, focal_power_dpt: None,
                 temperature_c,
                 e_com_ma,
                 board,
