@@ -311,9 +311,14 @@ pub struct ViewSummary {
     pub rms_px: f64,
     /// Estimated stage correction, mm (errors-in-variables; 0 otherwise).
     pub dz_mm: f64,
-    /// Estimated current correction, mA (errors-in-variables; 0 otherwise); in a
-    /// focal-power calibration the focal-power correction, in dpt.
+    /// Estimated current correction, mA (errors-in-variables; 0 otherwise; absent, NaN
+    /// here, in a focal-power calibration).
+    #[serde(default = "crate::lens_setting::absent", skip_serializing_if = "crate::lens_setting::is_absent")]
     pub de_ma: f64,
+    /// Estimated focal-power correction, dpt (a focal-power calibration, instead of
+    /// `de_ma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub de_dpt: Option<f64>,
     /// The view's own estimate of fx, px: fx refitted to this view alone with every other
     /// number of the calibration held (0 when not computed).
     #[serde(default)]
@@ -361,6 +366,81 @@ pub const NO_TEMPERATURE_COMPENSATION: &str = "no thermal calibration was given 
 enum Direction {
     EComForEIn,
     EInForECom,
+}
+
+/// The keys of the focus law in the file: a current calibration's `coefficients_ma`,
+/// `e_com_range_ma`, `rms_ma` (the law's own), a focal-power calibration's
+/// `coefficients_dpt`, `focal_power_range_dpt`, `rms_dpt` ([`FocusLaw::setting`]); either
+/// with `distance_range_mm` and `views`. A law giving keys of both kinds, or not all of one,
+/// is refused naming them.
+mod focus_law_keys {
+    use etl_core::focus::FocusLaw;
+    use etl_core::runtime::SettingKind;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Either kind of law as read.
+    #[derive(Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Keys {
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        coefficients_ma: Option<[f64; 3]>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        coefficients_dpt: Option<[f64; 3]>,
+        distance_range_mm: [f64; 2],
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        e_com_range_ma: Option<[f64; 2]>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        focal_power_range_dpt: Option<[f64; 2]>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rms_ma: Option<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rms_dpt: Option<f64>,
+        views: usize,
+    }
+
+    pub(super) fn write<S: Serializer>(law: &Option<FocusLaw>, s: S) -> Result<S::Ok, S::Error> {
+        let Some(l) = law else { return s.serialize_none() };
+        if l.setting == SettingKind::Current {
+            return l.serialize(s);
+        }
+        let keys = Keys {
+            coefficients_ma: None,
+            coefficients_dpt: Some(l.coefficients_ma),
+            distance_range_mm: l.distance_range_mm,
+            e_com_range_ma: None,
+            focal_power_range_dpt: Some(l.e_com_range_ma),
+            rms_ma: None,
+            rms_dpt: Some(l.rms_ma),
+            views: l.views,
+        };
+        keys.serialize(s)
+    }
+
+    pub(super) fn read<'de, D: Deserializer<'de>>(d: D) -> Result<Option<FocusLaw>, D::Error> {
+        let Some(k) = Option::<Keys>::deserialize(d)? else { return Ok(None) };
+        let (setting, c, r, rms) = match (k.coefficients_ma, k.e_com_range_ma, k.rms_ma) {
+            (Some(c), Some(r), Some(rms)) if k.coefficients_dpt.is_none() && k.focal_power_range_dpt.is_none() => {
+                (SettingKind::Current, c, r, rms)
+            }
+            (None, None, None) => match (k.coefficients_dpt, k.focal_power_range_dpt, k.rms_dpt) {
+                (Some(c), Some(r), Some(rms)) => (SettingKind::FocalPower, c, r, rms),
+                _ => return Err(serde::de::Error::custom(KINDS)),
+            },
+            _ => return Err(serde::de::Error::custom(KINDS)),
+        };
+        let law = FocusLaw {
+            coefficients_ma: c,
+            distance_range_mm: k.distance_range_mm,
+            e_com_range_ma: r,
+            rms_ma: rms,
+            views: k.views,
+            setting,
+        };
+        Ok(Some(law))
+    }
+
+    const KINDS: &str = "focus_law needs coefficients_ma, e_com_range_ma and rms_ma (a current's law) or \
+                         coefficients_dpt, focal_power_range_dpt and rms_dpt (a focal power's), not a mix";
 }
 
 /// An absent range (a focal-power calibration's `e_com_range_ma`): NaN.
@@ -458,7 +538,14 @@ pub struct Calibration {
     /// The focus law: the distance in focus (mm, along the optical axis from the camera's
     /// centre) against E_com, fitted to the views (optional; absent when the views did not
     /// allow one, and in files written before it existed).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// A focal-power calibration's law is in dpt, and so are its keys
+    /// ([`focus_law_keys`]).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "focus_law_keys::write",
+        deserialize_with = "focus_law_keys::read"
+    )]
     pub focus_law: Option<FocusLaw>,
     /// The corners found to be gross outliers after the bundle adjustment and left out of
     /// the final solve (optional: absent when there are none, and in older files).
@@ -593,9 +680,14 @@ impl Calibration {
         for v in &mut self.views {
             v.focal_power_dpt = Some(v.e_com_ma);
             v.e_com_ma = f64::NAN;
+            v.de_dpt = Some(v.de_ma);
+            v.de_ma = f64::NAN;
         }
         if let Some(n) = &mut self.covariance_noise {
             n.sigma_p_dpt = n.sigma_e_ma.take();
+        }
+        if let Some(law) = &mut self.focus_law {
+            law.setting = SettingKind::FocalPower;
         }
         self
     }
@@ -934,6 +1026,12 @@ impl Calibration {
                                 give \"setting\": \"focal_power\" or remove them"
                         .into());
                 }
+                let absent = |v: &ViewSummary| v.e_com_ma.is_nan() || v.de_ma.is_nan() || v.focal_power_dpt.is_some();
+                if let Some(i) = self.views.iter().position(absent) {
+                    return Err(format!(
+                        "views[{i}] needs e_com_ma and de_ma (and no focal_power_dpt) in a current calibration"
+                    ));
+                }
                 ("e_com_range_ma", self.e_com_range_ma, etl_core::thermal::E_IN_DOMAIN_MA, "mA")
             }
             SettingKind::FocalPower => {
@@ -941,6 +1039,13 @@ impl Calibration {
                     return Err("a focal-power calibration has neither e_com_range_ma nor a thermal part (the \
                                 driver compensates the temperature): remove them"
                         .into());
+                }
+                let present =
+                    |v: &ViewSummary| !v.e_com_ma.is_nan() || !v.de_ma.is_nan() || v.focal_power_dpt.is_none();
+                if let Some(i) = self.views.iter().position(present) {
+                    return Err(format!(
+                        "views[{i}] needs focal_power_dpt and de_dpt (and neither e_com_ma nor de_ma) in a focal-power calibration"
+                    ));
                 }
                 let t = self.focal_power_t_range_c.unwrap_or([0.0; 2]);
                 if !(t[0].is_finite() && t[1].is_finite() && t[0] <= t[1]) {

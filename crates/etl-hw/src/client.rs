@@ -26,6 +26,7 @@ use crate::codec::scaling::{current_code, current_ma, temperature_c, FirmwareTyp
 use crate::codec::{scan_reply, Command, Mode, Reply, Scan};
 use crate::error::{HwError, Result};
 pub use crate::transport::Transport;
+use etl_core::physics::shaping::ZvShaper;
 
 /// How to open the driver.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -96,6 +97,23 @@ pub struct SetCurrent {
     pub code: i16,
     /// The request was outside the limits and was clamped.
     pub clamped: bool,
+}
+
+/// What [`LensClient::set_current_shaped_ma`] did: the two writes of a zero-vibration
+/// shaped step and when the second went out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShapedSet {
+    /// The current the step started from (read back before it), mA.
+    pub from_ma: f64,
+    /// The first write: the shaper's fraction of the step.
+    pub first: SetCurrent,
+    /// The second write: the target.
+    pub target: SetCurrent,
+    /// When the target went out after the first write was sent, s (the shaper's delay, or
+    /// later when the first write's read-back took longer: then `late_s` > 0).
+    pub delay_s: f64,
+    /// How late the second write was against the shaper's delay, s (0 on time).
+    pub late_s: f64,
 }
 
 /// An error frame that arrived when no reply was expected (after a fire-and-forget
@@ -535,6 +553,34 @@ impl<T: Transport> LensClient<T> {
         }
         let max = inner.max_current_ma;
         Ok(SetCurrent { requested_ma: ma, commanded_ma: current_ma(code, max), code, clamped })
+    }
+
+    /// Steps the output current to `to_ma` by the zero-vibration `shaper`
+    /// (`etl_core::physics::shaping`): reads the current, writes the shaper's fraction of
+    /// the step at once, then the target the shaper's delay after that write was sent
+    /// (each write confirmed by its read-back, as [`Self::set_current_ma`]). The
+    /// membrane's ringing cancels and the step settles in about the delay instead of its
+    /// transient (3.97 ms against 15.0 ms measured by `etlcal lens characterise` on the
+    /// published dynamics). The delay is slept: a first read-back slower than it makes the
+    /// target late, reported in [`ShapedSet::late_s`], never early.
+    ///
+    /// Errors: those of [`Self::current_ma`] and [`Self::set_current_ma`]; a shaper whose
+    /// fraction is outside (0, 1] or whose delay is not a finite time >= 0 ([`HwError::Core`]).
+    pub fn set_current_shaped_ma(&self, to_ma: f64, shaper: &ZvShaper) -> Result<ShapedSet> {
+        let ok = shaper.first_fraction > 0.0 && shaper.first_fraction <= 1.0;
+        if !(ok && shaper.delay_s.is_finite() && shaper.delay_s >= 0.0) {
+            return Err(HwError::Core(etl_core::Error::InvalidArgument {
+                what: "a shaper needs a first fraction in (0, 1] and a delay >= 0 s",
+            }));
+        }
+        let from_ma = self.current_ma()?;
+        let sent = Instant::now();
+        let first = self.set_current_ma(shaper.command_ma(from_ma, to_ma, 0.0))?;
+        let wait = Duration::from_secs_f64(shaper.delay_s).saturating_sub(sent.elapsed());
+        std::thread::sleep(wait);
+        let delay_s = sent.elapsed().as_secs_f64();
+        let target = self.set_current_ma(to_ma)?;
+        Ok(ShapedSet { from_ma, first, target, delay_s, late_s: (delay_s - shaper.delay_s).max(0.0) })
     }
 
     /// The output current, mA (`Ar`).

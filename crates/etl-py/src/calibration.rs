@@ -473,9 +473,10 @@ impl Calibration {
 
     /// What the covariance accounts for: a dict with "sigma_px" (the pixel noise, px) and,
     /// where the covariance includes the errors of the recorded stage positions and
-    /// currents, "sigma_z_mm" and "sigma_e_ma" (the "eiv" priors, or the "paper"
-    /// estimator's input noise). None for files written before it was recorded (a
-    /// "paper" covariance there is of the pixel noise alone) and for models given.
+    /// currents, "sigma_z_mm" and "sigma_e_ma" ("sigma_p_dpt", dpt, at focal powers; the
+    /// "eiv" priors, or the "paper" estimator's input noise). None for files written
+    /// before it was recorded (a "paper" covariance there is of the pixel noise alone)
+    /// and for models given.
     #[getter]
     fn covariance_noise<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Some(n) = &self.file.covariance_noise else { return Ok(None) };
@@ -484,6 +485,11 @@ impl Calibration {
         if let (Some(z), Some(e)) = (n.sigma_z_mm, n.sigma_e_ma) {
             d.set_item("sigma_z_mm", z)?;
             d.set_item("sigma_e_ma", e)?;
+        }
+        // A focal-power calibration's: the prior on the commanded power, dpt.
+        if let (Some(z), Some(p)) = (n.sigma_z_mm, n.sigma_p_dpt) {
+            d.set_item("sigma_z_mm", z)?;
+            d.set_item("sigma_p_dpt", p)?;
         }
         Ok(Some(d))
     }
@@ -1021,12 +1027,9 @@ impl Calibration {
                 Camera::new(self.model, self.file.thermal.as_ref().map(ThermalRef::trust), self.file.e_com_range_ma)
                     .py()
             }
-            etl_formats::SettingKind::FocalPower => Camera::new_focal_power(
-                self.model,
-                self.file.setting_range(),
-                self.file.focal_power_t_range_c,
-            )
-            .py(),
+            etl_formats::SettingKind::FocalPower => {
+                Camera::new_focal_power(self.model, self.file.setting_range(), self.file.focal_power_t_range_c).py()
+            }
         }
     }
 

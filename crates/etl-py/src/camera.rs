@@ -185,10 +185,15 @@ impl CameraAt {
     #[getter]
     fn extrapolated_quantities(&self) -> Vec<&'static str> {
         let f = self.inner.flags();
-        [(f.temperature, "temperature_c"), (f.e_in, "e_in_ma"), (f.e_com, "e_com_ma"), (f.focal_power, "focal_power_dpt")]
-            .into_iter()
-            .filter_map(|(on, name)| on.then_some(name))
-            .collect()
+        [
+            (f.temperature, "temperature_c"),
+            (f.e_in, "e_in_ma"),
+            (f.e_com, "e_com_ma"),
+            (f.focal_power, "focal_power_dpt"),
+        ]
+        .into_iter()
+        .filter_map(|(on, name)| on.then_some(name))
+        .collect()
     }
     /// (fx, fy) at E_com, px (Eq. 16; `Calibration.focal_lengths`).
     #[getter]

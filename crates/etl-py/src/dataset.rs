@@ -130,7 +130,8 @@ impl Dataset {
         let (e_in_ma, temperature_c, e_com_ma) = setting(e_in_ma, temperature_c, e_com_ma)?;
         let z_w_mm = finite(z_w_mm, "z_w_mm")?;
         let (board, first_corner) = own_board(board, first_corner)?;
-        let view = DatasetView { image, e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, z_w_mm, board, first_corner };
+        let view =
+            DatasetView { image, e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, z_w_mm, board, first_corner };
         self.file.views.push(view);
         Ok(())
     }
@@ -187,7 +188,15 @@ impl Dataset {
     ) -> PyResult<()> {
         let (e_in_ma, temperature_c, e_com_ma) = setting(e_in_ma, temperature_c, e_com_ma)?;
         let (board, first_corner) = own_board(board, first_corner)?;
-        self.file.setting_views.push(SettingImage { image, e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, board, first_corner });
+        self.file.setting_views.push(SettingImage {
+            image,
+            e_in_ma,
+            focal_power_dpt: None,
+            temperature_c,
+            e_com_ma,
+            board,
+            first_corner,
+        });
         Ok(())
     }
 

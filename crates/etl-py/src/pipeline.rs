@@ -62,6 +62,8 @@ impl Spelling for Keywords {
 ///     sigma_z_mm: spread of a view's recorded stage position, mm (None: the paper's
 ///         0.010): the "eiv" prior, and the error the "paper" covariance accounts for.
 ///     sigma_e_ma: the same for the recorded current, mA (None: the paper's 0.4).
+///     sigma_p_dpt: the same for a focal-power view's commanded power, dpt (views at focal
+///         powers only; None: 0.05, half the driver's stated 0.1 dpt reproducibility).
 ///     sigma_px: pixel noise, px (None: estimated from the residuals).
 ///     method: "proposed" (the paper's method, above) or "per-setting" (the paper's
 ///         baseline of section 5.2.3: Zhang at each current of the observations'
@@ -102,7 +104,7 @@ impl Spelling for Keywords {
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
     distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None,
-    accept_ill_conditioned=false, centre=None))]
+    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -126,6 +128,7 @@ pub fn calibrate(
     sigma_z_um: Option<f64>,
     accept_ill_conditioned: bool,
     centre: Option<&str>,
+    sigma_p_dpt: Option<f64>,
 ) -> PyResult<Calibration> {
     let sigma_z = match (sigma_z_mm, sigma_z_um) {
         (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
@@ -136,7 +139,7 @@ pub fn calibrate(
         a0: a0.map(|a| a.inner),
         thermal: thermal.map(crate::calibration::thermal_ref).transpose()?,
         estimator: estimator.map(parse_estimator).transpose()?,
-        priors: EivPriors { sigma_z, sigma_e_ma, sigma_px },
+        priors: EivPriors { sigma_z, sigma_e_ma, sigma_p_dpt, sigma_px },
         hold_a0,
         robust: robust.map(|r| parse_robust(r, robust_k_px.unwrap_or(DEFAULT_ROBUST_K_PX))).transpose()?,
         distortion: distortion.map(parse_distortion).transpose()?,

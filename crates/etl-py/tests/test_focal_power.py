@@ -24,6 +24,10 @@ def test_a_focal_power_calibration_from_python(focal_power_observations: pathlib
     assert obs[0].focal_power_dpt is not None and obs[0].e_in_ma is None
     cal = etlcal.calibrate(obs)
     assert cal.setting == "focal_power"
+    noise = cal.covariance_noise
+    assert noise is not None and noise["sigma_p_dpt"] == 0.05 and "sigma_e_ma" not in noise
+    own = etlcal.calibrate(obs, sigma_p_dpt=0.1).covariance_noise
+    assert own is not None and own["sigma_p_dpt"] == 0.1
     lo, hi = cal.focal_power_range_dpt
     assert 12.0 < lo < hi < 19.0
     cam = cal.at(focal_power_dpt=15.0, temperature_c=30.0)
@@ -54,6 +58,8 @@ def test_the_refusals(focal_power_observations: pathlib.Path) -> None:
         cal.at(focal_power_dpt=25.0, temperature_c=30.0)
     with pytest.raises(etlcal.InputError, match="does not apply to views at a focal power"):
         etlcal.calibrate(obs, thermal="paper")
+    with pytest.raises(etlcal.InputError, match="sigma_e_ma does not apply to views at a focal power"):
+        etlcal.calibrate(obs, sigma_e_ma=0.4)
     view = obs[0]
     with pytest.raises(etlcal.InputError, match="exactly one of e_in_ma"):
         obs.add_view(view.world_mm, view.pixels, 150.0, 30.0, focal_power_dpt=15.0)

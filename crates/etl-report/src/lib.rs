@@ -7,6 +7,7 @@ mod data;
 pub mod figure;
 pub mod heat_map;
 mod html;
+pub mod lens_dynamics;
 mod plots;
 mod uncertainty;
 pub mod zhang;

@@ -161,6 +161,11 @@ pub struct Args {
     /// for.
     #[arg(long, value_name = "MA")]
     pub sigma_e_ma: Option<f64>,
+    /// Standard deviation of a focal-power view's setting, dpt [default: 0.05, half the
+    /// driver's stated 0.1 dpt reproducibility]: as --sigma-e-ma, for views at focal
+    /// powers (refused with views at currents).
+    #[arg(long, value_name = "DPT")]
+    pub sigma_p_dpt: Option<f64>,
     /// Pixel noise standard deviation, px [default: estimated: --estimator eiv from a plain
     /// solution, --estimator paper from its residuals with the input errors' share out].
     #[arg(long, value_name = "PX")]
@@ -271,7 +276,12 @@ impl Args {
                 EstimatorArg::Paper => EstimatorChoice::Paper,
                 EstimatorArg::Eiv => EstimatorChoice::Eiv,
             }),
-            priors: EivPriors { sigma_z, sigma_e_ma: self.sigma_e_ma, sigma_px: self.sigma_px },
+            priors: EivPriors {
+                sigma_z,
+                sigma_e_ma: self.sigma_e_ma,
+                sigma_p_dpt: self.sigma_p_dpt,
+                sigma_px: self.sigma_px,
+            },
             hold_a0: self.hold_a0,
             robust,
             distortion: self.distortion.map(|d| match d {

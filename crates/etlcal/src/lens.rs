@@ -5,7 +5,11 @@
 //! Safety policy of `set-current`: a request beyond the driver's software limits is
 //! **clamped** to the nearest limit, sent so, and reported with a warning on stderr
 //! (`"clamped": true` in JSON); NaN and infinities are refused (exit 1). Nothing outside
-//! the limits is ever sent.
+//! the limits is ever sent. `set-current MA --shaped F` steps there by the zero-vibration
+//! shaper of the lens dynamics in F (`etlcal.lens-dynamics/1`, e.g. measured by
+//! `characterise --out`): the shaper's fraction of the step at once, the target its delay
+//! later (`LensClient::set_current_shaped_ma`); `--json` adds `"shaper"`:
+//! `{"first_fraction", "delay_ms", "first_ma", "late_ms"}`.
 //!
 //! `--port` opens a real driver without the `Start` handshake (which would zero the
 //! current), unless `--handshake` is given. `--virtual` starts an in-process virtual lens
@@ -25,6 +29,32 @@ use serde_json::json;
 use super::print_json;
 use etl_formats::calibration::ThermalRef;
 use etl_formats::{compact, Error, Result};
+
+/// `set-current MA --shaped F`: the shaper of the dynamics in `f`, the step taken by it;
+/// the target's write and the shaper as `--json` gives it. A file whose membrane is not
+/// underdamped has no shaper: refused in one line.
+fn set_shaped(
+    client: &LensClient,
+    ma: f64,
+    f: &std::path::Path,
+) -> Result<(etl_hw::client::SetCurrent, serde_json::Value)> {
+    let dynamics = etl_formats::LensDynamicsFile::load(f)?.dynamics();
+    let Some(z) = etl_core::physics::shaping::ZvShaper::of(&dynamics) else {
+        let why =
+            format!("{}: damping {} is not below 1: a step does not ring, no shaper", f.display(), dynamics.damping);
+        return Err(Error::invalid("--shaped", why));
+    };
+    let s = client.set_current_shaped_ma(ma, &z).map_err(Error::lens)?;
+    if s.late_s > 0.1 * z.delay_s {
+        eprintln!(
+            "etlcal: warning: the target went out {:.2} ms late (the first write's read-back)",
+            1000.0 * s.late_s
+        );
+    }
+    let j = json!({"first_fraction": z.first_fraction, "delay_ms": 1000.0 * z.delay_s,
+        "first_ma": s.first.commanded_ma, "late_ms": 1000.0 * s.late_s});
+    Ok((s.target, j))
+}
 
 /// Arguments of `etlcal lens`.
 #[derive(clap::Args, Debug)]
@@ -75,6 +105,10 @@ pub enum LensCommand {
         /// Current, mA.
         #[arg(value_name = "MA")]
         ma: f64,
+        /// Step there by the zero-vibration shaper of these dynamics
+        /// (etlcal.lens-dynamics/1): faster settling, no ringing.
+        #[arg(long, value_name = "FILE")]
+        shaped: Option<PathBuf>,
     },
     /// The driver current, mA.
     GetCurrent,
@@ -165,9 +199,12 @@ pub fn run(args: Args) -> Result<()> {
                 }
             }
         }
-        LensCommand::SetCurrent { ma } => {
+        LensCommand::SetCurrent { ma, shaped } => {
             // The client confirms the write by reading it back: a rejected `Aw` is an error here.
-            let r = client.set_current_ma(ma).map_err(Error::lens)?;
+            let (r, shaper) = match shaped {
+                Some(f) => set_shaped(&client, ma, &f)?,
+                None => (client.set_current_ma(ma).map_err(Error::lens)?, serde_json::Value::Null),
+            };
             let now = client.current_ma().map_err(Error::lens)?;
             if r.clamped {
                 let [lo, hi] = client.limits_ma();
@@ -183,6 +220,7 @@ pub fn run(args: Args) -> Result<()> {
                     "code": r.code,
                     "clamped": r.clamped,
                     "current_ma": now,
+                    "shaper": shaper,
                 }));
             } else {
                 outln!("current set to {:.4} mA (code {})", r.commanded_ma, r.code);

@@ -1,6 +1,8 @@
 //! `etlcal lens --virtual --dynamics F characterise --camera sim`: the lens's dynamics
 //! measured from frames alone ([`etl_calib::lens_dynamics::characterise`]), printed and
-//! optionally written as `etlcal.lens-dynamics/1`.
+//! optionally written as `etlcal.lens-dynamics/1` (`--out`) and as a report with the step
+//! responses plotted (`--report DIR`: index.html, step_responses.png and .svg; the
+//! directory replaced as a set; `--json` lists the files under `"report"`).
 
 use std::path::PathBuf;
 
@@ -30,6 +32,10 @@ pub struct CharacteriseArgs {
     /// defaults, which the file's `source` says).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Also write a report into DIR (created if missing, replaced as a set): index.html
+    /// with the measured numbers and the step responses plotted.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// The simulated camera on `device`, refused in one line for any other SPEC or lens.
@@ -71,6 +77,20 @@ fn as_file(c: &Characterisation) -> LensDynamicsFile {
     LensDynamicsFile::new(&d, Some(source))
 }
 
+/// Writes the report of `c` into `dir` as a set; the paths written.
+fn report(c: &Characterisation, a: &CharacteriseArgs, dir: &std::path::Path, json_out: bool) -> Result<Vec<String>> {
+    use etl_report::lens_dynamics::{write_characterisation_report, CHARACTERISATION_REPORT_FILES};
+    let source = format!("the virtual lens with its dynamics, framed by camera {} at {} Hz", a.camera, a.frame_rate);
+    let files = crate::output::write_dir_set(dir, &CHARACTERISATION_REPORT_FILES, |staging| {
+        let files = write_characterisation_report(c, &source, staging)?;
+        Ok(crate::output::moved(files, staging, dir))
+    })?;
+    if !json_out {
+        outln!("wrote the report to {} (open index.html)", dir.display());
+    }
+    Ok(files.iter().map(|p| p.display().to_string()).collect())
+}
+
 /// Runs `etlcal lens characterise`.
 pub fn run(
     client: &mut LensClient,
@@ -79,18 +99,22 @@ pub fn run(
     a: &CharacteriseArgs,
     json_out: bool,
 ) -> Result<()> {
-    if let Some(out) = &a.out {
-        crate::output::check([], &[Output::File(out)])?;
-    }
+    let outputs: Vec<Output<'_>> =
+        a.out.iter().map(|f| Output::File(f)).chain(a.report.iter().map(|d| Output::Dir(d))).collect();
+    crate::output::check([], &outputs)?;
     let mut cam = camera(a, device, has_dynamics)?;
     let c = characterise(client, &mut cam, &CharacteriseOptions::default(), &crate::progress::Bar::new(!json_out))?;
     if let Some(out) = &a.out {
         crate::output::create_parent(out)?;
         as_file(&c).save(out)?;
     }
+    let report = match &a.report {
+        Some(dir) => report(&c, a, dir, json_out)?,
+        None => vec![],
+    };
     let steps: Vec<_> =
         c.steps.iter().map(|s| json!({"step_ma": s.step_ma, "settling_ms": 1000.0 * s.settling_s})).collect();
-    let j = json!({
+    let mut j = json!({
         "settling_ms": {"up": 1000.0 * c.settling_s[0], "down": 1000.0 * c.settling_s[1]},
         "hysteresis_ma": c.hysteresis_ma,
         "creep_tau_s": c.creep_tau_s,
@@ -102,6 +126,9 @@ pub fn run(
         "shaped_settling_ms": c.shaped_settling_s.map(|s| json!({"up": 1000.0 * s[0], "down": 1000.0 * s[1]})),
         "steps": steps,
     });
+    if a.report.is_some() {
+        j["report"] = json!(report);
+    }
     if json_out {
         print_json(&j);
     } else {

@@ -291,6 +291,7 @@ fn calibration_of(
                 rms_px: s.zhang.rms_px,
                 dz_mm: 0.0,
                 de_ma: 0.0,
+                de_dpt: None,
                 fx_px: s.zhang.fx,
                 fy_px: s.zhang.fy,
             })

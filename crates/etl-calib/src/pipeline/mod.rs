@@ -81,16 +81,18 @@ impl Default for CalibrateOptions {
 
 impl CalibrateOptions {
     /// These options for views of `setting`: a focal power's prior on the setting is
-    /// [`FOCAL_POWER_SIGMA_DPT`] (in the estimator and in the input noise), a current's
-    /// is left as it is.
-    pub fn for_setting(&self, setting: SettingKind) -> CalibrateOptions {
+    /// `sigma_p_dpt` or else [`FOCAL_POWER_SIGMA_DPT`] (in the estimator and in the input
+    /// noise), a current's is left as it is. Options already for `setting` are kept as
+    /// they are (a prior chosen stays).
+    pub fn with_setting(&self, setting: SettingKind, sigma_p_dpt: Option<f64>) -> CalibrateOptions {
         let mut o = CalibrateOptions { setting, ..*self };
-        if setting == SettingKind::FocalPower {
+        if setting == SettingKind::FocalPower && self.setting != SettingKind::FocalPower {
+            let sigma = sigma_p_dpt.unwrap_or(FOCAL_POWER_SIGMA_DPT);
             if let Estimator::Eiv { sigma_e_ma, .. } = &mut o.estimator {
-                *sigma_e_ma = FOCAL_POWER_SIGMA_DPT;
+                *sigma_e_ma = sigma;
             }
             if let Some(n) = &mut o.input_noise {
-                n.sigma_e_ma = FOCAL_POWER_SIGMA_DPT;
+                n.sigma_e_ma = sigma;
             }
         }
         o
@@ -226,7 +228,7 @@ pub fn calibrate(
             "no ETL views (views) in the observations: the proposed method needs the board on the stage at >= 3 currents",
         ));
     }
-    let options = &options.for_setting(obs.setting_kind()?);
+    let options = &options.with_setting(obs.setting_kind()?, None);
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
@@ -268,6 +270,7 @@ fn view_summaries(m: &CameraModel, views: &[View<'_>], solved: &solve::Solved) -
                 rms_px: if n > 0 { (s / n as f64).sqrt() } else { 0.0 },
                 dz_mm: c.dz_mm,
                 de_ma: c.de_ma,
+                de_dpt: None,
                 fx_px,
                 fy_px,
             }

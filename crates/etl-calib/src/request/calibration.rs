@@ -76,6 +76,9 @@ pub struct EivPriors {
     pub sigma_z: Option<StageSigma>,
     /// The current's prior standard deviation, mA.
     pub sigma_e_ma: Option<f64>,
+    /// A focal-power view's prior standard deviation, dpt (focal-power views only;
+    /// `None`: [`crate::pipeline::FOCAL_POWER_SIGMA_DPT`]).
+    pub sigma_p_dpt: Option<f64>,
     /// The pixel noise, px; `None`: estimated (the default).
     pub sigma_px: Option<f64>,
 }
@@ -365,6 +368,7 @@ impl CalibrationRequest {
         let given = [
             p.sigma_z.map(StageSigma::given),
             p.sigma_e_ma.map(|s| (RequestOption::SigmaEMa, s)),
+            p.sigma_p_dpt.map(|s| (RequestOption::SigmaPDpt, s)),
             p.sigma_px.map(|s| (RequestOption::SigmaPx, s)),
             self.robust.map(|r| match r {
                 RobustLoss::Huber { k_px } | RobustLoss::Cauchy { k_px } => (RequestOption::RobustKPx, k_px),
@@ -425,8 +429,11 @@ impl CalibrationRequest {
     /// [`Self::run`] without the conditioning check.
     fn run_unchecked(&self, obs: &Observations, spelling: &dyn Spelling) -> Result<Calibrated> {
         self.validate(spelling)?;
-        if obs.setting_kind()? == etl_formats::SettingKind::FocalPower {
+        let setting = obs.setting_kind()?;
+        if setting == etl_formats::SettingKind::FocalPower {
             self.check_focal_power().map_err(|r| r.to_error(spelling))?;
+        } else if self.priors.sigma_p_dpt.is_some() {
+            return Err(Refusal::OnlyForFocalPower.to_error(spelling));
         }
         let thermal = self.thermal.as_ref();
         if thermal.is_none() {
@@ -447,7 +454,7 @@ impl CalibrationRequest {
         if self.a0.is_none() && obs.offstate_views.is_empty() {
             return Err(Refusal::NoLensOffViews.to_error(spelling));
         }
-        let options = self.options();
+        let options = self.options().with_setting(setting, self.priors.sigma_p_dpt);
         let result = match (self.family(), self.degree(), self.moving_centre()) {
             (Some(family), Some(degree), Some(moving)) => {
                 let layout = Layout::new(family, degree).map_err(Error::Core)?.with_moving_centre(moving);

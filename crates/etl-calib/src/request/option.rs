@@ -22,6 +22,8 @@ pub enum RequestOption {
     SigmaZUm,
     /// The errors-in-variables prior on the current, mA.
     SigmaEMa,
+    /// The errors-in-variables prior on a focal-power view's setting, dpt.
+    SigmaPDpt,
     /// The errors-in-variables pixel noise, px.
     SigmaPx,
     /// Hold A0 in the bundle adjustment.
@@ -58,6 +60,7 @@ impl RequestOption {
             RequestOption::SigmaZMm => "sigma_z_mm",
             RequestOption::SigmaZUm => "sigma_z_um",
             RequestOption::SigmaEMa => "sigma_e_ma",
+            RequestOption::SigmaPDpt => "sigma_p_dpt",
             RequestOption::SigmaPx => "sigma_px",
             RequestOption::HoldA0 => "hold_a0",
             RequestOption::Robust => "robust",

@@ -70,6 +70,8 @@ pub enum Refusal {
         /// The option given.
         given: RequestOption,
     },
+    /// The focal-power prior given with views at currents.
+    OnlyForFocalPower,
     /// A calibration the data do not determine (module `conditioning`), not accepted.
     IllConditioned {
         /// The symptom.
@@ -91,6 +93,7 @@ impl Refusal {
             Refusal::NoSettingViews => RequestOption::Method,
             Refusal::NoThermal { .. } => RequestOption::Thermal,
             Refusal::NotForFocalPower { given } => given,
+            Refusal::OnlyForFocalPower => RequestOption::SigmaPDpt,
             Refusal::IllConditioned { .. } => RequestOption::AcceptIllConditioned,
         }
     }
@@ -148,8 +151,13 @@ impl Refusal {
                     RequestOption::Thermal => "the lens driver compensates the temperature in focal-power mode",
                     RequestOption::Method => "the per-setting baseline takes views at currents",
                     RequestOption::HoldA0 => "A0's kf0 is fx at the lens off, not at 0 dpt, so kf0 is fitted",
-                    _ => "the prior on a focal-power view's setting is in dpt (FOCAL_POWER_SIGMA_DPT)",
+                    _ => "the prior on a focal-power view's setting is in dpt",
                 }
+            ),
+            Refusal::OnlyForFocalPower => format!(
+                "{} is the prior on a focal-power view's setting, and these views are at currents: give {} instead",
+                s.name(RequestOption::SigmaPDpt),
+                s.name(RequestOption::SigmaEMa)
             ),
             Refusal::NoThermal { setting, view } => format!(
                 "{} {view} has no e_com_ma and no thermal calibration was chosen: give one ({} with a thermal \
@@ -196,6 +204,7 @@ pub const fn largest(option: RequestOption) -> Option<(f64, &'static str)> {
         RequestOption::SigmaZMm => Some((10.0, "mm")),
         RequestOption::SigmaZUm => Some((10_000.0, "um")),
         RequestOption::SigmaEMa => Some((50.0, "mA")),
+        RequestOption::SigmaPDpt => Some((5.0, "dpt")),
         RequestOption::SigmaPx | RequestOption::RobustKPx => Some((100.0, "px")),
         _ => None,
     }

@@ -40,7 +40,7 @@ fn the_defaults_are_the_papers_model_and_errors_in_variables() {
     // Priors given in either unit give the same estimator: 10 um is the paper's 0.010 mm.
     for sigma_z in [StageSigma::Um(10.0), StageSigma::Mm(0.010)] {
         let given = CalibrationRequest {
-            priors: EivPriors { sigma_z: Some(sigma_z), sigma_e_ma: Some(0.4), sigma_px: None },
+            priors: EivPriors { sigma_z: Some(sigma_z), sigma_e_ma: Some(0.4), sigma_p_dpt: None, sigma_px: None },
             ..CalibrationRequest::default()
         };
         assert_eq!(given.estimator(), Estimator::EIV_PAPER);

@@ -69,6 +69,11 @@ pub struct FocusLaw {
     pub rms_ma: f64,
     /// Views fitted.
     pub views: usize,
+    /// What the law's setting is: E_com (mA; the default) or the focal power (dpt), whose
+    /// calibration file names the law's keys in dpt (`coefficients_dpt`,
+    /// `focal_power_range_dpt`, `rms_dpt`). Not a key of its own.
+    #[serde(skip)]
+    pub setting: crate::runtime::SettingKind,
 }
 
 /// Dioptres (1/m) of a distance in mm.
@@ -138,6 +143,7 @@ impl FocusLaw {
             e_com_range_ma: e_range,
             rms_ma,
             views: samples.len(),
+            setting: crate::runtime::SettingKind::Current,
         };
         law.validate()?;
         Ok(law)

@@ -135,7 +135,8 @@ fn a_board_is_named_where_it_stands_in_the_dataset() {
     let image = PathBuf::from("v0.png");
     d.views.push(DatasetView {
         image: image.clone(),
-        e_in_ma: 120.0, focal_power_dpt: None,
+        e_in_ma: 120.0,
+        focal_power_dpt: None,
         temperature_c: 30.0,
         e_com_ma: None,
         z_w_mm: 50.0,

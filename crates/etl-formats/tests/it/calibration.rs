@@ -527,3 +527,53 @@ fn pixel_projection_std_refuses_bad_distances_and_passes_the_principal_point() {
         Calibration::load(&fixture()).unwrap().pixel_projection_std([300.0, 1200.0], 150.0, None, refuse).unwrap_err();
     assert!(e.to_string().contains("no covariance"), "{e}");
 }
+
+/// A calibration made a focal-power one writes no key in mA: the range, the views' setting
+/// and correction, the focus law and the noise in dpt; it reads back the same. A file
+/// mixing the two kinds is refused naming what is wrong, and nothing is written.
+#[test]
+fn a_focal_power_calibration_names_its_keys_in_dpt_and_a_mix_is_refused() {
+    let mut good = Calibration::load(&fixture()).unwrap();
+    good.thermal = None;
+    // The fixture predates the focus law and the noise: a law of 15 views and the paper's.
+    let samples: Vec<etl_core::focus::FocusSample> = (0..15)
+        .map(|k| etl_core::focus::FocusSample { e_com_ma: 80.0 + 10.0 * k as f64, distance_mm: 120.0 - 5.0 * k as f64 })
+        .collect();
+    good.focus_law = Some(etl_core::focus::FocusLaw::fit(&samples).unwrap());
+    good.covariance_noise = Some(etl_formats::calibration::CovarianceNoise {
+        sigma_px: 0.2,
+        sigma_z_mm: Some(0.01),
+        sigma_e_ma: Some(0.4),
+        sigma_p_dpt: None,
+    });
+    // Its numbers are a current calibration's; the range, as a focal power's would be.
+    good.e_com_range_ma = [12.4, 18.8];
+    let fp = good.clone().into_focal_power(Some([25.0, 35.0]));
+    let text = serde_json::to_string(&fp).unwrap();
+    for key in ["e_com_range_ma", "e_com_ma", "de_ma", "coefficients_ma", "rms_ma", "sigma_e_ma"] {
+        assert!(!text.contains(&format!("\"{key}\"")), "{key} in {text:.400}");
+    }
+    for key in ["focal_power_range_dpt", "focal_power_dpt", "de_dpt", "coefficients_dpt", "rms_dpt"] {
+        assert!(text.contains(&format!("\"{key}\"")), "{key} missing");
+    }
+    let back = Calibration::parse(&text, Path::new("fp.json")).unwrap();
+    assert_eq!(serde_json::to_string(&back).unwrap(), text, "it reads back the same (NaN marks what is absent)");
+    assert_eq!(back.setting_range(), good.e_com_range_ma);
+    let mixed = text.replacen("\"rms_dpt\"", "\"rms_ma\"", 1);
+    let err = Calibration::parse(&mixed, Path::new("fp.json")).unwrap_err().to_string();
+    assert!(err.contains("not a mix"), "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let spoils: [Spoil; 3] = [
+        ("thermal part", |c| c.thermal = Calibration::load(&fixture()).unwrap().thermal),
+        ("e_com_ma", |c| c.views[2].e_com_ma = 150.0),
+        ("focal_power_t_range_c", |c| c.focal_power_t_range_c = Some([35.0, 25.0])),
+    ];
+    for (what, spoil) in spoils {
+        let mut c = fp.clone();
+        spoil(&mut c);
+        let path = dir.path().join("c.json");
+        let err = c.save(&path).unwrap_err().to_string();
+        assert!(err.contains(what), "{what}: {err}");
+        assert!(!path.exists());
+    }
+}

@@ -180,6 +180,35 @@ fn set_current_writes_aw_then_confirms_it_with_ar() {
     });
 }
 
+/// A zero-vibration shaped step from 0 to 100 mA: the current read, 60 % of the step
+/// (code 839: 60 mA x 4095 / 292.84 = 839.0), then the target (code 1398) no earlier than
+/// the shaper's delay after the first write; each write confirmed by its read-back. A
+/// shaper that is no step shape is refused before a byte is written.
+#[test]
+fn a_shaped_step_writes_the_fraction_then_the_target_after_the_delay() {
+    let then = [
+        (ar(), a_reply(0)),
+        (frame(b"Aw\x03\x47"), vec![]),
+        (ar(), a_reply(839)),
+        (hex("41 77 05 76 26 90"), vec![]),
+        (ar(), a_reply(1398)),
+    ];
+    let shaper = etl_core::physics::shaping::ZvShaper { first_fraction: 0.6, delay_s: 0.008 };
+    run(&then, |client| {
+        let start = Instant::now();
+        let s = client.set_current_shaped_ma(100.0, &shaper).unwrap();
+        assert!(start.elapsed() >= Duration::from_millis(8));
+        assert_eq!((s.from_ma, s.first.code, s.target.code), (0.0, 839, 1398));
+        assert!(s.delay_s >= 0.008 && s.late_s == (s.delay_s - 0.008).max(0.0), "{s:?}");
+        for bad in [0.0, 1.5, f64::NAN] {
+            let z = etl_core::physics::shaping::ZvShaper { first_fraction: bad, delay_s: 0.004 };
+            assert!(matches!(client.set_current_shaped_ma(100.0, &z), Err(HwError::Core(_))), "{bad}");
+        }
+        let z = etl_core::physics::shaping::ZvShaper { first_fraction: 0.6, delay_s: -1.0 };
+        assert!(client.set_current_shaped_ma(100.0, &z).is_err());
+    });
+}
+
 #[test]
 fn a_current_command_the_driver_rejects_is_an_error_naming_aw() {
     // E 02 answers the `Aw`; the read-back's `A` (the old code 0) follows it and is consumed,

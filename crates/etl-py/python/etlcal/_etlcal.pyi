@@ -681,6 +681,7 @@ def calibrate(
     sigma_z_um: Optional[float] = None,
     accept_ill_conditioned: bool = False,
     centre: Optional[Literal["fixed", "moving", "auto"]] = None,
+    sigma_p_dpt: Optional[float] = None,
 ) -> Calibration:
     """The paper's calibration (or the per-setting baseline) from observations; every
     keyword is the `etlcal calibrate` flag of the same name (hold_a0: --hold-a0). None

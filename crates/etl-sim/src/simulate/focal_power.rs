@@ -54,7 +54,6 @@ pub fn current_for_power_ma(dpt: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-
 /// The paper rig's views in focal-power mode under `noise`, seeded, the temperatures
 /// cycling through `temperatures_c` and the firmware compensating with `compensation`
 /// (module docs). `true_de_ma` holds each view's true focal-power error, dpt.

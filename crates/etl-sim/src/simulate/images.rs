@@ -244,7 +244,8 @@ fn etl_views(sim: &Simulation, dir: &Path, options: &ImageOptions, seed: u64) ->
         });
         dataset.views.push(DatasetView {
             image,
-            e_in_ma: view.e_in_ma, focal_power_dpt: None,
+            e_in_ma: view.e_in_ma,
+            focal_power_dpt: None,
             temperature_c: view.temperature_c,
             e_com_ma: view.e_com_ma,
             z_w_mm: z_rec,

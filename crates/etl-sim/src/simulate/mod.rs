@@ -337,7 +337,13 @@ pub fn simulate_rig(design: &RigDesign, noise: &NoiseModel, seed: u64) -> Simula
         // The recorded current is E_com; the driver was commanded the E_in that gives it at
         // the lens temperature.
         let e_in = ThermalSurface::PAPER.e_in_for_e_com(e, PAPER_TEMPERATURE_C).unwrap_or(e);
-        obs.views.push(ViewObs { e_in_ma: e_in, focal_power_dpt: None, temperature_c: PAPER_TEMPERATURE_C, e_com_ma: Some(e), points });
+        obs.views.push(ViewObs {
+            e_in_ma: e_in,
+            focal_power_dpt: None,
+            temperature_c: PAPER_TEMPERATURE_C,
+            e_com_ma: Some(e),
+            points,
+        });
         dzs.push(dz);
         des.push(de);
     }
@@ -441,7 +447,8 @@ pub fn add_setting_views(obs: &mut Observations, rig: &SettingRig, noise: &Noise
             }
             let e_in = ThermalSurface::PAPER.e_in_for_e_com(e, PAPER_TEMPERATURE_C).unwrap_or(e);
             obs.setting_views.push(ViewObs {
-                e_in_ma: e_in, focal_power_dpt: None,
+                e_in_ma: e_in,
+                focal_power_dpt: None,
                 temperature_c: PAPER_TEMPERATURE_C,
                 e_com_ma: Some(e),
                 points,

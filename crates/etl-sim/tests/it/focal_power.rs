@@ -62,6 +62,9 @@ fn check_the_file(cal: &etl_formats::Calibration, sim: &etl_sim::simulate::Simul
     assert_eq!(json["setting"], "focal_power");
     assert!(json.get("e_com_range_ma").is_none() && json["views"][0].get("e_com_ma").is_none(), "{text:.300}");
     assert!(json["views"][0]["focal_power_dpt"].is_f64() && json["covariance_noise"]["sigma_p_dpt"] == 0.05);
+    let law = &json["focus_law"];
+    assert!(law["coefficients_dpt"].is_array() && law["focal_power_range_dpt"].is_array() && law["rms_dpt"].is_f64());
+    assert!(!text.contains("_ma\""), "no key in mA: {text:.300}");
     let back = etl_formats::Calibration::parse(&text, std::path::Path::new("fp.json")).unwrap();
     assert_eq!(back.setting_range(), [lo, hi]);
     let p = power_dpt(150.0);

@@ -93,6 +93,19 @@ fn a_focal_power_calibration_from_simulation_to_focus_and_export() {
         "--json",
     ]);
     run(export(&["--dpt", "15", "--t", "30"], &p("cur.json")), "its setting is the lens current");
+    // The prior on the focal power: recorded as given; refused with currents, or not positive.
+    let own =
+        json_of(&["calibrate", "--observations", &obs_path, "--sigma-p-dpt", "0.1", "--out", &p("own.json"), "--json"]);
+    assert_eq!(own["covariance_noise"]["sigma_p_dpt"], 0.1, "{}", own["covariance_noise"]);
+    let cur_obs = p("cur/observations.json");
+    let with_current =
+        ["calibrate", "--observations", &cur_obs, "--thermal", "paper", "--sigma-p-dpt", "0.1", "--out", &out];
+    refused(&with_current, "--sigma-p-dpt is the prior on a focal-power view's setting", Path::new(&out));
+    refused(
+        &["calibrate", "--observations", &obs_path, "--sigma-p-dpt", "0", "--out", &out],
+        "--sigma-p-dpt must be positive",
+        Path::new(&out),
+    );
 }
 
 /// Views of both kinds in one file are refused naming the view, and a focal-power view

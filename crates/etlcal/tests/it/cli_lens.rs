@@ -261,6 +261,7 @@ fn focal_power_mode_in_the_documented_order_and_its_refusals_in_one_line() {
 fn characterise_prints_the_documented_keys_writes_the_dynamics_and_refuses_what_it_cannot_frame() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("measured.json");
+    let report = dir.path().join("report");
     let f = published_dynamics();
     let args = [
         "lens",
@@ -273,6 +274,8 @@ fn characterise_prints_the_documented_keys_writes_the_dynamics_and_refuses_what_
         "sim",
         "--out",
         out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
     ];
     let (code, stdout, err) = etlcal(&args);
     assert_eq!(code, 0, "{err}");
@@ -286,10 +289,37 @@ fn characterise_prints_the_documented_keys_writes_the_dynamics_and_refuses_what_
     let written = etl_formats::LensDynamicsFile::load(&out).unwrap();
     assert!((written.natural_frequency_hz - 150.0).abs() < 15.0, "{written:?}");
     assert!(written.source.unwrap().contains("not measured: the published defaults"));
+    // The report: the page with the numbers, the step responses plotted.
+    let files: Vec<&str> = j["report"].as_array().unwrap().iter().map(|p| p.as_str().unwrap()).collect();
+    assert_eq!(files.len(), 3, "{j}");
+    let html = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(html.contains(&format!("{up:.2} ms up")) && html.contains("step_responses.png"), "{html:.500}");
+    assert!(std::fs::metadata(report.join("step_responses.png")).unwrap().len() > 1000);
     refused(&["lens", "--virtual", "characterise", "--camera", "sim"], "nothing to characterise");
     refused(&["lens", "--virtual", "--dynamics", &f, "characterise", "--camera", "basler:1"], "only `sim` exists yet");
     refused(
         &["lens", "--virtual", "--dynamics", &f, "characterise", "--camera", "sim", "--frame-rate", "0"],
         "--frame-rate",
     );
+}
+
+/// `set-current --shaped F`: the step split by the zero-vibration shaper of F's membrane
+/// (published: 150 Hz, damping 0.28: 71.4 % at once, the rest 3.47 ms later), the target
+/// confirmed; an overdamped membrane has no shaper and is refused in one line.
+#[test]
+fn set_current_shaped_splits_the_step_by_the_shaper_of_the_dynamics() {
+    let f = published_dynamics();
+    let (code, stdout, err) = etlcal(&["lens", "--virtual", "--json", "set-current", "100", "--shaped", &f]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    let s = &j["shaper"];
+    let fraction = s["first_fraction"].as_f64().unwrap();
+    assert!((fraction - 0.7143).abs() < 1e-3 && (s["delay_ms"].as_f64().unwrap() - 3.472).abs() < 1e-3, "{s}");
+    assert!((s["first_ma"].as_f64().unwrap() - 100.0 * fraction).abs() < 0.1, "{s}");
+    assert!((j["current_ma"].as_f64().unwrap() - 100.0).abs() < 0.1, "{j}");
+    let dir = tempfile::tempdir().unwrap();
+    let over = dir.path().join("over.json");
+    let text = std::fs::read_to_string(&f).unwrap().replace("\"damping\": 0.28", "\"damping\": 1.5");
+    std::fs::write(&over, text).unwrap();
+    refused(&["lens", "--virtual", "set-current", "100", "--shaped", over.to_str().unwrap()], "no shaper");
 }

@@ -128,6 +128,7 @@ fn focus_law() -> BoxedStrategy<FocusLaw> {
             e_com_range_ma: e,
             rms_ma: rms,
             views,
+            setting: Default::default(),
         })
         .boxed()
 }
@@ -156,6 +157,7 @@ fn view_summary() -> BoxedStrategy<ViewSummary> {
             rms_px,
             dz_mm,
             de_ma,
+            de_dpt: None,
             fx_px,
             fy_px,
         })
@@ -263,7 +265,13 @@ fn view_obs(size: [u32; 2], planar: bool) -> BoxedStrategy<ViewObs> {
         proptest::option::of(e),
         prop::collection::vec(point(size, planar), 1..5),
     )
-        .prop_map(|(e_in_ma, temperature_c, e_com_ma, points)| ViewObs { e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, points })
+        .prop_map(|(e_in_ma, temperature_c, e_com_ma, points)| ViewObs {
+            e_in_ma,
+            focal_power_dpt: None,
+            temperature_c,
+            e_com_ma,
+            points,
+        })
         .boxed()
 }
 
@@ -362,19 +370,25 @@ impl Format for Dataset {
     ];
 
     fn strategy() -> BoxedStrategy<Self> {
-        let view =
-            (
-                image_path(),
-                finite(),
-                finite(),
-                proptest::option::of(finite()),
-                finite(),
-                proptest::option::of(board()),
-                first_corner(),
-            )
-                .prop_map(|(image, e_in_ma, temperature_c, e_com_ma, z_w_mm, board, first_corner)| {
-                    DatasetView { image, e_in_ma, focal_power_dpt: None, temperature_c, e_com_ma, z_w_mm, board, first_corner }
-                });
+        let view = (
+            image_path(),
+            finite(),
+            finite(),
+            proptest::option::of(finite()),
+            finite(),
+            proptest::option::of(board()),
+            first_corner(),
+        )
+            .prop_map(|(image, e_in_ma, temperature_c, e_com_ma, z_w_mm, board, first_corner)| DatasetView {
+                image,
+                e_in_ma,
+                focal_power_dpt: None,
+                temperature_c,
+                e_com_ma,
+                z_w_mm,
+                board,
+                first_corner,
+            });
         let offstate = (image_path(), proptest::option::of(board()), first_corner())
             .prop_map(|(image, board, first_corner)| OffstateImage { image, board, first_corner });
         let setting = (
@@ -387,7 +401,8 @@ impl Format for Dataset {
         )
             .prop_map(|(image, e_in_ma, temperature_c, e_com_ma, board, first_corner)| SettingImage {
                 image,
-                e_in_ma, focal_power_dpt: None,
+                e_in_ma,
+                focal_power_dpt: None,
                 temperature_c,
                 e_com_ma,
                 board,
