@@ -1,24 +1,44 @@
 //! What any per-current central model can reach on the ray-traced rigs of fixtures/optics,
 //! noise-free ([`etl_studies::optics::floor`]); prints one Markdown table per rig
 //! (docs/RESULTS.md). Run:
-//! `cargo run --release -p etl-studies --example optics_floor -- [OPTICS_FILE...]`
-//! (default: the fixtures' rigs).
+//! `cargo run --release -p etl-studies --example optics_floor -- [--stop-scale S] [OPTICS_FILE...]`
+//! (default: the fixtures' rigs; `--stop-scale S` scales the aperture stop's
+//! semi-diameter by S, 0 < S <= 1: the same rig stopped down).
 
 use std::path::Path;
 
 use etl_formats::optics::OpticsFile;
+use etl_formats::{Error, Result};
 use etl_sim::optics::OpticalRig;
 use etl_studies::optics::floor::central_floor;
 
 /// The rigs run when no file is given.
 const FIXTURES: [&str; 2] = ["cooke-16mm-centred.json", "double-gauss-25mm-toleranced.json"];
 
-fn main() -> etl_formats::Result<()> {
+fn main() -> Result<()> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/optics");
-    let given: Vec<std::path::PathBuf> = std::env::args().skip(1).map(Into::into).collect();
-    let files = if given.is_empty() { FIXTURES.iter().map(|n| dir.join(n)).collect() } else { given };
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut scale = 1.0;
+    if args.first().map(String::as_str) == Some("--stop-scale") {
+        let value = args.get(1).and_then(|s| s.parse::<f64>().ok()).filter(|s| *s > 0.0 && *s <= 1.0);
+        scale = value.ok_or_else(|| Error::invalid("--stop-scale", "--stop-scale takes a number in (0, 1]"))?;
+        args.drain(..2);
+    }
+    let files: Vec<std::path::PathBuf> = if args.is_empty() {
+        FIXTURES.iter().map(|n| dir.join(n)).collect()
+    } else {
+        args.iter().map(Into::into).collect()
+    };
     for path in files {
-        let rig = OpticalRig::new(OpticsFile::load(&path)?)?;
+        let mut file = OpticsFile::load(&path)?;
+        if scale != 1.0 {
+            let stop = file.prime.stop;
+            if let Some(s) = file.prime.surfaces.get_mut(stop) {
+                s.semi_diameter_mm *= scale;
+            }
+            file.name = format!("{} with its stop scaled by {scale}", file.name);
+        }
+        let rig = OpticalRig::new(file)?;
         println!("{}", central_floor(&rig, &[80.0, 150.0, 225.0])?.markdown());
     }
     Ok(())
