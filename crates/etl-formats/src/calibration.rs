@@ -328,6 +328,18 @@ pub struct ViewSummary {
     pub fy_px: f64,
 }
 
+impl ViewSummary {
+    /// The view's setting in its calibration's unit: `focal_power_dpt`, or `e_com_ma`.
+    pub fn setting(&self) -> f64 {
+        self.focal_power_dpt.unwrap_or(self.e_com_ma)
+    }
+
+    /// The view's setting correction in its calibration's unit: `de_dpt`, or `de_ma`.
+    pub fn setting_correction(&self) -> f64 {
+        self.de_dpt.unwrap_or(self.de_ma)
+    }
+}
+
 /// The file's `"distortion_model"` for a family: none for the paper's (files unchanged).
 fn distortion_model_field(model: DistortionModel) -> Option<String> {
     match model {
@@ -708,7 +720,7 @@ impl Calibration {
 
     /// The setting of each view summary, in the setting's unit (E_com or focal power).
     pub fn view_settings(&self) -> Vec<f64> {
-        self.views.iter().map(|v| v.focal_power_dpt.unwrap_or(v.e_com_ma)).collect()
+        self.views.iter().map(ViewSummary::setting).collect()
     }
 
     /// The distortion family: `"distortion_model"`, the paper's when absent. Errors: a

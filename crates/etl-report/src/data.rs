@@ -120,7 +120,7 @@ fn gather_views(
     obs.validate()?;
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
-    let mut view_focal: Vec<(f64, f64, f64)> = cal.views.iter().map(|v| (v.e_com_ma, v.fx_px, v.fy_px)).collect();
+    let mut view_focal: Vec<(f64, f64, f64)> = cal.views.iter().map(|v| (v.setting(), v.fx_px, v.fy_px)).collect();
     let recompute = view_focal.len() != obs.views.len() || view_focal.iter().all(|v| v.1 == 0.0);
     if recompute {
         view_focal.clear();
@@ -130,7 +130,7 @@ fn gather_views(
     let (mut view_dist, mut views) = (vec![], vec![]);
     for (k, (p, &e)) in pts.iter().zip(&e_com).enumerate() {
         // The errors-in-variables corrections of the calibration, when it has them.
-        let (dz, de) = cal.views.get(k).map_or((0.0, 0.0), |v| (v.dz_mm, v.de_ma));
+        let (dz, de) = cal.views.get(k).map_or((0.0, 0.0), |v| (v.dz_mm, v.setting_correction()));
         // The points of the final solve: the calibration's outliers (listed in their own
         // table) would swamp the residual plots and the view's distortion estimate.
         let outlier = |i: usize| cal.outliers.iter().any(|o| o.view == k && o.point == i);
@@ -240,7 +240,7 @@ pub(crate) fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Opt
             cal: cal.clone(),
             model,
             covariance: None,
-            view_focal: cal.views.iter().map(|v| (v.e_com_ma, v.fx_px, v.fy_px)).collect(),
+            view_focal: cal.views.iter().map(|v| (v.setting(), v.fx_px, v.fy_px)).collect(),
             view_dist: vec![],
             views: vec![],
             map_currents: [0.0; 3],
@@ -256,4 +256,13 @@ pub(crate) fn gather(cal: &Calibration, obs: Option<&Observations>, thermal: Opt
         d.std_maps = d.map_currents.iter().map(|&e| std_map(&d, &c, e)).collect();
     }
     Ok(d)
+}
+
+/// The name and unit of a calibration's setting as the report labels it: ("E_com", "mA"),
+/// or ("focal power", "dpt") for a focal-power calibration.
+pub(crate) fn setting_axis(cal: &etl_formats::Calibration) -> (&'static str, &'static str) {
+    match cal.setting_kind() {
+        etl_formats::SettingKind::Current => ("E_com", "mA"),
+        etl_formats::SettingKind::FocalPower => ("focal power", "dpt"),
+    }
 }

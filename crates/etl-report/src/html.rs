@@ -236,14 +236,15 @@ fn views_table(d: &Data) -> String {
         .map(|(k, v)| {
             format!(
                 "<tr><td>{k}</td><td>{:.2}</td><td>{}</td><td>{:.3}</td><td>{:.2}</td><td>{:.2}</td><td>{:.4}</td><td>{:.3}</td></tr>\n",
-                v.e_com_ma, v.points, v.rms_px, v.fx_px, v.fy_px, v.dz_mm, v.de_ma
+                v.setting(), v.points, v.rms_px, v.fx_px, v.fy_px, v.dz_mm, v.setting_correction()
             )
         })
         .collect();
+    let (name, unit) = crate::data::setting_axis(&d.cal);
     format!(
-        "<p>dZ, dE: the errors-in-variables corrections of the view's stage position and current (0 for the paper's \
-         estimator, which takes both as exact).</p>\n<table class=\"num\"><tr><th>view</th><th>E_com (mA)</th>\
-         <th>points</th><th>RMS (px)</th><th>own fx (px)</th><th>own fy (px)</th><th>dZ (mm)</th><th>dE (mA)</th></tr>\n\
+        "<p>dZ, dE: the errors-in-variables corrections of the view's stage position and setting (0 for the paper's \
+         estimator, which takes both as exact).</p>\n<table class=\"num\"><tr><th>view</th><th>{name} ({unit})</th>\
+         <th>points</th><th>RMS (px)</th><th>own fx (px)</th><th>own fy (px)</th><th>dZ (mm)</th><th>dE ({unit})</th></tr>\n\
          {rows}</table>\n"
     )
 }
@@ -372,6 +373,10 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
         notes += &format!("<h2 id=\"warnings\">Warnings</h2><ul>{items}</ul>\n");
     }
     let flagged = parameter_table(d).matches("class=\"flag\"").count();
+    let setting_in = match c.setting_kind() {
+        etl_formats::SettingKind::Current => "E_com in mA",
+        etl_formats::SettingKind::FocalPower => "the commanded focal power in dpt",
+    };
     format!(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>etlcal calibration report</title>\
          <style>{STYLE}</style></head><body>\n<h1>etlcal calibration report</h1>\n{notes}\n\
@@ -381,7 +386,7 @@ pub(crate) fn index(d: &Data, text: bool, p: &Provenance, files: &[PathBuf]) -> 
          <ul><li><a href=\"#parameters\">Parameters</a></li>{toc}<li><a href=\"#views\">Views</a></li>\
          <li><a href=\"#provenance\">Provenance</a></li></ul>\n\
          <h2 id=\"parameters\">Parameters (value and one standard deviation)</h2>\n\
-         <p>The model (the paper's Eq. 16-18): fx(E) = kf0x + kf1x E + kf2x E² + kf3x E³ with E = E_com in mA (fy(E) \
+         <p>The model (the paper's Eq. 16-18): fx(E) = kf0x + kf1x E + kf2x E² + kf3x E³ with E = {setting_in} (fy(E) \
          likewise); the distortion coefficients of Eq. 17 are k1 = a1 w² + a2 w + a3, p1 = a4 w² + a5 w + a6, \
          p2 = a7 w² + a8 w + a9 with w = 2 / (fx(E) + fy(E)) in 1/px (Eq. 18).</p>\n\
          <p>Std from the covariance of the bundle adjustment (first order). Rows flagged ⚠ have |value| &lt; 2 std: \

@@ -104,6 +104,8 @@ struct BandPanel {
     curve: Vec<(f64, f64, f64)>,
     points: Vec<(f64, f64)>,
     colour: RGBColor,
+    /// The calibration's setting: its name and unit ([`crate::data::setting_axis`]).
+    setting: (&'static str, &'static str),
 }
 
 fn draw_band<DB: Canvas>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: bool) -> DrawResult {
@@ -111,11 +113,15 @@ fn draw_band<DB: Canvas>(area: &DrawingArea<DB, Shift>, p: &BandPanel, text: boo
     let (lo, hi) = range_of(band(3.0).chain(p.points.iter().map(|q| q.1)));
     let (e0, e1) = (p.curve.first().map_or(0.0, |c| c.0), p.curve.last().map_or(1.0, |c| c.0));
     let mut b = panel_frame(area, 12, (&p.title, 17), [42, 78], text);
-    let mut chart = b.build_cartesian_2d(e0 - 5.0..e1 + 5.0, lo..hi)?;
+    // 5 mA either side (the run-time margin of a current), 0.25 dpt (that of a power).
+    let (name, unit) = p.setting;
+    let pad = if unit == "dpt" { etl_core::runtime::FOCAL_POWER_MARGIN_DPT } else { 5.0 };
+    let mut chart = b.build_cartesian_2d(e0 - pad..e1 + pad, lo..hi)?;
+    let x_desc = format!("{name} ({unit})");
     if text {
         chart
             .configure_mesh()
-            .x_desc("E_com (mA)")
+            .x_desc(x_desc.as_str())
             .y_desc(p.y_label.as_str())
             .x_labels(6)
             .y_labels(6)
@@ -181,6 +187,7 @@ fn draw_curve_panels<DB: Canvas>(
         curve: c.iter().map(|q| (q.0, q.1[i] * scale, q.2[i] * scale)).collect(),
         points: p.points.clone(),
         colour: p.colour,
+        setting: crate::data::setting_axis(&d.cal),
     };
     draw_band(top_area, &top, text)?;
     let deviation = BandPanel {
@@ -189,6 +196,7 @@ fn draw_curve_panels<DB: Canvas>(
         curve: c.iter().map(|q| (q.0, 0.0, q.2[i] * scale)).collect(),
         points: p.points.iter().map(|v| (v.0, v.1 - curve_values(&d.model, v.0)[i] * scale)).collect(),
         colour: p.colour,
+        setting: crate::data::setting_axis(&d.cal),
     };
     draw_band(bottom_area, &deviation, text)
 }
@@ -289,7 +297,8 @@ pub(crate) fn draw_projection_std<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: 
     let [w, h] = d.cal.image_size;
     for (m, panel) in d.std_maps.iter().zip(maps.split_evenly((1, 3)).iter()) {
         let max = m.cells.iter().flatten().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
-        let caption = format!("E_com {:.1} mA, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max);
+        let (name, unit) = crate::data::setting_axis(&d.cal);
+        let caption = format!("{name} {:.1} {unit}, depth {:.1} mm: max {:.3} px", m.e_com_ma, m.depth_mm, max);
         let mut b = panel_frame(panel, 10, (caption, 16), [35, 50], text);
         b.margin_top(16);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
@@ -349,12 +358,13 @@ pub(crate) fn draw_coverage<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
     let body = root.margin(30, 0, 0, 0);
     for (g, panel) in groups.iter().zip(body.split_evenly((groups.len().div_ceil(3), 3)).iter()) {
         let corners: usize = g.1.iter().map(|&k| d.views[k].pixels.len()).sum();
+        let (name, unit) = crate::data::setting_axis(&d.cal);
         let range = if g.0[1] - g.0[0] < 0.05 {
-            format!("{:.1} mA", g.0[0])
+            format!("{:.1} {unit}", g.0[0])
         } else {
-            format!("{:.1}–{:.1} mA", g.0[0], g.0[1])
+            format!("{:.1}–{:.1} {unit}", g.0[0], g.0[1])
         };
-        let caption = format!("E_com {range}: {} views, {corners} corners", g.1.len());
+        let caption = format!("{name} {range}: {} views, {corners} corners", g.1.len());
         let mut b = panel_frame(panel, 10, (caption, 16), [32, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         if text {
@@ -444,6 +454,8 @@ pub(crate) fn draw_view_rms<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
     let caption = "RMS residual per view (bars, colour as in the residual map); dashed: all views";
     let mut b = panel_frame(root, 15, (caption, 18), [45, 65], text);
     let mut chart = b.build_cartesian_2d(-0.6..n as f64 - 0.4, 0.0..top)?;
+    let (name, unit) = crate::data::setting_axis(&d.cal);
+    let view_desc = format!("view: {name} ({unit})");
     if text {
         chart
             .configure_mesh()
@@ -458,7 +470,7 @@ pub(crate) fn draw_view_rms<DB: Canvas>(root: &DrawingArea<DB, Shift>, d: &Data,
                     None => String::new(),
                 }
             })
-            .x_desc(if n <= 20 { "view: E_com (mA)" } else { "view (its current in the views table)" })
+            .x_desc(if n <= 20 { view_desc.as_str() } else { "view (its setting in the views table)" })
             .y_desc("RMS (px)")
             .draw()?;
     }
@@ -529,7 +541,8 @@ pub(crate) fn draw_distortion_field<DB: Canvas>(root: &DrawingArea<DB, Shift>, d
     let gain = 0.08 * w as f64 / max;
     for ((f, e), panel) in fields.iter().zip(d.map_currents).zip(root.split_evenly((1, 3)).iter()) {
         let m = f.iter().map(|q| norm(&q.1)).fold(0.0, f64::max);
-        let caption = format!("E_com {e:.1} mA: max {m:.2} px, arrows x{gain:.0}");
+        let (name, unit) = crate::data::setting_axis(&d.cal);
+        let caption = format!("{name} {e:.1} {unit}: max {m:.2} px, arrows x{gain:.0}");
         let mut b = panel_frame(panel, 10, (caption, 16), [35, 50], text);
         let mut chart = b.build_cartesian_2d(0.0..w as f64, h as f64..0.0)?;
         draw_image_axes(&mut chart, text)?;

@@ -59,6 +59,11 @@ fn a_focal_power_calibration_from_simulation_to_focus_and_export() {
     assert_eq!((e["setting"].as_str(), e["focal_power_dpt"].as_f64()), (Some("focal_power"), Some(want)));
     let yaml = std::fs::read_to_string(p("cv.yaml")).unwrap();
     assert!(yaml.contains("focal power") && yaml.contains("setting: focal_power"), "{yaml:.200}");
+    // The report says its setting: the range, the axes and the views in dpt, no NaN.
+    json_of(&["report", "--calibration", &p("cal.json"), "--observations", &obs_path, "--out", &p("report"), "--json"]);
+    let html = std::fs::read_to_string(p("report/index.html")).unwrap();
+    assert!(html.contains("focal power 12.4 .. 18.8 dpt") && html.contains("focal power (dpt)"), "{html:.600}");
+    assert!(!html.contains("NaN"), "a NaN in the report");
     // Refusals, nothing written.
     let out = p("refused.json");
     refused(
