@@ -10,6 +10,7 @@ pub mod lens_dynamics;
 pub mod pipeline;
 pub mod request;
 pub mod robust;
+pub mod stereo;
 pub mod thermal_calibration;
 pub mod zhang;
 

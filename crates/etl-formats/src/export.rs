@@ -110,9 +110,9 @@ fn header(c: &CameraAt, fit: &OpenCvFit) -> String {
     h
 }
 
-/// A float every reader takes as one: 17 significant digits, a decimal point, a signed
-/// exponent when there is one.
-fn num(x: f64) -> String {
+/// A float every reader takes as one (OpenCV's FileStorage YAML included): the shortest
+/// digits that read back exactly, a decimal point, a signed exponent when there is one.
+pub fn num(x: f64) -> String {
     let s = format!("{x:?}");
     match s.split_once('e') {
         Some((m, e)) => {

@@ -60,6 +60,8 @@ pub mod model_selection;
 pub mod observations;
 pub mod optics;
 pub mod output;
+pub mod plan;
+pub mod rig;
 pub mod thermal;
 
 pub(crate) use checks::first_not_finite;

@@ -24,6 +24,7 @@ pub mod pipeline;
 pub mod pool;
 pub mod pose;
 pub mod results;
+pub mod rig;
 pub mod simulate;
 pub mod studies;
 pub mod thermal;
@@ -72,5 +73,8 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<lens::Lens>()?;
     m.add_class::<lens::VirtualLens>()?;
     m.add_function(wrap_pyfunction!(thermal_calibration::thermal_calibration, m)?)?;
+    m.add_class::<rig::RigCamera>()?;
+    m.add_function(wrap_pyfunction!(rig::rig_capture_views, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_capture_offstate, m)?)?;
     Ok(())
 }

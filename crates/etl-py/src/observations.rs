@@ -77,11 +77,9 @@ impl Observations {
             // NaN stands for "no current" in the file's view: a NaN given is refused as
             // the number it is.
             let view = list(&mut self.file).len();
-            return Err(invalid_value(
-                &format!("views[{view}].e_in_ma"),
-                x,
-                &format!("view {view}: current or temperature is not finite"),
-            ));
+            let message = format!("view {view}: current or temperature is not finite");
+            let e = etl_formats::Error::invalid_value(format!("views[{view}].e_in_ma"), x, message);
+            return Err(crate::errors::calib_err(e));
         }
         let e_in_ma = e_in_ma.unwrap_or(f64::NAN);
         let points = view_points(world_mm, pixels)?;

@@ -28,7 +28,9 @@ def test_a_focal_power_calibration_from_python(focal_power_observations: pathlib
     assert noise is not None and noise["sigma_p_dpt"] == 0.05 and "sigma_e_ma" not in noise
     own = etlcal.calibrate(obs, sigma_p_dpt=0.1).covariance_noise
     assert own is not None and own["sigma_p_dpt"] == 0.1
-    lo, hi = cal.focal_power_range_dpt
+    power_range = cal.focal_power_range_dpt
+    assert power_range is not None
+    lo, hi = power_range
     assert 12.0 < lo < hi < 19.0
     cam = cal.at(focal_power_dpt=15.0, temperature_c=30.0)
     assert (cam.setting, cam.focal_power_dpt, cam.temperature_c, cam.e_in_ma) == ("focal_power", 15.0, 30.0, None)

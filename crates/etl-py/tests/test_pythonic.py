@@ -140,7 +140,7 @@ def test_observations_are_a_sequence_of_views(sim: etlcal.Simulation) -> None:
     last = obs[-1]
     assert last.world_mm.shape == (last.pixels.shape[0], 3) and last.pixels.shape[1] == 2
     assert last["e_in_ma"] == last.e_in_ma and "temperature_c" in last
-    assert list(last.keys()) == ["world_mm", "pixels", "e_in_ma", "temperature_c", "e_com_ma"]
+    assert list(last.keys()) == ["world_mm", "pixels", "e_in_ma", "temperature_c", "e_com_ma", "focal_power_dpt"]
     assert "View(world_mm=<array (" in repr(last)
     with pytest.raises(IndexError, match="view index 15 out of range"):
         obs[15]

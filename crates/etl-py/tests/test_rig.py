@@ -75,7 +75,7 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     blocks = code_blocks(RIG)
     languages = [language for language, _ in blocks]
     # A new snippet must be added here with what the test gives it.
-    assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh"], languages
+    assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh", "json", "sh"], languages
     # The rig's data: images of the simulated rig (views/, offstate/, dataset.json) and the
     # lens-off board's file that the zhang snippet names.
     subprocess.run([etlcal_binary, "simulate", "--out", str(tmp_path), "--quiet"], check=True, capture_output=True)
@@ -91,6 +91,8 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
         elif language == "python":
             assert f'"{PORT}"' in code or PORT not in code, code
             exec(compile(code.replace(f'"{PORT}"', repr(device.port)), str(RIG), "exec"), namespace)
+        elif '"etlcal.plan/1"' in code:
+            (tmp_path / "plan.json").write_text(code)  # the text names it plan.json
         elif '"etlcal.board/1"' in code:
             (tmp_path / "board.json").write_text(code)  # the text names it board.json
         else:
@@ -115,6 +117,10 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     e_com = namespace["cal"].thermal_calibration.compensate(150.0, 31.0).e_com_ma
     assert namespace["cam"].e_com_ma == pytest.approx(e_com, abs=1e-9)
     assert "camera_matrix" in (tmp_path / "camera.yaml").read_text()
+    # The capture on the simulated rig: the plan's views, calibrated.
+    captured = etlcal.Dataset.load(tmp_path / "capture" / "dataset.json")
+    assert len(captured) == 15
+    assert (tmp_path / "capture" / "calibration.json").is_file()
 
 
 def thermal_surface_follows_the_virtual_lens(tmp_path: pathlib.Path, rig: Rig, namespace: Dict[str, Any]) -> None:

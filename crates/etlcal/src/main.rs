@@ -29,6 +29,8 @@ macro_rules! outln {
 
 pub mod board;
 pub mod calibrate;
+pub mod camera;
+pub mod capture;
 pub mod demo;
 pub mod detect;
 pub mod diff;
@@ -44,6 +46,8 @@ pub mod render;
 pub mod report;
 pub mod sharpness;
 pub mod simulate;
+pub mod stage;
+pub mod stereo;
 pub mod study;
 pub mod thermal;
 pub mod undistort;
@@ -95,6 +99,8 @@ enum Command {
     Report(report::Args),
     /// Monofocal calibration of a fixed-focus camera from board images (Zhang).
     Zhang(zhang::Args),
+    /// A fixed-focus camera pair from synchronised board images: each camera by Zhang, then R, T.
+    Stereo(stereo::Args),
     /// The board's pose in two images at a lens current and the displacement between them.
     Measure(measure::Args),
     /// The camera at a lens current and temperature for OpenCV, ROS or mrcal.
@@ -120,6 +126,12 @@ enum Command {
     Lens(lens::Args),
     /// Run a virtual lens on a pseudo-terminal and print its port path.
     LensSim(lens_sim::Args),
+    /// Capture a dataset on a rig from a plan (camera, lens, stage), resumably.
+    Capture(capture::Args),
+    /// List cameras, or grab an image from one.
+    Camera(camera::Args),
+    /// Move a stage, read its position, home it.
+    Stage(stage::Args),
 }
 
 /// Prints `value` as one JSON object on stdout.
@@ -152,6 +164,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Calibrate(a) => done(calibrate::run(calibrate::Args { json, ..a })),
         Command::Report(a) => done(report::run(report::Args { json, ..a })),
         Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
+        Command::Stereo(a) => done(stereo::run(stereo::Args { json, ..a })),
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
         Command::Export(a) => done(export::run(export::Args { json, ..a })),
         Command::Focus(a) => done(focus::run(focus::Args { json, ..a })),
@@ -164,6 +177,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Board(a) => done(board::run(board::Args { json, ..a })),
         Command::Lens(a) => done(lens::run(lens::Args { json, ..a })),
         Command::LensSim(a) => done(lens_sim::run(lens_sim::Args { json, ..a })),
+        Command::Capture(a) => done(capture::run(capture::Args { json, ..a })),
+        Command::Camera(a) => done(camera::run(camera::Args { json, ..a })),
+        Command::Stage(a) => done(stage::run(stage::Args { json, ..a })),
     }
 }
 

@@ -47,7 +47,7 @@ use serde_json::{json, Value};
 use super::print_json;
 use crate::board::BoardArgs;
 use crate::calibrate::FlagSpelling;
-use etl_calib::pipeline::{detect_views, PlanarViews};
+use etl_calib::pipeline::detect_views;
 use etl_calib::request::ZhangRequest;
 use etl_calib::zhang::ZhangResult;
 use etl_core::model::DistortionModel;
@@ -118,6 +118,34 @@ fn opencv_json(z: &ZhangResult, images: &[&PathBuf]) -> Value {
         "fix_k3": z.options.flags.fix_k3, "zero_tangent": z.options.flags.zero_tangent})
 }
 
+/// The `--json` object of a Zhang result `z` on images of `size` (every key but
+/// `"report"`, module docs): `(image_index, ids)` give, for each of the result's views,
+/// the index of its image among `images` and its corners' ids (an outlier's image and
+/// corner), `board` the corner grid. `etlcal stereo` prints each camera with it.
+pub fn result_json(
+    z: &ZhangResult,
+    size: [u32; 2],
+    images: &[PathBuf],
+    (image_index, ids): (&[usize], &[Vec<u32>]),
+    board: &Board,
+) -> Value {
+    let [c0, c1, c2, ..] = z.coefficients;
+    let mut j = match z.options.model {
+        DistortionModel::Paper => json!({"fx": z.fx, "fy": z.fy, "u0": z.u0, "v0": z.v0, "k1": c0, "p1": c1,
+            "p2": c2, "rms_px": z.rms_px, "views_used": z.views_used}),
+        DistortionModel::OpenCv => {
+            let used: Vec<&PathBuf> = image_index.iter().filter_map(|&k| images.get(k)).collect();
+            opencv_json(z, &used)
+        }
+    };
+    j["projection_std_px"] = projection_grid(z, size).json();
+    let outliers = outliers_json(&z.outliers, (image_index, ids), images, board);
+    if !outliers.is_empty() {
+        j["outliers"] = Value::Array(outliers);
+    }
+    j
+}
+
 /// Runs `etlcal zhang`.
 pub fn run(args: Args) -> Result<()> {
     let request = args.request();
@@ -140,16 +168,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let z = request.run(views, size, &FlagSpelling::default())?;
     let [c0, c1, c2, c3, c4] = z.coefficients;
-    let mut j = match request.model {
-        DistortionModel::Paper => json!({"fx": z.fx, "fy": z.fy, "u0": z.u0, "v0": z.v0, "k1": c0, "p1": c1,
-            "p2": c2, "rms_px": z.rms_px, "views_used": z.views_used}),
-        DistortionModel::OpenCv => {
-            let used: Vec<&PathBuf> = found.image_index.iter().filter_map(|&k| args.images.get(k)).collect();
-            opencv_json(&z, &used)
-        }
-    };
+    let mut j = result_json(&z, size, &args.images, (&found.image_index, &found.ids), &board);
     let grid = projection_grid(&z, size);
-    j["projection_std_px"] = grid.json();
     if let Some(dir) = &args.report {
         let files = crate::output::write_dir_set(dir, &etl_report::zhang::ZHANG_REPORT_FILES, |staging| {
             let files = etl_report::zhang::write_zhang_report(&z, size, staging)?;
@@ -159,10 +179,6 @@ pub fn run(args: Args) -> Result<()> {
         if !args.json {
             outln!("wrote the report to {} (open index.html)", dir.display());
         }
-    }
-    let outliers = outliers_json(&z.outliers, &found, &args.images, &board);
-    if !outliers.is_empty() {
-        j["outliers"] = Value::Array(outliers.clone());
     }
     if args.json {
         print_json(&j);
@@ -187,6 +203,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     grid.print();
+    let outliers = j["outliers"].as_array().cloned().unwrap_or_default();
     if !outliers.is_empty() {
         outln!("left out {} outlier corners:", outliers.len());
     }
@@ -238,16 +255,22 @@ impl ProjectionGrid {
     }
 }
 
-/// Zhang's outliers (indices into `found.views`) as the JSON of the verb: each with the
-/// index and path of its image among `images`, its point index, its id and its corner
-/// [i, j] on `board`'s corner grid.
-fn outliers_json(outliers: &[Outlier], found: &PlanarViews, images: &[PathBuf], board: &Board) -> Vec<Value> {
+/// Zhang's outliers (indices into the result's views, whose images and corners' ids are
+/// `image_index` and `ids`) as the JSON of the verb: each with the index and path of its
+/// image among `images`, its point index, its id and its corner [i, j] on `board`'s corner
+/// grid.
+fn outliers_json(
+    outliers: &[Outlier],
+    (image_index, ids): (&[usize], &[Vec<u32>]),
+    images: &[PathBuf],
+    board: &Board,
+) -> Vec<Value> {
     let cols = board.corner_grid()[0].max(1);
     outliers
         .iter()
         .map(|o| {
-            let image = found.image_index.get(o.view).copied().unwrap_or(o.view);
-            let id = found.ids.get(o.view).and_then(|v| v.get(o.point)).copied();
+            let image = image_index.get(o.view).copied().unwrap_or(o.view);
+            let id = ids.get(o.view).and_then(|v| v.get(o.point)).copied();
             let corner = id.map(|id| [id as usize % cols, id as usize / cols]);
             json!({"view": image, "image": images.get(image).map(|p| p.display().to_string()),
                 "point": o.point, "corner": corner, "id": id, "residual_px": o.residual_px})
@@ -258,6 +281,7 @@ fn outliers_json(outliers: &[Outlier], found: &PlanarViews, images: &[PathBuf], 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use etl_calib::pipeline::PlanarViews;
     use etl_calib::zhang::{zhang_with, PlanarView, ZhangOptions};
     use etl_sim::simulate::{paper_rig, NoiseModel};
 
@@ -299,7 +323,7 @@ mod tests {
         let images: Vec<PathBuf> = (0..6).map(|k| PathBuf::from(format!("img{k}.png"))).collect();
         let found =
             PlanarViews { views, image_index: vec![0, 2, 3, 4, 5], ids, image_size: [1936, 1458], skipped: vec![] };
-        let j = outliers_json(&z.outliers, &found, &images, &board);
+        let j = outliers_json(&z.outliers, (&found.image_index, &found.ids), &images, &board);
         assert_eq!(j.len(), 2);
         for (o, (view, image, point, corner)) in
             j.iter().zip([(2, "img2.png", 7, [7, 0]), (5, "img5.png", cols + 2, [2, 1])])

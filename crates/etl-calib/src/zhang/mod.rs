@@ -100,7 +100,7 @@ pub struct ZhangResult {
 
 impl ZhangResult {
     /// The shared numbers: fx, fy, u0, v0, the coefficients.
-    fn shared(&self) -> Shared {
+    pub(crate) fn shared(&self) -> Shared {
         let mut z = [0.0; SHARED_MAX];
         z[..4].copy_from_slice(&[self.fx, self.fy, self.u0, self.v0]);
         z[4..].copy_from_slice(&self.coefficients);
@@ -150,15 +150,15 @@ impl ZhangResult {
 }
 
 /// The most shared numbers: fx, fy, u0, v0 and OpenCV's five coefficients.
-const SHARED_MAX: usize = 4 + MAX_COEFFICIENTS;
+pub(crate) const SHARED_MAX: usize = 4 + MAX_COEFFICIENTS;
 
 /// The shared numbers: fx, fy, u0, v0, then the coefficients in the family's order.
-type Shared = [f64; SHARED_MAX];
+pub(crate) type Shared = [f64; SHARED_MAX];
 
 /// The camera model the shared numbers `z` stand for at E = 0 in family `model`: focal
 /// cubic focal polynomials with kf0 = fx, fy (E = 0 leaves only kf0; the paper's layout, so that the paper family solves exactly as before), each coefficient the
 /// constant term a_(3c+3) of its Eq. 18 quadratic.
-fn model_at(model: DistortionModel, z: &Shared, pose: &[f64; 6]) -> CameraModel {
+pub(crate) fn model_at(model: DistortionModel, z: &Shared, pose: &[f64; 6]) -> CameraModel {
     let mut a = DistortionA::zero(model);
     for (c, &v) in z.iter().skip(4).take(model.coefficient_count()).enumerate() {
         if let Some(slot) = a.as_mut_slice().get_mut(3 * c + 2) {
@@ -177,7 +177,7 @@ fn model_at(model: DistortionModel, z: &Shared, pose: &[f64; 6]) -> CameraModel 
 }
 
 /// Where shared number `k` lies in the parameter vector of [`model_at`]'s layout.
-fn param_index(layout: &Layout, k: usize) -> usize {
+pub(crate) fn param_index(layout: &Layout, k: usize) -> usize {
     match k {
         0 => layout.kf0x(),
         1 => layout.kf0y(),
@@ -380,12 +380,18 @@ fn joint_blocks<const N: usize>(
     Ok(ZhangUncertainty { model: problem.model, shared, poses, s_inv, w, v_inv, sigma2_px })
 }
 
+/// The indices into [`Shared`] of the numbers `options` leaves free: fx, fy, u0, v0 and
+/// every coefficient of the family that no OpenCV flag holds.
+pub(crate) fn free_numbers(options: &ZhangOptions) -> Vec<usize> {
+    let model = options.model;
+    (0..4 + model.coefficient_count()).filter(|&k| k < 4 || !options.flags.holds(model, k - 4)).collect()
+}
+
 /// Step 3: the LM refinement of the free shared numbers and every view's pose from `z0`
 /// and `poses`; the numbers `options` holds stay at `z0`.
 fn refine(views: &[PlanarView], options: &ZhangOptions, z0: &Shared, poses: &[[f64; 6]]) -> Result<Refined> {
     let model = options.model;
-    let free: Vec<usize> =
-        (0..4 + model.coefficient_count()).filter(|&k| k < 4 || !options.flags.holds(model, k - 4)).collect();
+    let free = free_numbers(options);
     match free.len() {
         6 => refine_n::<6>(views, model, &free, z0, poses),
         7 => refine_n::<7>(views, model, &free, z0, poses),

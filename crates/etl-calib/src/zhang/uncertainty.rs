@@ -99,6 +99,13 @@ impl super::ZhangResult {
 }
 
 impl ZhangUncertainty {
+    /// sigma^2 S^-1: the covariance of the shared numbers (fx, fy, u0, v0, the
+    /// coefficients; the rows and columns of held ones zero), OpenCV's scaling, as the
+    /// result's `std` squared on the diagonal.
+    pub(crate) fn shared_covariance(&self) -> [[f64; SHARED_MAX]; SHARED_MAX] {
+        self.s_inv.map(|row| row.map(|v| v * self.sigma2_px))
+    }
+
     /// Its lengths agree (a pose, a W and a V^-1 per view, at least one view) and every
     /// number is finite: what [`Self::projection_std`] assumes of a deserialised value.
     pub fn validate(&self) -> Result<()> {

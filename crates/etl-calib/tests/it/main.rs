@@ -7,6 +7,7 @@ mod pipeline_baseline;
 mod request;
 mod robust;
 mod select;
+mod stereo;
 mod uncertainty;
 mod zhang;
 mod zhang_opencv;

@@ -89,7 +89,7 @@ from ._etlcal import (
 # The result classes: every name of etlcal.results.__all__ (re-exported by the star import,
 # which type checkers follow too; listed once, there).
 from .results import *  # noqa: F401,F403
-from . import options, physics, results, simulate, studies
+from . import options, physics, results, rig, simulate, studies
 
 __all__ = [
     "__version__",
@@ -126,6 +126,7 @@ __all__ = [
     "options",
     "physics",
     "results",
+    "rig",
     "simulate",
     "studies",
 ]

@@ -86,6 +86,9 @@ __all__ = [
     "study",
     "thermal_calibration",
     "zhang",
+    "RigCamera",
+    "rig_capture_offstate",
+    "rig_capture_views",
 ]
 __version__: str
 
@@ -952,4 +955,50 @@ def study(
 def diff(a: CameraAt, b: CameraAt, grid: Tuple[int, int] = (64, 48)) -> ProjectionDiff:
     """How far apart two cameras at a setting project the same directions over the image
     (intrinsics only, and after the best rotation), px; as `etlcal diff`."""
+    ...
+
+
+@final
+class RigCamera:
+    """A camera of the rig opened from its spec ("sim", "files:DIR", "aravis:NAME"):
+    `etlcal.rig.Camera`."""
+    @staticmethod
+    def open(spec: str, seed: int = 1) -> RigCamera: ...
+    def grab(self) -> npt.NDArray[Any]: ...
+    def grab_frame(self) -> Tuple[npt.NDArray[Any], int]: ...
+    def set_exposure_us(self, exposure_us: float) -> None: ...
+    def set_gain_db(self, gain_db: float) -> None: ...
+    def info(self) -> Tuple[str, str, Tuple[int, int]]: ...
+
+
+def rig_capture_views(
+    plan: Any,
+    out: Union[str, os.PathLike[str]],
+    camera: Any,
+    lens: str,
+    stage: Any,
+    *,
+    settle_tolerance_px: float = 0.05,
+    settle_timeout_s: float = 10.0,
+    max_temperature_change_c: float = 0.5,
+    autofocus_range_ma: Optional[Tuple[float, float]] = None,
+    seed: int = 1,
+) -> Dict[str, Any]:
+    """A plan's lens-off and ETL views captured into `out` (`etlcal.rig.capture_views`)."""
+    ...
+
+
+def rig_capture_offstate(
+    plan: Any,
+    out: Union[str, os.PathLike[str]],
+    camera: Any,
+    lens: str,
+    stage: Any,
+    *,
+    settle_tolerance_px: float = 0.05,
+    settle_timeout_s: float = 10.0,
+    max_temperature_change_c: float = 0.5,
+    seed: int = 1,
+) -> Dict[str, Any]:
+    """A plan's lens-off views captured into `out` (`etlcal.rig.capture_offstate`)."""
     ...

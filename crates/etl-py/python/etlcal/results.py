@@ -342,7 +342,7 @@ class ExportResult(_Result):
     dist_coeffs: _F64
     fit_rms_px: float
     fit_max_px: float
-    focal_power_dpt: Optional[float] = None
+    focal_power_dpt: Optional[float]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -357,7 +357,7 @@ class View(_Result):
     e_in_ma: Optional[float]
     temperature_c: float
     e_com_ma: Optional[float]
-    focal_power_dpt: Optional[float] = None
+    focal_power_dpt: Optional[float]
 
 
 @dataclass(frozen=True, eq=False, repr=False)

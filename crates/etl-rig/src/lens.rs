@@ -1,0 +1,94 @@
+//! The lens of a rig: etl-core's [`Lens`] trait over the Optotune Lens Driver 4 client
+//! (`ld4:PORT`) or the virtual lens (`virtual`: served on a pseudo-terminal and driven
+//! through the same serial client, as `etlcal lens --virtual` does), named for errors.
+//!
+//! A current is always approached from below ([`RigLens::approach_ma`]): the lens first
+//! goes [`APPROACH_MA`] under the target, then to it, so that every view sits on the
+//! rising branch of the lens's hysteresis loop.
+
+use etl_core::lens::Lens;
+use etl_hw::client::{LensClient, OpenOptions};
+use etl_hw::virtual_lens::{VirtualDevice, VirtualLens, VirtualLensConfig};
+use etl_hw::HwError;
+
+use crate::error::{Error, Result};
+use crate::spec::LensSpec;
+
+/// How far below a target current the lens goes first, mA (larger than the published
+/// hysteresis widths of shape-changing-polymer lenses, a few mA).
+pub const APPROACH_MA: f64 = 10.0;
+
+/// A lens with its name.
+pub struct RigLens {
+    name: String,
+    lens: Box<dyn Lens<Error = HwError>>,
+    limits_ma: [f64; 2],
+    // Kept alive while the client talks to it (the virtual lens's server).
+    virtual_lens: Option<VirtualLens>,
+}
+
+impl RigLens {
+    /// Opens the lens of `spec`; a virtual lens gets `config`.
+    pub fn open(spec: &LensSpec, config: VirtualLensConfig) -> Result<RigLens> {
+        let name = format!("lens {spec}");
+        let (path, virtual_lens) = match spec {
+            LensSpec::Virtual => {
+                let v = VirtualLens::spawn(config).map_err(|e| Error::lens(&name, e))?;
+                (v.path().to_owned(), Some(v))
+            }
+            LensSpec::Ld4(p) => (p.clone(), None),
+        };
+        let client = LensClient::open(&path, OpenOptions::default()).map_err(|e| Error::lens(&name, e))?;
+        let limits_ma = client.limits_ma();
+        Ok(RigLens { name, lens: Box::new(client), limits_ma, virtual_lens })
+    }
+
+    /// Any lens behind the trait (a test double, another driver), named `name`, with
+    /// its driver's limits `[lo, hi]` mA.
+    pub fn from_lens(name: impl Into<String>, lens: Box<dyn Lens<Error = HwError>>, limits_ma: [f64; 2]) -> RigLens {
+        RigLens { name: name.into(), lens, limits_ma, virtual_lens: None }
+    }
+
+    /// The device's name in errors: `lens SPEC`.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The driver's current limits, mA.
+    pub fn limits_ma(&self) -> [f64; 2] {
+        self.limits_ma
+    }
+
+    /// The virtual lens's device, when this is the virtual lens.
+    pub fn virtual_device(&self) -> Option<&VirtualDevice> {
+        self.virtual_lens.as_ref().map(|v| v.device())
+    }
+
+    /// The virtual lens (its faults, its pty), when this is the virtual lens.
+    pub fn virtual_lens(&self) -> Option<&VirtualLens> {
+        self.virtual_lens.as_ref()
+    }
+
+    /// Commands `e_in_ma`; returns the current commanded (clamped, quantised), mA.
+    pub fn set_current_ma(&mut self, e_in_ma: f64) -> Result<f64> {
+        self.lens.set_current_ma(e_in_ma).map_err(|e| Error::lens(&self.name, e))
+    }
+
+    /// Goes to `e_in_ma` from below: first [`APPROACH_MA`] under it (within the driver's
+    /// lower limit), then to it; returns the current commanded, mA.
+    pub fn approach_ma(&mut self, e_in_ma: f64) -> Result<f64> {
+        let below = (e_in_ma - APPROACH_MA).max(self.limits_ma[0]);
+        self.set_current_ma(below)?;
+        self.set_current_ma(e_in_ma)
+    }
+
+    /// The lens temperature, degC.
+    pub fn temperature_c(&mut self) -> Result<f64> {
+        self.lens.temperature_c().map_err(|e| Error::lens(&self.name, e))
+    }
+
+    /// The current the driver is at, mA.
+    pub fn current_ma(&mut self) -> Result<f64> {
+        self.lens.current_ma().map_err(|e| Error::lens(&self.name, e))
+    }
+}

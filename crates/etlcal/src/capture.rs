@@ -1,0 +1,177 @@
+//! `etlcal capture views|offstate --plan F --camera SPEC --lens SPEC --stage SPEC --out DIR`:
+//! runs a capture plan (`etlcal.plan/1`) on a rig and writes `DIR/dataset.json` with its
+//! images (etl-rig's `capture_views` / `capture_offstate`; docs/RIG.md, "Capture").
+//!
+//! The same command resumes a capture a kill or a failure ended: what is on disk is
+//! verified and kept. Ctrl-C ends the capture after the current view (a second Ctrl-C,
+//! SIGTERM or SIGHUP end it at once; the dataset stays whole either way).
+//!
+//! With `--json`: `{"dataset", "offstate_kept", "offstate_taken", "views_kept",
+//! "views_taken", "stopped"}`.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use etl_formats::plan::Plan;
+use etl_formats::{Error, Result};
+use etl_hw::virtual_lens::VirtualLensConfig;
+use etl_rig::capture::{capture_offstate, capture_views, CaptureOptions, CaptureReport};
+use etl_rig::rig::{paper_virtual_lens, Rig, RigSpec};
+use etl_rig::spec::{CameraSpec, LensSpec, StageSpec};
+use nix::sys::signal::{pthread_sigmask, raise, signal, SigHandler, SigSet, SigmaskHow, Signal};
+use serde_json::json;
+
+use super::print_json;
+
+/// Arguments of `etlcal capture`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Which capture.
+    #[command(subcommand)]
+    pub command: CaptureCommand,
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
+    pub json: bool,
+}
+
+/// The captures.
+#[derive(clap::Subcommand, Debug)]
+pub enum CaptureCommand {
+    /// The plan's lens-off views (if it asks for them), then its ETL views.
+    Views(CaptureArgs),
+    /// The plan's lens-off views only (its offstate_views).
+    Offstate(CaptureArgs),
+}
+
+/// The rig, the plan and where to write.
+#[derive(clap::Args, Debug)]
+pub struct CaptureArgs {
+    /// The capture plan (etlcal.plan/1).
+    #[arg(long, value_name = "FILE")]
+    pub plan: PathBuf,
+    /// The camera: sim, files:DIR, aravis:NAME, v4l2:/dev/videoN.
+    #[arg(long, value_name = "SPEC")]
+    pub camera: String,
+    /// The lens: virtual (the paper rig's lens at 27 degC ambient), ld4:PORT (or a port path).
+    #[arg(long, value_name = "SPEC")]
+    pub lens: String,
+    /// The stage: sim, manual, zaber:PORT,microstep_um=UM[,device=N][,axis=N].
+    #[arg(long, value_name = "SPEC")]
+    pub stage: String,
+    /// The output folder (dataset.json, views/, offstate/); created if missing.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// The lens has settled when the board's corners move at most this between frames (RMS, px).
+    #[arg(long, default_value_t = CaptureOptions::default().settle_tolerance_px, value_name = "PX")]
+    pub settle_tolerance_px: f64,
+    /// The longest wait for the lens to settle, s.
+    #[arg(long, default_value_t = CaptureOptions::default().settle_timeout_s, value_name = "S")]
+    pub settle_timeout_s: f64,
+    /// Refuse a view whose lens temperature moved more than this during it, degC.
+    #[arg(long, default_value_t = CaptureOptions::default().max_temperature_change_c, value_name = "C")]
+    pub max_temperature_change_c: f64,
+    /// The autofocus search range, mA (plans with "focus": "autofocus").
+    #[arg(long, num_args = 2, value_names = ["LO_MA", "HI_MA"])]
+    pub autofocus_range_ma: Option<Vec<f64>>,
+    /// With --lens virtual: the lens's dynamics (etlcal.lens-dynamics/1: step response,
+    /// creep, hysteresis), which the settling from frames then waits out.
+    #[arg(long, value_name = "FILE")]
+    pub dynamics: Option<PathBuf>,
+    /// Seed of the sim camera's noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+/// Runs `etlcal capture`.
+pub fn run(args: Args) -> Result<()> {
+    let (a, offstate_only) = match args.command {
+        CaptureCommand::Views(a) => (a, false),
+        CaptureCommand::Offstate(a) => (a, true),
+    };
+    let plan = Plan::load(&a.plan)?;
+    let lens = a.lens.parse::<LensSpec>()?;
+    if a.dynamics.is_some() && lens != LensSpec::Virtual {
+        return Err(Error::invalid(
+            "--dynamics",
+            "--dynamics FILE describes the virtual lens: pass it with --lens virtual",
+        ));
+    }
+    let virtual_lens =
+        VirtualLensConfig { dynamics: crate::lens_sim::dynamics(a.dynamics.as_deref())?, ..paper_virtual_lens() };
+    let spec = RigSpec {
+        camera: a.camera.parse::<CameraSpec>()?,
+        lens,
+        stage: a.stage.parse::<StageSpec>()?,
+        sim_seed: a.seed,
+        virtual_lens,
+    };
+    let options = CaptureOptions {
+        settle_tolerance_px: a.settle_tolerance_px,
+        settle_timeout_s: a.settle_timeout_s,
+        max_temperature_change_c: a.max_temperature_change_c,
+        autofocus_range_ma: a.autofocus_range_ma.as_deref().map(|r| [r[0], r[1]]),
+    };
+    options.validate(&plan)?;
+    let stop = stop_after_view_on_interrupt()?;
+    let mut rig = Rig::open(&spec)?;
+    let bar = crate::progress::Bar::new(!args.json);
+    let report = if offstate_only {
+        capture_offstate(&plan, &mut rig, &a.out, &options, &bar, &stop)?
+    } else {
+        capture_views(&plan, &mut rig, &a.out, &options, &bar, &stop)?
+    };
+    print_report(&report, &a.out.join(etl_rig::capture::store::DATASET_FILE), args.json);
+    Ok(())
+}
+
+fn print_report(r: &CaptureReport, dataset: &std::path::Path, json_out: bool) {
+    if json_out {
+        print_json(&json!({
+            "dataset": dataset, "offstate_kept": r.offstate_kept, "offstate_taken": r.offstate_taken,
+            "views_kept": r.views_kept, "views_taken": r.views_taken, "stopped": r.stopped,
+        }));
+    } else {
+        let state = if r.stopped { "stopped; run the same command to resume" } else { "done" };
+        outln!(
+            "{}: {} lens-off views taken ({} kept), {} views taken ({} kept): {state}",
+            dataset.display(),
+            r.offstate_taken,
+            r.offstate_kept,
+            r.views_taken,
+            r.views_kept
+        );
+    }
+}
+
+/// Ctrl-C sets the returned flag (the capture stops after the current view); a second
+/// Ctrl-C, SIGTERM or SIGHUP remove the virtual lens's folder and end the process by the
+/// signal. No code runs in a signal handler: the signals are blocked here (call before
+/// any thread starts, so that every thread inherits the mask) and one thread waits.
+fn stop_after_view_on_interrupt() -> Result<Arc<AtomicBool>> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut set = SigSet::empty();
+    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
+        set.add(s);
+    }
+    pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&set), None)
+        .map_err(|e| Error::invalid("signals", format!("cannot block the stop signals: {e}")))?;
+    let flag = Arc::clone(&stop);
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || loop {
+            let Ok(sig) = set.wait() else { return };
+            if sig == Signal::SIGINT && !flag.swap(true, Ordering::SeqCst) {
+                eprintln!("etlcal: stopping after the current view (Ctrl-C again to stop now)");
+                continue;
+            }
+            etl_hw::virtual_lens::folders::remove_live();
+            // SAFETY: SIG_DFL installs no Rust code as a handler.
+            let _ = unsafe { signal(sig, SigHandler::SigDfl) };
+            let _ = pthread_sigmask(SigmaskHow::SIG_UNBLOCK, Some(&set), None);
+            let _ = raise(sig);
+            std::process::exit(128 + sig as i32);
+        })
+        .map_err(|e| Error::invalid("signals", format!("cannot start the signal thread: {e}")))?;
+    Ok(stop)
+}
