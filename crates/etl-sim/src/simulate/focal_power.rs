@@ -23,8 +23,7 @@ use etl_hw::virtual_lens::FocalPowerCompensation;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::{gauss, lens_off_views_of, visible_stage_board, NoiseModel, RigDesign, Simulation};
-use etl_core::calib::A0;
+use super::{gauss, lens_off_a0, lens_off_views_of, visible_stage_board, NoiseModel, RigDesign, Simulation};
 use etl_formats::observations::{Observations, PointObs};
 
 /// The lens temperatures the focal-power views cycle through, degC: the firmware's
@@ -94,12 +93,7 @@ pub fn focal_power_rig(
         dps.push(power_dpt(e_true) - p);
     }
     obs.offstate_views = lens_off_views_of(&truth, &design.lens_off, design.image_size, noise, &mut rng);
-    let a0 = A0 {
-        kf0x: truth.kf_x.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
-        kf0y: truth.kf_y.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
-        u0: truth.principal_point[0] + gauss(noise.pp_px, &mut rng),
-        v0: truth.principal_point[1] + gauss(noise.pp_px, &mut rng),
-    };
+    let a0 = lens_off_a0(&truth, noise, &mut rng);
     Simulation { observations: obs, a0, truth, true_dz_mm: dzs, true_de_ma: dps }
 }
 

@@ -348,13 +348,19 @@ pub fn simulate_rig(design: &RigDesign, noise: &NoiseModel, seed: u64) -> Simula
         des.push(de);
     }
     obs.offstate_views = lens_off_views_of(&truth, &design.lens_off, design.image_size, noise, &mut rng);
-    let a0 = A0 {
-        kf0x: truth.kf_x.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
-        kf0y: truth.kf_y.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, &mut rng)),
-        u0: truth.principal_point[0] + gauss(noise.pp_px, &mut rng),
-        v0: truth.principal_point[1] + gauss(noise.pp_px, &mut rng),
-    };
+    let a0 = lens_off_a0(&truth, noise, &mut rng);
     Simulation { observations: obs, a0, truth, true_dz_mm: dzs, true_de_ma: des }
+}
+
+/// The A0 a lens-off calibration of `truth` would give: kf0 off by the noise model's
+/// relative error, the principal point by its error in px.
+pub(super) fn lens_off_a0(truth: &CameraModel, noise: &NoiseModel, rng: &mut ChaCha8Rng) -> A0 {
+    A0 {
+        kf0x: truth.kf_x.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, rng)),
+        kf0y: truth.kf_y.coefficients()[0] * (1.0 + gauss(noise.kf0_rel, rng)),
+        u0: truth.principal_point[0] + gauss(noise.pp_px, rng),
+        v0: truth.principal_point[1] + gauss(noise.pp_px, rng),
+    }
 }
 
 /// The per-setting baseline's rig (the paper's "existing method", section 5.2.3): at each
