@@ -116,6 +116,24 @@ pub struct ShapedSet {
     pub late_s: f64,
 }
 
+/// A step from `from_ma` to `to_ma` by `shaper` through `set` (any lens's write): the
+/// shaper's fraction at once, the target the shaper's delay after that write began (slept,
+/// never early). Returns both writes' results and when the second began, s. The one
+/// implementation of the shaped step ([`LensClient::set_current_shaped_ma`], a rig's
+/// lens).
+pub fn shaped_step<T, E>(
+    from_ma: f64,
+    to_ma: f64,
+    shaper: &ZvShaper,
+    mut set: impl FnMut(f64) -> std::result::Result<T, E>,
+) -> std::result::Result<((T, T), f64), E> {
+    let sent = Instant::now();
+    let first = set(shaper.command_ma(from_ma, to_ma, 0.0))?;
+    std::thread::sleep(Duration::from_secs_f64(shaper.delay_s.max(0.0)).saturating_sub(sent.elapsed()));
+    let delay_s = sent.elapsed().as_secs_f64();
+    Ok(((first, set(to_ma)?), delay_s))
+}
+
 /// An error frame that arrived when no reply was expected (after a fire-and-forget
 /// command), found when draining before the next command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -574,12 +592,7 @@ impl<T: Transport> LensClient<T> {
             }));
         }
         let from_ma = self.current_ma()?;
-        let sent = Instant::now();
-        let first = self.set_current_ma(shaper.command_ma(from_ma, to_ma, 0.0))?;
-        let wait = Duration::from_secs_f64(shaper.delay_s).saturating_sub(sent.elapsed());
-        std::thread::sleep(wait);
-        let delay_s = sent.elapsed().as_secs_f64();
-        let target = self.set_current_ma(to_ma)?;
+        let ((first, target), delay_s) = shaped_step(from_ma, to_ma, shaper, |ma| self.set_current_ma(ma))?;
         Ok(ShapedSet { from_ma, first, target, delay_s, late_s: (delay_s - shaper.delay_s).max(0.0) })
     }
 

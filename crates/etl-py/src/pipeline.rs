@@ -64,6 +64,9 @@ impl Spelling for Keywords {
 ///     sigma_e_ma: the same for the recorded current, mA (None: the paper's 0.4).
 ///     sigma_p_dpt: the same for a focal-power view's commanded power, dpt (views at focal
 ///         powers only; None: 0.05, half the driver's stated 0.1 dpt reproducibility).
+///     model: "auto" chooses the distortion family, the focal degree and the centre
+///         together by held-out views (all 20 candidates, in `model_selection`); not with
+///         distortion, focal_degree or centre.
 ///     sigma_px: pixel noise, px (None: estimated from the residuals).
 ///     method: "proposed" (the paper's method, above) or "per-setting" (the paper's
 ///         baseline of section 5.2.3: Zhang at each current of the observations'
@@ -104,7 +107,7 @@ impl Spelling for Keywords {
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
     distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None,
-    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None))]
+    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None, model=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -129,7 +132,15 @@ pub fn calibrate(
     accept_ill_conditioned: bool,
     centre: Option<&str>,
     sigma_p_dpt: Option<f64>,
+    model: Option<&str>,
 ) -> PyResult<Calibration> {
+    let model_auto = match model {
+        None => false,
+        Some("auto") => true,
+        Some(other) => {
+            return Err(invalid_value("model", other, format!("model must be \"auto\" or None, got {other:?}")))
+        }
+    };
     let sigma_z = match (sigma_z_mm, sigma_z_um) {
         (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
         (mm, um) => mm.map(StageSigma::Mm).or(um.map(StageSigma::Um)),
@@ -148,6 +159,7 @@ pub fn calibrate(
         zero_tangent,
         accept_ill_conditioned,
         centre: centre.map(parse_centre).transpose()?,
+        model_auto,
     };
     request.validate(&Keywords).py()?;
     let obs = observations.file;

@@ -296,6 +296,7 @@ fn options(
         settle_timeout_s,
         max_temperature_change_c,
         autofocus_range_ma: autofocus_range_ma.map(|(a, b)| [a, b]),
+        shaper: None,
     }
 }
 

@@ -70,3 +70,15 @@ def test_the_refusals(focal_power_observations: pathlib.Path) -> None:
     assert len(obs) == 15, "a refused view is not kept"
     obs.add_view(view.world_mm, view.pixels, temperature_c=30.0, focal_power_dpt=15.0)
     assert len(obs) == 16 and obs[15].focal_power_dpt == 15.0
+
+
+def test_model_auto_chooses_everything_and_stands_alone(focal_power_observations: pathlib.Path) -> None:
+    obs = etlcal.Observations.load(str(focal_power_observations))
+    cal = etlcal.calibrate(obs, model="auto")
+    assert cal.setting == "focal_power"
+    selection = cal.model_selection
+    assert selection is not None and len(selection["candidates"]) == 20
+    with pytest.raises(etlcal.InputError, match='model="auto" chooses the distortion family.*drop centre'):
+        etlcal.calibrate(obs, model="auto", centre="fixed")
+    with pytest.raises(etlcal.InputError, match="model must be"):
+        etlcal.calibrate(obs, model="opencv")  # type: ignore[arg-type]

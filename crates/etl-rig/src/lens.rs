@@ -4,9 +4,12 @@
 //!
 //! A current is always approached from below ([`RigLens::approach_ma`]): the lens first
 //! goes [`APPROACH_MA`] under the target, then to it, so that every view sits on the
-//! rising branch of the lens's hysteresis loop.
+//! rising branch of the lens's hysteresis loop. With a shaper ([`RigLens::set_shaper`]) the
+//! last step up is split by it ([`etl_hw::client::shaped_step`]): the membrane does not
+//! ring, and the frames find it settled sooner.
 
 use etl_core::lens::Lens;
+use etl_core::physics::shaping::ZvShaper;
 use etl_hw::client::{LensClient, OpenOptions};
 use etl_hw::virtual_lens::{VirtualDevice, VirtualLens, VirtualLensConfig};
 use etl_hw::HwError;
@@ -25,6 +28,7 @@ pub struct RigLens {
     limits_ma: [f64; 2],
     // Kept alive while the client talks to it (the virtual lens's server).
     virtual_lens: Option<VirtualLens>,
+    shaper: Option<ZvShaper>,
 }
 
 impl RigLens {
@@ -40,13 +44,13 @@ impl RigLens {
         };
         let client = LensClient::open(&path, OpenOptions::default()).map_err(|e| Error::lens(&name, e))?;
         let limits_ma = client.limits_ma();
-        Ok(RigLens { name, lens: Box::new(client), limits_ma, virtual_lens })
+        Ok(RigLens { name, lens: Box::new(client), limits_ma, virtual_lens, shaper: None })
     }
 
     /// Any lens behind the trait (a test double, another driver), named `name`, with
     /// its driver's limits `[lo, hi]` mA.
     pub fn from_lens(name: impl Into<String>, lens: Box<dyn Lens<Error = HwError>>, limits_ma: [f64; 2]) -> RigLens {
-        RigLens { name: name.into(), lens, limits_ma, virtual_lens: None }
+        RigLens { name: name.into(), lens, limits_ma, virtual_lens: None, shaper: None }
     }
 
     /// The device's name in errors: `lens SPEC`.
@@ -74,12 +78,19 @@ impl RigLens {
         self.lens.set_current_ma(e_in_ma).map_err(|e| Error::lens(&self.name, e))
     }
 
+    /// Splits every approach's last step by `shaper` (None: plain steps).
+    pub fn set_shaper(&mut self, shaper: Option<ZvShaper>) {
+        self.shaper = shaper;
+    }
+
     /// Goes to `e_in_ma` from below: first [`APPROACH_MA`] under it (within the driver's
-    /// lower limit), then to it; returns the current commanded, mA.
+    /// lower limit), then to it, that step shaped when a shaper is set; returns the
+    /// current commanded, mA.
     pub fn approach_ma(&mut self, e_in_ma: f64) -> Result<f64> {
-        let below = (e_in_ma - APPROACH_MA).max(self.limits_ma[0]);
-        self.set_current_ma(below)?;
-        self.set_current_ma(e_in_ma)
+        let below = self.set_current_ma((e_in_ma - APPROACH_MA).max(self.limits_ma[0]))?;
+        let Some(z) = self.shaper else { return self.set_current_ma(e_in_ma) };
+        let ((_, to), _) = etl_hw::client::shaped_step(below, e_in_ma, &z, |ma| self.set_current_ma(ma))?;
+        Ok(to)
     }
 
     /// The lens temperature, degC.
@@ -90,5 +101,47 @@ impl RigLens {
     /// The current the driver is at, mA.
     pub fn current_ma(&mut self) -> Result<f64> {
         self.lens.current_ma().map_err(|e| Error::lens(&self.name, e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::{Arc, Mutex};
+    use std::time::Instant;
+
+    /// A lens that logs each current commanded and when.
+    struct Log(Arc<Mutex<Vec<(f64, Instant)>>>);
+
+    impl Lens for Log {
+        type Error = HwError;
+        fn set_current_ma(&mut self, e_in_ma: f64) -> std::result::Result<f64, HwError> {
+            self.0.lock().unwrap().push((e_in_ma, Instant::now()));
+            Ok(e_in_ma)
+        }
+        fn current_ma(&mut self) -> std::result::Result<f64, HwError> {
+            Ok(self.0.lock().unwrap().last().map_or(0.0, |c| c.0))
+        }
+        fn temperature_c(&mut self) -> std::result::Result<f64, HwError> {
+            Ok(27.0)
+        }
+    }
+
+    /// An approach goes 10 mA under the target, then up: plainly, or by the shaper (its
+    /// fraction of the 10 mA at once, the target no earlier than its delay later).
+    #[test]
+    fn an_approach_from_below_plain_and_shaped() {
+        let log = Arc::new(Mutex::new(vec![]));
+        let mut lens = RigLens::from_lens("lens test", Box::new(Log(Arc::clone(&log))), [-290.0, 290.0]);
+        assert_eq!(lens.approach_ma(150.0).unwrap(), 150.0);
+        let plain: Vec<f64> = log.lock().unwrap().iter().map(|c| c.0).collect();
+        assert_eq!(plain, [140.0, 150.0]);
+        log.lock().unwrap().clear();
+        lens.set_shaper(Some(ZvShaper { first_fraction: 0.7, delay_s: 0.006 }));
+        assert_eq!(lens.approach_ma(150.0).unwrap(), 150.0);
+        let shaped = log.lock().unwrap().clone();
+        let currents: Vec<f64> = shaped.iter().map(|c| c.0).collect();
+        assert_eq!(currents, [140.0, 147.0, 150.0]);
+        assert!(shaped[2].1.duration_since(shaped[1].1).as_secs_f64() >= 0.006);
     }
 }

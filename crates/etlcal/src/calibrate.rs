@@ -196,6 +196,11 @@ pub struct Args {
     /// chooses by held-out views.
     #[arg(long, value_enum)]
     pub centre: Option<CentreArg>,
+    /// `auto`: choose the distortion family, the focal degree and the centre together by
+    /// the error of held-out views (all 20 candidates, in the file's "model_selection");
+    /// not with --distortion, --focal-degree or --centre.
+    #[arg(long, value_name = "auto", value_parser = ["auto"])]
+    pub model: Option<String>,
     /// Hold k3 at 0 (OpenCV's CALIB_FIX_K3; --distortion opencv or auto).
     #[arg(long)]
     pub fix_k3: bool,
@@ -301,6 +306,7 @@ impl Args {
                 CentreArg::Moving => CentreChoice::Moving,
                 CentreArg::Auto => CentreChoice::Auto,
             }),
+            model_auto: self.model.is_some(),
         })
     }
 }

@@ -74,6 +74,11 @@ pub struct CaptureArgs {
     /// The autofocus search range, mA (plans with "focus": "autofocus").
     #[arg(long, num_args = 2, value_names = ["LO_MA", "HI_MA"])]
     pub autofocus_range_ma: Option<Vec<f64>>,
+    /// Split each approach's last step by the zero-vibration shaper of these dynamics
+    /// (etlcal.lens-dynamics/1, e.g. measured by `etlcal lens characterise --out`): the
+    /// lens settles sooner; the frames still judge when it has.
+    #[arg(long, value_name = "FILE")]
+    pub shaped: Option<PathBuf>,
     /// With --lens virtual: the lens's dynamics (etlcal.lens-dynamics/1: step response,
     /// creep, hysteresis), which the settling from frames then waits out.
     #[arg(long, value_name = "FILE")]
@@ -111,6 +116,7 @@ pub fn run(args: Args) -> Result<()> {
         settle_timeout_s: a.settle_timeout_s,
         max_temperature_change_c: a.max_temperature_change_c,
         autofocus_range_ma: a.autofocus_range_ma.as_deref().map(|r| [r[0], r[1]]),
+        shaper: a.shaped.as_deref().map(shaper_of).transpose()?,
     };
     options.validate(&plan)?;
     let stop = stop_after_view_on_interrupt()?;
@@ -174,4 +180,15 @@ fn stop_after_view_on_interrupt() -> Result<Arc<AtomicBool>> {
         })
         .map_err(|e| Error::invalid("signals", format!("cannot start the signal thread: {e}")))?;
     Ok(stop)
+}
+
+/// The zero-vibration shaper of the dynamics in `f`; an overdamped membrane has none,
+/// refused in one line.
+fn shaper_of(f: &std::path::Path) -> Result<etl_core::physics::shaping::ZvShaper> {
+    let d = etl_formats::LensDynamicsFile::load(f)?.dynamics();
+    etl_core::physics::shaping::ZvShaper::of(&d).ok_or_else(|| {
+        let why =
+            format!("--shaped {}: damping {} is not below 1: a step does not ring, no shaper", f.display(), d.damping);
+        etl_formats::Error::invalid("--shaped", why)
+    })
 }

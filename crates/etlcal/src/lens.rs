@@ -40,8 +40,11 @@ fn set_shaped(
 ) -> Result<(etl_hw::client::SetCurrent, serde_json::Value)> {
     let dynamics = etl_formats::LensDynamicsFile::load(f)?.dynamics();
     let Some(z) = etl_core::physics::shaping::ZvShaper::of(&dynamics) else {
-        let why =
-            format!("{}: damping {} is not below 1: a step does not ring, no shaper", f.display(), dynamics.damping);
+        let why = format!(
+            "--shaped {}: damping {} is not below 1: a step does not ring, no shaper",
+            f.display(),
+            dynamics.damping
+        );
         return Err(Error::invalid("--shaped", why));
     };
     let s = client.set_current_shaped_ma(ma, &z).map_err(Error::lens)?;

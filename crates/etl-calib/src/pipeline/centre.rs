@@ -34,12 +34,14 @@ pub fn move_std_mm(layout: &Layout, covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS]
     Some(sandwich(&[g], covariance)[0][0].max(0.0).sqrt())
 }
 
-/// Why `model`'s moving centre is not determined by `views` (one sentence), or None (a
-/// fixed centre, or a move known to within [`MAX_CENTRE_SCALE_STD`] of the distance).
+/// Why `model`'s moving centre is not determined by `views` (one sentence, the range in
+/// the unit of `setting`), or None (a fixed centre, or a move known to within
+/// [`MAX_CENTRE_SCALE_STD`] of the distance).
 pub fn undetermined_move(
     model: &CameraModel,
     covariance: &[[f64; MAX_PARAMS]; MAX_PARAMS],
     views: &[View<'_>],
+    setting: etl_formats::SettingKind,
 ) -> Option<String> {
     let lo = views.iter().map(|v| v.e_com_ma).fold(f64::INFINITY, f64::min);
     let hi = views.iter().map(|v| v.e_com_ma).fold(f64::NEG_INFINITY, f64::max);
@@ -50,8 +52,12 @@ pub fn undetermined_move(
     if relative <= MAX_CENTRE_SCALE_STD {
         return None;
     }
+    let range = match setting {
+        etl_formats::SettingKind::Current => format!("{lo:.0}..{hi:.0} mA"),
+        etl_formats::SettingKind::FocalPower => format!("{lo:.2}..{hi:.2} dpt"),
+    };
     Some(format!(
-        "the data do not determine the centre's move: its standard deviation over {lo:.0}..{hi:.0} mA is {std_mm:.3} \
+        "the data do not determine the centre's move: its standard deviation over {range} is {std_mm:.3} \
          mm, {:.2} % of the {distance_mm:.0} mm working distance (at most {:.1} %): only perspective in the views tells \
          fx(E) from dz(E); tilt the board on the stage further, add views, or keep the fixed centre (docs/RIG.md)",
         100.0 * relative,

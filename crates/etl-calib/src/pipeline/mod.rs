@@ -233,13 +233,7 @@ pub fn calibrate(
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
     let solved = solve::solve_without_outliers(&views, a0, options)?;
-    let mut result = calibration_of(obs, &views, solved, thermal, options)?;
-    if options.setting == SettingKind::FocalPower {
-        let t = obs.views.iter().map(|v| v.temperature_c);
-        let t_range_c = [t.clone().fold(f64::INFINITY, f64::min), t.fold(f64::NEG_INFINITY, f64::max)];
-        result.calibration = result.calibration.into_focal_power(Some(t_range_c));
-    }
-    Ok(result)
+    calibration_of(obs, &views, solved, thermal, options)
 }
 
 /// Each view's summary under the calibrated `m`: its points in the solve, their RMS
@@ -316,6 +310,11 @@ fn calibration_of(
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.
     calibration.set_covariance(&report.covariance)?;
     calibration.covariance_noise = Some(covariance_noise(options, &report));
-    calibration.warnings.extend(centre::undetermined_move(&m, &report.covariance, views));
+    calibration.warnings.extend(centre::undetermined_move(&m, &report.covariance, views, options.setting));
+    if options.setting == SettingKind::FocalPower {
+        let t = obs.views.iter().map(|v| v.temperature_c);
+        let t_range_c = [t.clone().fold(f64::INFINITY, f64::min), t.fold(f64::NEG_INFINITY, f64::max)];
+        calibration = calibration.into_focal_power(Some(t_range_c));
+    }
     Ok(CalibrationResult { calibration, report, initial, focus_law_warning })
 }

@@ -198,8 +198,12 @@ pub(super) fn plausibility_warnings(cal: &Calibration, rounds: &Rounds, options:
             cal.views.iter().enumerate().map(|(j, v)| (j, f(v).abs())).max_by(|a, b| a.1.total_cmp(&b.1))
         };
         if let Some((j, de)) = worst(&|v| v.de_ma).filter(|&(_, de)| de > PRIOR_FACTOR * sigma_e_ma) {
+            let (what, unit, labels) = match options.setting {
+                SettingKind::Current => ("current", "mA", "current labels"),
+                SettingKind::FocalPower => ("focal-power", "dpt", "recorded focal powers"),
+            };
             w.push(format!(
-                "the current correction of view {j} is {de:.3} mA, {:.1} times its prior ({sigma_e_ma} mA): are the current labels right?",
+                "the {what} correction of view {j} is {de:.3} {unit}, {:.1} times its prior ({sigma_e_ma} {unit}): are the {labels} right?",
                 de / sigma_e_ma
             ));
         }

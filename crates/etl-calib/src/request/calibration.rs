@@ -201,6 +201,11 @@ pub struct CalibrationRequest {
     pub accept_ill_conditioned: bool,
     /// The projection centre; `None`: fixed, the paper's.
     pub centre: Option<CentreChoice>,
+    /// Every model choice to the data (`--model auto`, Python `model="auto"`): the
+    /// distortion family, the focal degree and the centre chosen together by the error of
+    /// held-out views ([`crate::pipeline::select`], all 20 candidates), reported in the
+    /// file's `"model_selection"`. Refused beside any of the three.
+    pub model_auto: bool,
 }
 
 /// What a run gives: the proposed method's result or the baseline's.
@@ -256,6 +261,9 @@ impl CalibrationRequest {
     /// The family asked for: `Some` a family (the paper's by default), `None` chosen by the
     /// data.
     pub fn family(&self) -> Option<DistortionModel> {
+        if self.model_auto {
+            return None;
+        }
         match self.distortion {
             None => Some(DistortionModel::Paper),
             Some(DistortionChoice::Family(f)) => Some(f),
@@ -265,6 +273,9 @@ impl CalibrationRequest {
 
     /// The focal degree asked for: `Some` a degree (3 by default), `None` chosen by the data.
     pub fn degree(&self) -> Option<usize> {
+        if self.model_auto {
+            return None;
+        }
         match self.focal_degree {
             None => Some(PAPER_FOCAL_DEGREE),
             Some(FocalDegreeChoice::Degree(d)) => Some(d),
@@ -275,6 +286,9 @@ impl CalibrationRequest {
     /// The centre asked for: `Some(true)` moving, `Some(false)` fixed (the default), `None`
     /// chosen by the data.
     pub fn moving_centre(&self) -> Option<bool> {
+        if self.model_auto {
+            return None;
+        }
         match self.centre {
             None | Some(CentreChoice::Fixed) => Some(false),
             Some(CentreChoice::Moving) => Some(true),
@@ -334,6 +348,7 @@ impl CalibrationRequest {
                 return Err(Refusal::PerSettingTakesNoBundleAdjustment { given });
             }
             let model = [
+                (RequestOption::Model, self.model_auto),
                 (RequestOption::Distortion, self.distortion.is_some()),
                 (RequestOption::FocalDegree, self.focal_degree.is_some()),
                 (RequestOption::Centre, self.centre.is_some()),
@@ -343,6 +358,14 @@ impl CalibrationRequest {
             if let Some(&(given, _)) = model.iter().find(|(_, g)| *g) {
                 return Err(Refusal::PerSettingTakesNoModelOption { given });
             }
+        }
+        let choices = [
+            (RequestOption::Distortion, self.distortion.is_some()),
+            (RequestOption::FocalDegree, self.focal_degree.is_some()),
+            (RequestOption::Centre, self.centre.is_some()),
+        ];
+        if let Some(&(given, _)) = choices.iter().find(|(_, g)| self.model_auto && *g) {
+            return Err(Refusal::ModelAutoAlone { given });
         }
         if let Some(FocalDegreeChoice::Degree(degree)) = self.focal_degree {
             if !(1..=MAX_FOCAL_DEGREE).contains(&degree) {

@@ -40,7 +40,8 @@ pub enum RequestOption {
     FixK3,
     /// OpenCV's `CALIB_ZERO_TANGENT_DIST`.
     ZeroTangent,
-    /// Zhang's distortion family.
+    /// Zhang's distortion family; for a calibration, `auto`: every model choice to the
+    /// data.
     Model,
     /// Keep a calibration the data do not determine (marked in its warnings).
     AcceptIllConditioned,

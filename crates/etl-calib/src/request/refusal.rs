@@ -72,6 +72,12 @@ pub enum Refusal {
     },
     /// The focal-power prior given with views at currents.
     OnlyForFocalPower,
+    /// `model = auto` beside a choice it makes itself (the distortion family, the focal
+    /// degree or the centre).
+    ModelAutoAlone {
+        /// The option given beside it.
+        given: RequestOption,
+    },
     /// A calibration the data do not determine (module `conditioning`), not accepted.
     IllConditioned {
         /// The symptom.
@@ -94,6 +100,7 @@ impl Refusal {
             Refusal::NoThermal { .. } => RequestOption::Thermal,
             Refusal::NotForFocalPower { given } => given,
             Refusal::OnlyForFocalPower => RequestOption::SigmaPDpt,
+            Refusal::ModelAutoAlone { given } => given,
             Refusal::IllConditioned { .. } => RequestOption::AcceptIllConditioned,
         }
     }
@@ -153,6 +160,11 @@ impl Refusal {
                     RequestOption::HoldA0 => "A0's kf0 is fx at the lens off, not at 0 dpt, so kf0 is fitted",
                     _ => "the prior on a focal-power view's setting is in dpt",
                 }
+            ),
+            Refusal::ModelAutoAlone { given } => format!(
+                "{} chooses the distortion family, the focal degree and the centre itself: drop {}",
+                s.with_word(RequestOption::Model, "auto"),
+                s.name(given)
             ),
             Refusal::OnlyForFocalPower => format!(
                 "{} is the prior on a focal-power view's setting, and these views are at currents: give {} instead",

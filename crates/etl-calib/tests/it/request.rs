@@ -4,8 +4,8 @@
 
 use etl_calib::pipeline::{calibrate, CalibrateOptions};
 use etl_calib::request::{
-    CalibrationRequest, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, KeySpelling, Method, Refusal,
-    RequestOption, Spelling, StageSigma, ZhangRequest,
+    CalibrationRequest, CentreChoice, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, KeySpelling,
+    Method, Refusal, RequestOption, Spelling, StageSigma, ZhangRequest,
 };
 use etl_core::calib::{Estimator, RobustLoss};
 use etl_core::model::DistortionModel;
@@ -133,6 +133,19 @@ fn every_refusal_names_its_option_in_the_callers_words() {
             RequestOption::RobustKPx,
             "<robust_k_px> must be positive and finite",
         ),
+        (
+            CalibrationRequest { model_auto: true, centre: Some(CentreChoice::Fixed), ..base.clone() },
+            RequestOption::Centre,
+            "<model>='auto' chooses the distortion family, the focal degree and the centre itself: drop <centre>",
+        ),
+        (
+            CalibrationRequest {
+                model_auto: true,
+                ..CalibrationRequest { method: Method::PerSetting, ..base.clone() }
+            },
+            RequestOption::Model,
+            "<method>='per-setting' takes no <model>",
+        ),
     ];
     for (request, option, words) in cases {
         let refusal = request.check().unwrap_err();
@@ -148,6 +161,10 @@ fn every_refusal_names_its_option_in_the_callers_words() {
     // The paper family's flag is allowed where the data may choose opencv.
     let auto = CalibrationRequest { fix_k3: true, distortion: Some(DistortionChoice::Auto), ..Default::default() };
     assert!(auto.check().is_ok());
+    // model = auto leaves every choice to the data.
+    let model = CalibrationRequest { model_auto: true, ..Default::default() };
+    assert!(model.check().is_ok());
+    assert_eq!((model.family(), model.degree(), model.moving_centre()), (None, None, None));
     let zhang = ZhangRequest { zero_tangent: true, ..ZhangRequest::default() };
     assert_eq!(
         zhang.check().unwrap_err(),

@@ -43,9 +43,17 @@ fn glib_err(name: &str, kind: ErrorKind) -> impl Fn(aravis::glib::Error) -> Erro
     move |e| Error::device(name, kind, e.to_string())
 }
 
+/// One camera opened at a time in the process: aravis builds each camera's GenICam tree
+/// with GLib's lazily registered types, and two threads opening cameras at once corrupt it
+/// (seen as "self is not a ArvDomNode" and a SIGFPE with two fake cameras opened by
+/// parallel tests).
+static OPENING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 impl AravisCamera {
-    /// Opens the camera `id` and queues its stream's buffers.
+    /// Opens the camera `id` and queues its stream's buffers (one opening at a time in the
+    /// process, [`OPENING`]).
     pub fn open(id: &str) -> Result<AravisCamera> {
+        let _one_at_a_time = OPENING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let name = format!("camera aravis:{id}");
         let (camera, device) = match id.strip_prefix("Fake_") {
             Some(serial) => {

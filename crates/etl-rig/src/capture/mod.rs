@@ -52,6 +52,9 @@ pub struct CaptureOptions {
     pub max_temperature_change_c: f64,
     /// The autofocus search range, mA (needed by plans with `"focus": "autofocus"`).
     pub autofocus_range_ma: Option<[f64; 2]>,
+    /// Split each approach's last step by this zero-vibration shaper (the lens's measured
+    /// dynamics, `etlcal lens characterise --out`); None: plain steps.
+    pub shaper: Option<etl_core::physics::shaping::ZvShaper>,
 }
 
 impl Default for CaptureOptions {
@@ -62,6 +65,7 @@ impl Default for CaptureOptions {
             settle_timeout_s: 10.0,
             max_temperature_change_c: 0.5,
             autofocus_range_ma: None,
+            shaper: None,
         }
     }
 }
@@ -162,6 +166,7 @@ fn run(
     views: bool,
 ) -> Result<CaptureReport> {
     let image_size = preflight(plan, rig, options, views)?;
+    rig.lens.set_shaper(options.shaper);
     let mut store = Store::open(out_dir, plan, image_size)?;
     let (offstate_kept, views_kept) = store.resumed;
     let mut report = CaptureReport { offstate_kept, views_kept, ..CaptureReport::default() };

@@ -235,6 +235,18 @@ fn bad_plans_and_specs_fail_in_one_line_and_write_nothing() {
     assert_eq!((code, stderr.lines().count()), (1, 1), "{stderr}");
     assert!(stderr.contains("camera webcam:0: unknown camera spec"), "{stderr}");
     assert!(!out.exists());
+    // A shaper from dynamics whose membrane does not ring: refused, nothing written.
+    let published = fixture("lens-dynamics/el-10-30-published.json");
+    let over = dir.path().join("over.json");
+    std::fs::write(&over, std::fs::read_to_string(published).unwrap().replace("\"damping\": 0.28", "\"damping\": 1.5"))
+        .unwrap();
+    let over_s = over.to_string_lossy().into_owned();
+    let mut args = capture_args(&plan, &out_s);
+    args.extend_from_slice(&["--shaped", &over_s]);
+    let (code, _, stderr) = etlcal_run(&args);
+    assert_eq!((code, stderr.lines().count()), (1, 1), "{stderr}");
+    assert!(stderr.contains("--shaped") && stderr.contains("no shaper"), "{stderr}");
+    assert!(!out.exists());
 }
 
 #[test]

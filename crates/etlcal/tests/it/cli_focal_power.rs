@@ -98,6 +98,22 @@ fn a_focal_power_calibration_from_simulation_to_focus_and_export() {
         "--json",
     ]);
     run(export(&["--dpt", "15", "--t", "30"], &p("cur.json")), "its setting is the lens current");
+    // --model auto chooses among all 20 candidates on focal-power views too, and says so
+    // in dpt; it is refused beside a choice it makes itself.
+    let auto =
+        json_of(&["calibrate", "--observations", &obs_path, "--model", "auto", "--out", &p("auto.json"), "--json"]);
+    assert_eq!(auto["setting"], "focal_power");
+    let candidates = auto["model_selection"]["candidates"].as_array().unwrap();
+    assert_eq!(candidates.len(), 20, "{}", auto["model_selection"]);
+    assert_eq!(candidates.iter().filter(|c| c["chosen"] == true).count(), 1);
+    let text = auto.to_string();
+    assert!(!text.contains(" mA is "), "a focal-power range said in mA: {text:.300}");
+    let alone = ["calibrate", "--observations", &obs_path, "--model", "auto", "--centre", "fixed", "--out", &out];
+    refused(
+        &alone,
+        "--model auto chooses the distortion family, the focal degree and the centre itself: drop --centre",
+        Path::new(&out),
+    );
     // The prior on the focal power: recorded as given; refused with currents, or not positive.
     let own =
         json_of(&["calibrate", "--observations", &obs_path, "--sigma-p-dpt", "0.1", "--out", &p("own.json"), "--json"]);

@@ -147,7 +147,8 @@ fn fit_all(
                 let options = candidate_options(base, layout);
                 let fit =
                     solve_without_outliers(views, &family_a0, &options).map_err(|e| e.to_string()).and_then(|solved| {
-                        match undetermined_move(&solved.report.model, &solved.report.covariance, views) {
+                        match undetermined_move(&solved.report.model, &solved.report.covariance, views, options.setting)
+                        {
                             // A move the data do not determine is no candidate (module centre).
                             Some(why) => Err(why),
                             None => Ok(Fitted { options, solved }),
@@ -185,6 +186,7 @@ pub fn select(
     candidates: &Candidates,
 ) -> Result<CalibrationResult> {
     obs.validate()?;
+    let options = &options.with_setting(obs.setting_kind()?, None);
     if candidates.families.is_empty() || candidates.focal_degrees.is_empty() || candidates.centres.is_empty() {
         return Err(Error::invalid(
             "candidates",
