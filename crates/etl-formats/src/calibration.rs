@@ -718,11 +718,6 @@ impl Calibration {
         }
     }
 
-    /// The setting of each view summary, in the setting's unit (E_com or focal power).
-    pub fn view_settings(&self) -> Vec<f64> {
-        self.views.iter().map(ViewSummary::setting).collect()
-    }
-
     /// The distortion family: `"distortion_model"`, the paper's when absent. Errors: a
     /// name that is no family (naming the field).
     pub fn distortion_model(&self) -> Result<DistortionModel> {

@@ -175,16 +175,15 @@ impl Dataset {
     /// The one kind of setting of the ETL and setting views, each view's setting checked
     /// ([`lens_setting::view_setting_kind`]); an error naming the first view that differs.
     pub fn setting_kind(&self) -> Result<SettingKind> {
+        let views = self.views.iter().map(|v| (v.e_in_ma, v.focal_power_dpt, v.e_com_ma));
+        let settings = self.setting_views.iter().map(|v| (v.e_in_ma, v.focal_power_dpt, v.e_com_ma));
+        let all = (views.enumerate().map(|(i, s)| ("views", "view", i, s)))
+            .chain(settings.enumerate().map(|(i, s)| ("setting_views", "setting view", i, s)));
         let mut kinds = vec![];
-        for (key, list) in [
-            ("views", self.views.iter().map(|v| (v.e_in_ma, v.focal_power_dpt, v.e_com_ma)).collect::<Vec<_>>()),
-            ("setting_views", self.setting_views.iter().map(|v| (v.e_in_ma, v.focal_power_dpt, v.e_com_ma)).collect()),
-        ] {
-            for (i, (e_in, p, e_com)) in list.into_iter().enumerate() {
-                let name = format!("{} {i}", if key == "views" { "view" } else { "setting view" });
-                let kind = lens_setting::view_setting_kind(e_in, p, e_com, |f| format!("{key}[{i}].{f}"), &name)?;
-                kinds.push((kind, format!("{key}[{i}]")));
-            }
+        for (key, name, i, (e_in, p, e_com)) in all {
+            let kind =
+                lens_setting::view_setting_kind(e_in, p, e_com, |f| format!("{key}[{i}].{f}"), &format!("{name} {i}"))?;
+            kinds.push((kind, format!("{key}[{i}]")));
         }
         Ok(lens_setting::common_kind(kinds)?.unwrap_or_default())
     }

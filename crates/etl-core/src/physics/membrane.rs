@@ -85,6 +85,32 @@ impl LensPhysics {
     pub fn f_liq_mm(&self, e_ma: f64) -> Result<f64> {
         self.f_liq_at_pressure_mm(self.membrane_pressure_pa(e_ma)?)
     }
+
+    /// Focal power of the liquid lens at (compensated) current `e_ma`, 1000 / f_liq, dpt
+    /// (NaN outside the model's range, [`Self::f_liq_mm`]).
+    pub fn power_dpt(&self, e_ma: f64) -> f64 {
+        self.f_liq_mm(e_ma).map_or(f64::NAN, |f| 1000.0 / f)
+    }
+
+    /// The (compensated) current in `[lo_ma, hi_ma]` at which the liquid lens has power
+    /// `dpt`, by bisection (the power rises with the current there); None when `dpt` is
+    /// not reached in the interval. 60 halvings take any interval of the driver's range
+    /// below the resolution of an f64.
+    pub fn current_for_power_ma(&self, dpt: f64, [lo_ma, hi_ma]: [f64; 2]) -> Option<f64> {
+        let (mut lo, mut hi) = (lo_ma, hi_ma);
+        if !(self.power_dpt(lo) <= dpt && dpt <= self.power_dpt(hi)) {
+            return None;
+        }
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if self.power_dpt(mid) < dpt {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(0.5 * (lo + hi))
+    }
 }
 
 #[cfg(test)]

@@ -247,28 +247,16 @@ impl Model {
     }
 
     /// Focal power of the liquid lens at compensated current `e_com_ma` (NaN outside the
-    /// physics model's range).
+    /// physics model's range; [`LensPhysics::power_dpt`]).
     pub fn power_dpt_at(&self, e_com_ma: f64) -> f64 {
-        self.physics.f_liq_mm(e_com_ma).map(|f| 1000.0 / f).unwrap_or(f64::NAN)
+        self.physics.power_dpt(e_com_ma)
     }
 
-    /// The compensated current that gives focal power `dpt`, by bisection over
-    /// [0, upper limit] (power rises with current there); None if out of reach.
+    /// The compensated current that gives focal power `dpt` over [0, upper limit]
+    /// ([`LensPhysics::current_for_power_ma`]); None if out of reach.
     pub fn e_com_for_power(&self, dpt: f64) -> Option<f64> {
-        let (mut lo, mut hi) = (0.0, current_ma(self.upper_limit_code, self.max_current_ma()));
-        let (plo, phi) = (self.power_dpt_at(lo), self.power_dpt_at(hi));
-        if !(plo <= dpt && dpt <= phi) {
-            return None;
-        }
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if self.power_dpt_at(mid) < dpt {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        Some(0.5 * (lo + hi))
+        let hi = current_ma(self.upper_limit_code, self.max_current_ma());
+        self.physics.current_for_power_ma(dpt, [0.0, hi])
     }
 
     pub fn state(&self) -> LensState {

@@ -32,25 +32,13 @@ pub const FOCAL_POWER_TEMPERATURES_C: [f64; 3] = [25.0, 30.0, 35.0];
 
 /// The liquid lens's focal power at compensated current `e_com_ma`, dpt (Eq. 5).
 pub fn power_dpt(e_com_ma: f64) -> f64 {
-    LensPhysics::paper().f_liq_mm(e_com_ma).map_or(f64::NAN, |f| 1000.0 / f)
+    LensPhysics::paper().power_dpt(e_com_ma)
 }
 
-/// The compensated current at which the liquid lens has power `dpt`, mA: bisection on
-/// 0..300 mA, where the power rises with the current (NaN out of reach).
+/// The compensated current at which the liquid lens has power `dpt`, mA, within
+/// 0..300 mA (NaN out of reach; [`LensPhysics::current_for_power_ma`]).
 pub fn current_for_power_ma(dpt: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0, 300.0);
-    if !(power_dpt(lo) <= dpt && dpt <= power_dpt(hi)) {
-        return f64::NAN;
-    }
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if power_dpt(mid) < dpt {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
+    LensPhysics::paper().current_for_power_ma(dpt, [0.0, 300.0]).unwrap_or(f64::NAN)
 }
 
 /// The paper rig's views in focal-power mode under `noise`, seeded, the temperatures
