@@ -345,3 +345,37 @@ pub extern "C" fn etl_gate_board(name: &[u8; 16], len: usize, observed: u64, col
     let touching = board.corner_markers(id).map_or(0.0, |m| (m[0] + m[1]) as f64);
     decoded + corner + marker + touching
 }
+
+/// A two-camera rig: the pose at caller settings of a moving centre (Eq. R2), a point
+/// triangulated from its two pixels with its covariance, and a band of rectification maps
+/// through the rotation; their sum, or NaN on error.
+#[unsafe(no_mangle)]
+pub extern "C" fn etl_gate_rig(e0_ma: f64, e1_ma: f64, z_mm: f64, sigma_px: f64, maps: &mut [f32; 128]) -> f64 {
+    use etl_core::model::MovingCentre;
+    use etl_core::runtime::rig::{centre_shift_mm, triangulate, RigPose, TriangulationView};
+    use etl_core::runtime::{Camera, Trust};
+    use etl_core::undistort::{rectify_maps, OutputCamera};
+    let mut model = CameraModel::strong_distortion_rig();
+    model.centre = Some(MovingCentre { dz_mm: [-5e-3, 1e-5], principal_point_slope_px: [0.01, 0.0] });
+    let Ok(cam) = Camera::new(model, None, [80.0, 225.0]) else { return f64::NAN };
+    let (Ok(c0), Ok(c1)) = (cam.at_e_com(e0_ma, Trust::Refuse), cam.at_e_com(e1_ma, Trust::Refuse)) else {
+        return f64::NAN;
+    };
+    let reference = RigPose::from_rodrigues([0.0, -0.05, 0.0], [-100.0, 0.0, 0.0]);
+    let pose = reference.at_settings(centre_shift_mm(&model, e0_ma, 150.0), centre_shift_mm(&model, e1_ma, 150.0));
+    let x = [10.0, -5.0, z_mm];
+    let (Ok(p0), Ok(p1)) = (c0.project_camera_point(x), c1.project_camera_point(pose.apply(x))) else {
+        return f64::NAN;
+    };
+    let views = [
+        TriangulationView { camera: &c0, pose: RigPose::IDENTITY, pixel: p0 },
+        TriangulationView { camera: &c1, pose, pixel: p1 },
+    ];
+    let Ok(t) = triangulate(&views, sigma_px) else { return f64::NAN };
+    let Ok(out) = OutputCamera::of_intrinsics(c1.intrinsics(), 8, 8) else { return f64::NAN };
+    let (mx, my) = maps.split_at_mut(64);
+    if rectify_maps(c1.intrinsics(), c1.distortion(), &pose.rotation, &out, 0..8, mx, my).is_err() {
+        return f64::NAN;
+    }
+    t.point_mm[2] + t.covariance_mm2[2][2] + mx[9] as f64
+}

@@ -63,5 +63,5 @@ mod solve;
 pub use calibrate::stereo_calibrate;
 pub use init::relative_pose_median;
 pub use options::{StereoMode, StereoOptions, StereoPair, MIN_JOINT_PAIRS};
-pub use rectify::{rectify, Rectification};
+pub use rectify::{rectify, rectify_cameras, undistort_opencv, Rectification, RectifyCamera};
 pub use result::StereoResult;

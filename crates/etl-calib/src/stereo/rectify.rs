@@ -47,10 +47,21 @@ pub struct Rectification {
     pub q: [[f64; 4]; 4],
 }
 
+/// One camera as Bouguet's rectification sees it: its focal lengths, px, and the
+/// normalised undistorted point ((u - u0) / fx, (v - v0) / fy after undistortion) of an
+/// image pixel, by which the image's corners are centred.
+pub struct RectifyCamera<'a> {
+    /// fx, fy, px.
+    pub focal_px: [f64; 2],
+    /// Pixel -> normalised undistorted point.
+    pub normalise: &'a dyn Fn([f64; 2]) -> etl_core::Result<[f64; 2]>,
+}
+
 /// OpenCV's `cvUndistortPoints` of one pixel with 5 fixed-point iterations (its default
-/// criterion), OpenCV's model `k` = [k1, k2, p1, p2, k3]: the normalised point.
-fn undistort_opencv(z: &ZhangResult, k: &[f64; 5], [u, v]: [f64; 2]) -> [f64; 2] {
-    let (x0, y0) = ((u - z.u0) / z.fx, (v - z.v0) / z.fy);
+/// criterion), camera `[fx, fy, u0, v0]`, OpenCV's model `k` = [k1, k2, p1, p2, k3]: the
+/// normalised point.
+pub fn undistort_opencv([fx, fy, u0, v0]: [f64; 4], k: &[f64; 5], [u, v]: [f64; 2]) -> [f64; 2] {
+    let (x0, y0) = ((u - u0) / fx, (v - v0) / fy);
     let (mut x, mut y) = (x0, y0);
     for _ in 0..5 {
         let r2 = x * x + y * y;
@@ -69,16 +80,16 @@ fn undistort_opencv(z: &ZhangResult, k: &[f64; 5], [u, v]: [f64; 2]) -> [f64; 2]
 /// The centring principal point of one camera (module docs): `((w - 1) / 2, (h - 1) / 2)`
 /// minus the mean of its four image corners undistorted, rotated by `r` and projected
 /// with focal length `f` about 0, float32 where OpenCV's points are.
-fn centring(z: &ZhangResult, k: &[f64; 5], r: &Mat3, f: f64, [w, h]: [f64; 2]) -> [f64; 2] {
+fn centring(cam: &RectifyCamera<'_>, r: &Mat3, f: f64, [w, h]: [f64; 2]) -> Result<[f64; 2]> {
     let f32r = |x: f64| x as f32 as f64;
     let mut sum = [0.0; 2];
     for (u, v) in [(0.0, 0.0), (w - 1.0, 0.0), (0.0, h - 1.0), (w - 1.0, h - 1.0)] {
-        let [x, y] = undistort_opencv(z, k, [u, v]).map(f32r);
+        let [x, y] = (cam.normalise)([u, v])?.map(f32r);
         let p = mat_vec(r, [x, y, 1.0]);
         sum[0] += f32r(f * p[0] / p[2]);
         sum[1] += f32r(f * p[1] / p[2]);
     }
-    [(w - 1.0) / 2.0 - sum[0] / 4.0, (h - 1.0) / 2.0 - sum[1] / 4.0]
+    Ok([(w - 1.0) / 2.0 - sum[0] / 4.0, (h - 1.0) / 2.0 - sum[1] / 4.0])
 }
 
 /// The rectifying rotations (R1, R2), the baseline t' = R2 T and its axis i (module docs).
@@ -114,21 +125,48 @@ fn rotations(rotation_rodrigues: [f64; 3], translation_mm: [f64; 3]) -> Result<(
 /// `CALIB_ZERO_DISPARITY` (one principal point for both, its default).
 ///
 /// Errors: a camera of the paper's family (`"model"`: OpenCV's rectification is defined
-/// for its model), a zero baseline (`"translation_mm"`).
+/// for its model; [`rectify_cameras`] takes any camera), a zero baseline
+/// (`"translation_mm"`).
 pub fn rectify(
     (left, right): (&ZhangResult, &ZhangResult),
     image_size: [u32; 2],
-    (rotation_rodrigues, translation_mm): ([f64; 3], [f64; 3]),
+    pose: ([f64; 3], [f64; 3]),
     zero_disparity: bool,
 ) -> Result<Rectification> {
     let (Some(dl), Some(dr)) = (left.dist_coeffs(), right.dist_coeffs()) else {
         return Err(Error::invalid("model", "rectification in OpenCV's conventions needs --model opencv"));
     };
+    let kl = [left.fx, left.fy, left.u0, left.v0];
+    let kr = [right.fx, right.fy, right.u0, right.v0];
+    let nl = move |p: [f64; 2]| Ok(undistort_opencv(kl, &dl, p));
+    let nr = move |p: [f64; 2]| Ok(undistort_opencv(kr, &dr, p));
+    rectify_cameras(
+        (&RectifyCamera { focal_px: [left.fx, left.fy], normalise: &nl }, &RectifyCamera {
+            focal_px: [right.fx, right.fy],
+            normalise: &nr,
+        }),
+        image_size,
+        pose,
+        zero_disparity,
+    )
+}
+
+/// Bouguet's rectification (module docs) of any two cameras: as [`rectify`], with each
+/// image corner normalised by the camera's own `normalise` (OpenCV's 5 iterations for
+/// `cv2.stereoRectify`'s numbers, or a model's exact inverse).
+///
+/// Errors: a zero baseline (`"translation_mm"`), a corner the camera cannot undistort.
+pub fn rectify_cameras(
+    (left, right): (&RectifyCamera<'_>, &RectifyCamera<'_>),
+    image_size: [u32; 2],
+    (rotation_rodrigues, translation_mm): ([f64; 3], [f64; 3]),
+    zero_disparity: bool,
+) -> Result<Rectification> {
     let (r1, r2, t, i) = rotations(rotation_rodrigues, translation_mm)?;
     let size = [image_size[0] as f64, image_size[1] as f64];
-    let across = |z: &ZhangResult| if i == 0 { z.fy } else { z.fx };
+    let across = |c: &RectifyCamera<'_>| if i == 0 { c.focal_px[1] } else { c.focal_px[0] };
     let f = 0.5 * (across(left) + across(right));
-    let mut c = [centring(left, &dl, &r1, f, size), centring(right, &dr, &r2, f, size)];
+    let mut c = [centring(left, &r1, f, size)?, centring(right, &r2, f, size)?];
     if zero_disparity {
         let mean = [0.5 * (c[0][0] + c[1][0]), 0.5 * (c[0][1] + c[1][1])];
         c = [mean, mean];

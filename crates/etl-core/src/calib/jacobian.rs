@@ -404,6 +404,32 @@ impl Projector {
     }
 }
 
+/// A camera point `pc` (mm, the camera's frame) projected under intrinsics `k` and
+/// distortion `d` ([`crate::model::projection::project_camera_point`], either family),
+/// with d pixel / d pc (2 x 3), analytic: the derivatives the bundle adjustment uses.
+///
+/// Errors: the point at or behind the camera; a non-finite pixel.
+pub fn project_camera_point_jacobian(
+    pc: [f64; 3],
+    k: &crate::model::Intrinsics,
+    d: &Distortion,
+) -> Result<([f64; 2], [[f64; 3]; 2])> {
+    if !(pc[2] > 0.0) {
+        return Err(Error::BehindCamera);
+    }
+    let iz = 1.0 / pc[2];
+    let (xn, yn) = (pc[0] * iz, pc[1] * iz);
+    let local = match d.model() {
+        DistortionModel::Paper => paper_local(d, k.fx, k.fy, xn, yn, iz, true),
+        DistortionModel::OpenCv => opencv_local(d, k.fx, k.fy, xn, yn, iz, true),
+    };
+    let pixel = [local.pixel[0] + k.u0, local.pixel[1] + k.v0];
+    if !(pixel[0].is_finite() && pixel[1].is_finite()) {
+        return Err(Error::NotFinite { what: "projected pixel" });
+    }
+    Ok((pixel, local.d_pc))
+}
+
 /// One family's part of a projection: the pixel relative to the principal point and its
 /// derivatives with respect to the camera point, to (fx, fy) at fixed coefficients, and to
 /// the coefficients.
@@ -508,6 +534,33 @@ mod tests {
             // And the value agrees with the model's own projection.
             let q = model.project(pw, e).unwrap();
             assert!((q[0] - p.pixel[0]).abs() < 1e-9 && (q[1] - p.pixel[1]).abs() < 1e-9, "{q:?} {:?}", p.pixel);
+        }
+    }
+
+    /// The camera point's projection and its Jacobian against the model's own projection
+    /// and central differences, both families.
+    #[test]
+    fn camera_point_jacobian_matches_central_differences() {
+        use crate::model::projection::project_camera_point;
+        for model in [CameraModel::paper_rig(), CameraModel::strong_distortion_rig()] {
+            let (k, d) = (model.intrinsics(150.0).unwrap(), model.distortion(150.0).unwrap());
+            for pc in [[30.0, -20.0, 400.0], [-150.0, 90.0, 300.0], [0.0, 0.0, 50.0]] {
+                let (px, j) = project_camera_point_jacobian(pc, &k, &d).unwrap();
+                let q = project_camera_point(pc, &k, &d).unwrap();
+                assert!((px[0] - q[0]).abs() < 1e-9 && (px[1] - q[1]).abs() < 1e-9, "{px:?} {q:?}");
+                for c in 0..3 {
+                    let h = 1e-4;
+                    let (mut a, mut b) = (pc, pc);
+                    a[c] += h;
+                    b[c] -= h;
+                    let (pa, pb) = (project_camera_point(a, &k, &d).unwrap(), project_camera_point(b, &k, &d).unwrap());
+                    for row in 0..2 {
+                        let fd = (pa[row] - pb[row]) / (2.0 * h);
+                        assert!((fd - j[row][c]).abs() < 1e-6 * fd.abs().max(1.0), "{pc:?} {row} {c}: {fd} {}", j[row][c]);
+                    }
+                }
+            }
+            assert_eq!(project_camera_point_jacobian([0.0, 0.0, -1.0], &k, &d), Err(Error::BehindCamera));
         }
     }
 

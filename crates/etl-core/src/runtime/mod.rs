@@ -24,6 +24,7 @@
 //! # Ok::<(), etl_core::Error>(())
 //! ```
 
+pub mod rig;
 mod setting;
 mod trust;
 

@@ -151,6 +151,22 @@ impl CameraAt {
     pub fn project(&self, world_mm: [f64; 3]) -> Result<[f64; 2]> {
         self.model.project(world_mm, self.setting)
     }
+    /// A point in this camera's own frame at this setting (mm: origin at the projection
+    /// centre where the lens puts it, Eq. C2) -> observed pixel (Eq. 15, 17): the
+    /// projection without the calibration's pose, as a rig uses it.
+    pub fn project_camera_point(&self, camera_mm: [f64; 3]) -> Result<[f64; 2]> {
+        crate::error::all_finite(&camera_mm, "camera_mm")?;
+        crate::model::projection::project_camera_point(camera_mm, &self.intrinsics, &self.distortion)
+    }
+    /// The unit direction, in this camera's frame, of the ray of an observed pixel: the
+    /// undistorted pixel back-projected through K at this setting.
+    pub fn camera_ray(&self, pixel: [f64; 2]) -> Result<[f64; 3]> {
+        let [x, y] = self.undistort_point(pixel)?;
+        let k = &self.intrinsics;
+        let d = [(x - k.u0) / k.fx, (y - k.v0) / k.fy, 1.0];
+        let n = libm::sqrt(d[0] * d[0] + d[1] * d[1] + 1.0);
+        Ok([d[0] / n, d[1] / n, 1.0 / n])
+    }
     /// Observed pixel -> undistorted pixel ([`CameraModel::undistort`]).
     pub fn undistort_point(&self, pixel: [f64; 2]) -> Result<[f64; 2]> {
         self.model.undistort(pixel, self.setting)

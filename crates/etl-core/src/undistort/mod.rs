@@ -31,9 +31,11 @@
 
 pub mod maps;
 pub mod pinhole;
+pub mod rectify;
 pub mod remap;
 
 pub use maps::undistort_maps;
+pub use rectify::rectify_maps;
 pub use pinhole::{OutputCamera, MAX_PIXELS, MAX_SIDE_PX};
 pub use remap::{remap, Sample, SourceImage};
 

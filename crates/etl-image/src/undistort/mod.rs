@@ -24,6 +24,7 @@
 //! ```
 
 mod focus_maps;
+mod rectify;
 mod simd;
 
 use etl_core::model::{Distortion, Intrinsics};
@@ -33,6 +34,7 @@ use simd::{FusedBand, MapsBand, RemapBand};
 
 pub use etl_core::undistort::{OutputCamera, Sample, SourceImage};
 pub use focus_maps::{FocusMaps, OutputChoice};
+pub use rectify::rectify_maps;
 
 use crate::Result;
 

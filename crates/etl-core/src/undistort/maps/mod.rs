@@ -132,7 +132,7 @@ fn row_polynomials(d: &Distortion, v: f64, u0: f64, v0: f64) -> [[f64; 4]; 2] {
 }
 
 /// The model at one current must be usable: its fields are public, so it is checked here.
-fn check_model(k: &Intrinsics, d: &Distortion) -> Result<()> {
+pub(crate) fn check_model(k: &Intrinsics, d: &Distortion) -> Result<()> {
     if !(k.fx > 0.0 && k.fy > 0.0 && k.fx.is_finite() && k.fy.is_finite()) {
         return Err(Error::InvalidArgument { what: "model intrinsics: fx and fy must be finite and > 0" });
     }
