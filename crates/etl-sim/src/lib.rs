@@ -9,6 +9,7 @@ pub mod print;
 pub mod render;
 pub mod rig;
 pub mod simulate;
+pub mod stereo_rig;
 pub mod virtual_rig;
 
 pub use etl_formats::{Error, Result};

@@ -97,9 +97,8 @@ impl RigAt {
         self.check_index(i, "pair")?;
         self.check_index(j, "pair")?;
         let (a, b) = (&self.poses[i], &self.poses[j]);
-        let r: [[f64; 3]; 3] = std::array::from_fn(|p| {
-            std::array::from_fn(|q| (0..3).map(|k| b.rotation[p][k] * a.rotation[q][k]).sum())
-        });
+        let r: [[f64; 3]; 3] =
+            std::array::from_fn(|p| std::array::from_fn(|q| (0..3).map(|k| b.rotation[p][k] * a.rotation[q][k]).sum()));
         let rt = etl_core::model::rotation::mat_vec(&r, a.translation_mm);
         let t = std::array::from_fn(|p| b.translation_mm[p] - rt[p]);
         Ok(RigPose { rotation: r, translation_mm: t })

@@ -26,7 +26,7 @@ use std::path::Path;
 
 use etl_core::runtime::rig::RigPose;
 use etl_formats::calibration::Calibration;
-use etl_formats::rig::{RigFile, RigExtrinsics};
+use etl_formats::rig::{RigExtrinsics, RigFile};
 use etl_formats::{Camera, Error, Result, Trust};
 
 pub use at::RigAt;
@@ -142,6 +142,3 @@ impl Rig {
         pose.at_settings(shift(0, ref0), shift(k, refk))
     }
 }
-
-#[cfg(test)]
-mod tests;

@@ -17,8 +17,8 @@
 //! map_x, map_y)` gives the rectified image of either family, exactly to the model.
 
 use etl_core::model::rotation::{matrix_to_rodrigues, Mat3};
-use etl_core::undistort::OutputCamera;
 use etl_core::model::DistortionModel;
+use etl_core::undistort::OutputCamera;
 use etl_formats::{CameraAt, Error, Result};
 use etl_image::undistort::{rectify_maps, UndistortMaps};
 
@@ -83,7 +83,11 @@ impl RigAt {
     pub fn stereo_rectify(&self, left: usize, right: usize, alpha: f64) -> Result<StereoRectification> {
         let pose = self.relative_pose(left, right)?;
         if left == right {
-            return Err(Error::invalid_value("pair", left, format!("pair: camera {left} cannot be paired with itself")));
+            return Err(Error::invalid_value(
+                "pair",
+                left,
+                format!("pair: camera {left} cannot be paired with itself"),
+            ));
         }
         if alpha != -1.0 {
             return Err(Error::invalid_value(
@@ -104,7 +108,10 @@ impl RigAt {
         let focal = |c: &CameraAt| [c.intrinsics().fx, c.intrinsics().fy];
         let rotation_rodrigues = matrix_to_rodrigues(&pose.rotation);
         let rectification = rectify_cameras(
-            (&RectifyCamera { focal_px: focal(cl), normalise: &*nl }, &RectifyCamera { focal_px: focal(cr), normalise: &*nr }),
+            (
+                &RectifyCamera { focal_px: focal(cl), normalise: &*nl },
+                &RectifyCamera { focal_px: focal(cr), normalise: &*nr },
+            ),
             sl,
             (rotation_rodrigues, pose.translation_mm),
             true,

@@ -94,13 +94,21 @@ impl RigAt {
         if pixels.len() != self.len() {
             return Err(Error::invalid(
                 "pixels",
-                format!("pixels: the rig has {} cameras, got {} entries (one per camera, None where unseen)", self.len(), pixels.len()),
+                format!(
+                    "pixels: the rig has {} cameras, got {} entries (one per camera, None where unseen)",
+                    self.len(),
+                    pixels.len()
+                ),
             ));
         }
         let used: Vec<usize> = (0..self.len()).filter(|&k| pixels[k].is_some()).collect();
         let views: Vec<TriangulationView<'_>> = used
             .iter()
-            .map(|&k| TriangulationView { camera: &self.cameras()[k], pose: self.poses()[k], pixel: pixels[k].unwrap_or_default() })
+            .map(|&k| TriangulationView {
+                camera: &self.cameras()[k],
+                pose: self.poses()[k],
+                pixel: pixels[k].unwrap_or_default(),
+            })
             .collect();
         let t = triangulate(&views, sigma_px).map_err(|e| Error::from(e).within("triangulate", Some("pixels")))?;
         let from_calibration = match part {
@@ -127,14 +135,22 @@ impl RigAt {
     }
 
     /// Cov_calibration (module docs) at the solution `t` of `views` (cameras `used`).
-    fn calibration_covariance(&self, views: &[TriangulationView<'_>], used: &[usize], t: &Triangulation) -> Result<Mat3> {
+    fn calibration_covariance(
+        &self,
+        views: &[TriangulationView<'_>],
+        used: &[usize],
+        t: &Triangulation,
+    ) -> Result<Mat3> {
         let x = t.point_mm;
-        let jacobians: Vec<[[f64; 3]; 2]> = views.iter().map(|v| v.residual(x).map(|(_, j)| j)).collect::<etl_core::Result<_>>()?;
+        let jacobians: Vec<[[f64; 3]; 2]> =
+            views.iter().map(|v| v.residual(x).map(|(_, j)| j)).collect::<etl_core::Result<_>>()?;
         // G = -(J^T J)^-1 J^T (3 x 2K): A_g = G dr/dtheta_g.
         let ni = &t.normal_inverse;
         let g: Vec<[[f64; 2]; 3]> = jacobians
             .iter()
-            .map(|j| std::array::from_fn(|a| std::array::from_fn(|row| -(0..3).map(|b| ni[a][b] * j[row][b]).sum::<f64>())))
+            .map(|j| {
+                std::array::from_fn(|a| std::array::from_fn(|row| -(0..3).map(|b| ni[a][b] * j[row][b]).sum::<f64>()))
+            })
             .collect();
         let mut cov = [[0.0; 3]; 3];
         let moving_0 = self.cameras()[0].model().centre.is_some();
@@ -250,7 +266,11 @@ impl RigAt {
 /// `c(i, j)` the group's covariance.
 fn add_group(cov: &mut Mat3, g: &[[[f64; 2]; 3]], d: &[Vec<f64>], c: impl Fn(usize, usize) -> f64, n: usize) {
     let a: Vec<[f64; 3]> = (0..n)
-        .map(|i| std::array::from_fn(|p| g.iter().enumerate().map(|(v, gv)| gv[p][0] * d[2 * v][i] + gv[p][1] * d[2 * v + 1][i]).sum()))
+        .map(|i| {
+            std::array::from_fn(|p| {
+                g.iter().enumerate().map(|(v, gv)| gv[p][0] * d[2 * v][i] + gv[p][1] * d[2 * v + 1][i]).sum()
+            })
+        })
         .collect();
     for i in 0..n {
         for j in 0..n {

@@ -141,10 +141,10 @@ pub fn rectify(
     let nl = move |p: [f64; 2]| Ok(undistort_opencv(kl, &dl, p));
     let nr = move |p: [f64; 2]| Ok(undistort_opencv(kr, &dr, p));
     rectify_cameras(
-        (&RectifyCamera { focal_px: [left.fx, left.fy], normalise: &nl }, &RectifyCamera {
-            focal_px: [right.fx, right.fy],
-            normalise: &nr,
-        }),
+        (
+            &RectifyCamera { focal_px: [left.fx, left.fy], normalise: &nl },
+            &RectifyCamera { focal_px: [right.fx, right.fy], normalise: &nr },
+        ),
         image_size,
         pose,
         zero_disparity,

@@ -556,7 +556,11 @@ mod tests {
                     let (pa, pb) = (project_camera_point(a, &k, &d).unwrap(), project_camera_point(b, &k, &d).unwrap());
                     for row in 0..2 {
                         let fd = (pa[row] - pb[row]) / (2.0 * h);
-                        assert!((fd - j[row][c]).abs() < 1e-6 * fd.abs().max(1.0), "{pc:?} {row} {c}: {fd} {}", j[row][c]);
+                        assert!(
+                            (fd - j[row][c]).abs() < 1e-6 * fd.abs().max(1.0),
+                            "{pc:?} {row} {c}: {fd} {}",
+                            j[row][c]
+                        );
                     }
                 }
             }

@@ -35,8 +35,8 @@ pub mod rectify;
 pub mod remap;
 
 pub use maps::undistort_maps;
-pub use rectify::rectify_maps;
 pub use pinhole::{OutputCamera, MAX_PIXELS, MAX_SIDE_PX};
+pub use rectify::rectify_maps;
 pub use remap::{remap, Sample, SourceImage};
 
 // The path before issue 26 (`camera` held the output image's pinhole camera): kept so that

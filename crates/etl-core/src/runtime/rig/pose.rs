@@ -67,7 +67,11 @@ impl RigPose {
         let t = self.translation_mm;
         RigPose {
             rotation: *r,
-            translation_mm: [t[0] + shift_0_mm * r[0][2], t[1] + shift_0_mm * r[1][2], t[2] + shift_0_mm * r[2][2] - shift_k_mm],
+            translation_mm: [
+                t[0] + shift_0_mm * r[0][2],
+                t[1] + shift_0_mm * r[1][2],
+                t[2] + shift_0_mm * r[2][2] - shift_k_mm,
+            ],
         }
     }
 }

@@ -61,11 +61,8 @@ impl TriangulationView<'_> {
     /// The residual q(R X + T) - u of point `x0_mm` (camera 0's frame) and its derivative
     /// with respect to X (2 x 3, px / mm). Errors: X at or behind this camera.
     pub fn residual(&self, x0_mm: [f64; 3]) -> Result<([f64; 2], [[f64; 3]; 2])> {
-        let (q, dq) = project_camera_point_jacobian(
-            self.pose.apply(x0_mm),
-            self.camera.intrinsics(),
-            self.camera.distortion(),
-        )?;
+        let (q, dq) =
+            project_camera_point_jacobian(self.pose.apply(x0_mm), self.camera.intrinsics(), self.camera.distortion())?;
         let r = &self.pose.rotation;
         let j = dq.map(|row| core::array::from_fn(|c| (0..3).map(|k| row[k] * r[k][c]).sum()));
         Ok(([q[0] - self.pixel[0], q[1] - self.pixel[1]], j))
@@ -105,44 +102,46 @@ pub fn triangulate(views: &[TriangulationView<'_>], sigma_px: f64) -> Result<Tri
         let step = core::array::from_fn::<f64, 3, _>(|i| -(0..3).map(|k| inverse[i][k] * gradient[k]).sum::<f64>());
         let size = libm::sqrt(step.iter().map(|s| s * s).sum::<f64>());
         let scale = 1.0 + libm::sqrt(x.iter().map(|s| s * s).sum::<f64>());
-        if size <= 1e-13 * scale {
+        let lower = if size <= 1e-12 * scale { None } else { descend(views, x, step, cost)? };
+        let Some(next) = lower else {
             let n = views.len() as f64;
             let covariance_mm2 = inverse.map(|row| row.map(|v| v * sigma_px * sigma_px));
             let rms_px = libm::sqrt(cost / n);
             return Ok(Triangulation { point_mm: x, covariance_mm2, normal_inverse: inverse, rms_px, iterations });
-        }
+        };
         if iterations == MAX_ITERATIONS {
             return Err(Error::NotConverged { what: "triangulation (Gauss-Newton)", iterations });
         }
         iterations += 1;
-        (x, cost, normal, gradient) = descend(views, x, step, cost)?;
+        (x, (cost, normal, gradient)) = next;
     }
 }
 
-/// The first of x + step, x + step / 2, ... that lowers the cost (or, after 40 halvings,
-/// the point itself: the step is then below rounding), with its normal equations.
+/// The first of x + step, x + step / 2, ... (40 halvings at most) that lowers the cost,
+/// with its normal equations; None when none does: x is the minimum to rounding.
 fn descend(
     views: &[TriangulationView<'_>],
     x: [f64; 3],
     step: [f64; 3],
     cost: f64,
-) -> Result<([f64; 3], f64, Mat3, [f64; 3])> {
+) -> Result<Option<([f64; 3], Normal)>> {
     let mut t = 1.0;
     for _ in 0..40 {
         let y = core::array::from_fn(|i| x[i] + t * step[i]);
         match normal_equations(views, y) {
-            Ok((c, n, g)) if c <= cost => return Ok((y, c, n, g)),
+            Ok(normal) if normal.0 < cost => return Ok(Some((y, normal))),
             Ok(_) | Err(Error::BehindCamera) => t *= 0.5,
             Err(e) => return Err(e),
         }
     }
-    let (c, n, g) = normal_equations(views, x)?;
-    // A point no step improves is the minimum to rounding: a zero gradient ends the loop.
-    Ok((x, c, n, if c <= cost { [0.0; 3] } else { g }))
+    Ok(None)
 }
 
+/// C(X), J^T J and J^T r at a point.
+type Normal = (f64, Mat3, [f64; 3]);
+
 /// C(X), J^T J and J^T r at `x` (Eq. T1, T3).
-fn normal_equations(views: &[TriangulationView<'_>], x: [f64; 3]) -> Result<(f64, Mat3, [f64; 3])> {
+fn normal_equations(views: &[TriangulationView<'_>], x: [f64; 3]) -> Result<Normal> {
     let (mut cost, mut normal, mut gradient) = (0.0, [[0.0; 3]; 3], [0.0; 3]);
     for v in views {
         let (r, j) = v.residual(x)?;
@@ -237,10 +236,15 @@ mod tests {
         assert!(matches!(triangulate(&[v0, v1], f64::NAN), Err(Error::InvalidArgument { .. })));
         assert!(matches!(triangulate(&[v0, v1], -1.0), Err(Error::InvalidArgument { .. })));
         // The same camera twice at the same place: every ray is the same line.
-        assert!(matches!(triangulate(&[v0, v0], 0.1), Err(Error::Degenerate { .. })), "{:?}", triangulate(&[v0, v0], 0.1));
+        assert!(
+            matches!(triangulate(&[v0, v0], 0.1), Err(Error::Degenerate { .. })),
+            "{:?}",
+            triangulate(&[v0, v0], 0.1)
+        );
         // Rays that meet behind the cameras: camera 1's pixel of a point far to the left
         // of what camera 0 sees makes them diverge.
-        let behind = TriangulationView { pixel: b.project_camera_point(pose.apply([900.0, 5.0, 700.0])).unwrap(), ..v1 };
+        let behind =
+            TriangulationView { pixel: b.project_camera_point(pose.apply([900.0, 5.0, 700.0])).unwrap(), ..v1 };
         let shifted = TriangulationView { pixel: a.project_camera_point([-900.0, 5.0, 700.0]).unwrap(), ..v0 };
         assert_eq!(triangulate(&[shifted, behind], 0.1), Err(Error::BehindCamera));
     }
