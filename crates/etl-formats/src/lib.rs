@@ -57,6 +57,7 @@ pub mod lens_dynamics;
 pub mod lens_setting;
 pub mod memory;
 pub mod model_selection;
+pub mod npy;
 pub mod observations;
 pub mod optics;
 pub mod output;

@@ -15,6 +15,7 @@ use etl_formats::Result;
 
 mod output;
 mod progress;
+mod rig_setting;
 mod setting;
 mod signals;
 
@@ -42,6 +43,7 @@ pub mod lens_focal;
 pub mod lens_sim;
 pub mod measure;
 pub mod model;
+pub mod rectify;
 pub mod render;
 pub mod report;
 pub mod sharpness;
@@ -50,6 +52,7 @@ pub mod stage;
 pub mod stereo;
 pub mod study;
 pub mod thermal;
+pub mod triangulate;
 pub mod undistort;
 pub mod zhang;
 
@@ -105,6 +108,10 @@ enum Command {
     Measure(measure::Args),
     /// The camera at a lens current and temperature for OpenCV, ROS or mrcal.
     Export(export::Args),
+    /// Points seen by two or more cameras of a rig at their settings, with their covariance.
+    Triangulate(triangulate::Args),
+    /// Bouguet's rectification of two cameras of a rig at their settings: stereo YAML, exports, maps.
+    Rectify(rectify::Args),
     /// The lens current that focuses the calibrated camera at a distance (the focus law).
     Focus(focus::Args),
     /// Undistort images taken at a lens current and temperature (exact maps of the model).
@@ -167,6 +174,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Stereo(a) => done(stereo::run(stereo::Args { json, ..a })),
         Command::Measure(a) => done(measure::run(measure::Args { json, ..a })),
         Command::Export(a) => done(export::run(export::Args { json, ..a })),
+        Command::Triangulate(a) => done(triangulate::run(triangulate::Args { json, ..a })),
+        Command::Rectify(a) => done(rectify::run(rectify::Args { json, ..a })),
         Command::Focus(a) => done(focus::run(focus::Args { json, ..a })),
         Command::Undistort(a) => done(undistort::run(undistort::Args { json, ..a })),
         Command::Diff(a) => done(diff::run(diff::Args { json, ..a })),

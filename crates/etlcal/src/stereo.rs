@@ -46,6 +46,7 @@ use etl_calib::stereo::{rectify, stereo_calibrate, StereoMode, StereoOptions, St
 use etl_calib::zhang::ZhangOptions;
 use etl_core::model::{DistortionModel, OpenCvFlags};
 use etl_formats::board::Board;
+use etl_formats::export::stereo::{opencv_stereo_yaml, OpenCvCamera, OpenCvStereo};
 use etl_formats::output::Output;
 use etl_formats::{write_atomic, Error, Result};
 
@@ -177,19 +178,9 @@ fn stereo_json(r: &StereoResult, args: &Args, found: [&PlanarViews; 2], board: &
     })
 }
 
-/// One matrix of OpenCV's FileStorage YAML, rows of numbers in full precision.
-fn yaml_matrix(name: &str, rows: &[&[f64]]) -> String {
-    let cols = rows.first().map_or(0, |r| r.len());
-    let data: Vec<String> = rows.iter().flat_map(|r| r.iter().map(|&v| etl_formats::export::num(v))).collect();
-    format!(
-        "{name}: !!opencv-matrix\n   rows: {}\n   cols: {cols}\n   dt: d\n   data: [ {} ]\n",
-        rows.len(),
-        data.join(", ")
-    )
-}
-
 /// The pair as OpenCV's stereo YAML (`--opencv-yaml`): the cameras, R, T and Bouguet's
-/// rectification. Errors: the paper's model, a zero baseline, images of different sizes.
+/// rectification (etl-formats' writer). Errors: the paper's model, a zero baseline,
+/// images of different sizes.
 fn opencv_yaml(r: &StereoResult, size: [[u32; 2]; 2]) -> Result<String> {
     if size[0] != size[1] {
         return Err(Error::invalid(
@@ -197,32 +188,20 @@ fn opencv_yaml(r: &StereoResult, size: [[u32; 2]; 2]) -> Result<String> {
             "OpenCV's stereo rectification needs both cameras' images of one size",
         ));
     }
-    let rect = rectify((&r.left, &r.right), size[0], (r.rotation_rodrigues, r.translation_mm), true)?;
-    let k = |z: &etl_calib::zhang::ZhangResult| z.camera_matrix();
-    let d = |z: &etl_calib::zhang::ZhangResult| z.dist_coeffs().unwrap_or_default();
-    let m3 = |m: &[[f64; 3]; 3]| -> Vec<Vec<f64>> { m.iter().map(|row| row.to_vec()).collect() };
-    let m4 = |m: &[[f64; 4]]| -> Vec<Vec<f64>> { m.iter().map(|row| row.to_vec()).collect() };
-    let (t, dl, dr) = (r.translation_mm, d(&r.left), d(&r.right));
-    let blocks: [(&str, Vec<Vec<f64>>); 11] = [
-        ("K1", m3(&k(&r.left))),
-        ("D1", vec![dl.to_vec()]),
-        ("K2", m3(&k(&r.right))),
-        ("D2", vec![dr.to_vec()]),
-        ("R", m3(&r.rotation_matrix())),
-        ("T", vec![vec![t[0]], vec![t[1]], vec![t[2]]]),
-        ("R1", m3(&rect.r1)),
-        ("R2", m3(&rect.r2)),
-        ("P1", m4(&rect.p1)),
-        ("P2", m4(&rect.p2)),
-        ("Q", m4(&rect.q)),
-    ];
-    let mut text = format!("%YAML:1.0\n---\nimage_width: {}\nimage_height: {}\n", size[0][0], size[0][1]);
-    for (name, rows) in &blocks {
-        let rows: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
-        text += &yaml_matrix(name, &rows);
-    }
-    text += &format!("rms_px: {}\n", etl_formats::export::num(r.rms_px));
-    Ok(text)
+    let rectification = rectify((&r.left, &r.right), size[0], (r.rotation_rodrigues, r.translation_mm), true)?;
+    let camera = |z: &etl_calib::zhang::ZhangResult| OpenCvCamera {
+        camera_matrix: z.camera_matrix(),
+        dist_coeffs: z.dist_coeffs().unwrap_or_default(),
+    };
+    let pair = OpenCvStereo {
+        image_size: size[0],
+        cameras: [camera(&r.left), camera(&r.right)],
+        rotation: r.rotation_matrix(),
+        translation_mm: r.translation_mm,
+        rectification,
+        rms_px: Some(r.rms_px),
+    };
+    Ok(opencv_stereo_yaml("", &pair))
 }
 
 /// Runs `etlcal stereo`.

@@ -17,6 +17,7 @@
 //! calibration's thermal part) or the commanded focal power (dpt) ([`RigSetting`]).
 
 mod at;
+mod export;
 mod rectify;
 
 mod setting;
@@ -30,6 +31,7 @@ use etl_formats::rig::{RigExtrinsics, RigFile};
 use etl_formats::{Camera, Error, Result, Trust};
 
 pub use at::RigAt;
+pub use export::{maps_files, write_files, ExportFile};
 pub use rectify::{StereoRectification, StereoRectifyMaps};
 
 pub use setting::RigSetting;

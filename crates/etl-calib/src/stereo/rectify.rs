@@ -31,21 +31,8 @@ use etl_formats::{Error, Result};
 
 use crate::zhang::ZhangResult;
 
-/// What [`rectify`] returns: the rectifying rotations and projections of both cameras and
-/// the disparity-to-depth matrix, in `cv2.stereoRectify`'s conventions.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rectification {
-    /// The left camera's rectifying rotation (its frame to the rectified one).
-    pub r1: Mat3,
-    /// The right camera's.
-    pub r2: Mat3,
-    /// The left camera's projection in the rectified frame, 3 x 4, px.
-    pub p1: [[f64; 4]; 3],
-    /// The right camera's, with the baseline in its last column (px mm).
-    pub p2: [[f64; 4]; 3],
-    /// The disparity-to-depth matrix, 4 x 4.
-    pub q: [[f64; 4]; 4],
-}
+/// What [`rectify`] returns (etl-formats', which the exports write).
+pub use etl_formats::export::stereo::Rectification;
 
 /// One camera as Bouguet's rectification sees it: its focal lengths, px, and the
 /// normalised undistorted point ((u - u0) / fx, (v - v0) / fy after undistortion) of an

@@ -23,6 +23,8 @@ use etl_core::runtime::CameraAt;
 use crate::calibration::Calibration;
 use crate::{write_atomic, Error, Result};
 
+pub mod stereo;
+
 /// The file an export writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ExportFormat {
@@ -80,7 +82,9 @@ pub fn export(cal: &Calibration, camera: &CameraAt, format: ExportFormat, path: 
     Ok(e)
 }
 
-fn header(c: &CameraAt, fit: &OpenCvFit) -> String {
+/// The comment lines that open every export: the setting, whether it is extrapolated,
+/// and whether the five coefficients are exact or fitted (with the fit's error).
+pub fn header(c: &CameraAt, fit: &OpenCvFit) -> String {
     let mut h = String::from("# etlcal: the camera at one setting");
     if c.e_in_ma().is_finite() {
         let _ = write!(h, ", E_in {} mA at {} degC", num(c.e_in_ma()), num(c.temperature_c()));
@@ -124,7 +128,8 @@ pub fn num(x: f64) -> String {
     }
 }
 
-fn list(xs: impl IntoIterator<Item = f64>) -> String {
+/// Numbers as a comma-separated list ([`num`]).
+pub fn list(xs: impl IntoIterator<Item = f64>) -> String {
     xs.into_iter().map(num).collect::<Vec<_>>().join(", ")
 }
 
@@ -139,16 +144,30 @@ fn opencv_yaml(header: &str, [w, h]: [u32; 2], k: &[[f64; 3]; 3], d: &[f64; 5]) 
     )
 }
 
-fn ros_yaml(header: &str, [w, h]: [u32; 2], k: &[[f64; 3]; 3], d: &[f64; 5]) -> String {
+fn ros_yaml(header: &str, size: [u32; 2], k: &[[f64; 3]; 3], d: &[f64; 5]) -> String {
+    let identity = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let p = [[k[0][0], 0.0, k[0][2], 0.0], [0.0, k[1][1], k[1][2], 0.0], [0.0, 0.0, 1.0, 0.0]];
+    ros_camera_info(header, "etlcal", size, (k, d), (&identity, &p))
+}
+
+/// ROS's `camera_info` YAML (camera_calibration_parsers' keys) of camera `name`: K and
+/// the plumb_bob D, the rectification R and the projection P (a single camera: I and
+/// [K | 0]; a stereo pair's: R1 or R2 and P1 or P2, as stereo_image_proc reads them).
+pub fn ros_camera_info(
+    header: &str,
+    name: &str,
+    [w, h]: [u32; 2],
+    (k, d): (&[[f64; 3]; 3], &[f64; 5]),
+    (r, p): (&[[f64; 3]; 3], &[[f64; 4]; 3]),
+) -> String {
     let m = |rows: usize, cols: usize, data: String| format!("\n  rows: {rows}\n  cols: {cols}\n  data: [{data}]\n");
-    let p = [k[0][0], 0.0, k[0][2], 0.0, 0.0, k[1][1], k[1][2], 0.0, 0.0, 0.0, 1.0, 0.0];
     format!(
-        "{header}image_width: {w}\nimage_height: {h}\ncamera_name: etlcal\ncamera_matrix:{}distortion_model: plumb_bob\n\
+        "{header}image_width: {w}\nimage_height: {h}\ncamera_name: {name}\ncamera_matrix:{}distortion_model: plumb_bob\n\
          distortion_coefficients:{}rectification_matrix:{}projection_matrix:{}",
         m(3, 3, list(k.iter().flatten().copied())),
         m(1, 5, list(d.iter().copied())),
-        m(3, 3, list([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])),
-        m(3, 4, list(p))
+        m(3, 3, list(r.iter().flatten().copied())),
+        m(3, 4, list(p.iter().flatten().copied()))
     )
 }
 
@@ -156,17 +175,26 @@ fn ros_yaml(header: &str, [w, h]: [u32; 2], k: &[[f64; 3]; 3], d: &[f64; 5]) -> 
 /// (x_cam = R x_ref + t): the calibration's R and T(E) of Eq. C2, the pose of the centre
 /// at this setting relative to the calibration's frame (T itself for a fixed centre).
 fn mrcal_model(header: &str, cal: &Calibration, e_com_ma: f64, k: &[[f64; 3]; 3], d: &[f64; 5]) -> Result<String> {
-    let intrinsics = [k[0][0], k[1][1], k[0][2], k[1][2], d[0], d[1], d[2], d[3], d[4]];
     let t = cal.model()?.translation_at(e_com_ma);
-    let rt = cal.rotation_rodrigues.iter().chain(&t).copied();
-    Ok(format!(
+    let r = cal.rotation_rodrigues;
+    Ok(mrcal_cameramodel(header, cal.image_size, (k, d), [r[0], r[1], r[2], t[0], t[1], t[2]]))
+}
+
+/// mrcal's `.cameramodel` (`LENSMODEL_OPENCV5`) of K `k`, coefficients `d` and extrinsics
+/// `rt_cam_ref` (Rodrigues, rad, then translation, mm: x_cam = R x_ref + t).
+pub fn mrcal_cameramodel(
+    header: &str,
+    [w, h]: [u32; 2],
+    (k, d): (&[[f64; 3]; 3], &[f64; 5]),
+    rt_cam_ref: [f64; 6],
+) -> String {
+    let intrinsics = [k[0][0], k[1][1], k[0][2], k[1][2], d[0], d[1], d[2], d[3], d[4]];
+    format!(
         "{header}{{\n    'lensmodel': 'LENSMODEL_OPENCV5',\n    'intrinsics': [ {} ],\n    'extrinsics': [ {} ],\n    \
-         'imagersize': [ {}, {} ],\n}}\n",
+         'imagersize': [ {w}, {h} ],\n}}\n",
         list(intrinsics),
-        list(rt),
-        cal.image_size[0],
-        cal.image_size[1]
-    ))
+        list(rt_cam_ref),
+    )
 }
 
 #[cfg(test)]
