@@ -40,7 +40,9 @@ mod tests {
         let n = u16::from_le_bytes([b[8], b[9]]) as usize;
         assert_eq!((10 + n) % 64, 0);
         let header = std::str::from_utf8(&b[10..10 + n]).unwrap();
-        assert!(header.starts_with("{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }") && header.ends_with('\n'));
+        assert!(
+            header.starts_with("{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }") && header.ends_with('\n')
+        );
         assert_eq!(b.len(), 10 + n + 24);
         assert_eq!(f32::from_le_bytes(b[10 + n + 20..].try_into().unwrap()), 6.5);
         assert!(npy_f32(2, 2, &[1.0]).is_err());

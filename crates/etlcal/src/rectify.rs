@@ -83,7 +83,9 @@ pub fn run(args: Args) -> Result<()> {
     let formats = formats(&args.format)?;
     crate::output::check([Some(args.rig.rig.as_path())], &[Output::Dir(&args.out)])?;
     let (_, at) = args.rig.rig_at()?;
-    let rect = at.stereo_rectify(l, r, args.alpha).map_err(|e| e.rename_input("pair", "--pair").rename_input("alpha", "--alpha"))?;
+    let rect = at
+        .stereo_rectify(l, r, args.alpha)
+        .map_err(|e| e.rename_input("pair", "--pair").rename_input("alpha", "--alpha"))?;
     let mut files: Vec<(String, Vec<u8>)> =
         at.export_pair(&rect, &formats)?.into_iter().map(|f| (f.name, f.text.into_bytes())).collect();
     if args.maps {

@@ -69,7 +69,11 @@ fn point_of_flags(at: &RigAt, flags: &[String]) -> Result<Vec<Option<[f64; 2]>>>
         let bad = |why: &str| Error::invalid_value("--pixel", f.as_str(), format!("--pixel {f:?}: {why}"));
         let (cam, uv) = f.split_once(':').ok_or_else(|| bad("give CAM:U,V"))?;
         let k = camera_index(at, cam).ok_or_else(|| bad("CAM is not a camera of the rig (an index or a name)"))?;
-        let parsed: Vec<f64> = uv.split(',').map(|x| x.trim().parse::<f64>()).collect::<std::result::Result<_, _>>().map_err(|_| bad("U,V must be two numbers"))?;
+        let parsed: Vec<f64> = uv
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| bad("U,V must be two numbers"))?;
         let [u, v] = parsed[..] else { return Err(bad("U,V must be two numbers")) };
         if point[k].is_some() {
             return Err(bad("a camera given twice"));
@@ -89,7 +93,10 @@ fn points_of_file(path: &std::path::Path, cameras: usize) -> Result<Vec<Vec<Opti
     if let Some((i, p)) = points.iter().enumerate().find(|(_, p)| p.len() != cameras) {
         return Err(Error::Parse {
             path: path.to_owned(),
-            message: format!("[{i}]: {} entries, the rig has {cameras} cameras (one per camera, null where unseen)", p.len()),
+            message: format!(
+                "[{i}]: {} entries, the rig has {cameras} cameras (one per camera, null where unseen)",
+                p.len()
+            ),
         });
     }
     Ok(points)
@@ -118,7 +125,11 @@ pub fn run(args: Args) -> Result<()> {
         .map(|(i, p)| {
             at.triangulate(p, args.sigma_px, part).map_err(|e| {
                 let e = e.rename_input("sigma_px", "--sigma-px");
-                if points.len() > 1 { e.within(format!("point {i}"), None) } else { e }
+                if points.len() > 1 {
+                    e.within(format!("point {i}"), None)
+                } else {
+                    e
+                }
             })
         })
         .collect::<Result<_>>()?;

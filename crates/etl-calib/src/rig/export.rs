@@ -44,7 +44,11 @@ impl RigAt {
         for format in formats {
             match format {
                 ExportFormat::OpenCv => {
-                    let header = format!("# left: camera {l} ({})\n{hl}# right: camera {r} ({})\n{hr}", self.name(l), self.name(r));
+                    let header = format!(
+                        "# left: camera {l} ({})\n{hl}# right: camera {r} ({})\n{hr}",
+                        self.name(l),
+                        self.name(r)
+                    );
                     files.push(ExportFile { name: "stereo.yaml".into(), text: opencv_stereo_yaml(&header, &pair) });
                 }
                 ExportFormat::Ros => {
@@ -67,11 +71,22 @@ impl RigAt {
                 let pose = &self.poses()[k];
                 let om = matrix_to_rodrigues(&pose.rotation);
                 let t = pose.translation_mm;
-                let header = format!("# camera {k} ({}) of the rig; extrinsics relative to camera 0 at these settings\n{header}", self.name(k));
-                let text = mrcal_cameramodel(&header, size, (&c.camera_matrix, &c.dist_coeffs), [om[0], om[1], om[2], t[0], t[1], t[2]]);
+                let header = format!(
+                    "# camera {k} ({}) of the rig; extrinsics relative to camera 0 at these settings\n{header}",
+                    self.name(k)
+                );
+                let text = mrcal_cameramodel(
+                    &header,
+                    size,
+                    (&c.camera_matrix, &c.dist_coeffs),
+                    [om[0], om[1], om[2], t[0], t[1], t[2]],
+                );
                 let name = format!("{}.cameramodel", self.name(k));
                 if Path::new(&name).file_name().and_then(|n| n.to_str()) != Some(name.as_str()) {
-                    let message = format!("camera {k}'s name {:?} is not a file name: the mrcal export is named after it", self.name(k));
+                    let message = format!(
+                        "camera {k}'s name {:?} is not a file name: the mrcal export is named after it",
+                        self.name(k)
+                    );
                     return Err(Error::invalid("cameras.name", message));
                 }
                 Ok(ExportFile { name, text })

@@ -23,6 +23,7 @@ mod cli_optics;
 mod cli_outputs;
 mod cli_render;
 mod cli_report;
+mod cli_rig;
 mod cli_runtime;
 mod cli_stereo;
 mod cli_study;
