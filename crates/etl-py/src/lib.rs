@@ -25,7 +25,9 @@ pub mod pool;
 pub mod pose;
 pub mod results;
 pub mod rig;
+pub mod rig_runtime;
 pub mod simulate;
+pub mod stereo;
 pub mod studies;
 pub mod thermal;
 pub mod thermal_calibration;
@@ -66,6 +68,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(images::render, m)?)?;
     m.add_function(wrap_pyfunction!(focus::autofocus, m)?)?;
     m.add_function(wrap_pyfunction!(zhang::zhang, m)?)?;
+    m.add_function(wrap_pyfunction!(stereo::stereo, m)?)?;
     // Private (not in __all__): reached through ZhangResult.projection_std only.
     m.setattr("_ZhangProjection", m.py().get_type::<zhang::ZhangProjection>())?;
     m.add_function(wrap_pyfunction!(diff::diff, m)?)?;
@@ -74,6 +77,8 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<lens::VirtualLens>()?;
     m.add_function(wrap_pyfunction!(thermal_calibration::thermal_calibration, m)?)?;
     m.add_class::<rig::RigCamera>()?;
+    m.add_class::<rig_runtime::Rig>()?;
+    m.add_class::<rig_runtime::RigAt>()?;
     m.add_function(wrap_pyfunction!(rig::rig_capture_views, m)?)?;
     m.add_function(wrap_pyfunction!(rig::rig_capture_offstate, m)?)?;
     Ok(())

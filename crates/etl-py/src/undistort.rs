@@ -54,6 +54,14 @@ pub(crate) fn maps_out<'py>(
     out: &OutputCamera,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let maps = crate::pool::detach(py, || undistort_maps(k, d, out)).py()?;
+    maps_arrays(py, maps)
+}
+
+/// `maps` as two (h, w) float32 arrays, for `cv2.remap`.
+pub(crate) fn maps_arrays<'py>(
+    py: Python<'py>,
+    maps: etl_image::undistort::UndistortMaps,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let (w, h) = (maps.width_px(), maps.height_px());
     let (mx, my) = maps.into_parts();
     let shape = |v: Vec<f32>| Array2::from_shape_vec((h, w), v).map_err(|e| input_error(e.to_string()));

@@ -14,7 +14,7 @@ use crate::errors::{invalid, invalid_value, CoreResultExt};
 use crate::pipeline::Keywords;
 
 /// The request of `model`, `fix_k3`, `zero_tangent` (an unknown model refused naming it).
-fn request(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangRequest> {
+pub(crate) fn request(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangRequest> {
     let model = DistortionModel::from_name(model).ok_or_else(|| {
         invalid_value("model", model, format!("model must be \"paper\" or \"opencv\", got {model:?}"))
     })?;
@@ -22,7 +22,7 @@ fn request(model: &str, fix_k3: bool, zero_tangent: bool) -> PyResult<ZhangReque
 }
 
 /// The (board_mm, pixels) pairs as planar views.
-fn planar_views(views: &[(Bound<'_, PyAny>, Bound<'_, PyAny>)]) -> PyResult<Vec<PlanarView>> {
+pub(crate) fn planar_views(views: &[(Bound<'_, PyAny>, Bound<'_, PyAny>)]) -> PyResult<Vec<PlanarView>> {
     let mut planar = Vec::with_capacity(views.len());
     for (k, (board, pixels)) in views.iter().enumerate() {
         let board_mm: Vec<[f64; 2]> = match crate::arrays::points::<2>(board, "board_mm") {
@@ -89,7 +89,7 @@ pub fn zhang<'py>(
 }
 
 /// The result object of `r` (ZhangResult, or ZhangOpenCvResult for the opencv family).
-fn result<'py>(py: Python<'py>, r: &ZhangResult) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn result<'py>(py: Python<'py>, r: &ZhangResult) -> PyResult<Bound<'py, PyAny>> {
     let d = PyDict::new(py);
     let c = r.coefficients;
     let (k1, p1, p2) = match r.options.model {

@@ -10,6 +10,10 @@ Main nouns:
   setting (`cal.at(e_in_ma, temperature_c)`, or `cal.at_e_com(e_com_ma)` at a known E_com,
   e.g. for a calibration without temperature compensation), which holds the run-time
   operations; `Calibration`'s methods taking `e_com_ma` are `at_e_com(e_com_ma)`'s.
+- `Rig`: a multi-camera rig (etlcal.rig/1; `etlcal.rig` is the capture module):
+  `Rig.load(path).at(settings, temperatures_c)` gives a `RigAt` (each camera's `CameraAt`
+  and pose at those settings) with `triangulate(pixels, sigma_px)` (the point and its
+  covariance) and `stereo_rectify_maps(left, right)` (R1, R2, P1, P2, Q and cv2.remap maps).
 - `Observations`, `A0`: the input of `calibrate(...)`.
 - `ThermalSurface`, `ThermalCalibration`: temperature compensation (E_com = E_in - E_T).
 - `LensPhysics` and `etlcal.physics`: the lens's physical model.
@@ -23,6 +27,7 @@ Main nouns:
   corners seen, each with its id) or `detect_corners(image, "14x12")` (a whole checkerboard),
   `sharpness(image, "cpbd")`, `render(e_com_ma=...)` (the synthetic camera),
   `autofocus(callable)`; `zhang(views, image_size)` (fixed-focus calibration, e.g. A0);
+  `stereo(pairs, image_size)` (a fixed-focus pair, as cv2.stereoCalibrate);
   `Dataset` (images + what was recorded; `.detect()` gives Observations).
 - `Board`: the calibration target (etlcal.board/1): `Board.charuco(squares, square_mm,
   marker_mm, dictionary)` (OpenCV's layout and ids; partial views need no hints) or
@@ -71,6 +76,8 @@ from ._etlcal import (
     LensPhysics,
     NotConvergedError,
     Observations,
+    Rig,
+    RigAt,
     Simulation,
     ThermalCalibration,
     ThermalSurface,
@@ -82,6 +89,7 @@ from ._etlcal import (
     diff,
     render,
     sharpness,
+    stereo,
     study,
     thermal_calibration,
     zhang,
@@ -109,6 +117,8 @@ __all__ = [
     "LensPhysics",
     "NotConvergedError",
     "Observations",
+    "Rig",
+    "RigAt",
     "Simulation",
     "ThermalCalibration",
     "ThermalSurface",
@@ -120,6 +130,7 @@ __all__ = [
     "diff",
     "render",
     "sharpness",
+    "stereo",
     "study",
     "thermal_calibration",
     "zhang",

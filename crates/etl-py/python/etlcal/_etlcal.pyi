@@ -1,5 +1,6 @@
 """Type stubs of the native module etlcal._etlcal (units: mm, mA, degC, px)."""
 import os
+import pathlib
 from typing import Any, Callable, Dict, Iterator, List, Literal, Mapping, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
@@ -34,8 +35,11 @@ from etlcal.results import (
     OffstateView,
     OpenCvCamera,
     ProjectionDiff,
+    StereoRectifyMaps,
+    StereoResult,
     StudyResult,
     ThermalCalibrationResult,
+    Triangulated,
     View,
     ViewSummary,
     ZhangOpenCvResult,
@@ -836,6 +840,81 @@ def zhang(
     """The same in OpenCV's model (cv2.calibrateCamera's): also k2, k3, camera_matrix,
     dist_coeffs, per_view_rms_px; std of fx, fy, u0, v0, k1, k2, p1, p2, k3."""
     ...
+
+def stereo(
+    pairs: Sequence[Tuple[Optional[Tuple[npt.ArrayLike, npt.ArrayLike]], Optional[Tuple[npt.ArrayLike, npt.ArrayLike]]]],
+    image_size: Tuple[int, int],
+    model: Literal["paper", "opencv"] = "paper",
+    fix_k3: bool = False,
+    zero_tangent: bool = False,
+    intrinsics: Literal["fixed", "joint"] = "fixed",
+    right_image_size: Optional[Tuple[int, int]] = None,
+) -> StereoResult:
+    """A fixed-focus pair from synchronised board views (left, right), each (board_mm,
+    pixels) or None: each camera by Zhang, then R, T as cv2.stereoCalibrate."""
+    ...
+
+@final
+class Rig:
+    """A multi-camera ETL rig (etlcal.rig/1): calibrations and poses relative to camera 0."""
+    @classmethod
+    def load(cls, path: Union[str, os.PathLike[str]]) -> "Rig": ...
+    def __len__(self) -> int: ...
+    @property
+    def names(self) -> List[str]: ...
+    @property
+    def calibrations(self) -> List[Calibration]: ...
+    def at(
+        self,
+        settings: Sequence[Union[float, str]],
+        temperatures_c: Sequence[float],
+        allow_extrapolation: bool = False,
+    ) -> "RigAt":
+        """The rig at one setting (each calibration's unit: mA or dpt) and temperature per camera."""
+        ...
+    def stereo_rectify_maps(
+        self,
+        setting_left: Union[float, str],
+        setting_right: Union[float, str],
+        temperatures_c: Sequence[float],
+        alpha: float = -1.0,
+        allow_extrapolation: bool = False,
+    ) -> StereoRectifyMaps:
+        """A two-camera rig's rectification at two settings, with cv2.remap maps."""
+        ...
+
+@final
+class RigAt:
+    """The rig at one setting per camera: cameras, poses, triangulation, rectification."""
+    def __len__(self) -> int: ...
+    @property
+    def cameras(self) -> List[CameraAt]: ...
+    @property
+    def poses(self) -> List[Tuple[_F64, _F64]]: ...
+    @property
+    def extrapolated(self) -> bool: ...
+    def triangulate(
+        self,
+        pixels: Sequence[Optional[Tuple[float, float]]],
+        sigma_px: float,
+        pixel_only: bool = False,
+    ) -> Triangulated:
+        """The point seen at one pixel per camera (None where unseen) and its covariance."""
+        ...
+    def stereo_rectify_maps(self, left: int = 0, right: int = 1, alpha: float = -1.0) -> StereoRectifyMaps:
+        """Bouguet's rectification of (left, right) at these settings, with cv2.remap maps."""
+        ...
+    def export_pair(
+        self,
+        out_dir: Union[str, os.PathLike[str]],
+        left: int = 0,
+        right: int = 1,
+        formats: Sequence[ExportFormat] = (),
+        maps: bool = False,
+        alpha: float = -1.0,
+    ) -> List[pathlib.Path]:
+        """stereo.yaml, and ROS / mrcal exports and .npy maps, into out_dir as one set."""
+        ...
 
 def thermal_calibration(
     lens: Lens,

@@ -37,8 +37,11 @@ __all__ = [
     "OpenCvDistortion",
     "ProjectionDiff",
     "PaperDistortion",
+    "StereoRectifyMaps",
+    "StereoResult",
     "StudyResult",
     "ThermalCalibrationResult",
+    "Triangulated",
     "View",
     "ViewSummary",
     "ZhangOpenCvResult",
@@ -343,6 +346,66 @@ class ExportResult(_Result):
     fit_rms_px: float
     fit_max_px: float
     focal_power_dpt: Optional[float]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Triangulated(_Result):
+    """`RigAt.triangulate`: `point_mm` (3,) in camera 0's frame at its setting, its
+    `covariance_mm2` (3 x 3) = `from_pixels_mm2` (the pixel noise's) + `from_calibration_mm2`
+    (the calibrations' and poses', None when pixel-only), `std_mm` (the square roots of its
+    diagonal), `cameras_used`, `rms_px` (reprojection), `extrapolated`."""
+
+    point_mm: _F64
+    covariance_mm2: _F64
+    std_mm: _F64
+    from_pixels_mm2: _F64
+    from_calibration_mm2: Optional[_F64]
+    cameras_used: List[int]
+    rms_px: float
+    extrapolated: bool
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class StereoRectifyMaps(_Result):
+    """`Rig.stereo_rectify_maps`, `RigAt.stereo_rectify_maps`: Bouguet's rectification of a
+    pair at its settings, as cv2.stereoRectify returns it (`R1`, `R2` 3 x 3, `P1`, `P2` 3 x 4,
+    `Q` 4 x 4), the pair's pose `R`, `T` (X_right = R X_left + T, mm) and `baseline_mm`, and
+    each image's maps `left_maps`, `right_maps` ((map_x, map_y), (h, w) float32: for
+    `cv2.remap`); `pair` (left, right) and `image_size` (w, h)."""
+
+    pair: Tuple[int, int]
+    image_size: Tuple[int, int]
+    R: _F64
+    T: _F64
+    baseline_mm: float
+    R1: _F64
+    R2: _F64
+    P1: _F64
+    P2: _F64
+    Q: _F64
+    left_maps: Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]
+    right_maps: Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class StereoResult(_Result):
+    """`stereo(...)`: `left`, `right` (each camera's `ZhangResult` or `ZhangOpenCvResult`),
+    `rotation_rodrigues` (rad), `rotation_matrix`, `translation_mm` (X_right = R X_left + T),
+    `covariance` (6 x 6 over (om, T)), `std`, `rms_px`, `per_view_rms_px` ([left, right] per
+    pair used), `pairs_used`, `baseline_mm`, `intrinsics` ("fixed" or "joint")."""
+
+    left: ZhangResult
+    right: ZhangResult
+    rotation_rodrigues: _F64
+    rotation_matrix: _F64
+    translation_mm: _F64
+    covariance: _F64
+    std: _F64
+    rms_px: float
+    per_view_rms_px: List[List[float]]
+    pairs_used: List[int]
+    baseline_mm: float
+    intrinsics: str
 
 
 @dataclass(frozen=True, eq=False, repr=False)
