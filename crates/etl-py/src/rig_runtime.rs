@@ -102,7 +102,10 @@ impl Rig {
     /// maps of both images through each camera's full model: `rig.at(...)` then
     /// `RigAt.stereo_rectify_maps(0, 1, alpha)` (see there; a rig of more cameras: use
     /// that). `alpha`: only -1 (cv2.stereoRectify's default) is implemented.
-    #[pyo3(signature = (setting_left, setting_right, temperatures_c, alpha = -1.0, allow_extrapolation = false))]
+    #[pyo3(
+        signature = (setting_left, setting_right, temperatures_c, alpha = -1.0, allow_extrapolation = false),
+        text_signature = "($self, setting_left, setting_right, temperatures_c, alpha=-1.0, allow_extrapolation=False)"
+    )]
     fn stereo_rectify_maps<'py>(
         &self,
         py: Python<'py>,
@@ -231,29 +234,32 @@ impl RigAt {
     /// maps). Returns a `StereoRectifyMaps`: `left_maps`, `right_maps` ((map_x, map_y),
     /// (h, w) float32 each), `R1`, `R2`, `P1`, `P2`, `Q`, `R`, `T` (X_right = R X_left +
     /// T at the settings), `baseline_mm`, `pair`, `image_size`.
-    #[pyo3(signature = (left = 0, right = 1, alpha = -1.0))]
+    #[pyo3(signature = (left = 0, right = 1, alpha = -1.0), text_signature = "($self, left=0, right=1, alpha=-1.0)")]
     fn stereo_rectify_maps<'py>(&self, py: Python<'py>, left: usize, right: usize, alpha: f64) -> PyResult<Bound<'py, PyAny>> {
         self.rectify_maps(py, left, right, alpha)
     }
 
     /// Writes the rectified pair (`left`, `right`) into `out_dir` as one set: `stereo.yaml`
-    /// (OpenCV stereo YAML) always, `left.yaml`/`right.yaml` (ROS camera_info) for "ros",
+    /// (OpenCV stereo YAML) always (`formats` None: that alone), `left.yaml`/`right.yaml` (ROS camera_info) for "ros",
     /// one `NAME.cameramodel` per camera (mrcal, extrinsics relative to camera 0) for
     /// "mrcal", and with `maps` the four `.npy` maps (as `etlcal rectify`). Returns the
     /// paths written.
-    #[pyo3(signature = (out_dir, left = 0, right = 1, formats = vec![], maps = false, alpha = -1.0))]
+    #[pyo3(
+        signature = (out_dir, left = 0, right = 1, formats = None, maps = false, alpha = -1.0),
+        text_signature = "($self, out_dir, left=0, right=1, formats=None, maps=False, alpha=-1.0)"
+    )]
     fn export_pair(
         &self,
         py: Python<'_>,
         out_dir: PathBuf,
         left: usize,
         right: usize,
-        formats: Vec<String>,
+        formats: Option<Vec<String>>,
         maps: bool,
         alpha: f64,
     ) -> PyResult<Vec<PathBuf>> {
         let mut f = vec![ExportFormat::OpenCv];
-        for name in &formats {
+        for name in formats.iter().flatten() {
             let e = name.parse::<ExportFormat>().py()?;
             if !f.contains(&e) {
                 f.push(e);
