@@ -248,6 +248,7 @@ impl RigAt {
         signature = (out_dir, left = 0, right = 1, formats = None, maps = false, alpha = -1.0),
         text_signature = "($self, out_dir, left=0, right=1, formats=None, maps=False, alpha=-1.0)"
     )]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, one each.
     fn export_pair(
         &self,
         py: Python<'_>,
