@@ -90,7 +90,7 @@ impl Rig {
         let cameras = (0..inner.len())
             .map(|k| {
                 let cal = self.calibrations[k].bind(py);
-                let file = Arc::new(cal.get().file.as_ref().clone());
+                let file = Arc::clone(&cal.get().file);
                 Py::new(py, CameraAt::new(inner.cameras()[k], cal.clone().into_any().unbind(), file))
             })
             .collect::<PyResult<_>>()?;
