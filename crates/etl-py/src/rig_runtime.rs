@@ -54,8 +54,8 @@ impl Rig {
         Ok(Rig { inner, calibrations })
     }
 
-    fn __len__(&self) -> usize {
-        self.inner.len()
+    fn __len__(&self) -> PyResult<usize> {
+        crate::errors::guarded_value("Rig.__len__", || self.inner.len())
     }
 
     /// The cameras' names, in the rig's order.
@@ -171,8 +171,8 @@ fn rectification_dict<'py>(py: Python<'py>, rect: &StereoRectification) -> PyRes
 
 #[pymethods]
 impl RigAt {
-    fn __len__(&self) -> usize {
-        self.inner.len()
+    fn __len__(&self) -> PyResult<usize> {
+        crate::errors::guarded_value("RigAt.__len__", || self.inner.len())
     }
 
     /// Each camera at its setting (`CameraAt`), in the rig's order.
@@ -235,7 +235,13 @@ impl RigAt {
     /// (h, w) float32 each), `R1`, `R2`, `P1`, `P2`, `Q`, `R`, `T` (X_right = R X_left +
     /// T at the settings), `baseline_mm`, `pair`, `image_size`.
     #[pyo3(signature = (left = 0, right = 1, alpha = -1.0), text_signature = "($self, left=0, right=1, alpha=-1.0)")]
-    fn stereo_rectify_maps<'py>(&self, py: Python<'py>, left: usize, right: usize, alpha: f64) -> PyResult<Bound<'py, PyAny>> {
+    fn stereo_rectify_maps<'py>(
+        &self,
+        py: Python<'py>,
+        left: usize,
+        right: usize,
+        alpha: f64,
+    ) -> PyResult<Bound<'py, PyAny>> {
         self.rectify_maps(py, left, right, alpha)
     }
 
