@@ -217,6 +217,7 @@ fn open_rig(camera: Device<'_>, lens: &str, stage: Device<'_>, seed: u64, raised
             lens: lens_spec,
             stage: s.parse::<StageSpec>()?,
             sim_seed: seed,
+            sim_roi: None,
             virtual_lens: paper_virtual_lens(),
         };
         return Rig::open(&spec);

@@ -29,6 +29,9 @@ pub struct RigSpec {
     pub stage: StageSpec,
     /// Seed of the sim camera's noise.
     pub sim_seed: u64,
+    /// The sim camera's region of interest `[x, y, width, height]`, px
+    /// ([`SimCamera::set_roi`]); None: the whole sensor. Refused with another camera.
+    pub sim_roi: Option<[u32; 4]>,
     /// The virtual lens's configuration (with `LensSpec::Virtual`).
     pub virtual_lens: VirtualLensConfig,
 }
@@ -68,7 +71,16 @@ impl Rig {
                     let message = "the sim camera renders the virtual lens's state: use --lens virtual";
                     Error::device("camera sim", ErrorKind::InvalidInput, message)
                 })?;
-                Box::new(SimCamera::new(world.clone(), device, spec.sim_seed))
+                let mut camera = SimCamera::new(world.clone(), device, spec.sim_seed);
+                if let Some(roi) = spec.sim_roi {
+                    camera.set_roi(roi)?;
+                }
+                Box::new(camera)
+            }
+            (other, _) if spec.sim_roi.is_some() => {
+                let message =
+                    "a region of interest (--sim-roi) is the sim camera's: set a real camera's in its own software";
+                return Err(Error::device(format!("camera {other}"), ErrorKind::InvalidInput, message));
             }
             (other, _) => open_camera(other, spec.sim_seed)?,
         };

@@ -3,4 +3,5 @@
 #[cfg(feature = "aravis")]
 mod aravis;
 mod capture;
+mod thermal;
 mod zaber;
