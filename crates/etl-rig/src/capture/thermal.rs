@@ -41,7 +41,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use etl_calib::thermal_calibration::{fit_samples, refocus_step, ProcedureOptions, Series};
-use etl_core::lens::{Lens, LensError, LensErrorKind};
+use etl_core::lens::Lens;
 use etl_core::progress::Progress;
 use etl_formats::plan::{Plan, ThermalPlan, THERMAL_COARSE_POINTS};
 use etl_formats::thermal::{read_thermal_table, write_thermal_table, ThermalFile, ThermalSample};
@@ -80,19 +80,6 @@ pub struct ThermalReport {
 struct StepLens<'a> {
     lens: &'a mut RigLens,
     failure: &'a RefCell<Option<Error>>,
-}
-
-impl LensError for Error {
-    fn kind(&self) -> LensErrorKind {
-        match Error::kind(self) {
-            ErrorKind::Timeout => LensErrorKind::Timeout,
-            ErrorKind::Refused => LensErrorKind::Refused,
-            ErrorKind::LinkLost => LensErrorKind::LinkLost,
-            ErrorKind::Protocol => LensErrorKind::Protocol,
-            ErrorKind::InvalidInput => LensErrorKind::InvalidInput,
-            _ => LensErrorKind::Other,
-        }
-    }
 }
 
 /// `result`, its error also kept in `failure` (the first one only).
