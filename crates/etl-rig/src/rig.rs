@@ -54,6 +54,12 @@ impl Rig {
     /// Errors: a device that cannot be opened, or a sim camera without the virtual lens
     /// and the sim stage; each names the device.
     pub fn open(spec: &RigSpec) -> Result<Rig> {
+        #[cfg(feature = "aravis")]
+        if let (CameraSpec::Aravis(id), LensSpec::Genicam(g)) = (&spec.camera, &spec.lens) {
+            if *id == g.id && spec.sim_roi.is_none() {
+                return Rig::open_genicam_camera(spec, id, g);
+            }
+        }
         let lens = RigLens::open(&spec.lens, spec.virtual_lens.clone())?;
         let sim = matches!(spec.camera, CameraSpec::Sim).then(SimWorld::paper).transpose()?;
         let stage: Box<dyn Stage> = match (&spec.stage, &sim) {
@@ -85,6 +91,15 @@ impl Rig {
             (other, _) => open_camera(other, spec.sim_seed)?,
         };
         Ok(Rig { camera, lens, stage, sim })
+    }
+
+    /// A GenICam camera that grabs the frames and drives the lens over one connection.
+    #[cfg(feature = "aravis")]
+    fn open_genicam_camera(spec: &RigSpec, id: &str, lens: &crate::spec::GenicamLensSpec) -> Result<Rig> {
+        let camera = crate::camera::aravis::AravisCamera::open(id)?;
+        let lens = RigLens::genicam(crate::lens::genicam::GenicamLens::on_camera(camera.arv_camera(), lens)?)?;
+        let stage = open_stage(&spec.stage)?;
+        Ok(Rig { camera: Box::new(camera), lens, stage, sim: None })
     }
 
     /// Shows `board` on the simulated stage and `offstate_board` in the lens-off poses

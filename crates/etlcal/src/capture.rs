@@ -61,7 +61,8 @@ pub struct CaptureArgs {
     /// The camera: sim, files:DIR, aravis:NAME, v4l2:/dev/videoN.
     #[arg(long, value_name = "SPEC")]
     pub camera: String,
-    /// The lens: virtual (the paper rig's lens at 27 degC ambient), ld4:PORT (or a port path).
+    /// The lens: virtual (the paper rig's lens at 27 degC ambient), ld4:PORT (or a port path),
+    /// genicam:NAME[,feature=F][,unit=dpt|ma][,temperature=F] (feature aravis).
     #[arg(long, value_name = "SPEC")]
     pub lens: String,
     /// The stage: sim, manual, zaber:PORT,microstep_um=UM[,device=N][,axis=N].

@@ -1,6 +1,8 @@
 //! The lens of a rig: etl-core's [`Lens`] trait over the Optotune Lens Driver 4 client
-//! (`ld4:PORT`) or the virtual lens (`virtual`: served on a pseudo-terminal and driven
-//! through the same serial client, as `etlcal lens --virtual` does), named for errors.
+//! (`ld4:PORT`), the virtual lens (`virtual`: served on a pseudo-terminal and driven
+//! through the same serial client, as `etlcal lens --virtual` does), a GenICam camera's
+//! lens features (`genicam:NAME`, [`genicam`], cargo feature `aravis`) or any driver
+//! ([`RigLens::from_driver`]), named for errors.
 //!
 //! A current is always approached from below ([`RigLens::approach_ma`]): the lens first
 //! goes [`APPROACH_MA`] under the target, then to it, so that every view sits on the
@@ -16,6 +18,9 @@ use etl_hw::HwError;
 
 use crate::error::{Error, Result};
 use crate::spec::LensSpec;
+
+#[cfg(feature = "aravis")]
+pub mod genicam;
 
 /// How far below a target current the lens goes first, mA (larger than the published
 /// hysteresis widths of shape-changing-polymer lenses, a few mA).
@@ -41,6 +46,7 @@ impl RigLens {
                 (v.path().to_owned(), Some(v))
             }
             LensSpec::Ld4(p) => (p.clone(), None),
+            LensSpec::Genicam(g) => return open_genicam(g, &name),
         };
         let client = LensClient::open(&path, OpenOptions::default()).map_err(|e| Error::lens(&name, e))?;
         let limits_ma = client.limits_ma();
@@ -111,6 +117,27 @@ impl RigLens {
     /// The current the driver is at, mA.
     pub fn current_ma(&mut self) -> Result<f64> {
         self.lens.current_ma()
+    }
+}
+
+#[cfg(feature = "aravis")]
+fn open_genicam(spec: &crate::spec::GenicamLensSpec, _name: &str) -> Result<RigLens> {
+    RigLens::genicam(genicam::GenicamLens::open(spec)?)
+}
+
+#[cfg(not(feature = "aravis"))]
+fn open_genicam(_spec: &crate::spec::GenicamLensSpec, name: &str) -> Result<RigLens> {
+    let message =
+        "this etlcal was built without the aravis feature (cargo install --path crates/etlcal --features aravis)";
+    Err(Error::device(name, crate::error::ErrorKind::InvalidInput, message))
+}
+
+#[cfg(feature = "aravis")]
+impl RigLens {
+    /// The lens of a GenICam camera, its limits the command feature's bounds.
+    pub fn genicam(lens: genicam::GenicamLens) -> Result<RigLens> {
+        let limits_ma = lens.limits_ma()?;
+        Ok(RigLens::from_driver(lens.name().to_owned(), Box::new(lens), limits_ma))
     }
 }
 
