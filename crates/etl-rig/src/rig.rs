@@ -139,12 +139,22 @@ pub fn open_camera(spec: &CameraSpec, sim_seed: u64) -> Result<Box<dyn Camera>> 
         }
         CameraSpec::Files(dir) => Ok(Box::new(FilesCamera::open(dir)?)),
         CameraSpec::Aravis(id) => open_aravis(id, &name),
-        CameraSpec::V4l2(_) => Err(Error::device(
-            name,
-            ErrorKind::InvalidInput,
-            "V4L2 cameras are not supported by etlcal yet: save frames with your V4L2 tool and replay them (files:DIR), or use aravis:NAME",
-        )),
+        CameraSpec::V4l2(path) => open_v4l2(path, &name),
     }
+}
+
+#[cfg(all(feature = "v4l2", target_os = "linux"))]
+fn open_v4l2(path: &std::path::Path, _name: &str) -> Result<Box<dyn Camera>> {
+    Ok(Box::new(crate::camera::v4l2::V4l2Camera::open(path)?))
+}
+
+#[cfg(not(all(feature = "v4l2", target_os = "linux")))]
+fn open_v4l2(_path: &std::path::Path, name: &str) -> Result<Box<dyn Camera>> {
+    Err(Error::device(
+        name,
+        ErrorKind::InvalidInput,
+        "this etlcal was built without the v4l2 feature (Linux: cargo install --path crates/etlcal --features v4l2)",
+    ))
 }
 
 #[cfg(feature = "aravis")]

@@ -19,7 +19,7 @@ pub enum CameraSpec {
     Files(PathBuf),
     /// A GenICam camera through aravis (cargo feature `aravis`), by its aravis id.
     Aravis(String),
-    /// A V4L2 device (parsed; opening one is refused: no V4L2 backend yet).
+    /// A V4L2 device (cargo feature `v4l2`, Linux), by its path.
     V4l2(PathBuf),
 }
 

@@ -4,4 +4,6 @@
 mod aravis;
 mod capture;
 mod thermal;
+#[cfg(all(feature = "v4l2", target_os = "linux"))]
+mod v4l2;
 mod zaber;
