@@ -111,6 +111,7 @@ pub fn run(args: Args) -> Result<()> {
     let plan = Plan::load(&a.plan)?;
     if kind == Kind::Thermal {
         plan.thermal_grid().map_err(|e| e.within(a.plan.display(), None))?;
+        refuse_view_flags(&a)?;
     }
     let lens = a.lens.parse::<LensSpec>()?;
     if a.dynamics.is_some() && lens != LensSpec::Virtual {
@@ -150,6 +151,22 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     print_report(&report, &a.out.join(etl_rig::capture::store::DATASET_FILE), args.json);
+    Ok(())
+}
+
+/// The flags of the views' capture that the temperature capture has no use for: refused,
+/// not ignored (it refocuses by its own search and settles on sharpness, not corners).
+fn refuse_view_flags(a: &CaptureArgs) -> Result<()> {
+    if a.autofocus_range_ma.is_some() {
+        let message =
+            "--autofocus-range-ma: capture thermal searches thermal.search_half_width_ma around each step's current";
+        return Err(Error::invalid("--autofocus-range-ma", message));
+    }
+    if a.settle_tolerance_px != CaptureOptions::default().settle_tolerance_px {
+        let message =
+            "--settle-tolerance-px: capture thermal settles each frame on its sharpness, not on the board's corners";
+        return Err(Error::invalid("--settle-tolerance-px", message));
+    }
     Ok(())
 }
 

@@ -212,4 +212,11 @@ fn bad_thermal_plans_fail_in_one_line_and_write_nothing() {
     assert_eq!((code, stderr.lines().count()), (1, 1), "{stderr}");
     assert!(stderr.contains("camera sim: region of interest x 1900"), "{stderr}");
     assert!(!out.exists());
+    // A flag of the views' capture that this one has no use for is refused, not ignored.
+    let mut args = thermal_args(&plan, &out_s);
+    args.extend_from_slice(&["--settle-tolerance-px", "0.2"]);
+    let (code, _, stderr) = etlcal_run(&args);
+    assert_eq!((code, stderr.lines().count()), (1, 1), "{stderr}");
+    assert!(stderr.contains("--settle-tolerance-px: capture thermal settles each frame on its sharpness"), "{stderr}");
+    assert!(!out.exists());
 }
