@@ -483,7 +483,7 @@ pub fn rig_capture_offstate<'py>(
 ///     seed: the sim camera's noise seed.
 ///
 /// Returns: dict with "table", "thermal" (None until the grid is done), "samples_kept",
-/// "samples_taken", "frames", "rms_ma" (None until done), "stopped".
+/// "samples_taken", "evaluations", "rms_ma" (None until done), "stopped".
 ///
 /// Raises: as `rig_capture_views` (the table stays whole: call again to resume).
 #[pyfunction]
@@ -519,7 +519,7 @@ pub fn rig_capture_thermal<'py>(
     d.set_item("thermal", r.rms_ma.map(|_| out.join(etl_rig::capture::thermal::THERMAL_FILE)))?;
     d.set_item("samples_kept", r.samples_kept)?;
     d.set_item("samples_taken", r.samples_taken)?;
-    d.set_item("frames", r.frames)?;
+    d.set_item("evaluations", r.evaluations)?;
     d.set_item("rms_ma", r.rms_ma)?;
     d.set_item("stopped", r.stopped)?;
     Ok(d)

@@ -10,7 +10,7 @@
 //!
 //! With `--json`: `{"dataset", "offstate_kept", "offstate_taken", "views_kept",
 //! "views_taken", "stopped"}`; for `thermal` `{"table", "thermal", "samples_kept",
-//! "samples_taken", "frames", "rms_ma", "stopped"}` (`thermal` and `rms_ma` null until the
+//! "samples_taken", "evaluations", "rms_ma", "stopped"}` (`thermal` and `rms_ma` null until the
 //! grid is done).
 
 use std::path::PathBuf;
@@ -184,7 +184,7 @@ fn print_thermal_report(r: &ThermalReport, out: &std::path::Path, json_out: bool
     if json_out {
         print_json(&json!({
             "table": table, "thermal": thermal, "samples_kept": r.samples_kept, "samples_taken": r.samples_taken,
-            "frames": r.frames, "rms_ma": r.rms_ma, "stopped": r.stopped,
+            "evaluations": r.evaluations, "rms_ma": r.rms_ma, "stopped": r.stopped,
         }));
         return;
     }
@@ -194,11 +194,11 @@ fn print_thermal_report(r: &ThermalReport, out: &std::path::Path, json_out: bool
         _ => "not done".to_owned(),
     };
     outln!(
-        "{}: {} samples taken ({} kept) from {} frames; {state}",
+        "{}: {} samples taken ({} kept) from {} sharpness evaluations; {state}",
         table.display(),
         r.samples_taken,
         r.samples_kept,
-        r.frames
+        r.evaluations
     );
 }
 

@@ -107,7 +107,7 @@ def capture_thermal(
     sharpness, E_T recorded into `out/thermal.csv`; the fitted surface into
     `out/thermal.json` once the grid is done. A second call resumes. `sim_roi` (x, y, width,
     height) px: the sim camera renders only that window. Returns {"table", "thermal",
-    "samples_kept", "samples_taken", "frames", "rms_ma", "stopped"} ("thermal" and "rms_ma"
+    "samples_kept", "samples_taken", "evaluations", "rms_ma", "stopped"} ("thermal" and "rms_ma"
     None until done). Raises as `capture_views`."""
     return rig_capture_thermal(
         plan, out, camera, lens, stage, settle_timeout_s=settle_timeout_s,

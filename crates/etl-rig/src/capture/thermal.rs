@@ -67,8 +67,9 @@ pub struct ThermalReport {
     pub samples_kept: usize,
     /// Samples taken now.
     pub samples_taken: usize,
-    /// Frames grabbed for the refocus searches now.
-    pub frames: usize,
+    /// Sharpness evaluations of the refocus searches now (each on one frame, grabbed once
+    /// the sharpness settled: two or more frames each).
+    pub evaluations: usize,
     /// Whether `stop` ended the capture before the grid was done.
     pub stopped: bool,
     /// The fit's RMS residual, mA, once the grid is done (then `thermal.json` is written).
@@ -187,7 +188,7 @@ pub fn capture_thermal(
             .map_err(|source| etl_formats::Error::Io { path: out_dir.to_owned(), source })?;
         write_thermal_table(&table, &samples)?;
         report.samples_taken += 1;
-        report.frames += frames;
+        report.evaluations += frames;
         progress.advance(1);
     }
     progress.finish();
