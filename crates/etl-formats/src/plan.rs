@@ -22,6 +22,10 @@
 //!   so that one plan gives a dataset that calibrates on its own.
 //! - `offstate_board` (optional, default `board`): the lens-off views' board, as the
 //!   dataset's key of the same name.
+//! - `thermal` (optional; `etlcal capture thermal` needs it): the temperature procedure's
+//!   grid ([`ThermalPlan`]). Its currents are the plan's `currents_ma` (focus
+//!   `"current"`), each with its stage position in `stage_mm`: where the board is in focus
+//!   at that current, the series' first temperature.
 //!
 //! Any other key is refused. The stage's limits are checked against `stage_mm` when the
 //! capture opens the stage (they are the stage's, not the plan's).
@@ -41,6 +45,97 @@ pub const MAX_FRAMES: u32 = 1000;
 
 /// The most views (ETL or lens-off) a plan may ask for.
 pub const MAX_VIEWS: usize = 10_000;
+
+/// The temperature procedure's keys (`"thermal"` in a plan), e.g.
+/// `{"temperatures_c": [27, 30, 33, 36], "temperature_tolerance_c": 0.25,
+/// "temperature_timeout_s": 1800}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalPlan {
+    /// The temperature steps of each current's series, degC, in order; the first is the
+    /// series' reference (E_T = 0 there).
+    pub temperatures_c: Vec<f64>,
+    /// A step begins once the lens reads within this of its temperature, degC.
+    pub temperature_tolerance_c: f64,
+    /// The longest wait for the lens to reach a temperature, s.
+    pub temperature_timeout_s: f64,
+    /// Half width of each refocus search around the previous step's current, mA
+    /// (default [`THERMAL_SEARCH_HALF_WIDTH_MA`], the procedure's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_half_width_ma: Option<f64>,
+    /// Frames (sharpness evaluations) of each refocus, coarse scan included (default
+    /// [`THERMAL_MAX_FRAMES`], the procedure's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refocus_frames: Option<usize>,
+}
+
+/// The default half width of a refocus search, mA (etl-calib's procedure's).
+pub const THERMAL_SEARCH_HALF_WIDTH_MA: f64 = 20.0;
+/// The default frames of a refocus (etl-calib's procedure's).
+pub const THERMAL_MAX_FRAMES: usize = 22;
+/// The fewest frames of a refocus: its coarse scan ([`THERMAL_COARSE_POINTS`]) and two
+/// refinements.
+pub const THERMAL_MIN_FRAMES: usize = THERMAL_COARSE_POINTS + 2;
+/// The points of a refocus's coarse scan (etl-calib's procedure's).
+pub const THERMAL_COARSE_POINTS: usize = 9;
+/// The distinct temperatures and currents a cubic surface needs.
+pub const THERMAL_DISTINCT_NEEDED: usize = 4;
+/// The longest wait for a temperature a plan may ask, s (a day).
+pub const MAX_TEMPERATURE_TIMEOUT_S: f64 = 86_400.0;
+
+impl ThermalPlan {
+    /// The half width of each refocus search, mA.
+    pub fn search_half_width_ma(&self) -> f64 {
+        self.search_half_width_ma.unwrap_or(THERMAL_SEARCH_HALF_WIDTH_MA)
+    }
+
+    /// The frames of each refocus.
+    pub fn refocus_frames(&self) -> usize {
+        self.refocus_frames.unwrap_or(THERMAL_MAX_FRAMES)
+    }
+
+    /// Checks every key (named `thermal.KEY`): at least [`THERMAL_DISTINCT_NEEDED`]
+    /// distinct temperatures in the lens's operating range (-40..=125 degC), a tolerance
+    /// in (0, 10] degC, a time-out in (0, [`MAX_TEMPERATURE_TIMEOUT_S`]] s, a search
+    /// half width in (0, 100] mA, [`THERMAL_MIN_FRAMES`]..=200 frames per refocus.
+    pub fn validate(&self) -> Result<()> {
+        let t = &self.temperatures_c;
+        if let Some((i, x)) = t.iter().enumerate().find(|(_, x)| !(x.is_finite() && (-40.0..=125.0).contains(*x))) {
+            let message = format!("thermal.temperatures_c[{i}] {x} degC is outside the lens's -40..=125 degC");
+            return Err(Error::invalid_value(format!("thermal.temperatures_c[{i}]"), *x, message));
+        }
+        if distinct(t) < THERMAL_DISTINCT_NEEDED {
+            let message = format!(
+                "thermal.temperatures_c: {} distinct temperatures; the cubic surface needs at least {THERMAL_DISTINCT_NEEDED}",
+                distinct(t)
+            );
+            return Err(Error::invalid("thermal.temperatures_c", message));
+        }
+        let ranges = [
+            ("temperature_tolerance_c", self.temperature_tolerance_c, 10.0, "degC"),
+            ("temperature_timeout_s", self.temperature_timeout_s, MAX_TEMPERATURE_TIMEOUT_S, "s"),
+            ("search_half_width_ma", self.search_half_width_ma(), 100.0, "mA"),
+        ];
+        if let Some((key, x, hi, unit)) = ranges.into_iter().find(|(_, x, hi, _)| !(*x > 0.0 && *x <= *hi)) {
+            let message = format!("thermal.{key} {x} must lie in (0, {hi}] {unit}");
+            return Err(Error::invalid_value(format!("thermal.{key}"), x, message));
+        }
+        let n = self.refocus_frames();
+        if !(THERMAL_MIN_FRAMES..=200).contains(&n) {
+            let message = format!("thermal.refocus_frames: {n} frames; give {THERMAL_MIN_FRAMES}..=200");
+            return Err(Error::invalid_value("thermal.refocus_frames", n, message));
+        }
+        Ok(())
+    }
+}
+
+/// The number of distinct values of `x`.
+fn distinct(x: &[f64]) -> usize {
+    let mut v = x.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    v.len()
+}
 
 /// How each ETL view is focused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -75,6 +170,9 @@ pub struct Plan {
     /// The lens-off views' board (optional, default `board`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub offstate_board: Option<Board>,
+    /// The temperature procedure's keys (optional; `etlcal capture thermal` needs them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thermal: Option<ThermalPlan>,
 }
 
 impl Plan {
@@ -118,7 +216,34 @@ impl Plan {
                 return Err(Error::invalid_value("offstate_views", n, message));
             }
         }
+        if let Some(t) = &self.thermal {
+            t.validate()?;
+        }
         Ok(())
+    }
+
+    /// The temperature procedure's grid, for `etlcal capture thermal`: the `thermal` keys
+    /// and the plan's currents (focus `"current"`, at least [`THERMAL_DISTINCT_NEEDED`]
+    /// distinct), each with its stage position. The error names the key.
+    pub fn thermal_grid(&self) -> Result<(&ThermalPlan, &[f64])> {
+        let Some(t) = &self.thermal else {
+            let message = "thermal: the plan has no \"thermal\" keys (temperatures_c, temperature_tolerance_c, \
+                           temperature_timeout_s) for the temperature procedure";
+            return Err(Error::invalid("thermal", message));
+        };
+        let (Focus::Current, Some(c)) = (self.focus, &self.currents_ma) else {
+            let message = "focus: the temperature procedure starts each series at one of the plan's currents: \
+                           give focus \"current\" with currents_ma (the board in focus at stage_mm)";
+            return Err(Error::invalid("focus", message));
+        };
+        if distinct(c) < THERMAL_DISTINCT_NEEDED {
+            let message = format!(
+                "currents_ma: {} distinct currents; the cubic surface needs at least {THERMAL_DISTINCT_NEEDED}",
+                distinct(c)
+            );
+            return Err(Error::invalid("currents_ma", message));
+        }
+        Ok((t, c))
     }
 
     fn validate_currents(&self) -> Result<()> {

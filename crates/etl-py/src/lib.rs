@@ -81,5 +81,6 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<rig_runtime::RigAt>()?;
     m.add_function(wrap_pyfunction!(rig::rig_capture_views, m)?)?;
     m.add_function(wrap_pyfunction!(rig::rig_capture_offstate, m)?)?;
+    m.add_function(wrap_pyfunction!(rig::rig_capture_thermal, m)?)?;
     Ok(())
 }

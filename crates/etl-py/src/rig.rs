@@ -1,12 +1,16 @@
 //! `etlcal.rig`: the rig's cameras (`RigCamera`, `etlcal.rig.Camera`) and the capture
-//! procedures (`rig_capture_views`, `rig_capture_offstate`, behind
-//! `etlcal.rig.capture_views` / `capture_offstate`) of etl-rig. A device is a spec string
-//! (`"sim"`, `"files:DIR"`, `"aravis:NAME"`; `"virtual"`, `"ld4:PORT"`; `"sim"`,
-//! `"manual"`, `"zaber:PORT,microstep_um=UM"`) or, for the camera and the stage, a Python
-//! object: a camera with `grab()` (a 2-D uint8 or uint16 numpy array; optional
-//! `image_size`, (width, height) px, else a first frame tells it), a stage with
-//! `move_mm(z_mm)` (returning the position reached, mm, or None for the one asked) and,
-//! for lens-off views, `present_offstate_pose(k, count)`; optional `limits_mm()`.
+//! procedures (`rig_capture_views`, `rig_capture_offstate`, `rig_capture_thermal`, behind
+//! `etlcal.rig.capture_views` / `capture_offstate` / `capture_thermal`) of etl-rig. A
+//! device is a spec string (`"sim"`, `"files:DIR"`, `"aravis:NAME"`; `"virtual"`,
+//! `"ld4:PORT"`; `"sim"`, `"manual"`, `"zaber:PORT,microstep_um=UM"`) or a Python object:
+//! a camera with `grab()` (a 2-D uint8 or uint16 numpy array; optional `image_size`,
+//! (width, height) px, else a first frame tells it), a stage with `move_mm(z_mm)`
+//! (returning the position reached, mm, or None for the one asked) and, for lens-off
+//! views, `present_offstate_pose(k, count)`; optional `limits_mm()`; a lens with
+//! `set_current_ma(e_in_ma)` (returning the current commanded, mA, or None for the one
+//! asked) and `temperature_c()`; optional `current_ma()` (else the last current commanded)
+//! and `limits_ma()` ((lo, hi) mA; else none: each approach then goes the full 10 mA
+//! below its current).
 
 use std::cell::RefCell;
 use std::path::PathBuf;
@@ -14,7 +18,7 @@ use std::rc::Rc;
 use std::sync::atomic::AtomicBool;
 
 use etl_rig::camera::{Camera, CameraInfo, Frame, Gray16Image, Pixels};
-use etl_rig::capture::{capture_offstate, capture_views, CaptureOptions};
+use etl_rig::capture::{capture_offstate, capture_thermal, capture_views, CaptureOptions};
 use etl_rig::lens::RigLens;
 use etl_rig::rig::{open_camera, open_stage, paper_virtual_lens, Rig, RigSpec};
 use etl_rig::spec::{CameraSpec, LensSpec, StageSpec};
@@ -40,8 +44,15 @@ fn rig_err(e: etl_rig::Error) -> PyErr {
 /// The first Python exception a Python device raised, re-raised after the capture.
 type Raised = Rc<RefCell<Option<PyErr>>>;
 
+/// Keeps `e` (the first only), with a note naming the device (`add_note`, Python 3.11+:
+/// the exception stays the object's own, its traceback says which device raised it).
 fn keep(raised: &Raised, device: &str, e: PyErr) -> etl_rig::Error {
     let message = format!("a Python method raised: {e}");
+    Python::attach(|py| {
+        let note =
+            format!("raised by the {device} during the capture (what was taken stays whole: call again to resume)");
+        let _ = e.value(py).call_method1("add_note", (note,));
+    });
     raised.borrow_mut().get_or_insert(e);
     etl_rig::Error::device(device, ErrorKind::Other, message)
 }
@@ -196,7 +207,81 @@ impl Stage for PyStageObject {
     }
 }
 
-/// A camera: a spec string or a Python object with `grab()`.
+/// A Python lens object (`set_current_ma(e_in_ma)`, `temperature_c()`, optional
+/// `current_ma()` and `limits_ma()`).
+struct PyLensObject {
+    obj: Py<PyAny>,
+    raised: Raised,
+    last_ma: Option<f64>,
+}
+
+/// The name of a Python lens in errors.
+const PY_LENS: &str = "lens (Python object)";
+
+impl PyLensObject {
+    /// `method(args)` as a number (None: the method returned None).
+    fn number(&self, method: &str, args: Option<f64>) -> etl_rig::Result<Option<f64>> {
+        Python::attach(|py| {
+            let obj = self.obj.bind(py);
+            let out = match args {
+                Some(x) => obj.call_method1(method, (x,)),
+                None => obj.call_method0(method),
+            }
+            .map_err(|e| keep(&self.raised, PY_LENS, e))?;
+            if out.is_none() {
+                return Ok(None);
+            }
+            out.extract::<f64>().map(Some).map_err(|_| {
+                etl_rig::Error::device(PY_LENS, ErrorKind::Protocol, format!("{method}() returned no number"))
+            })
+        })
+    }
+
+    fn has(&self, method: &str) -> bool {
+        Python::attach(|py| self.obj.bind(py).hasattr(method).unwrap_or(false))
+    }
+
+    /// The object's `limits_ma()`, or none.
+    fn limits_ma(&self) -> etl_rig::Result<[f64; 2]> {
+        if !self.has("limits_ma") {
+            return Ok([f64::NEG_INFINITY, f64::INFINITY]);
+        }
+        Python::attach(|py| {
+            let out = self.obj.bind(py).call_method0("limits_ma").map_err(|e| keep(&self.raised, PY_LENS, e))?;
+            let (lo, hi) = out.extract::<(f64, f64)>().map_err(|_| {
+                etl_rig::Error::device(PY_LENS, ErrorKind::Protocol, "limits_ma() must return (lo, hi) mA")
+            })?;
+            Ok([lo, hi])
+        })
+    }
+}
+
+impl etl_core::lens::Lens for PyLensObject {
+    type Error = etl_rig::Error;
+
+    fn set_current_ma(&mut self, e_in_ma: f64) -> etl_rig::Result<f64> {
+        let set = self.number("set_current_ma", Some(e_in_ma))?.unwrap_or(e_in_ma);
+        self.last_ma = Some(set);
+        Ok(set)
+    }
+
+    fn current_ma(&mut self) -> etl_rig::Result<f64> {
+        if self.has("current_ma") {
+            if let Some(e) = self.number("current_ma", None)? {
+                return Ok(e);
+            }
+        }
+        self.last_ma.ok_or_else(|| etl_rig::Error::device(PY_LENS, ErrorKind::Other, "no current commanded yet"))
+    }
+
+    fn temperature_c(&mut self) -> etl_rig::Result<f64> {
+        self.number("temperature_c", None)?.ok_or_else(|| {
+            etl_rig::Error::device(PY_LENS, ErrorKind::Protocol, "temperature_c() returned None, not degC")
+        })
+    }
+}
+
+/// A device: a spec string or a Python object.
 enum Device<'py> {
     Spec(String),
     Object(Bound<'py, PyAny>),
@@ -209,22 +294,38 @@ fn device<'py>(obj: Bound<'py, PyAny>) -> Device<'py> {
     }
 }
 
-fn open_rig(camera: Device<'_>, lens: &str, stage: Device<'_>, seed: u64, raised: &Raised) -> etl_rig::Result<Rig> {
-    let lens_spec = lens.parse::<LensSpec>()?;
-    if let (Device::Spec(c), Device::Spec(s)) = (&camera, &stage) {
+/// The rig of the devices given: all specs open as the command line opens them (`sim_roi`
+/// for the sim camera); any Python object, each device on its own.
+fn open_rig(
+    camera: Device<'_>,
+    lens: Device<'_>,
+    stage: Device<'_>,
+    sim: (u64, Option<[u32; 4]>),
+    raised: &Raised,
+) -> etl_rig::Result<Rig> {
+    let (seed, sim_roi) = sim;
+    if let (Device::Spec(c), Device::Spec(l), Device::Spec(s)) = (&camera, &lens, &stage) {
         let spec = RigSpec {
             camera: c.parse::<CameraSpec>()?,
-            lens: lens_spec,
+            lens: l.parse::<LensSpec>()?,
             stage: s.parse::<StageSpec>()?,
             sim_seed: seed,
+            sim_roi,
             virtual_lens: paper_virtual_lens(),
         };
         return Rig::open(&spec);
     }
-    let lens = RigLens::open(&lens_spec, paper_virtual_lens())?;
+    let lens = match lens {
+        Device::Spec(l) => RigLens::open(&l.parse::<LensSpec>()?, paper_virtual_lens())?,
+        Device::Object(o) => {
+            let driver = PyLensObject { obj: o.unbind(), raised: Rc::clone(raised), last_ma: None };
+            let limits_ma = driver.limits_ma()?;
+            RigLens::from_driver(PY_LENS, Box::new(driver), limits_ma)
+        }
+    };
     let camera: Box<dyn Camera> = match camera {
         Device::Spec(c) if c == "sim" => {
-            let message = "the sim camera renders the simulated stage's board: give stage=\"sim\"";
+            let message = "the sim camera renders the virtual lens's state on the simulated stage: give lens=\"virtual\" and stage=\"sim\"";
             return Err(etl_rig::Error::device("camera sim", ErrorKind::InvalidInput, message));
         }
         Device::Spec(c) => open_camera(&c.parse::<CameraSpec>()?, seed)?,
@@ -256,14 +357,14 @@ fn run<'py>(
     plan: Bound<'py, PyAny>,
     out: PathBuf,
     camera: Bound<'py, PyAny>,
-    lens: &str,
+    lens: Bound<'py, PyAny>,
     stage: Bound<'py, PyAny>,
     options: CaptureOptions,
     seed: u64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let plan = load_plan(py, &plan)?;
     let raised: Raised = Rc::new(RefCell::new(None));
-    let result = open_rig(device(camera), lens, device(stage), seed, &raised).and_then(|mut rig| {
+    let result = open_rig(device(camera), device(lens), device(stage), (seed, None), &raised).and_then(|mut rig| {
         let (progress, stop) = (etl_core::progress::NoProgress, AtomicBool::new(false));
         if offstate_only {
             capture_offstate(&plan, &mut rig, &out, &options, &progress, &stop)
@@ -309,7 +410,8 @@ fn options(
 ///     out: the output folder.
 ///     camera: a spec ("sim", "files:DIR", "aravis:NAME") or an object with `grab()`
 ///         returning a 2-D uint8/uint16 numpy array.
-///     lens: a spec ("virtual", "ld4:PORT").
+///     lens: a spec ("virtual", "ld4:PORT") or an object with `set_current_ma(e_in_ma)`
+///         and `temperature_c()` (optional `current_ma()`, `limits_ma()`; module docs).
 ///     stage: a spec ("sim", "manual", "zaber:PORT,microstep_um=UM") or an object with
 ///         `move_mm(z_mm)` (and `present_offstate_pose(k, count)` for lens-off views).
 ///     settle_tolerance_px: the lens has settled when the board's corners move at most
@@ -334,7 +436,7 @@ pub fn rig_capture_views<'py>(
     plan: Bound<'py, PyAny>,
     out: PathBuf,
     camera: Bound<'py, PyAny>,
-    lens: &str,
+    lens: Bound<'py, PyAny>,
     stage: Bound<'py, PyAny>,
     settle_tolerance_px: f64,
     settle_timeout_s: f64,
@@ -357,7 +459,7 @@ pub fn rig_capture_offstate<'py>(
     plan: Bound<'py, PyAny>,
     out: PathBuf,
     camera: Bound<'py, PyAny>,
-    lens: &str,
+    lens: Bound<'py, PyAny>,
     stage: Bound<'py, PyAny>,
     settle_tolerance_px: f64,
     settle_timeout_s: f64,
@@ -366,6 +468,61 @@ pub fn rig_capture_offstate<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let o = options(settle_tolerance_px, settle_timeout_s, max_temperature_change_c, None);
     run(py, true, plan, out, camera, lens, stage, o, seed)
+}
+
+/// The temperature procedure over a plan's `thermal` grid on a rig, writing
+/// `out/thermal.csv` after every sample and `out/thermal.json` once the grid is done;
+/// resumes what an earlier run left there (`etlcal.rig.capture_thermal`; docs/RIG.md,
+/// "Temperature capture").
+///
+/// Args:
+///     plan, out, camera, lens, stage: as `rig_capture_views`.
+///     settle_timeout_s: the longest wait for each frame's sharpness to settle, s.
+///     max_temperature_change_c: a step whose lens temperature moved more, degC, is refused.
+///     sim_roi: (x, y, width, height) px: the sim camera renders only that window.
+///     seed: the sim camera's noise seed.
+///
+/// Returns: dict with "table", "thermal" (None until the grid is done), "samples_kept",
+/// "samples_taken", "evaluations", "rms_ma" (None until done), "stopped".
+///
+/// Raises: as `rig_capture_views` (the table stays whole: call again to resume).
+#[pyfunction]
+#[pyo3(signature = (plan, out, camera, lens, stage, *, settle_timeout_s=10.0, max_temperature_change_c=0.5,
+    sim_roi=None, seed=1))]
+#[allow(clippy::too_many_arguments)]
+pub fn rig_capture_thermal<'py>(
+    py: Python<'py>,
+    plan: Bound<'py, PyAny>,
+    out: PathBuf,
+    camera: Bound<'py, PyAny>,
+    lens: Bound<'py, PyAny>,
+    stage: Bound<'py, PyAny>,
+    settle_timeout_s: f64,
+    max_temperature_change_c: f64,
+    sim_roi: Option<(u32, u32, u32, u32)>,
+    seed: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let plan = load_plan(py, &plan)?;
+    let options = CaptureOptions { settle_timeout_s, max_temperature_change_c, ..CaptureOptions::default() };
+    let raised: Raised = Rc::new(RefCell::new(None));
+    let roi = sim_roi.map(|(x, y, w, h)| [x, y, w, h]);
+    let result = open_rig(device(camera), device(lens), device(stage), (seed, roi), &raised).and_then(|mut rig| {
+        let (progress, stop) = (etl_core::progress::NoProgress, AtomicBool::new(false));
+        capture_thermal(&plan, &mut rig, &out, &options, &progress, &stop)
+    });
+    if let Some(e) = raised.borrow_mut().take() {
+        return Err(e);
+    }
+    let r = result.map_err(rig_err)?;
+    let d = PyDict::new(py);
+    d.set_item("table", out.join(etl_rig::capture::thermal::THERMAL_TABLE_FILE))?;
+    d.set_item("thermal", r.rms_ma.map(|_| out.join(etl_rig::capture::thermal::THERMAL_FILE)))?;
+    d.set_item("samples_kept", r.samples_kept)?;
+    d.set_item("samples_taken", r.samples_taken)?;
+    d.set_item("evaluations", r.evaluations)?;
+    d.set_item("rms_ma", r.rms_ma)?;
+    d.set_item("stopped", r.stopped)?;
+    Ok(d)
 }
 
 /// A camera of the rig, opened from its spec (`etlcal.rig.Camera`): `"sim"` (the

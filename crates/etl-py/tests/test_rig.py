@@ -75,7 +75,8 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     blocks = code_blocks(RIG)
     languages = [language for language, _ in blocks]
     # A new snippet must be added here with what the test gives it.
-    assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh", "json", "sh"], languages
+    assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh", "json", "sh",
+                         "json", "sh"], languages
     # The rig's data: images of the simulated rig (views/, offstate/, dataset.json) and the
     # lens-off board's file that the zhang snippet names.
     subprocess.run([etlcal_binary, "simulate", "--out", str(tmp_path), "--quiet"], check=True, capture_output=True)
@@ -121,6 +122,14 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     captured = etlcal.Dataset.load(tmp_path / "capture" / "dataset.json")
     assert len(captured) == 15
     assert (tmp_path / "capture" / "calibration.json").is_file()
+    # The temperature capture on the simulated rig: its 4 x 4 grid, fitted close to the
+    # virtual lens's surface (E_T since 27 degC at the same E_in).
+    table = (tmp_path / "thermal-capture" / "thermal.csv").read_text().splitlines()
+    assert table[0] == "temperature_c,e_in_ma,e_t_ma" and len(table) == 17
+    fitted = etlcal.ThermalCalibration.load(tmp_path / "thermal-capture" / "thermal.json")
+    truth = etlcal.ThermalSurface.paper()
+    got = fitted.compensate(150.0, 33.0).e_t_ma - fitted.compensate(150.0, 27.0).e_t_ma
+    assert abs(got - (truth.e_t(150.0, 33.0) - truth.e_t(150.0, 27.0))) < 0.5
 
 
 def thermal_surface_follows_the_virtual_lens(tmp_path: pathlib.Path, rig: Rig, namespace: Dict[str, Any]) -> None:

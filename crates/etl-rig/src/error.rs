@@ -3,7 +3,7 @@
 //! ([`Error::kind`], as etl-core's `LensError::kind` and embedded-hal's `Error::kind()` do),
 //! so that a capture ends a view with one line saying which device failed and how.
 
-use etl_core::lens::LensErrorKind;
+use etl_core::lens::{LensError, LensErrorKind};
 
 /// What kind of failure a rig call met.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -129,6 +129,21 @@ impl From<Error> for etl_formats::Error {
             }
             Error::Device { device, message, .. } => other(device, message),
             Error::View { view, message } => other(view, message),
+        }
+    }
+}
+
+/// A rig error as a lens error (a rig lens, [`crate::lens::RigLens::from_driver`], under
+/// etl-core's `Lens` trait): its kind mapped back.
+impl LensError for Error {
+    fn kind(&self) -> LensErrorKind {
+        match Error::kind(self) {
+            ErrorKind::Timeout => LensErrorKind::Timeout,
+            ErrorKind::Refused => LensErrorKind::Refused,
+            ErrorKind::LinkLost => LensErrorKind::LinkLost,
+            ErrorKind::Protocol => LensErrorKind::Protocol,
+            ErrorKind::InvalidInput => LensErrorKind::InvalidInput,
+            _ => LensErrorKind::Other,
         }
     }
 }

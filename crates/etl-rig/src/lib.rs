@@ -8,7 +8,8 @@
 //!   ([`error::Error::kind`]).
 //! - Procedures: [`capture::capture_views`], [`capture::capture_offstate`]: an
 //!   `etlcal.plan/1` in, `dataset.json` and its images out, always whole on disk and
-//!   resumable.
+//!   resumable; [`capture::capture_thermal`]: the temperature procedure (section 4.1),
+//!   its table and fitted surface out, resumable too.
 //!
 //! The command line (`etlcal capture`, `camera`, `stage`) and Python call these; this crate
 //! imports neither.

@@ -29,6 +29,9 @@ pub struct RigSpec {
     pub stage: StageSpec,
     /// Seed of the sim camera's noise.
     pub sim_seed: u64,
+    /// The sim camera's region of interest `[x, y, width, height]`, px
+    /// ([`SimCamera::set_roi`]); None: the whole sensor. Refused with another camera.
+    pub sim_roi: Option<[u32; 4]>,
     /// The virtual lens's configuration (with `LensSpec::Virtual`).
     pub virtual_lens: VirtualLensConfig,
 }
@@ -51,6 +54,12 @@ impl Rig {
     /// Errors: a device that cannot be opened, or a sim camera without the virtual lens
     /// and the sim stage; each names the device.
     pub fn open(spec: &RigSpec) -> Result<Rig> {
+        #[cfg(feature = "aravis")]
+        if let (CameraSpec::Aravis(id), LensSpec::Genicam(g)) = (&spec.camera, &spec.lens) {
+            if *id == g.id && spec.sim_roi.is_none() {
+                return Rig::open_genicam_camera(spec, id, g);
+            }
+        }
         let lens = RigLens::open(&spec.lens, spec.virtual_lens.clone())?;
         let sim = matches!(spec.camera, CameraSpec::Sim).then(SimWorld::paper).transpose()?;
         let stage: Box<dyn Stage> = match (&spec.stage, &sim) {
@@ -68,11 +77,29 @@ impl Rig {
                     let message = "the sim camera renders the virtual lens's state: use --lens virtual";
                     Error::device("camera sim", ErrorKind::InvalidInput, message)
                 })?;
-                Box::new(SimCamera::new(world.clone(), device, spec.sim_seed))
+                let mut camera = SimCamera::new(world.clone(), device, spec.sim_seed);
+                if let Some(roi) = spec.sim_roi {
+                    camera.set_roi(roi)?;
+                }
+                Box::new(camera)
+            }
+            (other, _) if spec.sim_roi.is_some() => {
+                let message =
+                    "a region of interest (--sim-roi) is the sim camera's: set a real camera's in its own software";
+                return Err(Error::device(format!("camera {other}"), ErrorKind::InvalidInput, message));
             }
             (other, _) => open_camera(other, spec.sim_seed)?,
         };
         Ok(Rig { camera, lens, stage, sim })
+    }
+
+    /// A GenICam camera that grabs the frames and drives the lens over one connection.
+    #[cfg(feature = "aravis")]
+    fn open_genicam_camera(spec: &RigSpec, id: &str, lens: &crate::spec::GenicamLensSpec) -> Result<Rig> {
+        let camera = crate::camera::aravis::AravisCamera::open(id)?;
+        let lens = RigLens::genicam(crate::lens::genicam::GenicamLens::on_camera(camera.arv_camera(), lens)?)?;
+        let stage = open_stage(&spec.stage)?;
+        Ok(Rig { camera: Box::new(camera), lens, stage, sim: None })
     }
 
     /// Shows `board` on the simulated stage and `offstate_board` in the lens-off poses
@@ -112,12 +139,22 @@ pub fn open_camera(spec: &CameraSpec, sim_seed: u64) -> Result<Box<dyn Camera>> 
         }
         CameraSpec::Files(dir) => Ok(Box::new(FilesCamera::open(dir)?)),
         CameraSpec::Aravis(id) => open_aravis(id, &name),
-        CameraSpec::V4l2(_) => Err(Error::device(
-            name,
-            ErrorKind::InvalidInput,
-            "V4L2 cameras are not supported by etlcal yet: save frames with your V4L2 tool and replay them (files:DIR), or use aravis:NAME",
-        )),
+        CameraSpec::V4l2(path) => open_v4l2(path, &name),
     }
+}
+
+#[cfg(all(feature = "v4l2", target_os = "linux"))]
+fn open_v4l2(path: &std::path::Path, _name: &str) -> Result<Box<dyn Camera>> {
+    Ok(Box::new(crate::camera::v4l2::V4l2Camera::open(path)?))
+}
+
+#[cfg(not(all(feature = "v4l2", target_os = "linux")))]
+fn open_v4l2(_path: &std::path::Path, name: &str) -> Result<Box<dyn Camera>> {
+    Err(Error::device(
+        name,
+        ErrorKind::InvalidInput,
+        "this etlcal was built without the v4l2 feature (Linux: cargo install --path crates/etlcal --features v4l2)",
+    ))
 }
 
 #[cfg(feature = "aravis")]

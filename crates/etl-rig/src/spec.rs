@@ -1,7 +1,8 @@
 //! Device specs as the command line and Python give them: `sim`, `files:DIR`,
 //! `aravis:NAME`, `v4l2:/dev/video0` for a camera; `sim`, `manual`,
-//! `zaber:PORT[,microstep_um=UM][,device=N][,axis=N]` for a stage; `virtual` or
-//! `ld4:PORT` (or a bare port path) for the lens. Parsing checks only the spelling: opening
+//! `zaber:PORT[,microstep_um=UM][,device=N][,axis=N]` for a stage; `virtual`,
+//! `ld4:PORT` (or a bare port path) or `genicam:NAME[,feature=F][,unit=dpt|ma]
+//! [,temperature=F]` for the lens. Parsing checks only the spelling: opening
 //! the device ([`crate::rig`]) finds out whether it is there.
 
 use std::path::PathBuf;
@@ -18,7 +19,7 @@ pub enum CameraSpec {
     Files(PathBuf),
     /// A GenICam camera through aravis (cargo feature `aravis`), by its aravis id.
     Aravis(String),
-    /// A V4L2 device (parsed; opening one is refused: no V4L2 backend yet).
+    /// A V4L2 device (cargo feature `v4l2`, Linux), by its path.
     V4l2(PathBuf),
 }
 
@@ -54,6 +55,30 @@ pub enum LensSpec {
     Virtual,
     /// An Optotune Lens Driver 4 on a serial port.
     Ld4(PathBuf),
+    /// The lens a GenICam camera drives through its features (cargo feature `aravis`).
+    Genicam(GenicamLensSpec),
+}
+
+/// What a lens feature of a GenICam camera holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LensUnit {
+    /// A focal power, dpt (e.g. `FocalPower`).
+    Dpt,
+    /// A current, mA.
+    Ma,
+}
+
+/// `genicam:NAME[,feature=F][,unit=dpt|ma][,temperature=F]` (crate::lens::genicam).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenicamLensSpec {
+    /// The camera's aravis id.
+    pub id: String,
+    /// The lens's command feature (default `FocalPower`).
+    pub feature: String,
+    /// What the feature holds (default dpt).
+    pub unit: LensUnit,
+    /// The lens's temperature feature, degC (none by default).
+    pub temperature: Option<String>,
 }
 
 fn bad(device: &str, spec: &str, message: String) -> Error {
@@ -166,9 +191,41 @@ impl std::str::FromStr for LensSpec {
             None if s == "virtual" => Ok(LensSpec::Virtual),
             Some(("ld4", port)) if !port.is_empty() => Ok(LensSpec::Ld4(port.into())),
             None if s.starts_with('/') => Ok(LensSpec::Ld4(s.into())),
-            _ => Err(bad("lens", s, "unknown lens spec; use virtual, ld4:PORT or a port path".to_owned())),
+            Some(("genicam", rest)) => parse_genicam(s, rest).map(LensSpec::Genicam),
+            _ => {
+                Err(bad("lens", s, "unknown lens spec; use virtual, ld4:PORT, a port path or genicam:NAME".to_owned()))
+            }
         }
     }
+}
+
+fn parse_genicam(s: &str, rest: &str) -> Result<GenicamLensSpec> {
+    let mut parts = rest.split(',');
+    let id = parts.next().unwrap_or("");
+    if id.is_empty() {
+        return Err(bad("lens", s, "give the camera's aravis id after 'genicam:' (etlcal camera list)".to_owned()));
+    }
+    let mut spec =
+        GenicamLensSpec { id: id.to_owned(), feature: "FocalPower".to_owned(), unit: LensUnit::Dpt, temperature: None };
+    for part in parts {
+        let (key, value) = part.split_once('=').unwrap_or((part, ""));
+        if value.is_empty() {
+            return Err(bad("lens", s, format!("{key}: give a value, {key}=...")));
+        }
+        match key {
+            "feature" => spec.feature = value.to_owned(),
+            "temperature" => spec.temperature = Some(value.to_owned()),
+            "unit" => {
+                spec.unit = match value {
+                    "dpt" => LensUnit::Dpt,
+                    "ma" => LensUnit::Ma,
+                    _ => return Err(bad("lens", s, format!("unit={value}: use unit=dpt or unit=ma"))),
+                }
+            }
+            _ => return Err(bad("lens", s, format!("unknown option '{key}'; use feature, unit, temperature"))),
+        }
+    }
+    Ok(spec)
 }
 
 impl std::fmt::Display for LensSpec {
@@ -176,6 +233,14 @@ impl std::fmt::Display for LensSpec {
         match self {
             LensSpec::Virtual => write!(f, "virtual"),
             LensSpec::Ld4(p) => write!(f, "{}", p.display()),
+            LensSpec::Genicam(g) => {
+                let unit = if g.unit == LensUnit::Dpt { "dpt" } else { "ma" };
+                write!(f, "genicam:{},feature={},unit={unit}", g.id, g.feature)?;
+                match &g.temperature {
+                    Some(t) => write!(f, ",temperature={t}"),
+                    None => Ok(()),
+                }
+            }
         }
     }
 }
@@ -202,5 +267,11 @@ mod tests {
         assert_eq!("/dev/ttyACM0".parse::<LensSpec>().unwrap(), LensSpec::Ld4("/dev/ttyACM0".into()));
         assert_eq!("virtual".parse::<LensSpec>().unwrap(), LensSpec::Virtual);
         assert!("foo".parse::<LensSpec>().is_err());
+        let g = "genicam:10.0.0.5,temperature=LensTemperature".parse::<LensSpec>().unwrap();
+        assert_eq!(g.to_string(), "genicam:10.0.0.5,feature=FocalPower,unit=dpt,temperature=LensTemperature");
+        let e = "genicam:cam,unit=A".parse::<LensSpec>().unwrap_err().to_string();
+        assert!(e.starts_with("lens genicam:cam,unit=A: unit=A: use unit=dpt or unit=ma"), "{e}");
+        assert!("genicam:".parse::<LensSpec>().unwrap_err().to_string().contains("aravis id"));
+        assert!("genicam:c,speed=3".parse::<LensSpec>().unwrap_err().to_string().contains("unknown option 'speed'"));
     }
 }

@@ -1,13 +1,17 @@
-//! `etlcal capture views|offstate --plan F --camera SPEC --lens SPEC --stage SPEC --out DIR`:
-//! runs a capture plan (`etlcal.plan/1`) on a rig and writes `DIR/dataset.json` with its
-//! images (etl-rig's `capture_views` / `capture_offstate`; docs/RIG.md, "Capture").
+//! `etlcal capture views|offstate|thermal --plan F --camera SPEC --lens SPEC --stage SPEC
+//! --out DIR`: runs a capture plan (`etlcal.plan/1`) on a rig and writes `DIR/dataset.json`
+//! with its images (etl-rig's `capture_views` / `capture_offstate`), or for `thermal` the
+//! temperature procedure's `DIR/thermal.csv` and `DIR/thermal.json` (etl-rig's
+//! `capture_thermal`; docs/RIG.md, "Capture").
 //!
 //! The same command resumes a capture a kill or a failure ended: what is on disk is
 //! verified and kept. Ctrl-C ends the capture after the current view (a second Ctrl-C,
 //! SIGTERM or SIGHUP end it at once; the dataset stays whole either way).
 //!
 //! With `--json`: `{"dataset", "offstate_kept", "offstate_taken", "views_kept",
-//! "views_taken", "stopped"}`.
+//! "views_taken", "stopped"}`; for `thermal` `{"table", "thermal", "samples_kept",
+//! "samples_taken", "evaluations", "rms_ma", "stopped"}` (`thermal` and `rms_ma` null until the
+//! grid is done).
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -16,7 +20,9 @@ use std::sync::Arc;
 use etl_formats::plan::Plan;
 use etl_formats::{Error, Result};
 use etl_hw::virtual_lens::VirtualLensConfig;
-use etl_rig::capture::{capture_offstate, capture_views, CaptureOptions, CaptureReport};
+use etl_rig::capture::{
+    capture_offstate, capture_thermal, capture_views, CaptureOptions, CaptureReport, ThermalReport,
+};
 use etl_rig::rig::{paper_virtual_lens, Rig, RigSpec};
 use etl_rig::spec::{CameraSpec, LensSpec, StageSpec};
 use nix::sys::signal::{pthread_sigmask, raise, signal, SigHandler, SigSet, SigmaskHow, Signal};
@@ -42,6 +48,8 @@ pub enum CaptureCommand {
     Views(CaptureArgs),
     /// The plan's lens-off views only (its offstate_views).
     Offstate(CaptureArgs),
+    /// The temperature procedure over the plan's thermal grid: thermal.csv, then thermal.json.
+    Thermal(CaptureArgs),
 }
 
 /// The rig, the plan and where to write.
@@ -53,7 +61,8 @@ pub struct CaptureArgs {
     /// The camera: sim, files:DIR, aravis:NAME, v4l2:/dev/videoN.
     #[arg(long, value_name = "SPEC")]
     pub camera: String,
-    /// The lens: virtual (the paper rig's lens at 27 degC ambient), ld4:PORT (or a port path).
+    /// The lens: virtual (the paper rig's lens at 27 degC ambient), ld4:PORT (or a port path),
+    /// genicam:NAME[,feature=F][,unit=dpt|ma][,temperature=F] (feature aravis).
     #[arg(long, value_name = "SPEC")]
     pub lens: String,
     /// The stage: sim, manual, zaber:PORT,microstep_um=UM[,device=N][,axis=N].
@@ -86,15 +95,24 @@ pub struct CaptureArgs {
     /// Seed of the sim camera's noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// With --camera sim: render only this window of the sensor, px (a temperature capture
+    /// needs sharpness, not the whole board, and runs many times faster on a small window).
+    #[arg(long, num_args = 4, value_names = ["X", "Y", "W", "H"])]
+    pub sim_roi: Option<Vec<u32>>,
 }
 
 /// Runs `etlcal capture`.
 pub fn run(args: Args) -> Result<()> {
-    let (a, offstate_only) = match args.command {
-        CaptureCommand::Views(a) => (a, false),
-        CaptureCommand::Offstate(a) => (a, true),
+    let (a, kind) = match args.command {
+        CaptureCommand::Views(a) => (a, Kind::Views),
+        CaptureCommand::Offstate(a) => (a, Kind::Offstate),
+        CaptureCommand::Thermal(a) => (a, Kind::Thermal),
     };
     let plan = Plan::load(&a.plan)?;
+    if kind == Kind::Thermal {
+        plan.thermal_grid().map_err(|e| e.within(a.plan.display(), None))?;
+        refuse_view_flags(&a)?;
+    }
     let lens = a.lens.parse::<LensSpec>()?;
     if a.dynamics.is_some() && lens != LensSpec::Virtual {
         return Err(Error::invalid(
@@ -109,6 +127,7 @@ pub fn run(args: Args) -> Result<()> {
         lens,
         stage: a.stage.parse::<StageSpec>()?,
         sim_seed: a.seed,
+        sim_roi: a.sim_roi.as_deref().map(|r| [r[0], r[1], r[2], r[3]]),
         virtual_lens,
     };
     let options = CaptureOptions {
@@ -122,13 +141,65 @@ pub fn run(args: Args) -> Result<()> {
     let stop = stop_after_view_on_interrupt()?;
     let mut rig = Rig::open(&spec)?;
     let bar = crate::progress::Bar::new(!args.json);
-    let report = if offstate_only {
-        capture_offstate(&plan, &mut rig, &a.out, &options, &bar, &stop)?
-    } else {
-        capture_views(&plan, &mut rig, &a.out, &options, &bar, &stop)?
+    let report = match kind {
+        Kind::Offstate => capture_offstate(&plan, &mut rig, &a.out, &options, &bar, &stop)?,
+        Kind::Views => capture_views(&plan, &mut rig, &a.out, &options, &bar, &stop)?,
+        Kind::Thermal => {
+            let report = capture_thermal(&plan, &mut rig, &a.out, &options, &bar, &stop)?;
+            print_thermal_report(&report, &a.out, args.json);
+            return Ok(());
+        }
     };
     print_report(&report, &a.out.join(etl_rig::capture::store::DATASET_FILE), args.json);
     Ok(())
+}
+
+/// The flags of the views' capture that the temperature capture has no use for: refused,
+/// not ignored (it refocuses by its own search and settles on sharpness, not corners).
+fn refuse_view_flags(a: &CaptureArgs) -> Result<()> {
+    if a.autofocus_range_ma.is_some() {
+        let message =
+            "--autofocus-range-ma: capture thermal searches thermal.search_half_width_ma around each step's current";
+        return Err(Error::invalid("--autofocus-range-ma", message));
+    }
+    if a.settle_tolerance_px != CaptureOptions::default().settle_tolerance_px {
+        let message =
+            "--settle-tolerance-px: capture thermal settles each frame on its sharpness, not on the board's corners";
+        return Err(Error::invalid("--settle-tolerance-px", message));
+    }
+    Ok(())
+}
+
+/// Which capture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Views,
+    Offstate,
+    Thermal,
+}
+
+fn print_thermal_report(r: &ThermalReport, out: &std::path::Path, json_out: bool) {
+    let table = out.join(etl_rig::capture::thermal::THERMAL_TABLE_FILE);
+    let thermal = r.rms_ma.map(|_| out.join(etl_rig::capture::thermal::THERMAL_FILE));
+    if json_out {
+        print_json(&json!({
+            "table": table, "thermal": thermal, "samples_kept": r.samples_kept, "samples_taken": r.samples_taken,
+            "evaluations": r.evaluations, "rms_ma": r.rms_ma, "stopped": r.stopped,
+        }));
+        return;
+    }
+    let state = match (&thermal, r.rms_ma) {
+        (Some(t), Some(rms)) => format!("fitted, RMS {rms:.3} mA: wrote {}", t.display()),
+        _ if r.stopped => "stopped; run the same command to resume".to_owned(),
+        _ => "not done".to_owned(),
+    };
+    outln!(
+        "{}: {} samples taken ({} kept) from {} sharpness evaluations; {state}",
+        table.display(),
+        r.samples_taken,
+        r.samples_kept,
+        r.evaluations
+    );
 }
 
 fn print_report(r: &CaptureReport, dataset: &std::path::Path, json_out: bool) {

@@ -113,6 +113,124 @@ pub fn fit_samples(samples: &[ThermalSample]) -> Result<(ThermalCalibration, f64
     fit.solve_calibration().map_err(|err| Error::Core(err).within("cannot fit the surface", Some("rows")))
 }
 
+impl ProcedureOptions {
+    /// Checks the options, naming the first bad one: at least one current and two
+    /// temperatures, a positive search half width and tolerance.
+    pub fn validate(&self) -> Result<()> {
+        if self.e_in_grid_ma.is_empty() || self.temperatures_c.len() < 2 {
+            let what = if self.e_in_grid_ma.is_empty() { "e_in_grid_ma" } else { "temperatures_c" };
+            return Err(Error::invalid(what, "the procedure needs at least one current and two temperatures"));
+        }
+        let widths = [("search_half_width_ma", self.search_half_width_ma), ("tolerance_ma", self.tolerance_ma)];
+        if let Some((what, x)) = widths.into_iter().find(|(_, x)| !(*x > 0.0)) {
+            return Err(Error::invalid_value(what, x, "search half width and tolerance must be positive"));
+        }
+        Ok(())
+    }
+}
+
+/// Where the temperature series of one grid current stands: the grid current, the
+/// refocused current at the series' first temperature (its E_T reference, once measured)
+/// and the last refocused current (the centre of the next search).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Series {
+    /// The grid current, mA.
+    pub e0_ma: f64,
+    /// The refocused current at the first temperature, mA (None before it is measured).
+    pub reference_ma: Option<f64>,
+    /// The last refocused current, mA (the grid current before the first step).
+    pub last_ma: f64,
+}
+
+impl Series {
+    /// A series not begun.
+    pub fn new(e0_ma: f64) -> Series {
+        Series { e0_ma, reference_ma: None, last_ma: e0_ma }
+    }
+
+    /// A series that `samples` (its first steps, in order) began: a capture resumed
+    /// between two steps goes on exactly as an uninterrupted one would.
+    pub fn resume(e0_ma: f64, samples: &[ThermalSample]) -> Series {
+        Series {
+            e0_ma,
+            reference_ma: samples.first().map(|s| s.e_in_ma),
+            last_ma: samples.last().map_or(e0_ma, |s| s.e_in_ma),
+        }
+    }
+}
+
+/// One temperature step of a series, the lens already at `t_c` (the caller's climate
+/// brought it there): at the series' first step the lens goes to the grid current and
+/// the board is placed in focus; then the refocus by sharpness over
+/// `series.last_ma +- search_half_width_ma`. Returns the sample (the temperature the mean
+/// of the readings before and after the refocus; E_T = refocused current - the series'
+/// reference) and the frames grabbed.
+///
+/// Errors: the lens's and the camera's; a refocus ending at the edge of its window
+/// (`search_half_width_ma`, named with the temperature and the grid current).
+pub fn refocus_step<L: Lens, C: Camera>(
+    lens: &mut L,
+    camera: &mut C,
+    series: &mut Series,
+    t_c: f64,
+    options: &ProcedureOptions,
+) -> Result<(ThermalSample, usize)> {
+    let e0 = series.e0_ma;
+    if series.reference_ma.is_none() {
+        lens.set_current_ma(e0).and_then(|_| lens.current_ma()).map_err(Error::lens)?;
+        camera.place_board_in_focus()?;
+    }
+    let t_before = lens.temperature_c().map_err(Error::lens)?;
+    let window = [series.last_ma - options.search_half_width_ma, series.last_ma + options.search_half_width_ma];
+    let af = AutofocusOptions {
+        range_ma: window,
+        coarse_points: options.coarse_points,
+        max_evaluations: options.max_frames,
+        tolerance_ma: options.tolerance_ma,
+    };
+    let mut failure: Option<Error> = None;
+    let found = autofocus(
+        |e| {
+            // The read-back is a round trip: the driver has applied the current before
+            // the frame is grabbed (real rigs add the lens's settling time, a few ms, in
+            // `Camera::capture`).
+            let measured = lens
+                .set_current_ma(e)
+                .and_then(|_| lens.current_ma())
+                .map_err(Error::lens)
+                .and_then(|_| camera.capture())
+                .and_then(|img| sharpness(&img, options.metric));
+            measured.map_err(|err| {
+                failure = Some(err);
+                etl_core::Error::InvalidArgument { what: "frame failed" }
+            })
+        },
+        &af,
+    );
+    let found = match (found, failure) {
+        (_, Some(err)) => return Err(err),
+        (r, None) => r.map_err(Error::Core)?,
+    };
+    let edge = 0.02 * options.search_half_width_ma;
+    if (found.best_ma - window[0]).abs() < edge || (window[1] - found.best_ma).abs() < edge {
+        return Err(Error::invalid_value(
+            "search_half_width_ma",
+            options.search_half_width_ma,
+            format!(
+                "refocus at {t_c} degC for E_in {e0} mA ended at the edge of its window {window:?} mA: \
+                 widen the search (search_half_width_ma)"
+            ),
+        ));
+    }
+    // The current the driver actually holds (clamped and quantised) is the one recorded.
+    let e_set = lens.set_current_ma(found.best_ma).map_err(Error::lens)?;
+    let t_after = lens.temperature_c().map_err(Error::lens)?;
+    let e_ref = *series.reference_ma.get_or_insert(e_set);
+    series.last_ma = e_set;
+    let sample = ThermalSample { temperature_c: 0.5 * (t_before + t_after), e_in_ma: e_set, e_t_ma: e_set - e_ref };
+    Ok((sample, found.evaluations))
+}
+
 /// Runs the procedure (see the module documentation); `progress` draws a bar.
 ///
 /// Errors: bad options (named); any error of the lens, camera or climate; a refocus that
@@ -125,77 +243,18 @@ pub fn run_procedure<L: Lens, C: Camera, K: Climate>(
     options: &ProcedureOptions,
     progress: &dyn Progress,
 ) -> Result<ProcedureResult> {
-    if options.e_in_grid_ma.is_empty() || options.temperatures_c.len() < 2 {
-        let what = if options.e_in_grid_ma.is_empty() { "e_in_grid_ma" } else { "temperatures_c" };
-        return Err(Error::invalid(what, "the procedure needs at least one current and two temperatures"));
-    }
-    let widths = [("search_half_width_ma", options.search_half_width_ma), ("tolerance_ma", options.tolerance_ma)];
-    if let Some((what, x)) = widths.into_iter().find(|(_, x)| !(*x > 0.0)) {
-        return Err(Error::invalid_value(what, x, "search half width and tolerance must be positive"));
-    }
+    options.validate()?;
     let steps = options.e_in_grid_ma.len() * options.temperatures_c.len();
     progress.start(steps, "thermal");
     let mut samples = vec![];
     let mut frames = 0usize;
     for &e0 in &options.e_in_grid_ma {
-        let mut reference: Option<f64> = None;
-        let mut last = e0;
+        let mut series = Series::new(e0);
         for &t in &options.temperatures_c {
             climate.set_temperature_c(t)?;
-            if reference.is_none() {
-                lens.set_current_ma(e0).and_then(|_| lens.current_ma()).map_err(Error::lens)?;
-                camera.place_board_in_focus()?;
-            }
-            let t_before = lens.temperature_c().map_err(Error::lens)?;
-            let window = [last - options.search_half_width_ma, last + options.search_half_width_ma];
-            let af = AutofocusOptions {
-                range_ma: window,
-                coarse_points: options.coarse_points,
-                max_evaluations: options.max_frames,
-                tolerance_ma: options.tolerance_ma,
-            };
-            let mut failure: Option<Error> = None;
-            let found = autofocus(
-                |e| {
-                    // The read-back is a round trip: the driver has applied the current
-                    // before the frame is grabbed (real rigs add the lens's settling time,
-                    // a few ms, in `Camera::capture`).
-                    let measured = lens
-                        .set_current_ma(e)
-                        .and_then(|_| lens.current_ma())
-                        .map_err(Error::lens)
-                        .and_then(|_| camera.capture())
-                        .and_then(|img| sharpness(&img, options.metric));
-                    measured.map_err(|err| {
-                        failure = Some(err);
-                        etl_core::Error::InvalidArgument { what: "frame failed" }
-                    })
-                },
-                &af,
-            );
-            let found = match (found, failure) {
-                (_, Some(err)) => return Err(err),
-                (r, None) => r.map_err(Error::Core)?,
-            };
-            frames += found.evaluations;
-            let edge = 0.02 * options.search_half_width_ma;
-            if (found.best_ma - window[0]).abs() < edge || (window[1] - found.best_ma).abs() < edge {
-                return Err(Error::invalid_value(
-                    "search_half_width_ma",
-                    options.search_half_width_ma,
-                    format!(
-                        "refocus at {t} degC for E_in {e0} mA ended at the edge of its window {window:?} mA: \
-                         widen the search (--search-ma)"
-                    ),
-                ));
-            }
-            // The current the driver actually holds (clamped and quantised) is the one recorded.
-            let e_set = lens.set_current_ma(found.best_ma).map_err(Error::lens)?;
-            let t_after = lens.temperature_c().map_err(Error::lens)?;
-            let temperature_c = 0.5 * (t_before + t_after);
-            let e_ref = *reference.get_or_insert(e_set);
-            samples.push(ThermalSample { temperature_c, e_in_ma: e_set, e_t_ma: e_set - e_ref });
-            last = e_set;
+            let (sample, n) = refocus_step(lens, camera, &mut series, t, options)?;
+            samples.push(sample);
+            frames += n;
             progress.advance(1);
         }
     }

@@ -95,6 +95,7 @@ __all__ = [
     "zhang",
     "RigCamera",
     "rig_capture_offstate",
+    "rig_capture_thermal",
     "rig_capture_views",
 ]
 __version__: str
@@ -1058,7 +1059,7 @@ def rig_capture_views(
     plan: Any,
     out: Union[str, os.PathLike[str]],
     camera: Any,
-    lens: str,
+    lens: Any,
     stage: Any,
     *,
     settle_tolerance_px: float = 0.05,
@@ -1075,7 +1076,7 @@ def rig_capture_offstate(
     plan: Any,
     out: Union[str, os.PathLike[str]],
     camera: Any,
-    lens: str,
+    lens: Any,
     stage: Any,
     *,
     settle_tolerance_px: float = 0.05,
@@ -1084,4 +1085,20 @@ def rig_capture_offstate(
     seed: int = 1,
 ) -> Dict[str, Any]:
     """A plan's lens-off views captured into `out` (`etlcal.rig.capture_offstate`)."""
+    ...
+
+
+def rig_capture_thermal(
+    plan: Any,
+    out: Union[str, os.PathLike[str]],
+    camera: Any,
+    lens: Any,
+    stage: Any,
+    *,
+    settle_timeout_s: float = 10.0,
+    max_temperature_change_c: float = 0.5,
+    sim_roi: Optional[Tuple[int, int, int, int]] = None,
+    seed: int = 1,
+) -> Dict[str, Any]:
+    """A plan's temperature grid captured into `out` (`etlcal.rig.capture_thermal`)."""
     ...

@@ -144,6 +144,12 @@ impl Camera for AravisCamera {
 }
 
 impl AravisCamera {
+    /// The aravis camera (a handle to the same connection: the lens of
+    /// [`crate::lens::genicam`] shares it).
+    pub fn arv_camera(&self) -> ArvCamera {
+        self.camera.clone()
+    }
+
     /// The exposure time the camera reports, us.
     pub fn exposure_us(&self) -> Result<f64> {
         self.camera.exposure_time().map_err(glib_err(&self.name(), ErrorKind::Protocol))
@@ -156,6 +162,13 @@ impl Drop for AravisCamera {
             let _ = self.camera.stop_acquisition();
         }
     }
+}
+
+/// Opens the aravis camera `id` alone (no stream; one opening at a time, [`OPENING`]):
+/// for a GenICam lens on a camera that grabs no frames here.
+pub fn open_arv_camera(id: &str) -> Result<ArvCamera> {
+    let _one_at_a_time = OPENING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    ArvCamera::new(Some(id)).map_err(glib_err(&format!("camera aravis:{id}"), ErrorKind::LinkLost))
 }
 
 /// The ids of the GenICam cameras aravis finds on the GigE Vision and USB3 Vision

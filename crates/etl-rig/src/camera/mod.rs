@@ -1,6 +1,6 @@
 //! The [`Camera`] trait and its backends: [`files`] (a folder replayed in order), [`sim`]
 //! (the synthetic camera on the virtual lens and the simulated stage), and, behind cargo
-//! features, aravis (GenICam) and V4L2.
+//! features, aravis (GenICam) and V4L2 (`v4l2`, Linux; its formats in [`v4l2_format`]).
 //!
 //! Frames are mono, 8 or 16 bits ([`Pixels`]). A colour frame is converted to grey with
 //! the image crate's luma weights, those of ITU-R BT.709 (0.2126 R + 0.7152 G + 0.0722 B),
@@ -10,6 +10,9 @@
 pub mod aravis;
 pub mod files;
 pub mod sim;
+#[cfg(all(feature = "v4l2", target_os = "linux"))]
+pub mod v4l2;
+pub mod v4l2_format;
 
 use image::{DynamicImage, GrayImage, ImageBuffer, Luma};
 

@@ -8,6 +8,11 @@
 //! renders at E = 0 (the model's lens-off state). Exposure and gain are accepted and change
 //! nothing. Timestamps are the virtual lens's model clock, ns.
 //!
+//! A region of interest ([`SimCamera::set_roi`], `--sim-roi X Y W H`) renders only that
+//! window of the sensor (the principal point moved by its offset, as a camera's
+//! OffsetX/OffsetY do): the same pixels, `W x H` of them; a temperature capture, which
+//! needs sharpness and not the whole board, runs many times faster on a small window.
+//!
 //! A frame-level test double as well: [`SimCamera::disconnect_after`] makes it lose its
 //! link after a number of frames, as an unplugged camera does.
 
@@ -34,13 +39,17 @@ pub struct SimCamera {
     frames: u64,
     seed: u64,
     disconnect_after: Option<u64>,
+    roi: Option<[u32; 4]>,
 }
+
+/// The smallest region of interest, px (a side).
+pub const MIN_ROI_PX: u32 = 16;
 
 impl SimCamera {
     /// The camera of the module docs on `world` through the virtual lens `lens`; `seed`
     /// seeds the noise of each frame (with the frame's number).
     pub fn new(world: SimWorld, lens: VirtualDevice, seed: u64) -> SimCamera {
-        SimCamera { world, lens, truth: CameraModel::paper_rig(), frames: 0, seed, disconnect_after: None }
+        SimCamera { world, lens, truth: CameraModel::paper_rig(), frames: 0, seed, disconnect_after: None, roi: None }
     }
 
     /// The true camera of the simulated rig (the paper rig's, in its own world frame).
@@ -53,6 +62,37 @@ impl SimCamera {
         self.disconnect_after = Some(self.frames + frames);
     }
 
+    /// Renders only the window `[x, y, width, height]` of the sensor, px (module docs).
+    ///
+    /// Errors: a window not inside the 1936 x 1458 sensor or under [`MIN_ROI_PX`] a side.
+    pub fn set_roi(&mut self, roi: [u32; 4]) -> Result<()> {
+        let [x, y, w, h] = roi;
+        let [sw, sh] = CameraModel::PAPER_IMAGE_SIZE;
+        let inside = u64::from(x) + u64::from(w) <= u64::from(sw) && u64::from(y) + u64::from(h) <= u64::from(sh);
+        if !(inside && w >= MIN_ROI_PX && h >= MIN_ROI_PX) {
+            let message = format!(
+                "region of interest x {x}, y {y}, {w} x {h} px is not inside the {sw} x {sh} px sensor with sides of at least {MIN_ROI_PX} px"
+            );
+            return Err(Error::device(self.name(), ErrorKind::InvalidInput, message));
+        }
+        self.roi = Some(roi);
+        Ok(())
+    }
+
+    /// The rendered image's size, px (the region of interest's, or the sensor's).
+    fn image_size(&self) -> [u32; 2] {
+        self.roi.map_or(CameraModel::PAPER_IMAGE_SIZE, |[_, _, w, h]| [w, h])
+    }
+
+    /// `cam` seen through the region of interest: the principal point moved by its offset.
+    fn windowed(&self, mut cam: CameraModel) -> CameraModel {
+        if let Some([x, y, _, _]) = self.roi {
+            cam.principal_point[0] -= f64::from(x);
+            cam.principal_point[1] -= f64::from(y);
+        }
+        cam
+    }
+
     /// The camera in the frame of a ChArUco `board` (OpenCV's origin, one square before
     /// the paper board's first inner corner), or as it is for a checkerboard.
     fn in_board_frame(cam: &CameraModel, board: &etl_formats::Board) -> CameraModel {
@@ -63,7 +103,7 @@ impl SimCamera {
     }
 
     fn scene(&self, e_com_ma: f64) -> Result<(Scene, Optics)> {
-        let size = CameraModel::PAPER_IMAGE_SIZE;
+        let size = self.image_size();
         match self.world.view() {
             (Some((k, board)), _, _) => {
                 let poses = etl_sim::simulate::lens_off_poses(&self.truth);
@@ -73,11 +113,13 @@ impl SimCamera {
                     aperture_mm: LENS_OFF_APERTURE_MM,
                     base_sigma_px: 0.0,
                 };
-                Ok((Scene::new(Self::in_board_frame(&pose, &board), e_com_ma, board, 0.0, size), optics))
+                let cam = self.windowed(Self::in_board_frame(&pose, &board));
+                Ok((Scene::new(cam, e_com_ma, board, 0.0, size), optics))
             }
             (None, board, z_mm) => {
                 let optics = Optics::paper_focus(&self.truth, e_com_ma, APERTURE_MM);
-                Ok((Scene::new(Self::in_board_frame(&self.truth, &board), e_com_ma, board, z_mm, size), optics))
+                let cam = self.windowed(Self::in_board_frame(&self.truth, &board));
+                Ok((Scene::new(cam, e_com_ma, board, z_mm, size), optics))
             }
         }
     }
@@ -142,7 +184,7 @@ impl Camera for SimCamera {
         Ok(CameraInfo {
             spec: "sim".into(),
             model: "etlcal synthetic camera (paper rig)".into(),
-            image_size: CameraModel::PAPER_IMAGE_SIZE,
+            image_size: self.image_size(),
         })
     }
 }

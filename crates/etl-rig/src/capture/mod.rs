@@ -1,6 +1,8 @@
 //! The capture procedures: the ETL views of a plan ([`capture_views`], lens-off views
 //! first when the plan asks for them) and the lens-off views alone ([`capture_offstate`]),
-//! each writing `DIR/dataset.json` and its images resumably ([`store`]).
+//! each writing `DIR/dataset.json` and its images resumably ([`store`]); the temperature
+//! procedure ([`capture_thermal`], its own module [`thermal`]), writing the table and the
+//! fitted surface.
 //!
 //! One ETL view, in order:
 //! 1. the stage moves to the plan's position (the position read back is recorded);
@@ -26,6 +28,9 @@
 
 pub mod settle;
 pub mod store;
+pub mod thermal;
+
+pub use thermal::{capture_thermal, ThermalReport};
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -233,7 +238,8 @@ fn focus_search(rig: &mut Rig, options: &CaptureOptions) -> Result<f64> {
             let measured = rig
                 .lens
                 .approach_ma(e)
-                .and_then(|_| settle::settle_on_sharpness(rig.camera.as_mut(), options, &lens_name));
+                .and_then(|_| settle::settle_on_sharpness(rig.camera.as_mut(), options, &lens_name))
+                .map(|(_, s)| s);
             measured.map_err(|err| {
                 failure = Some(err);
                 etl_core::Error::InvalidArgument { what: "autofocus evaluation failed" }

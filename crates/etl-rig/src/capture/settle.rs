@@ -108,8 +108,8 @@ pub fn frame_sharpness(pixels: &Pixels) -> etl_formats::Result<f64> {
 }
 
 /// Grabs frames until two consecutive sharpness values agree (module docs); returns the
-/// last sharpness.
-pub fn settle_on_sharpness(camera: &mut dyn Camera, options: &CaptureOptions, lens: &str) -> Result<f64> {
+/// last frame and its sharpness.
+pub fn settle_on_sharpness(camera: &mut dyn Camera, options: &CaptureOptions, lens: &str) -> Result<(Frame, f64)> {
     let start = Instant::now();
     let mut previous: Option<f64> = None;
     loop {
@@ -117,7 +117,7 @@ pub fn settle_on_sharpness(camera: &mut dyn Camera, options: &CaptureOptions, le
         let s = frame_sharpness(&frame.pixels)?;
         if let Some(p) = previous {
             if (s - p).abs() <= SHARPNESS_TOLERANCE * p.abs().max(s.abs()) {
-                return Ok(s);
+                return Ok((frame, s));
             }
         }
         previous = Some(s);

@@ -34,6 +34,7 @@ fn spec() -> RigSpec {
         lens: LensSpec::Virtual,
         stage: StageSpec::Sim,
         sim_seed: 3,
+        sim_roi: None,
         virtual_lens: paper_virtual_lens(),
     }
 }

@@ -9,6 +9,7 @@ mod architecture;
 mod cli_board;
 mod cli_calibrate;
 mod cli_capture;
+mod cli_capture_thermal;
 mod cli_conventions;
 mod cli_dataset;
 mod cli_detect;

@@ -1,6 +1,8 @@
 //! The lens of a rig: etl-core's [`Lens`] trait over the Optotune Lens Driver 4 client
-//! (`ld4:PORT`) or the virtual lens (`virtual`: served on a pseudo-terminal and driven
-//! through the same serial client, as `etlcal lens --virtual` does), named for errors.
+//! (`ld4:PORT`), the virtual lens (`virtual`: served on a pseudo-terminal and driven
+//! through the same serial client, as `etlcal lens --virtual` does), a GenICam camera's
+//! lens features (`genicam:NAME`, [`genicam`], cargo feature `aravis`) or any driver
+//! ([`RigLens::from_driver`]), named for errors.
 //!
 //! A current is always approached from below ([`RigLens::approach_ma`]): the lens first
 //! goes [`APPROACH_MA`] under the target, then to it, so that every view sits on the
@@ -17,6 +19,9 @@ use etl_hw::HwError;
 use crate::error::{Error, Result};
 use crate::spec::LensSpec;
 
+#[cfg(feature = "aravis")]
+pub mod genicam;
+
 /// How far below a target current the lens goes first, mA (larger than the published
 /// hysteresis widths of shape-changing-polymer lenses, a few mA).
 pub const APPROACH_MA: f64 = 10.0;
@@ -24,7 +29,7 @@ pub const APPROACH_MA: f64 = 10.0;
 /// A lens with its name.
 pub struct RigLens {
     name: String,
-    lens: Box<dyn Lens<Error = HwError>>,
+    lens: Box<dyn Lens<Error = Error>>,
     limits_ma: [f64; 2],
     // Kept alive while the client talks to it (the virtual lens's server).
     virtual_lens: Option<VirtualLens>,
@@ -41,15 +46,26 @@ impl RigLens {
                 (v.path().to_owned(), Some(v))
             }
             LensSpec::Ld4(p) => (p.clone(), None),
+            LensSpec::Genicam(g) => return open_genicam(g, &name),
         };
         let client = LensClient::open(&path, OpenOptions::default()).map_err(|e| Error::lens(&name, e))?;
         let limits_ma = client.limits_ma();
-        Ok(RigLens { name, lens: Box::new(client), limits_ma, virtual_lens, shaper: None })
+        let lens = Box::new(Named { name: name.clone(), lens: Box::new(client) });
+        Ok(RigLens { name, lens, limits_ma, virtual_lens, shaper: None })
     }
 
-    /// Any lens behind the trait (a test double, another driver), named `name`, with
-    /// its driver's limits `[lo, hi]` mA.
+    /// Any lens behind the trait with etl-hw's errors (a test double, another serial
+    /// driver), named `name`, with its driver's limits `[lo, hi]` mA; its errors are led by
+    /// the name.
     pub fn from_lens(name: impl Into<String>, lens: Box<dyn Lens<Error = HwError>>, limits_ma: [f64; 2]) -> RigLens {
+        let name = name.into();
+        let lens = Box::new(Named { name: name.clone(), lens });
+        RigLens { name, lens, limits_ma, virtual_lens: None, shaper: None }
+    }
+
+    /// A driver whose errors are the rig's, each naming its device already (a Python
+    /// object, a GenICam camera's lens), named `name`, with limits `[lo, hi]` mA.
+    pub fn from_driver(name: impl Into<String>, lens: Box<dyn Lens<Error = Error>>, limits_ma: [f64; 2]) -> RigLens {
         RigLens { name: name.into(), lens, limits_ma, virtual_lens: None, shaper: None }
     }
 
@@ -75,7 +91,7 @@ impl RigLens {
 
     /// Commands `e_in_ma`; returns the current commanded (clamped, quantised), mA.
     pub fn set_current_ma(&mut self, e_in_ma: f64) -> Result<f64> {
-        self.lens.set_current_ma(e_in_ma).map_err(|e| Error::lens(&self.name, e))
+        self.lens.set_current_ma(e_in_ma)
     }
 
     /// Splits every approach's last step by `shaper` (None: plain steps).
@@ -95,12 +111,52 @@ impl RigLens {
 
     /// The lens temperature, degC.
     pub fn temperature_c(&mut self) -> Result<f64> {
-        self.lens.temperature_c().map_err(|e| Error::lens(&self.name, e))
+        self.lens.temperature_c()
     }
 
     /// The current the driver is at, mA.
     pub fn current_ma(&mut self) -> Result<f64> {
+        self.lens.current_ma()
+    }
+}
+
+#[cfg(feature = "aravis")]
+fn open_genicam(spec: &crate::spec::GenicamLensSpec, _name: &str) -> Result<RigLens> {
+    RigLens::genicam(genicam::GenicamLens::open(spec)?)
+}
+
+#[cfg(not(feature = "aravis"))]
+fn open_genicam(_spec: &crate::spec::GenicamLensSpec, name: &str) -> Result<RigLens> {
+    let message =
+        "this etlcal was built without the aravis feature (cargo install --path crates/etlcal --features aravis)";
+    Err(Error::device(name, crate::error::ErrorKind::InvalidInput, message))
+}
+
+#[cfg(feature = "aravis")]
+impl RigLens {
+    /// The lens of a GenICam camera, its limits the command feature's bounds.
+    pub fn genicam(lens: genicam::GenicamLens) -> Result<RigLens> {
+        let limits_ma = lens.limits_ma()?;
+        Ok(RigLens::from_driver(lens.name().to_owned(), Box::new(lens), limits_ma))
+    }
+}
+
+/// An etl-hw lens whose errors become the rig's, led by the lens's name.
+struct Named {
+    name: String,
+    lens: Box<dyn Lens<Error = HwError>>,
+}
+
+impl Lens for Named {
+    type Error = Error;
+    fn set_current_ma(&mut self, e_in_ma: f64) -> Result<f64> {
+        self.lens.set_current_ma(e_in_ma).map_err(|e| Error::lens(&self.name, e))
+    }
+    fn current_ma(&mut self) -> Result<f64> {
         self.lens.current_ma().map_err(|e| Error::lens(&self.name, e))
+    }
+    fn temperature_c(&mut self) -> Result<f64> {
+        self.lens.temperature_c().map_err(|e| Error::lens(&self.name, e))
     }
 }
 
