@@ -9,6 +9,7 @@ pub mod diff;
 pub mod lens_dynamics;
 pub mod pipeline;
 pub mod request;
+pub mod rig_calibration;
 pub mod robust;
 pub mod stereo;
 pub mod thermal_calibration;
