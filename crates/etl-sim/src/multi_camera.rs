@@ -17,10 +17,13 @@
 //! k focuses on the board: its compensated current E_kj is the paper lens's focus law
 //! ([`crate::rig::focus_law_current_ma`]) at the camera depth of the board's centre,
 //! recorded while the lens really runs at E_kj + dE_kj (its own current error). Each
+//! camera's lens has its own focus law: the paper lens's at the depth mapped affinely
+//! from the camera's depths of the board's centre at the ends of the travel onto camera
+//! 0's ([`focus_current_ma`]), so that every camera sweeps the paper rig's currents. Each
 //! physical corner sits off its nominal X, Y by the corner noise (the same for every
 //! camera); each observed pixel carries the pixel noise. A camera takes part in a view
 //! when at least [`MIN_POINTS`] corners fall in its image at a current inside the paper
-//! rig's range of currents. Each camera has the 10 lens-off views of the paper rig
+//! rig's range of currents (within [`E_MARGIN_MA`]). Each camera has the 10 lens-off views of the paper rig
 //! ([`crate::simulate::lens_off_views_of`]) for its A0.
 //!
 //! The extrinsics of camera k relative to camera 0 (X_k = R X_0 + T) are
@@ -32,7 +35,7 @@ use etl_core::model::{CameraModel, DistortionA, FocalPoly, MovingCentre};
 use etl_core::thermal::ThermalSurface;
 use etl_formats::board::Board;
 use etl_formats::calibration::Calibration;
-use etl_formats::rig::{RigCamera, RigExtrinsics, RigFile};
+use etl_formats::rig::{relative_pose, RigCamera, RigExtrinsics, RigFile};
 use etl_formats::rig_dataset::{points_of, RigDataset, RigDatasetCamera, RigOffstateShot, RigOffstateView, RigShot, RigView};
 use etl_formats::{Error, Result};
 use rand::SeedableRng;
@@ -51,6 +54,9 @@ pub const MIN_POINTS: usize = 12;
 /// view over the whole travel.
 pub const MULTI_CAMERA_BOARD: StageBoard =
     StageBoard { inner_corners: [41, 33], square_mm: 1.5, origin_mm: [-20.25, -15.75] };
+/// How far a camera's current may leave the paper rig's range of currents, mA (its lens's
+/// offset, [`focus_current_ma`]).
+pub const E_MARGIN_MA: f64 = 5.0;
 /// The most cameras a simulated rig may have.
 pub const MAX_CAMERAS: usize = 64;
 
@@ -183,14 +189,6 @@ pub fn camera_poses(design: &MultiCameraDesign) -> Vec<([f64; 3], [f64; 3])> {
     poses
 }
 
-/// The extrinsics (om, T) of camera pose `k` relative to camera pose `zero` (module docs).
-pub fn relative_pose(zero: ([f64; 3], [f64; 3]), k: ([f64; 3], [f64; 3])) -> ([f64; 3], [f64; 3]) {
-    let (r0, rk) = (rodrigues_to_matrix(zero.0), rodrigues_to_matrix(k.0));
-    let r: Mat3 = core::array::from_fn(|i| core::array::from_fn(|j| (0..3).map(|m| rk[i][m] * r0[j][m]).sum()));
-    let rt0 = mat_vec(&r, zero.1);
-    (matrix_to_rodrigues(&r), sub(k.1, rt0))
-}
-
 /// The visible corners of the rig's board at stage position `z_mm` for `cam` at current
 /// `e_ma` (the noise-free pixel in the image), as indices into the board's corners.
 fn visible(cam: &CameraModel, image_size: [u32; 2], z_mm: f64, e_ma: f64) -> Vec<usize> {
@@ -218,20 +216,32 @@ pub fn multi_camera_board() -> Result<Board> {
     Board::checkerboard(MULTI_CAMERA_BOARD.inner_corners, MULTI_CAMERA_BOARD.square_mm)
 }
 
+/// The current (mA) at which camera `cam` (the rig's camera k of n) focuses the board's
+/// centre at stage position `z_mm`: the paper lens's focus law ([`focus_law_current_ma`])
+/// at the depth d' = d0(z0) + (d - d(z0)) (d0(z1) - d0(z0)) / (d(z1) - d(z0)), d the
+/// camera's depth of the board's centre, d0 camera 0's (`zero`), z0, z1 the ends of
+/// [`STAGE_TRAVEL_MM`], plus 4 s_k mA (its lens's own offset, s_k the camera's factor).
+pub fn focus_current_ma(cam: &CameraModel, zero: &CameraModel, (k, n): (usize, usize), z_mm: f64) -> f64 {
+    let depth = |m: &CameraModel, z: f64| m.world_to_camera([0.0, 0.0, z])[2];
+    let [z0, z1] = STAGE_TRAVEL_MM;
+    let (a0, a1) = (depth(zero, z0), depth(zero, z1));
+    let (b0, b1) = (depth(cam, z0), depth(cam, z1));
+    focus_law_current_ma(a0 + (depth(cam, z_mm) - b0) * (a1 - a0) / (b1 - b0)) + 4.0 * spread(k, n)
+}
+
 /// Camera `cam`'s record of the stage at `z` (really at `z + dz`), focused on the board's
 /// centre: its entry (or `None` when it sees too little of the board or the current
 /// leaves the paper rig's range) and its current error.
 fn shoot(
-    (k, cam): (usize, &CameraModel),
+    (k, n, cam, zero): (usize, usize, &CameraModel, &CameraModel),
     (z, dz): (f64, f64),
     corner_noise: &[[f64; 2]],
     noise: &NoiseModel,
     rng: &mut ChaCha8Rng,
 ) -> Option<(RigShot, f64)> {
     let size = CameraModel::PAPER_IMAGE_SIZE;
-    let depth = cam.world_to_camera([0.0, 0.0, z])[2];
-    let e = focus_law_current_ma(depth);
-    let (lo, hi) = (PAPER_E_COM_MA[0], PAPER_E_COM_MA[PAPER_E_COM_MA.len() - 1]);
+    let e = focus_current_ma(cam, zero, (k, n), z);
+    let (lo, hi) = (PAPER_E_COM_MA[0] - E_MARGIN_MA, PAPER_E_COM_MA[PAPER_E_COM_MA.len() - 1] + E_MARGIN_MA);
     if !(lo..=hi).contains(&e) {
         return None;
     }
@@ -283,7 +293,7 @@ pub fn simulate_multi_camera(design: &MultiCameraDesign, noise: &NoiseModel, see
             (0..corners).map(|_| [gauss(noise.xy_mm, &mut rng), gauss(noise.xy_mm, &mut rng)]).collect();
         let mut view = RigView { z_w_mm: z, cameras: vec![] };
         for (k, cam) in truths.iter().enumerate() {
-            if let Some((shot, de)) = shoot((k, cam), (z, dz), &corner_noise, noise, &mut rng) {
+            if let Some((shot, de)) = shoot((k, n, cam, &truths[0]), (z, dz), &corner_noise, noise, &mut rng) {
                 view.cameras.push(shot);
                 true_de_ma[k][j] = Some(de);
             }

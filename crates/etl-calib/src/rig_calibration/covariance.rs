@@ -16,6 +16,7 @@
 //! (step 1e-6 rad / 1e-6 mm: the pose is smooth, the differences exact to ~1e-9).
 
 use etl_formats::{Error, Result};
+use etl_formats::rig::relative_pose;
 use nalgebra::{DMatrix, DVector};
 
 use super::normal::{JointProblem, State};
@@ -74,7 +75,7 @@ pub(super) fn extrinsics_covariance(
     (p0, pk): ([f64; 6], [f64; 6]),
 ) -> [[f64; 6]; 6] {
     let rel = |a: [f64; 6], b: [f64; 6]| {
-        let (om, t) = relative_pose(a, b);
+        let (om, t) = relative_pose(pose_pair(a), pose_pair(b));
         [om[0], om[1], om[2], t[0], t[1], t[2]]
     };
     let mut jac = DMatrix::zeros(6, 12);
@@ -99,12 +100,7 @@ pub(super) fn extrinsics_covariance(
     core::array::from_fn(|i| core::array::from_fn(|j| 0.5 * (e[(i, j)] + e[(j, i)])))
 }
 
-/// (om, T) of the pose `b` = (om_k, t_k) relative to `a` = (om_0, t_0):
-/// R = R_k R_0', T = t_k - R t_0.
-pub fn relative_pose(a: [f64; 6], b: [f64; 6]) -> ([f64; 3], [f64; 3]) {
-    use etl_core::model::rotation::{mat_vec, matrix_to_rodrigues, rodrigues_to_matrix, Mat3};
-    let (r0, rk) = (rodrigues_to_matrix([a[0], a[1], a[2]]), rodrigues_to_matrix([b[0], b[1], b[2]]));
-    let r: Mat3 = core::array::from_fn(|i| core::array::from_fn(|j| (0..3).map(|m| rk[i][m] * r0[j][m]).sum()));
-    let q = mat_vec(&r, [a[3], a[4], a[5]]);
-    (matrix_to_rodrigues(&r), [b[3] - q[0], b[4] - q[1], b[5] - q[2]])
+/// A pose's six numbers (om, t) as the pair etl-formats' `relative_pose` takes.
+pub(super) fn pose_pair(p: [f64; 6]) -> ([f64; 3], [f64; 3]) {
+    ([p[0], p[1], p[2]], [p[3], p[4], p[5]])
 }

@@ -22,6 +22,8 @@ pub(super) struct Solved {
 const INITIAL_DAMPING: f64 = 1e-8;
 /// The relative decrease of the cost below which an accepted step ends the loop.
 const COST_RTOL: f64 = 1e-14;
+/// The relative change of every number below which an accepted step ends the loop.
+const XTOL: f64 = 1e-12;
 /// The damping beyond which no step can be found (the loop ends at the current state).
 const MAX_DAMPING: f64 = 1e16;
 
@@ -41,6 +43,19 @@ fn predicted(n: &Normal, sizes: &[usize], (dx, dy): (&DVector<f64>, &[DVector<f6
         p += lambda * (0..d.len()).map(|i| n.v[j][(i, i)].max(1e-12) * d[i] * d[i]).sum::<f64>();
     }
     p
+}
+
+/// Whether every number's change `dx` is below [`XTOL`] of the number (internal numbers
+/// of the state `s`): the fit has reached the rounding of the data.
+fn step_is_small(s: &State, dx: &DVector<f64>, sizes: &[usize]) -> bool {
+    let mut at = 0;
+    for (z, &p) in s.z.iter().zip(sizes) {
+        if (0..p).any(|i| dx[at + i].abs() > XTOL * z[i].abs().max(1e-12)) {
+            return false;
+        }
+        at += p;
+    }
+    true
 }
 
 /// Runs the loop from the problem's start, each step by the sparse path if `sparse`.
@@ -65,7 +80,7 @@ pub(super) fn solve(problem: &JointProblem<'_>, sparse: bool, max_iterations: us
         lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
         nu = 2.0;
         let decrease = normal.cost - cost;
-        let done = decrease <= COST_RTOL * normal.cost;
+        let done = decrease <= COST_RTOL * normal.cost || step_is_small(&state, &dx, &sizes);
         state = next;
         normal = problem.normal(&state)?;
         if done {

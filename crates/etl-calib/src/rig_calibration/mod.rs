@@ -59,17 +59,17 @@ mod result;
 mod step;
 
 pub use cameras::JointCamera;
-pub use covariance::relative_pose;
 pub use options::{LinearSolver, RigCalibrationOptions, DEFAULT_MAX_ITERATIONS, SPARSE_FROM_CAMERAS};
 pub use result::{RigCalibration, RigCameraResult};
 pub use step::JointSystem;
 
 use etl_core::calib::Estimator;
-use etl_formats::rig::RigExtrinsics;
+use etl_formats::rig::{relative_pose, RigExtrinsics};
 use etl_formats::rig_dataset::RigDataset;
 use etl_formats::Result;
 
 use self::cameras::calibrate_cameras;
+use self::covariance::pose_pair;
 use self::normal::JointProblem;
 use self::result::{joint_calibration, pose_of};
 use crate::request::{KeySpelling, Spelling};
@@ -123,7 +123,7 @@ pub fn calibrate_rig_spelled(
     let extrinsics = (1..joint.len())
         .map(|k| {
             let (pk, ik) = pose_of(&problem.model(k, &solved.state));
-            let (om, t) = relative_pose(p0, pk);
+            let (om, t) = relative_pose(pose_pair(p0), pose_pair(pk));
             let shift = |i: [usize; 6], o: usize| i.map(|x| x + o);
             let c = covariance::extrinsics_covariance(&cov, (&shift(i0, offsets[0]), &shift(ik, offsets[k])), (p0, pk));
             RigExtrinsics { camera: k, rotation_rodrigues: om, translation_mm: t, covariance: Some(c), reference_setting: Some([0.0, 0.0]) }

@@ -5,6 +5,7 @@ mod common;
 
 mod pipeline_baseline;
 mod request;
+mod rig_calibration;
 mod robust;
 mod select;
 mod stereo;
