@@ -10,12 +10,17 @@ use etl_formats::{Error, Result};
 use super::cameras::{CameraView, JointCamera};
 use super::normal::{JointProblem, Normal};
 use super::options::LinearSolver;
+use super::covariance::{extrinsics_covariance, joint_covariance};
 use super::reduced::{dense_step, sparse_step};
+use super::result::pose_of;
+use nalgebra::DMatrix;
 
 /// The errors-in-variables normal equations of a rig's points at given models (each
 /// camera's views at their recorded E_com), with every point kept.
 pub struct JointSystem {
     cameras: Vec<JointCamera>,
+    views: usize,
+    sigma_z_mm: f64,
     present: Vec<Vec<(usize, usize)>>,
     sizes: Vec<usize>,
     normal: Normal,
@@ -45,7 +50,30 @@ impl JointSystem {
         let problem = JointProblem::new(&cameras, dataset.views.len(), Some(sigma_z_mm));
         let normal = problem.normal(&problem.start())?;
         let (present, sizes) = (problem.present.clone(), problem.sizes());
-        Ok(JointSystem { cameras, present, sizes, normal })
+        Ok(JointSystem { cameras, views: dataset.views.len(), sigma_z_mm, present, sizes, normal })
+    }
+
+    /// The inverse of the Fisher information of every camera's numbers (the model's
+    /// parameters, cameras stacked, each in its layout's order) with the corrections
+    /// marginalised out: at the true models and the simulation's noise, the Cramer-Rao
+    /// bound of the joint problem (module docs of [`super`], [`super::covariance`]).
+    pub fn covariance(&self) -> Result<DMatrix<f64>> {
+        let problem = JointProblem::new(&self.cameras, self.views, Some(self.sigma_z_mm));
+        joint_covariance(&problem, &problem.start(), None)
+    }
+
+    /// Where each camera's numbers start in [`Self::covariance`].
+    pub fn offsets(&self) -> Vec<usize> {
+        self.sizes.iter().scan(0, |a, p| Some(std::mem::replace(a, *a + p))).collect()
+    }
+
+    /// The 6 x 6 covariance of camera k's extrinsics (rad, mm) from a covariance `c` of
+    /// the system's numbers ([`Self::covariance`]), at the system's models.
+    pub fn extrinsics_covariance(&self, k: usize, c: &DMatrix<f64>) -> [[f64; 6]; 6] {
+        let off = self.offsets();
+        let (p0, i0) = pose_of(&self.cameras[0].start);
+        let (pk, ik) = pose_of(&self.cameras[k].start);
+        extrinsics_covariance(c, (&i0.map(|i| i + off[0]), &ik.map(|i| i + off[k])), (p0, pk))
     }
 
     /// The number of cameras.
