@@ -178,12 +178,16 @@ fn check_points(points: &[[f64; 4]], key: &str, image_size: [u32; 2]) -> Result<
         for (&x, side) in p[..2].iter().zip(image_size) {
             let margin = PIXEL_MARGIN_IMAGES * f64::from(side);
             if !(-margin..=f64::from(side) + margin).contains(&x) {
-                let message = format!("{key} point {j}: pixel {} px is outside the image and one image size around it", crate::compact(x));
+                let message = format!(
+                    "{key} point {j}: pixel {} px is outside the image and one image size around it",
+                    crate::compact(x)
+                );
                 return Err(Error::invalid_value(what, x, message));
             }
         }
         if let Some(&x) = p[2..].iter().find(|x| !(w0..=w1).contains(*x)) {
-            let message = format!("{key} point {j}: board coordinate {} mm is outside [{w0}, {w1}] mm", crate::compact(x));
+            let message =
+                format!("{key} point {j}: board coordinate {} mm is outside [{w0}, {w1}] mm", crate::compact(x));
             return Err(Error::invalid_value(what, x, message));
         }
     }
@@ -286,10 +290,17 @@ impl RigDataset {
         let mut kinds: Vec<(ShotKind, String)> = vec![];
         for (i, v) in self.views.iter().enumerate() {
             if !v.z_w_mm.is_finite() {
-                return Err(Error::invalid_value(format!("views[{i}].z_w_mm"), v.z_w_mm, format!("views[{i}].z_w_mm is not finite")));
+                return Err(Error::invalid_value(
+                    format!("views[{i}].z_w_mm"),
+                    v.z_w_mm,
+                    format!("views[{i}].z_w_mm is not finite"),
+                ));
             }
             if v.cameras.is_empty() {
-                return Err(Error::invalid(format!("views[{i}].cameras"), format!("views[{i}].cameras: no camera saw view {i}")));
+                return Err(Error::invalid(
+                    format!("views[{i}].cameras"),
+                    format!("views[{i}].cameras: no camera saw view {i}"),
+                ));
             }
             let mut seen = vec![];
             for (c, s) in v.cameras.iter().enumerate() {
@@ -321,9 +332,11 @@ impl RigDataset {
             return Err(Error::invalid(key.clone(), message));
         }
         for k in 0..self.cameras.len() {
-            let views = self.views.iter().enumerate().filter_map(|(i, v)| {
-                v.cameras.iter().position(|s| s.camera == k).map(|c| (i, c, &v.cameras[c]))
-            });
+            let views = self
+                .views
+                .iter()
+                .enumerate()
+                .filter_map(|(i, v)| v.cameras.iter().position(|s| s.camera == k).map(|c| (i, c, &v.cameras[c])));
             let settings: Vec<(SettingKind, String)> = views
                 .map(|(i, c, s)| {
                     let kind = if s.focal_power_dpt.is_some() { SettingKind::FocalPower } else { SettingKind::Current };

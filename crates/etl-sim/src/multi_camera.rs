@@ -36,7 +36,9 @@ use etl_core::thermal::ThermalSurface;
 use etl_formats::board::Board;
 use etl_formats::calibration::Calibration;
 use etl_formats::rig::{relative_pose, RigCamera, RigExtrinsics, RigFile};
-use etl_formats::rig_dataset::{points_of, RigDataset, RigDatasetCamera, RigOffstateShot, RigOffstateView, RigShot, RigView};
+use etl_formats::rig_dataset::{
+    points_of, RigDataset, RigDatasetCamera, RigOffstateShot, RigOffstateView, RigShot, RigView,
+};
 use etl_formats::{Error, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -197,7 +199,8 @@ fn visible(cam: &CameraModel, image_size: [u32; 2], z_mm: f64, e_ma: f64) -> Vec
     let (w_max, h_max) = (f64::from(image_size[0]) - 1.0, f64::from(image_size[1]) - 1.0);
     (0..cols * rows)
         .filter(|&i| {
-            let w = [b.origin_mm[0] + b.square_mm * (i % cols) as f64, b.origin_mm[1] + b.square_mm * (i / cols) as f64];
+            let w =
+                [b.origin_mm[0] + b.square_mm * (i % cols) as f64, b.origin_mm[1] + b.square_mm * (i / cols) as f64];
             cam.project([w[0], w[1], z_mm], e_ma)
                 .is_ok_and(|p| (0.0..=w_max).contains(&p[0]) && (0.0..=h_max).contains(&p[1]))
         })
@@ -273,13 +276,20 @@ fn shoot(
 /// Simulates the rig of `design` under `noise` (its `z_mm`, `e_ma`, `px`, `xy_mm`; A0
 /// comes from the lens-off views), seeded. Errors: a design outside its ranges, a noise
 /// model outside its own.
-pub fn simulate_multi_camera(design: &MultiCameraDesign, noise: &NoiseModel, seed: u64) -> Result<MultiCameraSimulation> {
+pub fn simulate_multi_camera(
+    design: &MultiCameraDesign,
+    noise: &NoiseModel,
+    seed: u64,
+) -> Result<MultiCameraSimulation> {
     design.validate()?;
     noise.validate(|k| format!("noise.{k}"))?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let n = design.cameras;
-    let truths: Vec<CameraModel> =
-        camera_poses(design).into_iter().enumerate().map(|(k, pose)| camera_truth(k, n, design.moving_centre, pose)).collect();
+    let truths: Vec<CameraModel> = camera_poses(design)
+        .into_iter()
+        .enumerate()
+        .map(|(k, pose)| camera_truth(k, n, design.moving_centre, pose))
+        .collect();
     let size = CameraModel::PAPER_IMAGE_SIZE;
     let cameras = (0..n).map(|k| RigDatasetCamera { name: format!("cam{k}"), image_size: size, board: None }).collect();
     let mut dataset = RigDataset::new(multi_camera_board()?, cameras);
@@ -324,18 +334,30 @@ pub fn truth_rig(sim: &MultiCameraSimulation) -> RigFile {
         .iter()
         .enumerate()
         .map(|(k, m)| {
-            let e = sim.dataset.views.iter().flat_map(|v| &v.cameras).filter(|s| s.camera == k).filter_map(|s| s.e_com_ma);
+            let e =
+                sim.dataset.views.iter().flat_map(|v| &v.cameras).filter(|s| s.camera == k).filter_map(|s| s.e_com_ma);
             let (lo, hi) = e.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), e| (lo.min(e), hi.max(e)));
             let c = &sim.dataset.cameras[k];
             let calibration = Calibration::from_model(m, c.image_size, [lo, hi]);
-            RigCamera { name: c.name.clone(), image_size: c.image_size, calibration: Some(Box::new(calibration)), calibration_path: None }
+            RigCamera {
+                name: c.name.clone(),
+                image_size: c.image_size,
+                calibration: Some(Box::new(calibration)),
+                calibration_path: None,
+            }
         })
         .collect();
     let pose = |m: &CameraModel| (m.rotation_rodrigues, m.translation_mm);
     let extrinsics = (1..sim.truths.len())
         .map(|k| {
             let (om, t) = relative_pose(pose(&sim.truths[0]), pose(&sim.truths[k]));
-            RigExtrinsics { camera: k, rotation_rodrigues: om, translation_mm: t, covariance: None, reference_setting: Some([0.0, 0.0]) }
+            RigExtrinsics {
+                camera: k,
+                rotation_rodrigues: om,
+                translation_mm: t,
+                covariance: None,
+                reference_setting: Some([0.0, 0.0]),
+            }
         })
         .collect();
     RigFile::new(cameras, extrinsics)

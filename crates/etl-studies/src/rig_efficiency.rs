@@ -99,7 +99,8 @@ pub fn rig_efficiency(trials: usize, seed: u64) -> Result<RigEfficiency> {
     let bound = crlb_variances(&system, &first.truths)?;
     let truth = quantities(&first.truths);
     let priors = EivPriors { sigma_px: Some(NOISE.px), ..EivPriors::default() };
-    let options = RigCalibrationOptions { request: CalibrationRequest { priors, ..Default::default() }, ..Default::default() };
+    let options =
+        RigCalibrationOptions { request: CalibrationRequest { priors, ..Default::default() }, ..Default::default() };
     let estimates: Vec<Option<Vec<f64>>> = (0..trials as u64)
         .into_par_iter()
         .map(|t| {

@@ -103,7 +103,10 @@ fn print_summary(rig: &RigCalibration, out: &std::path::Path) {
 pub fn run(args: Args) -> Result<()> {
     let flags = &args.request;
     let thermal_file = crate::output::thermal_file(flags.thermal.as_deref());
-    crate::output::check([Some(args.dataset.as_path()), flags.a0.as_deref(), thermal_file], &[Output::File(&args.out)])?;
+    crate::output::check(
+        [Some(args.dataset.as_path()), flags.a0.as_deref(), thermal_file],
+        &[Output::File(&args.out)],
+    )?;
     let spelling = flags.spelling();
     let request = flags.request()?;
     request.validate(&spelling)?;

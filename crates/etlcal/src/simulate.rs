@@ -155,7 +155,8 @@ fn run_rig(args: &Args, cameras: usize) -> Result<()> {
         truth_rig(&sim).save(&staging.join("truth_rig.json"))?;
         Ok(())
     })?;
-    let points: usize = sim.dataset.views.iter().flat_map(|v| &v.cameras).map(|s| s.points.as_ref().map_or(0, Vec::len)).sum();
+    let points: usize =
+        sim.dataset.views.iter().flat_map(|v| &v.cameras).map(|s| s.points.as_ref().map_or(0, Vec::len)).sum();
     if args.json {
         print_json(&json!({"cameras": cameras, "views": sim.dataset.views.len(), "points": points, "out": args.out}));
     } else {

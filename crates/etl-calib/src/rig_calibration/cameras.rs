@@ -51,7 +51,10 @@ fn check_supported(dataset: &RigDataset, options: &RigCalibrationOptions) -> Res
         ));
     }
     if options.request.method == Method::PerSetting {
-        return Err(Error::invalid("method", "method: a rig is calibrated by the proposed method only, not per setting"));
+        return Err(Error::invalid(
+            "method",
+            "method: a rig is calibrated by the proposed method only, not per setting",
+        ));
     }
     if options.request.robust.is_some() {
         return Err(Error::invalid(
@@ -63,7 +66,12 @@ fn check_supported(dataset: &RigDataset, options: &RigCalibrationOptions) -> Res
 }
 
 /// Camera `k` calibrated on its own, with its inlier views. Errors name the camera.
-fn camera_part(dataset: &RigDataset, k: usize, options: &RigCalibrationOptions, spelling: &dyn Spelling) -> Result<CameraPart> {
+fn camera_part(
+    dataset: &RigDataset,
+    k: usize,
+    options: &RigCalibrationOptions,
+    spelling: &dyn Spelling,
+) -> Result<CameraPart> {
     let name = dataset.cameras[k].name.clone();
     let split = dataset.camera_observations(k);
     let obs = &split.observations;

@@ -15,8 +15,8 @@
 //! om_k, t_k): cov(e_k) = J C_x J' with J (6 x 12) their Jacobian, by central differences
 //! (step 1e-6 rad / 1e-6 mm: the pose is smooth, the differences exact to ~1e-9).
 
-use etl_formats::{Error, Result};
 use etl_formats::rig::relative_pose;
+use etl_formats::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
 use super::normal::{JointProblem, State};
@@ -24,7 +24,11 @@ use super::reduced::{not_positive, schur_complement};
 
 /// The covariance of all numbers in the model's parameters (cameras stacked in the
 /// order of the problem, each in its layout's order).
-pub(super) fn joint_covariance(problem: &JointProblem<'_>, state: &State, input_noise_sigma_z_mm: Option<f64>) -> Result<DMatrix<f64>> {
+pub(super) fn joint_covariance(
+    problem: &JointProblem<'_>,
+    state: &State,
+    input_noise_sigma_z_mm: Option<f64>,
+) -> Result<DMatrix<f64>> {
     let sizes = problem.sizes();
     let total: usize = sizes.iter().sum();
     let n = problem.normal(state)?;

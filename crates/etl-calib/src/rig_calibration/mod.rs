@@ -109,7 +109,8 @@ pub fn calibrate_rig_spelled(
         let m = problem.model(k, &solved.state);
         let block = cov.view((offsets[k], offsets[k]), (sizes[k], sizes[k])).into_owned();
         let (rms_px, corrections) = problem.camera_rms(k, &solved.state)?;
-        let calibration = joint_calibration(&part.own.calibration, &m, &block, (rms_px, &corrections), solved.iterations)?;
+        let calibration =
+            joint_calibration(&part.own.calibration, &m, &block, (rms_px, &corrections), solved.iterations)?;
         let c = &dataset.cameras[k];
         cameras.push(RigCameraResult {
             name: c.name.clone(),
@@ -126,7 +127,13 @@ pub fn calibrate_rig_spelled(
             let (om, t) = relative_pose(pose_pair(p0), pose_pair(pk));
             let shift = |i: [usize; 6], o: usize| i.map(|x| x + o);
             let c = covariance::extrinsics_covariance(&cov, (&shift(i0, offsets[0]), &shift(ik, offsets[k])), (p0, pk));
-            RigExtrinsics { camera: k, rotation_rodrigues: om, translation_mm: t, covariance: Some(c), reference_setting: Some([0.0, 0.0]) }
+            RigExtrinsics {
+                camera: k,
+                rotation_rodrigues: om,
+                translation_mm: t,
+                covariance: Some(c),
+                reference_setting: Some([0.0, 0.0]),
+            }
         })
         .collect();
     Ok(RigCalibration {

@@ -127,14 +127,8 @@ impl<'a> JointProblem<'a> {
         let x = self.bases[k].to_params(&s.z[k]);
         let proj = Projector::new(&from_params(&cam.layout, &x));
         let f = 1.0 / cam.sigma_px;
-        let mut out = CameraNormal {
-            u: DMatrix::zeros(p, p),
-            g: DVector::zeros(p),
-            w: vec![],
-            v: vec![],
-            gy: vec![],
-            cost: 0.0,
-        };
+        let mut out =
+            CameraNormal { u: DMatrix::zeros(p, p), g: DVector::zeros(p), w: vec![], v: vec![], gy: vec![], cost: 0.0 };
         for (i, v) in cam.views.iter().enumerate() {
             let [dz, de] = self.corrections(k, i, s);
             let (mut wz, mut we) = (DVector::zeros(p), DVector::zeros(p));

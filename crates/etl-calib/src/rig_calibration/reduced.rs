@@ -28,10 +28,10 @@
 //!
 //! Both give the same step (a test checks it to 1e-9).
 
+use etl_formats::{Error, Result};
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
-use etl_formats::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
 use super::normal::Normal;
@@ -121,7 +121,8 @@ fn back_substitute(
         .iter()
         .enumerate()
         .map(|(j, p)| {
-            let dxj: Vec<f64> = p.iter().flat_map(|&(k, _)| dx.rows(off[k], sizes[k]).iter().copied().collect::<Vec<_>>()).collect();
+            let dxj: Vec<f64> =
+                p.iter().flat_map(|&(k, _)| dx.rows(off[k], sizes[k]).iter().copied().collect::<Vec<_>>()).collect();
             let b = -&n.gy[j] - n.w[j].transpose() * DVector::from_vec(dxj);
             solve(j, &b)
         })

@@ -134,6 +134,13 @@ pub(super) fn joint_calibration(
 pub(super) fn pose_of(m: &CameraModel) -> ([f64; 6], [usize; 6]) {
     let x = to_params(m);
     let l = m.layout();
-    let idx = [l.rotation().at(0), l.rotation().at(1), l.rotation().at(2), l.translation().at(0), l.translation().at(1), l.translation().at(2)];
+    let idx = [
+        l.rotation().at(0),
+        l.rotation().at(1),
+        l.rotation().at(2),
+        l.translation().at(0),
+        l.translation().at(1),
+        l.translation().at(2),
+    ];
     (idx.map(|i| x[i]), idx)
 }

@@ -8,9 +8,9 @@ use etl_formats::rig_dataset::RigDataset;
 use etl_formats::{Error, Result};
 
 use super::cameras::{CameraView, JointCamera};
+use super::covariance::{extrinsics_covariance, joint_covariance};
 use super::normal::{JointProblem, Normal};
 use super::options::LinearSolver;
-use super::covariance::{extrinsics_covariance, joint_covariance};
 use super::reduced::{dense_step, sparse_step};
 use super::result::pose_of;
 use nalgebra::DMatrix;
@@ -31,7 +31,12 @@ impl JointSystem {
     /// `sigma_px`, priors `sigma_z_mm` (stage) and `sigma_e_ma` (every camera's current).
     /// Errors: a model count other than the cameras', a view without `e_com_ma`, a point
     /// that does not project.
-    pub fn new(dataset: &RigDataset, models: &[CameraModel], sigma_px: f64, (sigma_z_mm, sigma_e_ma): (f64, f64)) -> Result<Self> {
+    pub fn new(
+        dataset: &RigDataset,
+        models: &[CameraModel],
+        sigma_px: f64,
+        (sigma_z_mm, sigma_e_ma): (f64, f64),
+    ) -> Result<Self> {
         if models.len() != dataset.cameras.len() {
             let message = format!("models: {} for {} cameras", models.len(), dataset.cameras.len());
             return Err(Error::invalid("models", message));
@@ -41,11 +46,21 @@ impl JointSystem {
             let mut views = vec![];
             for (j, v) in dataset.views.iter().enumerate() {
                 let Some(s) = v.cameras.iter().find(|s| s.camera == k) else { continue };
-                let e = s.e_com_ma.ok_or_else(|| Error::invalid(format!("views[{j}]"), format!("views[{j}]: no e_com_ma")))?;
-                let points = s.points.iter().flatten().map(|p| Point { world_mm: [p[2], p[3], v.z_w_mm], pixel: [p[0], p[1]] });
+                let e = s
+                    .e_com_ma
+                    .ok_or_else(|| Error::invalid(format!("views[{j}]"), format!("views[{j}]: no e_com_ma")))?;
+                let points =
+                    s.points.iter().flatten().map(|p| Point { world_mm: [p[2], p[3], v.z_w_mm], pixel: [p[0], p[1]] });
                 views.push(CameraView { view: j, e, points: points.collect() });
             }
-            cameras.push(JointCamera { views, start: *m, layout: m.layout(), sigma_px, sigma_e: sigma_e_ma, hold: ParamMask::NONE });
+            cameras.push(JointCamera {
+                views,
+                start: *m,
+                layout: m.layout(),
+                sigma_px,
+                sigma_e: sigma_e_ma,
+                hold: ParamMask::NONE,
+            });
         }
         let problem = JointProblem::new(&cameras, dataset.views.len(), Some(sigma_z_mm));
         let normal = problem.normal(&problem.start())?;

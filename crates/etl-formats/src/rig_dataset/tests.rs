@@ -55,9 +55,18 @@ fn rig_dataset_refuses_bad_files_naming_the_key() {
     let path = dir.path().join("rig_dataset.json");
     type Edit = Box<dyn Fn(&mut RigDataset)>;
     let cases: Vec<(Edit, &str)> = vec![
-        (Box::new(|d| d.views[0].cameras[1].camera = 2), "views[0].cameras[1].camera: 2 is not a camera of the rig (cameras 0..1)"),
-        (Box::new(|d| d.views[0].cameras[1].camera = 0), "views[0].cameras[1].camera: camera 0 has two entries in one view"),
-        (Box::new(|d| d.offstate_views[0].cameras[0].camera = 5), "offstate_views[0].cameras[0].camera: 5 is not a camera"),
+        (
+            Box::new(|d| d.views[0].cameras[1].camera = 2),
+            "views[0].cameras[1].camera: 2 is not a camera of the rig (cameras 0..1)",
+        ),
+        (
+            Box::new(|d| d.views[0].cameras[1].camera = 0),
+            "views[0].cameras[1].camera: camera 0 has two entries in one view",
+        ),
+        (
+            Box::new(|d| d.offstate_views[0].cameras[0].camera = 5),
+            "offstate_views[0].cameras[0].camera: 5 is not a camera",
+        ),
         (
             Box::new(|d| d.views.iter_mut().for_each(|v| v.cameras.retain(|s| s.camera == 0))),
             "cameras[1]: camera \"right\" sees the board in none of the 3 stage views",
@@ -70,7 +79,10 @@ fn rig_dataset_refuses_bad_files_naming_the_key() {
             Box::new(|d| d.views[1].cameras[0].focal_power_dpt = Some(10.0)),
             "views[1].cameras[0] gives both e_in_ma and focal_power_dpt",
         ),
-        (Box::new(|d| d.views[2].cameras[0].image = Some("a.png".into())), "views[2].cameras[0]: give exactly one of image and points"),
+        (
+            Box::new(|d| d.views[2].cameras[0].image = Some("a.png".into())),
+            "views[2].cameras[0]: give exactly one of image and points",
+        ),
         (
             Box::new(|d| {
                 d.views[2].cameras[0].points = None;
@@ -81,7 +93,10 @@ fn rig_dataset_refuses_bad_files_naming_the_key() {
         (Box::new(|d| d.cameras.truncate(1)), "cameras: a rig needs at least 2 cameras, got 1"),
         (Box::new(|d| d.cameras[1].name = "left".into()), "cameras[1].name: \"left\" is empty or not unique"),
         (Box::new(|d| d.views[0].z_w_mm = f64::NAN), "views[0].z_w_mm is not finite"),
-        (Box::new(|d| d.views[0].cameras[0].points.as_mut().unwrap()[0][0] = 1e6), "views[0].cameras[0] point 0: pixel 1e6 px"),
+        (
+            Box::new(|d| d.views[0].cameras[0].points.as_mut().unwrap()[0][0] = 1e6),
+            "views[0].cameras[0] point 0: pixel 1e6 px",
+        ),
         (Box::new(|d| d.views[1].cameras.clear()), "views[1].cameras: no camera saw view 1"),
         (Box::new(|d| d.views.clear()), "views: the rig dataset holds no stage views"),
     ];

@@ -47,8 +47,7 @@ fn the_stage_error_is_shared_and_the_current_errors_are_each_cameras() {
     assert_eq!(sim.true_dz_mm.len(), 15);
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     assert!(rms(&sim.true_dz_mm) > 0.003 && rms(&sim.true_dz_mm) < 0.03);
-    let both: Vec<(f64, f64)> =
-        (0..15).filter_map(|j| Some((sim.true_de_ma[0][j]?, sim.true_de_ma[1][j]?))).collect();
+    let both: Vec<(f64, f64)> = (0..15).filter_map(|j| Some((sim.true_de_ma[0][j]?, sim.true_de_ma[1][j]?))).collect();
     assert!(both.len() >= 5);
     assert!(both.iter().all(|(a, b)| a != b));
 }

@@ -21,12 +21,22 @@ fn simulate(dir: &Path) -> Value {
 fn calibrate_rig_recovers_the_simulated_extrinsics() {
     let dir = tempfile::tempdir().unwrap();
     simulate(dir.path());
-    let truth: Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("truth_rig.json")).unwrap()).unwrap();
+    let truth: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("truth_rig.json")).unwrap()).unwrap();
     let dataset = dir.path().join("rig_dataset.json");
     let mut results = vec![];
     for solver in ["dense", "sparse"] {
         let out = dir.path().join(format!("out/{solver}/rig.json"));
-        let args = ["calibrate-rig", "--dataset", dataset.to_str().unwrap(), "--out", out.to_str().unwrap(), "--solver", solver, "--json"];
+        let args = [
+            "calibrate-rig",
+            "--dataset",
+            dataset.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--solver",
+            solver,
+            "--json",
+        ];
         let (code, stdout, stderr) = etlcal_run(&args);
         assert_eq!(code, 0, "{stderr}");
         let v: Value = serde_json::from_str(&stdout).unwrap();
@@ -58,7 +68,10 @@ fn calibrate_rig_refuses_bad_rig_datasets() {
     let good = simulate(dir.path());
     type Edit = fn(&mut Value);
     let cases: [(Edit, &str); 5] = [
-        (|d| d["views"][0]["cameras"][0]["camera"] = 7.into(), "views[0].cameras[0].camera: 7 is not a camera of the rig"),
+        (
+            |d| d["views"][0]["cameras"][0]["camera"] = 7.into(),
+            "views[0].cameras[0].camera: 7 is not a camera of the rig",
+        ),
         (
             |d| {
                 for v in d["views"].as_array_mut().unwrap() {
@@ -72,7 +85,10 @@ fn calibrate_rig_refuses_bad_rig_datasets() {
             |d| d["cameras"][1]["board"] = serde_json::json!({"inner_corners": [9, 6], "square_mm": 2.0}),
             "cameras[1].board: camera \"cam1\" names another board than the rig's",
         ),
-        (|d| d["views"][2]["cameras"][1]["focal_power_dpt"] = 10.0.into(), "views[2].cameras[1] gives both e_in_ma and focal_power_dpt"),
+        (
+            |d| d["views"][2]["cameras"][1]["focal_power_dpt"] = 10.0.into(),
+            "views[2].cameras[1] gives both e_in_ma and focal_power_dpt",
+        ),
         (
             |d| {
                 let s = &mut d["views"][1]["cameras"][0];
