@@ -23,7 +23,7 @@ use etl_formats::{Error, Result};
 /// The linear solver of `--solver`.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolverArg {
-    /// Dense below 16 cameras, sparse from 16 on (the benchmark's crossover).
+    /// Dense below 12 cameras, sparse from 12 on (the benchmark's crossover).
     Auto,
     /// nalgebra's dense Cholesky of the Schur complement over all cameras' numbers.
     Dense,

@@ -20,7 +20,7 @@ pub enum LinearSolver {
 
 /// The fewest cameras from which [`LinearSolver::Auto`] takes the sparse path: the
 /// benchmark's crossover (docs/BENCHMARKS.md, `rig_reduced_system`).
-pub const SPARSE_FROM_CAMERAS: usize = 16;
+pub const SPARSE_FROM_CAMERAS: usize = 12;
 
 impl LinearSolver {
     /// Whether a rig of `cameras` cameras is solved by the sparse path.
