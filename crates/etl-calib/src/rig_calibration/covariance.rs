@@ -32,7 +32,7 @@ pub(super) fn joint_covariance(
     let sizes = problem.sizes();
     let total: usize = sizes.iter().sum();
     let n = problem.normal(state)?;
-    let (schur, _, _) = schur_complement(&n, &sizes, &problem.present, 0.0)?;
+    let schur = schur_complement(&n, &sizes, &problem.present, 0.0)?.s;
     let mut cz = schur.cholesky().ok_or_else(not_positive)?.inverse();
     if let (false, Some(sz)) = (problem.eiv(), input_noise_sigma_z_mm) {
         let with_corrections = JointProblem { sigma_z_mm: Some(sz), ..problem.clone() };

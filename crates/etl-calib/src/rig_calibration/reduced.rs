@@ -55,14 +55,21 @@ pub(super) fn not_positive() -> Error {
     Error::Core(etl_core::Error::Degenerate { what: "the rig's reduced system is not positive definite" })
 }
 
-/// The damped Schur complement S, its right-hand side and each view's damped V_j^-1 (the
-/// dense path's system; `present`: per view the cameras present).
+/// The dense path's system: the damped Schur complement S, its right-hand side and each
+/// view's damped V_j^-1.
+pub(super) struct Schur {
+    pub s: DMatrix<f64>,
+    pub rhs: DVector<f64>,
+    pub v_inverses: Vec<DMatrix<f64>>,
+}
+
+/// The dense path's system ([`Schur`]; `present`: per view the cameras present).
 pub(super) fn schur_complement(
     n: &Normal,
     sizes: &[usize],
     present: &[Vec<(usize, usize)>],
     lambda: f64,
-) -> Result<(DMatrix<f64>, DVector<f64>, Vec<DMatrix<f64>>)> {
+) -> Result<Schur> {
     let off = offsets(sizes);
     let total: usize = sizes.iter().sum();
     let mut s = DMatrix::zeros(total, total);
@@ -89,7 +96,7 @@ pub(super) fn schur_complement(
         }
         inverses.push(v_inv);
     }
-    Ok((s, rhs, inverses))
+    Ok(Schur { s, rhs, v_inverses: inverses })
 }
 
 /// The step (dx, dy) by the dense path.
@@ -99,9 +106,9 @@ pub(super) fn dense_step(
     present: &[Vec<(usize, usize)>],
     lambda: f64,
 ) -> Result<(DVector<f64>, Vec<DVector<f64>>)> {
-    let (s, rhs, inverses) = schur_complement(n, sizes, present, lambda)?;
+    let Schur { s, rhs, v_inverses } = schur_complement(n, sizes, present, lambda)?;
     let dx = s.cholesky().ok_or_else(not_positive)?.solve(&rhs);
-    let dy = back_substitute(n, sizes, present, &dx, |j, b| &inverses[j] * b);
+    let dy = back_substitute(n, sizes, present, &dx, |j, b| &v_inverses[j] * b);
     Ok((dx, dy))
 }
 
