@@ -133,3 +133,23 @@ fn calibrate_rig_refuses_the_per_setting_method_and_a_robust_loss() {
         assert!(!out.exists());
     }
 }
+
+/// `simulate --rig` refuses a rig outside its ranges in one line naming the flag, and
+/// writes nothing.
+#[test]
+fn simulate_rig_refuses_designs_outside_their_ranges() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rig");
+    for (flags, expected) in [
+        (vec!["--rig", "1"], "--rig: 1 is outside 2..=64"),
+        (vec!["--rig", "2", "--baseline-mm", "10"], "--baseline-mm 10 mm is outside [60, 150] mm"),
+        (vec!["--rig", "2", "--views", "2"], "--views: 2 is outside 3..=10000"),
+    ] {
+        let mut args = vec!["simulate", "--observations-only", "--out", out.to_str().unwrap()];
+        args.extend(flags);
+        let (code, _, stderr) = etlcal_run(&args);
+        assert_eq!(code, 1, "{stderr}");
+        assert!(stderr.contains(expected) && stderr.trim_end().lines().count() == 1, "{stderr}");
+        assert!(!out.exists());
+    }
+}
