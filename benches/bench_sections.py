@@ -157,6 +157,21 @@ def pipeline(s):
     return {"tables": {"criterion": table(["estimator", "median [95 % interval]", "target"], rows)}, "values": {}}
 
 
+def rig_reduced_system(s):
+    cams = [2, 4, 8, 12, 16]
+    ids = [f"rig_step_{k}_{n}_cameras" for n in cams for k in ("dense", "sparse")]
+    r = criterion(s, "etl-calib", "rig_reduced_system", ids)
+    rows = []
+    for n in cams:
+        d, sp = r[f"rig_step_dense_{n}_cameras"], r[f"rig_step_sparse_{n}_cameras"]
+        rows.append([str(n), str(25 * n), str(25 * n + 200), ci(d), ci(sp), ratio(d[0], sp[0]),
+                     "sparse" if sp[0] < d[0] else "dense"])
+    return {"tables": {"criterion": table(["cameras", "dense system (sum p_k)", "sparse system (+ 200 dZ_j)",
+                                            "dense (nalgebra) median [95 % interval]",
+                                            "sparse (faer) median [95 % interval]", "dense / sparse", "faster"], rows)},
+            "values": {}}
+
+
 def timed_child(args) -> tuple:
     """Wall and CPU seconds (user + system, the child's threads included) of one command."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -380,6 +395,6 @@ def python_project(s):
             "values": {"verdict": verdict(worst <= 1.5), "points": str(d["points"])}}
 
 
-SECTIONS = {f.__name__: f for f in (model, nist, bundle_adjust, pipeline, studies, checkerboard, python_bindings,
+SECTIONS = {f.__name__: f for f in (model, nist, bundle_adjust, pipeline, rig_reduced_system, studies, checkerboard, python_bindings,
                                     detection_sizes, charuco, zhang_wide, link, rendering, service, geometry,
                                     undistortion, python_project)}

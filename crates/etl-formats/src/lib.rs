@@ -63,6 +63,7 @@ pub mod optics;
 pub mod output;
 pub mod plan;
 pub mod rig;
+pub mod rig_dataset;
 pub mod thermal;
 
 pub(crate) use checks::first_not_finite;

@@ -68,6 +68,17 @@ pub struct RigExtrinsics {
     pub reference_setting: Option<[f64; 2]>,
 }
 
+/// The pose (om, T) of camera k relative to camera 0 from each camera's pose (om, t) to a
+/// shared world frame (X_c = R X_w + t): R = R_k R_0', T = t_k - R t_0, so that
+/// X_k = R X_0 + T (module docs).
+pub fn relative_pose(zero: ([f64; 3], [f64; 3]), k: ([f64; 3], [f64; 3])) -> ([f64; 3], [f64; 3]) {
+    use etl_core::model::rotation::{mat_vec, matrix_to_rodrigues, rodrigues_to_matrix, Mat3};
+    let (r0, rk) = (rodrigues_to_matrix(zero.0), rodrigues_to_matrix(k.0));
+    let r: Mat3 = core::array::from_fn(|i| core::array::from_fn(|j| (0..3).map(|m| rk[i][m] * r0[j][m]).sum()));
+    let q = mat_vec(&r, zero.1);
+    (matrix_to_rodrigues(&r), [k.1[0] - q[0], k.1[1] - q[1], k.1[2] - q[2]])
+}
+
 /// `etlcal.rig/1` (module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

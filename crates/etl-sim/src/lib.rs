@@ -4,6 +4,7 @@
 //! ([`virtual_rig`]); the printable board ([`print`]: SVG at true size, exact raster).
 
 pub mod lens_camera;
+pub mod multi_camera;
 pub mod optics;
 pub mod print;
 pub mod render;

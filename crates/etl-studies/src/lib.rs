@@ -14,6 +14,8 @@
 //!   Carlo spread of etlcal's estimates (statistical efficiency);
 //! - [`strong`]: the same on the strong-distortion rig for OpenCV's distortion family,
 //!   with the paper family's bias there (`crlb --rig strong`);
+//! - [`rig_efficiency`]: the joint calibration of a simulated 2-camera rig against the
+//!   Cramer-Rao bound of the joint problem (extrinsics and each camera's fx(E));
 //! - [`optics`]: a 2 mm move by PnP on the ray-traced rigs, the ETL model against a
 //!   per-current calibration, and ([`optics::floor`]) what any central model can reach there.
 //!
@@ -28,6 +30,7 @@ pub mod fig5;
 pub mod fig6;
 pub mod model;
 pub mod optics;
+pub mod rig_efficiency;
 mod run;
 pub mod strong;
 pub mod subsets;

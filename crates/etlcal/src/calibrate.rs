@@ -127,20 +127,33 @@ pub struct Args {
     /// A dataset of images (etlcal.dataset/1).
     #[arg(long, value_name = "FILE", conflicts_with = "observations")]
     pub dataset: Option<PathBuf>,
-    /// The method: the paper's (one calibration over all currents) or the per-setting
-    /// baseline.
-    #[arg(long, value_enum, default_value = "proposed")]
-    pub method: MethodArg,
     /// Also write the observations detected in a dataset's images here (its directory is
     /// created if missing).
     #[arg(long, value_name = "FILE", requires = "dataset")]
     pub observations_out: Option<PathBuf>,
-    /// Lens-off intrinsics (etlcal.a0/1); default: Zhang's method on the lens-off views.
-    #[arg(long, value_name = "FILE")]
-    pub a0: Option<PathBuf>,
     /// Where to write etlcal.calibration/1 (its directory is created if missing).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// The calibration's options (the model, the estimator, A0, the thermal calibration).
+    #[command(flatten)]
+    pub request: RequestFlags,
+    /// Set from the global `--json` (one JSON object on stdout).
+    #[arg(skip)]
+    pub json: bool,
+}
+
+/// The options of a calibration request, shared by `calibrate` and `calibrate-rig` (each
+/// camera of a rig is calibrated with them): they parse into an
+/// [`etl_calib::request::CalibrationRequest`].
+#[derive(clap::Args, Debug)]
+pub struct RequestFlags {
+    /// The method: the paper's (one calibration over all currents) or the per-setting
+    /// baseline.
+    #[arg(long, value_enum, default_value = "proposed")]
+    pub method: MethodArg,
+    /// Lens-off intrinsics (etlcal.a0/1); default: Zhang's method on the lens-off views.
+    #[arg(long, value_name = "FILE")]
+    pub a0: Option<PathBuf>,
     /// Bundle-adjustment estimator [default: eiv]: under the paper's noise model it reaches
     /// the Cramer-Rao bound and beats the paper's Eq. 24 (docs/RESULTS.md).
     // An Option, not a clap default, so that `--method per-setting` can refuse an
@@ -217,9 +230,6 @@ pub struct Args {
     /// assumed); kept whole in the calibration, which uses it at run time.
     #[arg(long, value_name = "FILE|paper")]
     pub thermal: Option<PathBuf>,
-    /// Set from the global `--json` (one JSON object on stdout).
-    #[arg(skip)]
-    pub json: bool,
 }
 
 /// The CLI's words for the options of a request ([`Spelling`]): `--hold-a0`,
@@ -249,9 +259,9 @@ impl Spelling for FlagSpelling {
     }
 }
 
-impl Args {
+impl RequestFlags {
     /// The spelling of this command line's refusals.
-    fn spelling(&self) -> FlagSpelling {
+    pub fn spelling(&self) -> FlagSpelling {
         FlagSpelling { huber_alias: self.huber_px.is_some() }
     }
 
@@ -341,13 +351,14 @@ pub fn run(args: Args) -> Result<()> {
     // output that is an input must be refused before the input is read.
     let mut outputs = vec![Output::File(&args.out)];
     outputs.extend(args.observations_out.as_deref().map(Output::File));
-    let thermal_file = crate::output::thermal_file(args.thermal.as_deref());
+    let flags = &args.request;
+    let thermal_file = crate::output::thermal_file(flags.thermal.as_deref());
     crate::output::check(
-        [args.observations.as_deref(), args.dataset.as_deref(), args.a0.as_deref(), thermal_file],
+        [args.observations.as_deref(), args.dataset.as_deref(), flags.a0.as_deref(), thermal_file],
         &outputs,
     )?;
-    let spelling = args.spelling();
-    let request = args.request()?;
+    let spelling = flags.spelling();
+    let request = flags.request()?;
     request.validate(&spelling)?;
     let obs = load_input(args.observations.as_deref(), args.dataset.as_deref(), !args.json)?;
     let calibrated = request.run(&obs, &spelling)?;

@@ -30,6 +30,7 @@ macro_rules! outln {
 
 pub mod board;
 pub mod calibrate;
+pub mod calibrate_rig;
 pub mod camera;
 pub mod capture;
 pub mod demo;
@@ -98,6 +99,9 @@ enum Command {
     Simulate(simulate::Args),
     /// Calibrate from corner observations: RAC, focal polynomial, distortion, bundle adjustment.
     Calibrate(calibrate::Args),
+    /// Calibrate a multi-camera ETL rig jointly from a rig dataset: every camera's numbers
+    /// and the extrinsics, with the shared stage corrections.
+    CalibrateRig(calibrate_rig::Args),
     /// Plots of a calibration (focal lengths, distortion, residuals) and an index.html.
     Report(report::Args),
     /// Monofocal calibration of a fixed-focus camera from board images (Zhang).
@@ -169,6 +173,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Demo(a) => done(demo::run(demo::Args { json, ..a })),
         Command::Simulate(a) => done(simulate::run(simulate::Args { json, ..a })),
         Command::Calibrate(a) => done(calibrate::run(calibrate::Args { json, ..a })),
+        Command::CalibrateRig(a) => done(calibrate_rig::run(calibrate_rig::Args { json, ..a })),
         Command::Report(a) => done(report::run(report::Args { json, ..a })),
         Command::Zhang(a) => done(zhang::run(zhang::Args { json, ..a })),
         Command::Stereo(a) => done(stereo::run(stereo::Args { json, ..a })),

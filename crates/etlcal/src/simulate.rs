@@ -27,6 +27,12 @@
 //! the virtual lens's 4 % residual; truth.json's `de_ma` are then each view's true
 //! focal-power error, dpt. Corners only (`--observations-only`), with the paper rig.
 //!
+//! `--rig N` simulates a rig of N cameras around one stage instead
+//! (`etl_sim::multi_camera`, with `--baseline-mm`, `--views`, `--moving-centre` and the
+//! noise flags): `rig_dataset.json` (`etlcal.rig-dataset/1`, points per camera and view,
+//! lens-off views included) and `truth_rig.json` (`etlcal.rig/1`, the true calibrations
+//! and extrinsics), corners only, for `etlcal calibrate-rig`.
+//!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
 
@@ -41,6 +47,7 @@ use etl_formats::{Error, Result};
 
 /// The names `simulate` writes into its directory.
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
+use etl_sim::multi_camera::{simulate_multi_camera, truth_rig, MultiCameraDesign};
 use etl_sim::optics::truth::{setting_truths, TRUTH_FORMAT};
 use etl_sim::optics::{procedure, OpticalRig};
 use etl_sim::simulate::focal_power::{focal_power_rig, FOCAL_POWER_TEMPERATURES_C};
@@ -86,9 +93,80 @@ pub struct Args {
     /// residual (corners only: with --observations-only).
     #[arg(long, requires = "observations_only", conflicts_with_all = ["optics", "setting_views"])]
     pub focal_power: bool,
+    /// Simulate a rig of N cameras around one stage instead (2..64; etl_sim::multi_camera):
+    /// rig_dataset.json (etlcal.rig-dataset/1, points) and truth_rig.json (etlcal.rig/1).
+    #[arg(long, value_name = "N", requires = "observations_only",
+        conflicts_with_all = ["optics", "config", "setting_views", "focal_power"])]
+    pub rig: Option<usize>,
+    /// With --rig: the distance of cameras 1.. from camera 0, mm (60..150) [default: 60].
+    #[arg(long, value_name = "MM", requires = "rig")]
+    pub baseline_mm: Option<f64>,
+    /// With --rig: the number of stage positions (3..10000) [default: 15].
+    #[arg(long, value_name = "N", requires = "rig")]
+    pub views: Option<usize>,
+    /// With --rig: every camera's centre moves with its lens setting (dz(E), u0(E), v0(E)).
+    #[arg(long, requires = "rig")]
+    pub moving_centre: bool,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
+}
+
+/// The names `simulate --rig` writes into its directory.
+const RIG_FILES: &[&str] = &["rig_dataset.json", "truth_rig.json"];
+
+/// `etlcal simulate --rig N`: the N-camera rig's points and truth.
+fn run_rig(args: &Args, cameras: usize) -> Result<()> {
+    crate::output::check([None], &[Output::Dir(&args.out)])?;
+    for (flag, value, hi, unit) in [
+        ("--stage-noise-um", args.stage_noise_um, 10_000.0, "um"),
+        ("--current-noise-ma", args.current_noise_ma, 50.0, "mA"),
+        ("--pixel-noise-px", args.pixel_noise_px, 100.0, "px"),
+    ] {
+        if let Some(v) = value {
+            etl_formats::check_range(flag, v, [0.0, hi], unit)?;
+        }
+    }
+    let paper = etl_sim::simulate::NoiseModel::PAPER;
+    let noise = etl_sim::simulate::NoiseModel {
+        z_mm: args.stage_noise_um.map_or(paper.z_mm, |um| um / 1000.0),
+        e_ma: args.current_noise_ma.unwrap_or(paper.e_ma),
+        px: args.pixel_noise_px.unwrap_or(paper.px),
+        ..paper
+    };
+    let base = MultiCameraDesign::new(cameras);
+    let design = MultiCameraDesign {
+        baseline_mm: args.baseline_mm.unwrap_or(base.baseline_mm),
+        views: args.views.unwrap_or(base.views),
+        moving_centre: args.moving_centre,
+        ..base
+    };
+    let sim = simulate_multi_camera(&design, &noise, args.seed.unwrap_or(1)).map_err(|e| {
+        let what = e.input_what().unwrap_or("").to_owned();
+        match what.as_str() {
+            "cameras" => e.rename_input("cameras", "--rig"),
+            "views" => e.rename_input("views", "--views"),
+            "baseline_mm" => e.rename_input("baseline_mm", "--baseline-mm"),
+            _ => e,
+        }
+    })?;
+    write_dir_set(&args.out, RIG_FILES, |staging| {
+        sim.dataset.save(&staging.join("rig_dataset.json"))?;
+        truth_rig(&sim).save(&staging.join("truth_rig.json"))?;
+        Ok(())
+    })?;
+    let points: usize =
+        sim.dataset.views.iter().flat_map(|v| &v.cameras).map(|s| s.points.as_ref().map_or(0, Vec::len)).sum();
+    if args.json {
+        print_json(&json!({"cameras": cameras, "views": sim.dataset.views.len(), "points": points, "out": args.out}));
+    } else {
+        outln!(
+            "wrote rig_dataset.json, truth_rig.json ({cameras} cameras, {} views, {points} points) to {}",
+            sim.dataset.views.len(),
+            args.out.display()
+        );
+    }
+    Ok(())
 }
 
 /// The configuration of the flags: `--config` (or the defaults), overridden by flags.
@@ -128,6 +206,9 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 pub fn run(args: Args) -> Result<()> {
     if let Some(optics) = &args.optics {
         return run_optics(&args, optics);
+    }
+    if let Some(cameras) = args.rig {
+        return run_rig(&args, cameras);
     }
     crate::output::check([args.config.as_deref()], &[Output::Dir(&args.out)])?;
     let config = config_from(&args)?;

@@ -6,6 +6,7 @@ mod common;
 mod pipeline_baseline;
 mod request;
 mod rig;
+mod rig_calibration;
 mod robust;
 mod select;
 mod stereo;

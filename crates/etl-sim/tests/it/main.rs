@@ -5,6 +5,7 @@ mod autofocus;
 mod focal_power;
 mod focus_law;
 mod lens_dynamics;
+mod multi_camera;
 mod optics;
 mod render;
 mod rig_images;

@@ -2,4 +2,5 @@
 //! more than running them): each module is one former test file.
 
 mod optics;
+mod rig_efficiency;
 mod study;

@@ -8,6 +8,7 @@ mod common;
 mod architecture;
 mod cli_board;
 mod cli_calibrate;
+mod cli_calibrate_rig;
 mod cli_capture;
 mod cli_capture_thermal;
 mod cli_conventions;
