@@ -1,5 +1,5 @@
 """Shared fixtures: the Rust reference values (printed by the `rust_reference` example of
-etl-py) and the `etlcal` command line, each built by cargo once per session, or taken
+etl-core) and the `etlcal` command line, each built by cargo once per session, or taken
 ready-built from the paths in ETLCAL_TEST_RUST_REFERENCE and ETLCAL_TEST_BINARY
 (scripts/test.sh passes the ones `cargo test` has just built: building them again here
 would rebuild pyo3 and a part of the workspace under another configuration)."""
@@ -22,7 +22,7 @@ def rust_reference() -> Dict[str, Any]:
         command = [built]
     else:
         cargo = shutil.which("cargo") or os.path.expanduser("~/.cargo/bin/cargo")
-        command = [cargo, "run", "-q", "-p", "etl-py", "--example", "rust_reference"]
+        command = [cargo, "run", "-q", "-p", "etl-core", "--example", "rust_reference"]
     out = subprocess.run(
         command,
         cwd=ROOT,
