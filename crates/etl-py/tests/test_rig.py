@@ -127,9 +127,9 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     table = (tmp_path / "thermal-capture" / "thermal.csv").read_text().splitlines()
     assert table[0] == "temperature_c,e_in_ma,e_t_ma" and len(table) == 17
     fitted = etlcal.ThermalCalibration.load(tmp_path / "thermal-capture" / "thermal.json")
-    truth = etlcal.ThermalSurface.paper()
+    surface = etlcal.ThermalSurface.paper()
     got = fitted.compensate(150.0, 33.0).e_t_ma - fitted.compensate(150.0, 27.0).e_t_ma
-    assert abs(got - (truth.e_t(150.0, 33.0) - truth.e_t(150.0, 27.0))) < 0.5
+    assert abs(got - (surface.e_t(150.0, 33.0) - surface.e_t(150.0, 27.0))) < 0.5
 
 
 def thermal_surface_follows_the_virtual_lens(tmp_path: pathlib.Path, rig: Rig, namespace: Dict[str, Any]) -> None:
