@@ -7,6 +7,7 @@ import json
 import os
 import pathlib
 import re
+import shutil
 import subprocess
 from typing import Any, Dict, List, Tuple
 
@@ -18,6 +19,7 @@ import etlcal
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 RIG = ROOT / "docs" / "RIG.md"
+RIG_FIXTURE = ROOT / "fixtures" / "rig"
 PORT = "/dev/ttyACM0"
 
 
@@ -75,13 +77,16 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     blocks = code_blocks(RIG)
     languages = [language for language, _ in blocks]
     # A new snippet must be added here with what the test gives it.
-    assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh", "json", "sh",
-                         "json", "sh"], languages
+    assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh", "python", "sh",
+                         "json", "sh", "json", "sh"], languages
     # The rig's data: images of the simulated rig (views/, offstate/, dataset.json) and the
     # lens-off board's file that the zhang snippet names.
     subprocess.run([etlcal_binary, "simulate", "--out", str(tmp_path), "--quiet"], check=True, capture_output=True)
     dataset = json.loads((tmp_path / "dataset.json").read_text())
     (tmp_path / "offstate-board.json").write_text(json.dumps(dataset["offstate_board"]))
+    # The rig snippets' rig.json: the synthetic two-camera rig of fixtures/rig.
+    for name in ["rig.json", "left.json", "right.json"]:
+        shutil.copy(RIG_FIXTURE / name, tmp_path / name)
     device = etlcal.VirtualLens()
     rig = Rig(device)
     namespace: Dict[str, Any] = {"camera": rig, "chamber": rig, "stage": rig}
@@ -118,6 +123,12 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     e_com = namespace["cal"].thermal_calibration.compensate(150.0, 31.0).e_com_ma
     assert namespace["cam"].e_com_ma == pytest.approx(e_com, abs=1e-9)
     assert "camera_matrix" in (tmp_path / "camera.yaml").read_text()
+    # The rig snippets: a point triangulated in front of both cameras, with its std, and the
+    # rectification written in the formats asked for.
+    point = namespace["p"]
+    assert 100.0 < point.point_mm[2] < 2000.0 and all(0.0 < s < 10.0 for s in point.std_mm)
+    for name in ["stereo.yaml", "left.yaml", "right.yaml"]:
+        assert (tmp_path / "rectified" / name).is_file(), name
     # The capture on the simulated rig: the plan's views, calibrated.
     captured = etlcal.Dataset.load(tmp_path / "capture" / "dataset.json")
     assert len(captured) == 15
