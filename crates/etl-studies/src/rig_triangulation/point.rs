@@ -3,6 +3,7 @@
 //! the estimated rig, and its error against the propagated covariance.
 
 use etl_calib::rig::{CalibrationPart, Rig};
+use etl_calib::rig_calibration::RigCalibration;
 use etl_core::model::rotation::Mat3;
 use etl_core::model::CameraModel;
 use etl_formats::{Error, Result, Trust};
@@ -32,6 +33,11 @@ pub struct PointError {
     pub calibration_share: f64,
     /// sqrt(Cov_ii) per axis, mm.
     pub std_mm: [f64; 3],
+    /// error_i / sigma_i with the calibration part from the joint covariance
+    /// ([`super::joint`]) instead of the rig file's independent groups.
+    pub z_scores_joint: [f64; 3],
+    /// d^2 with that covariance.
+    pub d2_joint: f64,
 }
 
 /// A point of the stage's volume (X, Y over the board, Z over the travel) that both true
@@ -62,7 +68,7 @@ fn mahalanobis2(c: &Mat3, e: [f64; 3]) -> Result<f64> {
 /// pixel noise `sigma_px`, at the lens temperature `temperature_c`; `ranges` each
 /// camera's calibrated range of E_com.
 pub fn point_error(
-    rig: &Rig,
+    (rig, calibrated): (&Rig, &RigCalibration),
     truths: &[CameraModel],
     (ranges, temperature_c): ([[f64; 2]; 2], f64),
     sigma_px: f64,
@@ -72,13 +78,15 @@ pub fn point_error(
     let w = draw_point(truths, e_com_ma, rng)
         .ok_or_else(|| Error::invalid("point", "point: no point seen by both cameras at these settings"))?;
     let truth_mm = truths[0].world_to_camera_at(w, e_com_ma[0]);
-    let mut pixels = vec![];
-    for (m, e) in truths.iter().zip(e_com_ma) {
+    let mut observed = [[0.0; 2]; 2];
+    for ((m, e), o) in truths.iter().zip(e_com_ma).zip(&mut observed) {
         let p = m.project(w, e)?;
-        pixels.push(Some([p[0] + gauss(sigma_px, rng), p[1] + gauss(sigma_px, rng)]));
+        *o = [p[0] + gauss(sigma_px, rng), p[1] + gauss(sigma_px, rng)];
     }
     let at = rig.at(&settings_of(&e_com_ma, temperature_c)?, &[temperature_c; 2], Trust::Refuse)?;
-    let t = at.triangulate(&pixels, sigma_px, CalibrationPart::Include)?;
+    let t = at.triangulate(&observed.map(Some), sigma_px, CalibrationPart::Include)?;
+    let joint = super::joint::joint_calibration_part(calibrated, e_com_ma, observed)?;
+    let joint_cov: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| t.from_pixels[i][j] + joint[i][j]));
     let e: [f64; 3] = std::array::from_fn(|i| t.point_mm[i] - truth_mm[i]);
     let std_mm = t.std_mm();
     let calibration = t.from_calibration.unwrap_or_default();
@@ -91,5 +99,7 @@ pub fn point_error(
         d2_pixels_only: mahalanobis2(&t.from_pixels, e)?,
         calibration_share: trace(&calibration) / trace(&t.covariance_mm2),
         std_mm,
+        z_scores_joint: std::array::from_fn(|i| e[i] / joint_cov[i][i].sqrt()),
+        d2_joint: mahalanobis2(&joint_cov, e)?,
     })
 }
