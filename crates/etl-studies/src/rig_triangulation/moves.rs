@@ -26,6 +26,9 @@ pub const MOVE_MM: f64 = 2.0;
 /// The fewest corners both cameras must see at both positions.
 pub const MIN_COMMON_CORNERS: usize = 12;
 
+/// Every board corner's pixel in each camera, None where it does not see it.
+pub type BoardPixels = Vec<[Option<[f64; 2]>; 2]>;
+
 /// Measured minus true length of the move, um, by each measurement.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct MoveErrors {
@@ -43,13 +46,7 @@ pub struct MoveErrors {
 
 /// Every board corner's noisy pixel in each true camera at stage position `z_mm` and
 /// currents `e_com_ma` (None where outside the image).
-fn observe(
-    truths: &[CameraModel],
-    z_mm: f64,
-    e_com_ma: [f64; 2],
-    sigma_px: f64,
-    rng: &mut ChaCha8Rng,
-) -> Vec<[Option<[f64; 2]>; 2]> {
+fn observe(truths: &[CameraModel], z_mm: f64, e_com_ma: [f64; 2], sigma_px: f64, rng: &mut ChaCha8Rng) -> BoardPixels {
     let [cols, rows] = MULTI_CAMERA_BOARD.inner_corners;
     (0..cols * rows)
         .map(|i| {
@@ -93,7 +90,7 @@ fn mean_point(
 fn pnp_move_mm(
     rig: &Rig,
     temperature_c: f64,
-    [(ea, obs_a), (eb, obs_b)]: [([f64; 2], &[[Option<[f64; 2]>; 2]]); 2],
+    [(ea, obs_a), (eb, obs_b)]: [([f64; 2], &BoardPixels); 2],
 ) -> Result<f64> {
     let pose = |e: [f64; 2], obs: &[[Option<[f64; 2]>; 2]]| -> Result<_> {
         let at = rig.at(&settings_of(&e, temperature_c)?, &[temperature_c; 2], Trust::Refuse)?;
