@@ -207,8 +207,8 @@ fn visible(cam: &CameraModel, image_size: [u32; 2], z_mm: f64, e_ma: f64) -> Vec
         .collect()
 }
 
-/// The board's corner `i` in mm.
-fn corner_mm(i: usize) -> [f64; 2] {
+/// The board's corner `i` in mm (row-major, X along the rows).
+pub fn corner_mm(i: usize) -> [f64; 2] {
     let b = &MULTI_CAMERA_BOARD;
     let cols = b.inner_corners[0];
     [b.origin_mm[0] + b.square_mm * (i % cols) as f64, b.origin_mm[1] + b.square_mm * (i / cols) as f64]

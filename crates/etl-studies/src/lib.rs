@@ -16,6 +16,8 @@
 //!   with the paper family's bias there (`crlb --rig strong`);
 //! - [`rig_efficiency`]: the joint calibration of a simulated 2-camera rig against the
 //!   Cramer-Rao bound of the joint problem (extrinsics and each camera's fx(E));
+//! - [`rig_triangulation`]: the acceptance of a calibrated 2-camera rig: triangulated
+//!   points at random settings against their propagated covariance, and a 2 mm move;
 //! - [`optics`]: a 2 mm move by PnP on the ray-traced rigs, the ETL model against a
 //!   per-current calibration, and ([`optics::floor`]) what any central model can reach there.
 //!
@@ -31,6 +33,7 @@ pub mod fig6;
 pub mod model;
 pub mod optics;
 pub mod rig_efficiency;
+pub mod rig_triangulation;
 mod run;
 pub mod strong;
 pub mod subsets;

@@ -96,7 +96,8 @@ pub struct Simulation {
     pub true_de_ma: Vec<f64>,
 }
 
-fn gauss(s: f64, rng: &mut ChaCha8Rng) -> f64 {
+/// A Gaussian draw of standard deviation `s` (0 when `s` is 0 or not a valid sigma).
+pub fn gauss(s: f64, rng: &mut ChaCha8Rng) -> f64 {
     match Normal::new(0.0, s) {
         Ok(n) if s > 0.0 => n.sample(rng),
         _ => 0.0,

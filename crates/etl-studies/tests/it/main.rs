@@ -3,4 +3,5 @@
 
 mod optics;
 mod rig_efficiency;
+mod rig_triangulation;
 mod study;
