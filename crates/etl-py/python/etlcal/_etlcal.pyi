@@ -82,6 +82,7 @@ __all__ = [
     "__version__",
     "autofocus",
     "calibrate",
+    "calibrate_rig",
     "cramer_rao_std",
     "detect_corners",
     "diff",
