@@ -29,6 +29,9 @@
 //! from a view (it did not see the board there), but every camera must take part in at
 //! least one stage view.
 //!
+//! `"offstate_board"` (optional, default `board`) is the board of the lens-off views, as in
+//! `etlcal.dataset/1`: a file of images must name it for the detector when it differs.
+//!
 //! A camera may repeat the board (`"board"` in its entry of `"cameras"`); it must then be
 //! the rig's board: one board on one stage is what the cameras share, and a camera that
 //! saw another board could not be calibrated into the same world frame.
@@ -39,6 +42,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
 use crate::board::Board;
+use crate::dataset::{Dataset, DatasetView, OffstateImage};
 use crate::lens_setting::{self, SettingKind};
 use crate::observations::{Observations, OffstateView, PointObs, ViewObs, PIXEL_MARGIN_IMAGES, WORLD_RANGE_MM};
 use crate::{Error, Result};
@@ -129,6 +133,10 @@ pub struct RigDataset {
     pub cameras: Vec<RigDatasetCamera>,
     /// The stage views.
     pub views: Vec<RigView>,
+    /// The board of the lens-off views when it differs from `board` (images: the detector
+    /// must be told which board to look for; points carry their board coordinates).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offstate_board: Option<Board>,
     /// The lens-off views (optional: A0 may be given instead).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub offstate_views: Vec<RigOffstateView>,
@@ -197,7 +205,14 @@ fn check_points(points: &[[f64; 4]], key: &str, image_size: [u32; 2]) -> Result<
 impl RigDataset {
     /// An empty rig dataset of `cameras` (name, image size) on `board`.
     pub fn new(board: Board, cameras: Vec<RigDatasetCamera>) -> Self {
-        RigDataset { format: FORMAT.into(), board, cameras, views: vec![], offstate_views: vec![] }
+        RigDataset {
+            format: FORMAT.into(),
+            board,
+            cameras,
+            views: vec![],
+            offstate_board: None,
+            offstate_views: vec![],
+        }
     }
 
     /// Reads and checks a file.
@@ -217,6 +232,9 @@ impl RigDataset {
     /// sizes, a repeated board equal to the rig's.
     fn check_cameras(&self) -> Result<()> {
         self.board.validate().map_err(|e| e.under("board"))?;
+        if let Some(b) = self.offstate_board {
+            b.validate().map_err(|e| e.under("offstate_board"))?;
+        }
         if self.cameras.len() < 2 {
             let message = format!("cameras: a rig needs at least 2 cameras, got {}", self.cameras.len());
             return Err(Error::invalid("cameras", message));
@@ -355,6 +373,49 @@ impl RigDataset {
             lens_setting::common_kind(settings)?;
         }
         Ok(())
+    }
+
+    /// The board of the lens-off views: `offstate_board`, or `board` when absent.
+    pub fn offstate_board(&self) -> Board {
+        self.offstate_board.unwrap_or(self.board)
+    }
+
+    /// Camera `k`'s images as a single-camera `etlcal.dataset/1` (its stage views with
+    /// their settings and stage positions, its lens-off views; no setting views), with the
+    /// rig view of each of its views, for the single-camera detection path. Image paths
+    /// stay relative to the rig dataset file (resolve them against it). Entries that give
+    /// points contribute no view.
+    pub fn camera_dataset(&self, k: usize) -> (Dataset, Vec<usize>) {
+        let size = self.cameras.get(k).map_or([1, 1], |c| c.image_size);
+        let mut d = Dataset::new(size, self.board);
+        d.offstate_board = self.offstate_board;
+        let mut view_index = vec![];
+        for (i, v) in self.views.iter().enumerate() {
+            let Some(s) = v.cameras.iter().find(|s| s.camera == k) else { continue };
+            let Some(image) = &s.image else { continue };
+            d.views.push(DatasetView {
+                image: image.clone(),
+                e_in_ma: s.e_in_ma,
+                focal_power_dpt: s.focal_power_dpt,
+                temperature_c: s.temperature_c,
+                e_com_ma: s.e_com_ma,
+                z_w_mm: v.z_w_mm,
+                board: None,
+                first_corner: None,
+            });
+            view_index.push(i);
+        }
+        let off = self.offstate_views.iter().filter_map(|v| v.cameras.iter().find(|s| s.camera == k));
+        for image in off.filter_map(|s| s.image.clone()) {
+            d.offstate_views.push(OffstateImage { image, board: None, first_corner: None });
+        }
+        (d, view_index)
+    }
+
+    /// Every image the file names, in the file's order (stage views, then lens-off views).
+    pub fn images(&self) -> impl Iterator<Item = &Path> + '_ {
+        let views = self.views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.image.as_deref());
+        views.chain(self.offstate_views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.image.as_deref()))
     }
 
     /// Whether the camera entries give images or points (the file's one kind; points for a

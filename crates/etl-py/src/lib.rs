@@ -25,6 +25,7 @@ pub mod pool;
 pub mod pose;
 pub mod results;
 pub mod rig;
+pub mod rig_calibration;
 pub mod rig_runtime;
 pub mod simulate;
 pub mod stereo;
@@ -62,6 +63,7 @@ fn _etlcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::simulate_paper_rig, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_strong_rig, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(rig_calibration::calibrate_rig, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::cramer_rao_std, m)?)?;
     m.add_function(wrap_pyfunction!(images::detect_corners, m)?)?;
     m.add_function(wrap_pyfunction!(images::sharpness, m)?)?;

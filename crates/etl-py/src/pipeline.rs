@@ -134,33 +134,11 @@ pub fn calibrate(
     sigma_p_dpt: Option<f64>,
     model: Option<&str>,
 ) -> PyResult<Calibration> {
-    let model_auto = match model {
-        None => false,
-        Some("auto") => true,
-        Some(other) => {
-            return Err(invalid_value("model", other, format!("model must be \"auto\" or None, got {other:?}")))
-        }
-    };
-    let sigma_z = match (sigma_z_mm, sigma_z_um) {
-        (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
-        (mm, um) => mm.map(StageSigma::Mm).or(um.map(StageSigma::Um)),
-    };
-    let request = CalibrationRequest {
-        method: parse_method(method)?,
-        a0: a0.map(|a| a.inner),
-        thermal: thermal.map(crate::calibration::thermal_ref).transpose()?,
-        estimator: estimator.map(parse_estimator).transpose()?,
-        priors: EivPriors { sigma_z, sigma_e_ma, sigma_p_dpt, sigma_px },
-        hold_a0,
-        robust: robust.map(|r| parse_robust(r, robust_k_px.unwrap_or(DEFAULT_ROBUST_K_PX))).transpose()?,
-        distortion: distortion.map(parse_distortion).transpose()?,
-        focal_degree: focal_degree.map(parse_focal_degree).transpose()?,
-        fix_k3,
-        zero_tangent,
-        accept_ill_conditioned,
-        centre: centre.map(parse_centre).transpose()?,
-        model_auto,
-    };
+    let request = request_of(
+        (method, a0, thermal, estimator, hold_a0, robust, robust_k_px),
+        (sigma_z_mm, sigma_e_ma, sigma_px, sigma_z_um, sigma_p_dpt),
+        (distortion, focal_degree, fix_k3, zero_tangent, accept_ill_conditioned, centre, model),
+    )?;
     request.validate(&Keywords).py()?;
     let obs = observations.file;
     let calibrated = crate::pool::detach(py, || request.run(&obs, &Keywords)).py()?;
@@ -177,6 +155,53 @@ pub fn calibrate(
         PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 2)?;
     }
     Calibration::from_file(calibrated.into_calibration())
+}
+
+/// The request's run options: method, A0, thermal, estimator, hold_a0, robust loss and
+/// its threshold.
+pub(crate) type RunKeywords<'a, 'py> =
+    (&'a str, Option<&'a A0>, Option<&'a Bound<'py, PyAny>>, Option<&'a str>, bool, Option<&'a str>, Option<f64>);
+/// The request's priors: sigma_z_mm, sigma_e_ma, sigma_px, sigma_z_um, sigma_p_dpt.
+pub(crate) type PriorKeywords = (Option<f64>, Option<f64>, Option<f64>, Option<f64>, Option<f64>);
+/// The request's model: distortion, focal degree, fix_k3, zero_tangent,
+/// accept_ill_conditioned, centre, model.
+pub(crate) type ModelKeywords<'a, 'py> =
+    (Option<&'a str>, Option<&'a Bound<'py, PyAny>>, bool, bool, bool, Option<&'a str>, Option<&'a str>);
+
+/// The keywords of `calibrate` (and `calibrate_rig`) as etl-calib's request, each word
+/// parsed (refused naming the keyword), not yet validated.
+pub(crate) fn request_of(
+    (method, a0, thermal, estimator, hold_a0, robust, robust_k_px): RunKeywords<'_, '_>,
+    (sigma_z_mm, sigma_e_ma, sigma_px, sigma_z_um, sigma_p_dpt): PriorKeywords,
+    (distortion, focal_degree, fix_k3, zero_tangent, accept_ill_conditioned, centre, model): ModelKeywords<'_, '_>,
+) -> PyResult<CalibrationRequest> {
+    let model_auto = match model {
+        None => false,
+        Some("auto") => true,
+        Some(other) => {
+            return Err(invalid_value("model", other, format!("model must be \"auto\" or None, got {other:?}")))
+        }
+    };
+    let sigma_z = match (sigma_z_mm, sigma_z_um) {
+        (Some(_), Some(_)) => return Err(invalid("sigma_z_um", "give sigma_z_mm or sigma_z_um, not both")),
+        (mm, um) => mm.map(StageSigma::Mm).or(um.map(StageSigma::Um)),
+    };
+    Ok(CalibrationRequest {
+        method: parse_method(method)?,
+        a0: a0.map(|a| a.inner),
+        thermal: thermal.map(crate::calibration::thermal_ref).transpose()?,
+        estimator: estimator.map(parse_estimator).transpose()?,
+        priors: EivPriors { sigma_z, sigma_e_ma, sigma_p_dpt, sigma_px },
+        hold_a0,
+        robust: robust.map(|r| parse_robust(r, robust_k_px.unwrap_or(DEFAULT_ROBUST_K_PX))).transpose()?,
+        distortion: distortion.map(parse_distortion).transpose()?,
+        focal_degree: focal_degree.map(parse_focal_degree).transpose()?,
+        fix_k3,
+        zero_tangent,
+        accept_ill_conditioned,
+        centre: centre.map(parse_centre).transpose()?,
+        model_auto,
+    })
 }
 
 /// `centre=`: "fixed", "moving" or "auto".

@@ -38,6 +38,18 @@ pub struct Rig {
     calibrations: Vec<Py<Calibration>>,
 }
 
+impl Rig {
+    /// The Python rig of etl-calib's, its calibrations as Python objects.
+    pub(crate) fn from_core(py: Python<'_>, inner: CoreRig) -> PyResult<Self> {
+        let calibrations = inner
+            .calibrations()
+            .iter()
+            .map(|c| Py::new(py, Calibration::from_file(c.clone())?))
+            .collect::<PyResult<_>>()?;
+        Ok(Rig { inner, calibrations })
+    }
+}
+
 #[pymethods]
 impl Rig {
     /// Reads `etlcal.rig/1` at `path` with its calibrations (paths relative to the file).
@@ -46,12 +58,13 @@ impl Rig {
     fn load(cls: &Bound<'_, PyType>, path: PathBuf) -> PyResult<Self> {
         let py = cls.py();
         let inner = py.detach(|| CoreRig::load(&path)).py()?;
-        let calibrations = inner
-            .calibrations()
-            .iter()
-            .map(|c| Py::new(py, Calibration::from_file(c.clone())?))
-            .collect::<PyResult<_>>()?;
-        Ok(Rig { inner, calibrations })
+        Rig::from_core(py, inner)
+    }
+
+    /// Writes the rig as `etlcal.rig/1` at `path`, each calibration inline, atomically
+    /// (nothing written if its checks fail). Raises InputError / FileError naming the cause.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        py.detach(|| self.inner.file().save(&path)).py()
     }
 
     fn __len__(&self) -> PyResult<usize> {

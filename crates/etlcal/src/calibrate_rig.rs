@@ -1,6 +1,9 @@
 //! `etlcal calibrate-rig --dataset F --out rig.json [the model flags of calibrate]
 //! [--solver auto|dense|sparse] [--json]`: a multi-camera ETL rig from an
-//! `etlcal.rig-dataset/1` (points per camera and view), calibrated jointly
+//! `etlcal.rig-dataset/1` (points per camera and view, or images whose boards are first
+//! detected by the detection of `calibrate --dataset`,
+//! [`etl_calib::rig_calibration::detect_rig`]: a view whose board is not found in one
+//! camera's image is dropped for that camera, with a warning), calibrated jointly
 //! ([`etl_calib::rig_calibration`]): each camera first by the flags of `calibrate` (the
 //! same request), then every camera's numbers together with the shared stage corrections.
 //! Writes `etlcal.rig/1` with each camera's calibration inline and each camera's pose
@@ -15,9 +18,12 @@ use serde_json::json;
 
 use super::calibrate::RequestFlags;
 use super::print_json;
-use etl_calib::rig_calibration::{calibrate_rig_spelled, LinearSolver, RigCalibration, RigCalibrationOptions};
+use etl_calib::pipeline::dataset::default_detector;
+use etl_calib::rig_calibration::{
+    calibrate_rig_spelled, detect_rig, LinearSolver, RigCalibration, RigCalibrationOptions,
+};
 use etl_formats::output::Output;
-use etl_formats::rig_dataset::RigDataset;
+use etl_formats::rig_dataset::{RigDataset, ShotKind};
 use etl_formats::{Error, Result};
 
 /// The linear solver of `--solver`.
@@ -34,7 +40,7 @@ pub enum SolverArg {
 /// Arguments of `etlcal calibrate-rig`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The rig's points (etlcal.rig-dataset/1).
+    /// The rig's points or images (etlcal.rig-dataset/1).
     #[arg(long, value_name = "FILE")]
     pub dataset: PathBuf,
     /// Where to write etlcal.rig/1 (its directory is created if missing).
@@ -99,6 +105,22 @@ fn print_summary(rig: &RigCalibration, out: &std::path::Path) {
     outln!("wrote {}", out.display());
 }
 
+/// The points of `dataset`: its own, or its images' detected corners, each view whose
+/// board was not found in a camera's image reported on stderr.
+fn detected(dataset: &RigDataset, args: &Args) -> Result<RigDataset> {
+    if dataset.shot_kind() == ShotKind::Points {
+        return Ok(dataset.clone());
+    }
+    let bar = crate::progress::Bar::new(!args.json);
+    let (points, summary) = detect_rig(dataset, &args.dataset, &default_detector(), &bar)?;
+    for (name, camera) in &summary.cameras {
+        for s in &camera.skipped {
+            eprintln!("etlcal: warning: camera {name}: {} ({} image) skipped: {}", s.image.display(), s.kind, s.reason);
+        }
+    }
+    Ok(points)
+}
+
 /// Runs `etlcal calibrate-rig`.
 pub fn run(args: Args) -> Result<()> {
     let flags = &args.request;
@@ -110,7 +132,7 @@ pub fn run(args: Args) -> Result<()> {
     let spelling = flags.spelling();
     let request = flags.request()?;
     request.validate(&spelling)?;
-    let dataset = RigDataset::load(&args.dataset)?;
+    let dataset = detected(&RigDataset::load(&args.dataset)?, &args)?;
     let solver = match args.solver.unwrap_or(SolverArg::Auto) {
         SolverArg::Auto => LinearSolver::Auto,
         SolverArg::Dense => LinearSolver::Dense,

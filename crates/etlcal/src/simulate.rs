@@ -29,9 +29,13 @@
 //!
 //! `--rig N` simulates a rig of N cameras around one stage instead
 //! (`etl_sim::multi_camera`, with `--baseline-mm`, `--views`, `--moving-centre` and the
-//! noise flags): `rig_dataset.json` (`etlcal.rig-dataset/1`, points per camera and view,
-//! lens-off views included) and `truth_rig.json` (`etlcal.rig/1`, the true calibrations
-//! and extrinsics), corners only, for `etlcal calibrate-rig`.
+//! noise flags): `rig_dataset.json` (`etlcal.rig-dataset/1`, lens-off views included) and
+//! `truth_rig.json` (`etlcal.rig/1`, the true calibrations and extrinsics), for `etlcal
+//! calibrate-rig`. Without `--observations-only` every camera's views are rendered
+//! (`images/camK/`, `etl_sim::multi_camera::images`: the rig's ChArUco board, each
+//! camera's truth, pose and focus) and the dataset gives images, its world frame (and
+//! truth_rig.json's) the ChArUco board's; with it, points per camera and view. `--views`
+//! sets how many stage positions (and so images) there are.
 //!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
@@ -47,7 +51,8 @@ use etl_formats::{Error, Result};
 
 /// The names `simulate` writes into its directory.
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
-use etl_sim::multi_camera::{simulate_multi_camera, truth_rig, MultiCameraDesign};
+use etl_sim::multi_camera::images::{dataset_truths, render_multi_camera};
+use etl_sim::multi_camera::{simulate_multi_camera, truth_rig, MultiCameraDesign, MultiCameraSimulation};
 use etl_sim::optics::truth::{setting_truths, TRUTH_FORMAT};
 use etl_sim::optics::{procedure, OpticalRig};
 use etl_sim::simulate::focal_power::{focal_power_rig, FOCAL_POWER_TEMPERATURES_C};
@@ -94,8 +99,9 @@ pub struct Args {
     #[arg(long, requires = "observations_only", conflicts_with_all = ["optics", "setting_views"])]
     pub focal_power: bool,
     /// Simulate a rig of N cameras around one stage instead (2..64; etl_sim::multi_camera):
-    /// rig_dataset.json (etlcal.rig-dataset/1, points) and truth_rig.json (etlcal.rig/1).
-    #[arg(long, value_name = "N", requires = "observations_only",
+    /// rig_dataset.json (etlcal.rig-dataset/1: rendered images under images/, or points
+    /// with --observations-only) and truth_rig.json (etlcal.rig/1).
+    #[arg(long, value_name = "N",
         conflicts_with_all = ["optics", "config", "setting_views", "focal_power"])]
     pub rig: Option<usize>,
     /// With --rig: the distance of cameras 1.. from camera 0, mm (60..150) [default: 60].
@@ -113,7 +119,7 @@ pub struct Args {
 }
 
 /// The names `simulate --rig` writes into its directory.
-const RIG_FILES: &[&str] = &["rig_dataset.json", "truth_rig.json"];
+const RIG_FILES: &[&str] = &["rig_dataset.json", "truth_rig.json", "images"];
 
 /// `etlcal simulate --rig N`: the N-camera rig's points and truth.
 fn run_rig(args: &Args, cameras: usize) -> Result<()> {
@@ -150,18 +156,29 @@ fn run_rig(args: &Args, cameras: usize) -> Result<()> {
             _ => e,
         }
     })?;
-    write_dir_set(&args.out, RIG_FILES, |staging| {
-        sim.dataset.save(&staging.join("rig_dataset.json"))?;
-        truth_rig(&sim).save(&staging.join("truth_rig.json"))?;
-        Ok(())
+    let images = write_dir_set(&args.out, RIG_FILES, |staging| {
+        if args.observations_only {
+            sim.dataset.save(&staging.join("rig_dataset.json"))?;
+            truth_rig(&sim).save(&staging.join("truth_rig.json"))?;
+            return Ok(0);
+        }
+        let bar = crate::progress::Bar::new(!args.json);
+        let seed = args.seed.unwrap_or(1);
+        let dataset = render_multi_camera(&sim, staging, &ImageOptions::default(), seed, &bar)?;
+        dataset.save(&staging.join("rig_dataset.json"))?;
+        let in_frame = MultiCameraSimulation { truths: dataset_truths(&sim), ..sim.clone() };
+        truth_rig(&in_frame).save(&staging.join("truth_rig.json"))?;
+        Ok(dataset.images().count())
     })?;
     let points: usize =
         sim.dataset.views.iter().flat_map(|v| &v.cameras).map(|s| s.points.as_ref().map_or(0, Vec::len)).sum();
     if args.json {
-        print_json(&json!({"cameras": cameras, "views": sim.dataset.views.len(), "points": points, "out": args.out}));
+        print_json(&json!({"cameras": cameras, "views": sim.dataset.views.len(), "points": points,
+            "images": images, "out": args.out}));
     } else {
+        let what = if images > 0 { format!("{images} images") } else { format!("{points} points") };
         outln!(
-            "wrote rig_dataset.json, truth_rig.json ({cameras} cameras, {} views, {points} points) to {}",
+            "wrote rig_dataset.json, truth_rig.json ({cameras} cameras, {} views, {what}) to {}",
             sim.dataset.views.len(),
             args.out.display()
         );

@@ -47,7 +47,8 @@ fn check_supported(dataset: &RigDataset, options: &RigCalibrationOptions) -> Res
     if dataset.shot_kind() == ShotKind::Images {
         return Err(Error::invalid(
             "views",
-            "the rig dataset gives images: calibrate-rig takes points ([u, v, X, Y] per camera and view, docs/FORMATS.md)",
+            "the rig dataset gives images: detect their boards first (etl_calib::rig_calibration::detect_rig), the joint \
+             solve takes points",
         ));
     }
     if options.request.method == Method::PerSetting {

@@ -46,11 +46,17 @@
 //! (`etlcal.rig-dataset/1`'s views all stand on the stage), since the stage views alone
 //! tie every camera to the world frame.
 //!
+//! **Images**: a rig dataset of images is first turned into one of points by
+//! [`detect_rig`] (each camera's images through the single-camera detection path, a view
+//! whose board is not found dropped for that camera).
+//!
 //! Preconditions: every camera calibrates alone (at least 3 distinct settings, its
-//! lens-off views or a given A0); points, not images; the proposed method; no robust loss.
+//! lens-off views or a given A0); points ([`detect_rig`] first for images); the proposed
+//! method; no robust loss.
 
 mod cameras;
 mod covariance;
+mod detect;
 mod lm;
 mod normal;
 mod options;
@@ -59,6 +65,7 @@ mod result;
 mod step;
 
 pub use cameras::JointCamera;
+pub use detect::{detect_rig, RigDetectionSummary};
 pub use options::{LinearSolver, RigCalibrationOptions, DEFAULT_MAX_ITERATIONS, SPARSE_FROM_CAMERAS};
 pub use result::{RigCalibration, RigCameraResult};
 pub use step::JointSystem;

@@ -123,3 +123,32 @@ fn rig_dataset_refuses_a_view_without_a_stage_position() {
     assert!(e.contains("z_w_mm"), "{e}");
     assert_eq!(e.lines().count(), 1, "{e}");
 }
+
+/// A file of images splits into each camera's `etlcal.dataset/1`: its views (with the rig
+/// view of each), its lens-off views, the lens-off board.
+#[test]
+fn an_images_file_splits_into_single_camera_datasets() {
+    let mut d = rig();
+    for (i, v) in d.views.iter_mut().enumerate() {
+        for s in &mut v.cameras {
+            s.points = None;
+            s.image = Some(format!("images/cam{}/view{i:02}.png", s.camera).into());
+        }
+    }
+    d.offstate_views[0].cameras[0] = RigOffstateShot { camera: 0, image: Some("off.png".into()), points: None };
+    d.offstate_board = Some(Board::checkerboard([11, 8], 4.0).unwrap());
+    d.validate().unwrap();
+    assert_eq!(d.shot_kind(), ShotKind::Images);
+    assert_eq!(d.images().count(), 6);
+    let (c1, index) = d.camera_dataset(1);
+    assert_eq!(index, vec![0, 1]);
+    assert_eq!(c1.views[1].image, PathBuf::from("images/cam1/view01.png"));
+    assert_eq!((c1.views[1].z_w_mm, c1.views[1].e_in_ma, c1.views[1].e_com_ma), (48.0, 107.5, Some(106.5)));
+    assert!(c1.offstate_views.is_empty());
+    let (c0, index) = d.camera_dataset(0);
+    assert_eq!(index, vec![0, 1, 2]);
+    assert_eq!(c0.offstate_views[0].image, PathBuf::from("off.png"));
+    assert_eq!(c0.offstate_board(), Board::checkerboard([11, 8], 4.0).unwrap());
+    assert_eq!(c0.image_size, [1936, 1458]);
+    c0.validate().unwrap();
+}

@@ -82,6 +82,7 @@ __all__ = [
     "__version__",
     "autofocus",
     "calibrate",
+    "calibrate_rig",
     "cramer_rao_std",
     "detect_corners",
     "diff",
@@ -700,6 +701,33 @@ def calibrate(
     robust_k_px is 1 px; None sigmas take the paper's (sigma_z 10 um, sigma_e 0.4 mA,
     sigma_px estimated); give the stage prior as sigma_z_mm or sigma_z_um, not both."""
     ...
+def calibrate_rig(
+    dataset: Union[str, os.PathLike[str]],
+    solver: Literal["auto", "dense", "sparse"] = "auto",
+    a0: Optional[A0] = None,
+    thermal: Union[ThermalCalibration, Literal["paper"], None] = None,
+    estimator: Optional[Estimator] = None,
+    hold_a0: bool = False,
+    robust: Optional[RobustLoss] = None,
+    robust_k_px: Optional[float] = None,
+    sigma_z_mm: Optional[float] = None,
+    sigma_e_ma: Optional[float] = None,
+    sigma_px: Optional[float] = None,
+    method: Method = "proposed",
+    distortion: Optional[DistortionChoice] = None,
+    focal_degree: Optional[FocalDegreeChoice] = None,
+    fix_k3: bool = False,
+    zero_tangent: bool = False,
+    sigma_z_um: Optional[float] = None,
+    accept_ill_conditioned: bool = False,
+    centre: Optional[Literal["fixed", "moving", "auto"]] = None,
+    sigma_p_dpt: Optional[float] = None,
+    model: Optional[Literal["auto"]] = None,
+) -> "Rig":
+    """A multi-camera rig calibrated jointly from an etlcal.rig-dataset/1 file (points or
+    images, detected first), as `etlcal calibrate-rig --dataset`: the keywords are
+    calibrate's (one request for every camera) and --solver's; returns the run-time Rig."""
+    ...
 def cramer_rao_std(
     observations: Observations,
     truth: Calibration,
@@ -863,6 +891,9 @@ class Rig:
     """A multi-camera ETL rig (etlcal.rig/1): calibrations and poses relative to camera 0."""
     @classmethod
     def load(cls, path: Union[str, os.PathLike[str]]) -> "Rig": ...
+    def save(self, path: Union[str, os.PathLike[str]]) -> None:
+        """Writes the rig as etlcal.rig/1, each calibration inline (atomically)."""
+        ...
     def __len__(self) -> int: ...
     @property
     def names(self) -> List[str]: ...

@@ -156,12 +156,33 @@ pub fn dataset_truth(truth: &CameraModel, options: &ImageOptions) -> CameraModel
     }
 }
 
-/// One image to make.
-struct Job {
-    path: PathBuf,
-    scene: Scene,
-    optics: Optics,
-    seed: u64,
+/// One image to make: the file, the scene, the lens's blur and the noise's seed.
+pub(crate) struct Job {
+    pub(crate) path: PathBuf,
+    pub(crate) scene: Scene,
+    pub(crate) optics: Optics,
+    pub(crate) seed: u64,
+}
+
+/// Renders `jobs` in parallel (8-bit PNG, the photometry of `options`), `progress` showing
+/// a bar.
+pub(crate) fn render_jobs(jobs: &[Job], options: &ImageOptions, progress: &dyn Progress) -> Result<()> {
+    progress.start(jobs.len(), "rendering");
+    jobs.par_iter()
+        .map(|job| {
+            let opts = RenderOptions {
+                optics: job.optics,
+                photometry: options.photometry,
+                bit_depth: BitDepth::Eight,
+                seed: job.seed,
+            };
+            let r = render(&job.scene, &opts)?.image.save_png(&job.path);
+            progress.advance(1);
+            r
+        })
+        .collect::<Result<Vec<()>>>()?;
+    progress.finish();
+    Ok(())
 }
 
 /// Renders every ETL and lens-off view of `sim` into `dir` (`views/`, `offstate/`, 8-bit
@@ -184,21 +205,7 @@ pub fn render_rig(
         let d = dir.join(sub);
         std::fs::create_dir_all(&d).map_err(|source| Error::Io { path: d, source })?;
     }
-    progress.start(jobs.len(), "rendering");
-    jobs.par_iter()
-        .map(|job| {
-            let opts = RenderOptions {
-                optics: job.optics,
-                photometry: options.photometry,
-                bit_depth: BitDepth::Eight,
-                seed: job.seed,
-            };
-            let r = render(&job.scene, &opts)?.image.save_png(&job.path);
-            progress.advance(1);
-            r
-        })
-        .collect::<Result<Vec<()>>>()?;
-    progress.finish();
+    render_jobs(&jobs, options, progress)?;
     Ok(dataset)
 }
 
@@ -267,14 +274,37 @@ fn lens_off_views(
     jobs: &mut Vec<Job>,
 ) -> Result<()> {
     let size = sim.observations.image_size;
+    let name = |k: usize| PathBuf::from(format!("offstate/off{k:02}.png"));
+    let (board, views) = lens_off_jobs(&sim.truth, size, (dir, &name), options, seed)?;
+    dataset.offstate_board = Some(board);
+    for (image, job) in views {
+        dataset.offstate_views.push(image);
+        jobs.push(job);
+    }
+    Ok(())
+}
+
+/// The lens-off views of `truth` (the paper's 10 tilted poses of the lens-off board,
+/// E = 0, focused at [`ImageOptions::lens_off_focus_mm`] through
+/// [`ImageOptions::lens_off_aperture_mm`]) on an image of `size`: the lens-off board and,
+/// per view, its dataset entry (image `name(k)`, relative to `dir`) with its render job.
+/// Seeds `seed * 1000003 + 500 + k`.
+pub(crate) fn lens_off_jobs(
+    truth: &CameraModel,
+    size: [u32; 2],
+    (dir, name): (&Path, &dyn Fn(usize) -> PathBuf),
+    options: &ImageOptions,
+    seed: u64,
+) -> Result<(Board, Vec<(OffstateImage, Job)>)> {
     let (off_inner, off_square) = LENS_OFF_BOARD;
     let off_board = Checkerboard { inner_corners: off_inner, square_mm: off_square };
     let charuco = LENS_OFF_CHARUCO.board()?;
-    dataset.offstate_board = Some(match options.board {
+    let dataset_board = match options.board {
         RigBoard::Charuco => charuco,
         RigBoard::CheckerboardBlocks => Board::Checkerboard(off_board),
-    });
-    for (k, pose) in lens_off_poses(&sim.truth).iter().enumerate() {
+    };
+    let mut views = vec![];
+    for (k, pose) in lens_off_poses(truth).iter().enumerate() {
         let (scene, board, first_corner) = match options.board {
             RigBoard::Charuco => (Scene::new(charuco_frame(pose, off_square), 0.0, charuco, 0.0, size), None, None),
             RigBoard::CheckerboardBlocks => {
@@ -287,8 +317,8 @@ fn lens_off_views(
                 (Scene::new(shifted(pose, first, off_square), 0.0, block, 0.0, size), Some(block), Some(first))
             }
         };
-        let image = PathBuf::from(format!("offstate/off{k:02}.png"));
-        jobs.push(Job {
+        let image = name(k);
+        let job = Job {
             path: dir.join(&image),
             scene,
             optics: Optics {
@@ -297,10 +327,10 @@ fn lens_off_views(
                 base_sigma_px: 0.0,
             },
             seed: seed.wrapping_mul(1_000_003).wrapping_add(500 + k as u64),
-        });
-        dataset.offstate_views.push(OffstateImage { image, board, first_corner });
+        };
+        views.push((OffstateImage { image, board, first_corner }, job));
     }
-    Ok(())
+    Ok((dataset_board, views))
 }
 
 #[cfg(test)]

@@ -153,3 +153,54 @@ fn simulate_rig_refuses_designs_outside_their_ranges() {
         assert!(!out.exists());
     }
 }
+
+/// A rig dataset of images: the simulated points rig with each entry's points replaced by
+/// an image under `images/` (which the caller writes, or not).
+fn images_dataset(points: &Value) -> Value {
+    let mut d = points.clone();
+    for (i, v) in d["views"].as_array_mut().unwrap().iter_mut().enumerate() {
+        for s in v["cameras"].as_array_mut().unwrap() {
+            let k = s["camera"].as_u64().unwrap();
+            s.as_object_mut().unwrap().remove("points");
+            s["image"] = format!("images/cam{k}/view{i:02}.png").into();
+        }
+    }
+    d.as_object_mut().unwrap().remove("offstate_views");
+    d
+}
+
+/// From images: an image that does not exist, and a camera whose board is found in none
+/// of its images, are each refused in one line naming it, nothing written.
+#[test]
+fn calibrate_rig_from_images_refuses_a_missing_image_and_a_blind_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = images_dataset(&simulate(dir.path()));
+    let path = dir.path().join("rig_images.json");
+    std::fs::write(&path, serde_json::to_string(&d).unwrap()).unwrap();
+    let out = dir.path().join("out/rig.json");
+    let run = || etlcal_run(&["calibrate-rig", "--dataset", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let (code, stdout, stderr) = run();
+    assert_eq!(code, 1, "{stderr}");
+    assert!(stderr.contains("images/cam0/view00.png") && stderr.trim_end().lines().count() == 1, "{stderr}");
+    assert!(stdout.is_empty() && !out.exists());
+    // Every image there, all grey: camera 0's board is found nowhere.
+    let size = [1936u32, 1458];
+    let grey = etl_sim::render::Image {
+        width: size[0],
+        height: size[1],
+        bit_depth: etl_sim::render::BitDepth::Eight,
+        data: vec![128; (size[0] * size[1]) as usize],
+    };
+    for v in d["views"].as_array().unwrap() {
+        for s in v["cameras"].as_array().unwrap() {
+            let p = dir.path().join(s["image"].as_str().unwrap());
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            grey.save_png(&p).unwrap();
+        }
+    }
+    let (code, stdout, stderr) = run();
+    assert_eq!(code, 1, "{stderr}");
+    let named = stderr.contains("camera 0 (cam0): ") && stderr.contains("the board was found in 0 of 15 views");
+    assert!(named && stderr.trim_end().lines().count() == 1, "{stderr}");
+    assert!(stdout.is_empty() && !out.exists());
+}

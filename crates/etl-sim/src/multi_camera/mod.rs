@@ -44,8 +44,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::rig::{focus_law_current_ma, PAPER_E_COM_MA, PAPER_TEMPERATURE_C};
+use crate::rig::{focus_law_current_ma, focus_law_depth_mm, PAPER_E_COM_MA, PAPER_TEMPERATURE_C};
 use crate::simulate::{lens_off_views_of, LensOff, NoiseModel, StageBoard};
+
+pub mod images;
 
 /// The stage's travel, mm: the paper rig's (its views stand from 2 to 75 mm).
 pub const STAGE_TRAVEL_MM: [f64; 2] = [2.0, 75.0];
@@ -232,6 +234,24 @@ pub fn focus_current_ma(cam: &CameraModel, zero: &CameraModel, (k, n): (usize, u
     focus_law_current_ma(a0 + (depth(cam, z_mm) - b0) * (a1 - a0) / (b1 - b0)) + 4.0 * spread(k, n)
 }
 
+/// The camera depth (mm) camera `cam` (the rig's camera k of n) is in focus at when its
+/// lens runs at `e_ma`: the inverse of [`focus_current_ma`], d = d(z0) + (d' - d0(z0))
+/// (d(z1) - d(z0)) / (d0(z1) - d0(z0)) with d' = [`focus_law_depth_mm`]`(e_ma - 4 s_k)`.
+pub fn focus_depth_mm(cam: &CameraModel, zero: &CameraModel, (k, n): (usize, usize), e_ma: f64) -> f64 {
+    let depth = |m: &CameraModel, z: f64| m.world_to_camera([0.0, 0.0, z])[2];
+    let [z0, z1] = STAGE_TRAVEL_MM;
+    let (a0, a1) = (depth(zero, z0), depth(zero, z1));
+    let (b0, b1) = (depth(cam, z0), depth(cam, z1));
+    b0 + (focus_law_depth_mm(e_ma - 4.0 * spread(k, n)) - a0) * (b1 - b0) / (a1 - a0)
+}
+
+/// The stage position of view j of `views` (evenly over [`STAGE_TRAVEL_MM`], the far end
+/// first), mm.
+pub fn stage_position_mm(j: usize, views: usize) -> f64 {
+    let [z0, z1] = STAGE_TRAVEL_MM;
+    z1 - (z1 - z0) * j as f64 / (views.max(2) - 1) as f64
+}
+
 /// Camera `cam`'s record of the stage at `z` (really at `z + dz`), focused on the board's
 /// centre: its entry (or `None` when it sees too little of the board or the current
 /// leaves the paper rig's range) and its current error.
@@ -294,10 +314,9 @@ pub fn simulate_multi_camera(
     let cameras = (0..n).map(|k| RigDatasetCamera { name: format!("cam{k}"), image_size: size, board: None }).collect();
     let mut dataset = RigDataset::new(multi_camera_board()?, cameras);
     let (mut true_dz_mm, mut true_de_ma) = (vec![], vec![vec![None; design.views]; n]);
-    let [z0, z1] = STAGE_TRAVEL_MM;
     let corners = MULTI_CAMERA_BOARD.inner_corners[0] * MULTI_CAMERA_BOARD.inner_corners[1];
     for j in 0..design.views {
-        let z = z1 - (z1 - z0) * j as f64 / (design.views - 1) as f64;
+        let z = stage_position_mm(j, design.views);
         let dz = gauss(noise.z_mm, &mut rng);
         let corner_noise: Vec<[f64; 2]> =
             (0..corners).map(|_| [gauss(noise.xy_mm, &mut rng), gauss(noise.xy_mm, &mut rng)]).collect();
