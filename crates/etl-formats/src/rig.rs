@@ -20,6 +20,21 @@
 //!  "extrinsics": [{"camera": 1, "rotation_rodrigues": [0.01, -0.14, 0.0], "translation_mm": [-120.0, 1.5, 4.0],
 //!                  "covariance": [[...6...], ...]}]}
 //! ```
+//!
+//! A rig calibrated jointly (`etlcal calibrate-rig`) may carry `joint_covariance`:
+//! `{"cameras": [0, 1, ...], "matrix": [[...]]}`, the covariance of every camera's model
+//! numbers together, over the concatenation of each camera's numbers in its calibration's
+//! layout order (`om1 om2 om3 tx ty tz kf.. u0 v0 a.. [dz1 dz2 u1 v1]`), camera 0 first.
+//! Its meaning: the cameras' poses (om, t) in the calibrations are poses to one shared
+//! world (the stage's), and the extrinsics follow from them, R_k = R(om_k) R(om_0)^T,
+//! T_k = t_k - R_k t_0 ([`relative_pose`]). The reader and the writer check its size (the
+//! sum of the layouts' sizes), that it is finite and symmetric with non-negative
+//! variances, and that every extrinsic pose is the relative pose of the calibrations'
+//! poses to 1e-9 rad and 1e-6 mm (otherwise the joint covariance does not describe this
+//! rig and the file is refused, naming the key). Each calibration's own `covariance` and
+//! each pose's 6 x 6 stay (a reader of one camera uses them); the cross-covariances
+//! between the cameras (through the shared stage, and each camera's pose to it) are only
+//! in the joint one.
 
 use std::path::{Path, PathBuf};
 
@@ -89,7 +104,29 @@ pub struct RigFile {
     pub cameras: Vec<RigCamera>,
     /// One pose per camera but camera 0.
     pub extrinsics: Vec<RigExtrinsics>,
+    /// The covariance of every camera's numbers jointly, when the rig was calibrated
+    /// jointly (module docs); absent, each calibration and each pose stands alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_covariance: Option<JointCovariance>,
 }
+
+/// The joint covariance of the cameras' numbers (`joint_covariance`, module docs): the
+/// concatenation of each camera's model numbers in its calibration's layout order
+/// (`om1 om2 om3 tx ty tz kf.. u0 v0 a.. [dz1 dz2 u1 v1]`), camera 0 first; the cameras'
+/// poses (om, t) in the calibrations are poses to one shared world, and the extrinsics
+/// their [`relative_pose`]s.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointCovariance {
+    /// The cameras whose numbers it covers, in order: every camera of the rig, 0..N.
+    pub cameras: Vec<usize>,
+    /// The matrix, symmetric, square of side the sum of the layouts' sizes.
+    pub matrix: Vec<Vec<f64>>,
+}
+
+/// How far an extrinsic pose may be from the relative pose of the calibrations' poses
+/// for the joint covariance to describe the rig: rad, mm.
+pub const JOINT_POSE_TOLERANCE: (f64, f64) = (1e-9, 1e-6);
 
 /// A rig file with every camera's calibration loaded, in the cameras' order.
 #[derive(Debug, Clone, PartialEq)]
@@ -118,7 +155,7 @@ fn covariance_problem(c: &[[f64; 6]; 6]) -> Option<&'static str> {
 impl RigFile {
     /// A rig of `cameras` and `extrinsics`.
     pub fn new(cameras: Vec<RigCamera>, extrinsics: Vec<RigExtrinsics>) -> Self {
-        RigFile { format: FORMAT.into(), cameras, extrinsics }
+        RigFile { format: FORMAT.into(), cameras, extrinsics, joint_covariance: None }
     }
 
     /// The pose of camera `k` relative to camera 0 (`None` for camera 0 and past the end).
@@ -214,7 +251,59 @@ impl RigFile {
             return Err(Error::Format { path: path.to_owned(), found: self.format.clone(), expected: FORMAT.into() });
         }
         self.check_structure().map_err(bad)?;
-        self.resolve(path).map_err(bad)
+        let calibrations = self.resolve(path).map_err(bad)?;
+        self.check_joint(&calibrations).map_err(bad)?;
+        Ok(calibrations)
+    }
+
+    /// The joint covariance's checks (module docs), if the file has one: every camera
+    /// in order, the size the sum of the layouts', finite, symmetric, non-negative
+    /// variances, and each extrinsic pose the relative pose of the calibrations' poses
+    /// (to [`JOINT_POSE_TOLERANCE`]). The message names the key.
+    fn check_joint(&self, calibrations: &[Calibration]) -> std::result::Result<(), String> {
+        let Some(j) = &self.joint_covariance else { return Ok(()) };
+        let key = "joint_covariance";
+        if j.cameras != (0..calibrations.len()).collect::<Vec<_>>() {
+            return Err(format!(
+                "{key}.cameras: {:?}, expected every camera in order 0..{}",
+                j.cameras,
+                calibrations.len() - 1
+            ));
+        }
+        let mut n = 0;
+        for c in calibrations {
+            n += c.layout().map_err(|e| format!("{key}: {e}"))?.len();
+        }
+        let m = &j.matrix;
+        if m.len() != n || m.iter().any(|row| row.len() != n) {
+            return Err(format!(
+                "{key}.matrix: expected {n} x {n} (the sum of the cameras' layouts), got {} rows",
+                m.len()
+            ));
+        }
+        if !m.iter().flatten().all(|v| v.is_finite()) {
+            return Err(format!("{key}.matrix is not finite"));
+        }
+        if (0..n).any(|i| m[i][i] < 0.0) {
+            return Err(format!("{key}.matrix has a negative variance"));
+        }
+        let scale = (0..n).map(|i| m[i][i]).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        if (0..n).any(|i| (0..i).any(|k| (m[i][k] - m[k][i]).abs() > 1e-9 * scale)) {
+            return Err(format!("{key}.matrix is not symmetric"));
+        }
+        let pose = |c: &Calibration| (c.rotation_rodrigues, c.translation_mm);
+        for e in &self.extrinsics {
+            let (om, t) = relative_pose(pose(&calibrations[0]), pose(&calibrations[e.camera]));
+            let d_rad = (0..3).map(|i| (om[i] - e.rotation_rodrigues[i]).abs()).fold(0.0, f64::max);
+            let d_mm = (0..3).map(|i| (t[i] - e.translation_mm[i]).abs()).fold(0.0, f64::max);
+            if d_rad > JOINT_POSE_TOLERANCE.0 || d_mm > JOINT_POSE_TOLERANCE.1 {
+                return Err(format!(
+                    "{key}: camera {}'s extrinsic pose is not the relative pose of the calibrations' poses ({d_rad:.1e} rad, {d_mm:.1e} mm off): the joint covariance does not describe this rig",
+                    e.camera
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Reads and checks a rig file, its calibrations loaded.
@@ -359,5 +448,63 @@ mod tests {
         r.extrinsics[0].reference_setting = Some([150.0, 150.0]);
         r.save(&path).unwrap();
         assert_eq!(RigFile::load(&path).unwrap().file, r);
+    }
+
+    /// `rig` with a made-up joint covariance (diagonal plus one cross term between the
+    /// cameras) and the extrinsic pose the calibrations' poses imply.
+    fn joint_rig(dir: &Path) -> RigFile {
+        let mut r = rig(dir);
+        let cals = r.validate(&dir.join("rig.json")).unwrap();
+        let pose = |c: &Calibration| (c.rotation_rodrigues, c.translation_mm);
+        let (om, t) = relative_pose(pose(&cals[0]), pose(&cals[1]));
+        r.extrinsics[0].rotation_rodrigues = om;
+        r.extrinsics[0].translation_mm = t;
+        let n = cals.iter().map(|c| c.layout().unwrap().len()).sum::<usize>();
+        let mut m = vec![vec![0.0; n]; n];
+        for (i, row) in m.iter_mut().enumerate() {
+            row[i] = 1e-4 * (i + 1) as f64;
+        }
+        m[0][n - 1] = 1e-5;
+        m[n - 1][0] = 1e-5;
+        r.joint_covariance = Some(JointCovariance { cameras: vec![0, 1], matrix: m });
+        r
+    }
+
+    #[test]
+    fn rig_round_trips_with_the_joint_covariance() {
+        let dir = tempfile::tempdir().unwrap();
+        let r = joint_rig(dir.path());
+        let path = dir.path().join("rig.json");
+        r.save(&path).unwrap();
+        let back = RigFile::load(&path).unwrap();
+        assert_eq!(back.file, r);
+        assert!(std::fs::read_to_string(&path).unwrap().contains("\"joint_covariance\""));
+    }
+
+    /// Each bad joint covariance gets one line naming the key, and nothing is written.
+    #[test]
+    fn rig_refuses_a_bad_joint_covariance_naming_the_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rig.json");
+        type Edit = Box<dyn Fn(&mut JointCovariance, &mut RigExtrinsics)>;
+        let cases: Vec<(Edit, &str)> = vec![
+            (Box::new(|j, _| j.matrix.truncate(3)), "joint_covariance.matrix: expected"),
+            (Box::new(|j, _| j.matrix[0][1] = 1.0), "joint_covariance.matrix is not symmetric"),
+            (Box::new(|j, _| j.matrix[2][2] = -1.0), "joint_covariance.matrix has a negative variance"),
+            (Box::new(|j, _| j.matrix[3][3] = f64::INFINITY), "joint_covariance.matrix is not finite"),
+            (Box::new(|j, _| j.cameras = vec![1, 0]), "joint_covariance.cameras: [1, 0]"),
+            (Box::new(|_, e| e.translation_mm[0] += 1e-3), "joint_covariance: camera 1's extrinsic pose is not"),
+            (Box::new(|_, e| e.rotation_rodrigues[2] += 1e-6), "the joint covariance does not describe this rig"),
+        ];
+        for (edit, expected) in cases {
+            let mut r = joint_rig(dir.path());
+            let mut j = r.joint_covariance.take().unwrap();
+            edit(&mut j, &mut r.extrinsics[0]);
+            r.joint_covariance = Some(j);
+            let e = r.save(&path).unwrap_err().to_string();
+            assert!(e.contains(expected), "{e}");
+            assert_eq!(e.lines().count(), 1, "{e}");
+            assert!(!path.exists(), "{expected}: written");
+        }
     }
 }

@@ -211,10 +211,12 @@ impl RigAt {
     /// None where the camera does not see it; at least two), least squares through each
     /// camera's full model, in camera 0's frame at its setting (mm). Its covariance: the
     /// pixel noise `sigma_px` (px per coordinate) plus the calibration's (each used
-    /// camera's model covariance and pose covariance, propagated; assumed independent),
-    /// which a missing covariance refuses unless `pixel_only`. Returns a `Triangulated`:
-    /// `point_mm`, `covariance_mm2`, `std_mm`, `from_pixels_mm2`, `from_calibration_mm2`
-    /// (None with `pixel_only`), `cameras_used`, `rms_px`, `extrapolated`.
+    /// the rig file's joint covariance when it has one, else each used camera's model
+    /// covariance and pose covariance as independent groups), which a missing covariance
+    /// refuses unless `pixel_only`. Returns a `Triangulated`: `point_mm`,
+    /// `covariance_mm2`, `std_mm`, `from_pixels_mm2`, `from_calibration_mm2` (None with
+    /// `pixel_only`), `calibration_covariance` (`"joint"`, `"independent"`, None with
+    /// `pixel_only`), `cameras_used`, `rms_px`, `extrapolated`.
     #[pyo3(signature = (pixels, sigma_px, pixel_only = false))]
     fn triangulate<'py>(
         &self,
@@ -232,6 +234,7 @@ impl RigAt {
         d.set_item("std_mm", vec_out(py, &t.std_mm()))?;
         d.set_item("from_pixels_mm2", mat3_out(py, t.from_pixels))?;
         d.set_item("from_calibration_mm2", t.from_calibration.map(|c| mat3_out(py, c)))?;
+        d.set_item("calibration_covariance", t.calibration_covariance.map(|c| c.as_str()))?;
         d.set_item("cameras_used", t.cameras_used.clone())?;
         d.set_item("rms_px", t.rms_px)?;
         d.set_item("extrapolated", t.extrapolated)?;

@@ -53,11 +53,13 @@ def test_triangulate_gives_cv2s_point_back_with_its_covariance(at: etlcal.RigAt)
         t = at.triangulate([(float(p[0][0]), float(p[0][1])), (float(p[1][0]), float(p[1][1]))], sigma_px=0.2)
         assert np.abs(t.point_mm - x0).max() < 1e-6, (t.point_mm, x0)
         assert t.from_calibration_mm2 is not None
+        # The fixture's rig has no joint covariance: independent groups, said so.
+        assert t.calibration_covariance == "independent"
         assert np.allclose(t.covariance_mm2, t.from_pixels_mm2 + t.from_calibration_mm2, rtol=1e-12, atol=0)
         assert np.allclose(t.std_mm, np.sqrt(np.diag(t.covariance_mm2)))
         # The pixels' part scales with sigma^2.
         half = at.triangulate([tuple(p[0]), tuple(p[1])], sigma_px=0.1, pixel_only=True)
-        assert half.from_calibration_mm2 is None
+        assert half.from_calibration_mm2 is None and half.calibration_covariance is None
         assert np.allclose(4.0 * half.covariance_mm2, t.from_pixels_mm2, rtol=1e-9)
 
 

@@ -7,7 +7,9 @@
 //! ([`etl_calib::rig_calibration`]): each camera first by the flags of `calibrate` (the
 //! same request), then every camera's numbers together with the shared stage corrections.
 //! Writes `etlcal.rig/1` with each camera's calibration inline and each camera's pose
-//! relative to camera 0 with its 6 x 6 covariance (atomically: nothing is written on
+//! relative to camera 0 with its 6 x 6 covariance, and the joint covariance of every
+//! camera's numbers (`joint_covariance`: what `triangulate` propagates, the
+//! cross-covariances between the cameras kept) (atomically: nothing is written on
 //! failure); prints per camera the RMS, and per pose the rotation and translation with
 //! their standard deviations and the baseline. `--json` prints the rig file's object with
 //! a `"summary"`.

@@ -11,12 +11,16 @@
 //! The point is the least-squares triangulation through every camera's full model, in
 //! camera 0's frame at its setting (mm). Its covariance is the pixel noise's
 //! (`--sigma-px`, per coordinate, default 0.1 px, printed with the result) plus the
-//! calibration's: each used camera's model numbers (its file's `covariance`) and pose
-//! (the rig file's), propagated to the point, assumed independent. A calibration or pose
-//! without a covariance is refused unless `--pixel-only` leaves that part out.
+//! calibration's, propagated to the point: from the rig file's `joint_covariance` when it
+//! has one (a rig from `calibrate-rig`: every camera's numbers together, cross-covariances
+//! kept), else each used camera's model numbers (its file's `covariance`) and pose (the
+//! rig file's) as independent groups, which over-states the depth sigma of a rig
+//! calibrated jointly. A calibration or pose without a covariance is refused (independent
+//! groups) unless `--pixel-only` leaves that part out.
 //!
 //! Output per point: `point_mm`, `covariance_mm2`, `std_mm` (the square roots of its
 //! diagonal), `from_pixels_mm2`, `from_calibration_mm2` (null with `--pixel-only`),
+//! `calibration_covariance` (`"joint"` or `"independent"`, null with `--pixel-only`),
 //! `cameras_used`, `rms_px`, `extrapolated`; `--json` wraps them as `{"points": [...],
 //! "sigma_px", "pixel_only", "rig", "cameras", "extrapolated"}`.
 
@@ -106,6 +110,7 @@ fn point_json(t: &Triangulated) -> Value {
     json!({
         "point_mm": t.point_mm, "covariance_mm2": t.covariance_mm2, "std_mm": t.std_mm(),
         "from_pixels_mm2": t.from_pixels, "from_calibration_mm2": t.from_calibration,
+        "calibration_covariance": t.calibration_covariance.map(|c| c.as_str()),
         "cameras_used": t.cameras_used, "rms_px": t.rms_px, "extrapolated": t.extrapolated,
     })
 }

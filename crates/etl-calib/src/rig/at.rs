@@ -2,7 +2,7 @@
 
 use etl_core::runtime::rig::RigPose;
 use etl_formats::calibration::Calibration;
-use etl_formats::rig::RigExtrinsics;
+use etl_formats::rig::{JointCovariance, RigExtrinsics};
 use etl_formats::{CameraAt, Error, Result};
 
 use super::Rig;
@@ -17,6 +17,7 @@ pub struct RigAt {
     extrinsics: Vec<Option<RigExtrinsics>>,
     cameras: Vec<CameraAt>,
     poses: Vec<RigPose>,
+    joint_covariance: Option<JointCovariance>,
 }
 
 impl RigAt {
@@ -29,6 +30,7 @@ impl RigAt {
             extrinsics: (0..n).map(|k| rig.extrinsics(k).cloned()).collect(),
             cameras,
             poses,
+            joint_covariance: rig.file().joint_covariance.clone(),
         }
     }
 
@@ -72,6 +74,11 @@ impl RigAt {
     /// None).
     pub fn extrinsics_file(&self, k: usize) -> Option<&RigExtrinsics> {
         self.extrinsics.get(k).and_then(Option::as_ref)
+    }
+
+    /// The rig file's joint covariance of the cameras' numbers, if it has one.
+    pub fn joint_covariance(&self) -> Option<&JointCovariance> {
+        self.joint_covariance.as_ref()
     }
 
     /// Whether any camera is outside its calibrated ranges (`Trust::Extrapolate`).

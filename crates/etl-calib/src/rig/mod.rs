@@ -35,7 +35,7 @@ pub use export::{maps_files, write_files, ExportFile};
 pub use rectify::{StereoRectification, StereoRectifyMaps};
 
 pub use setting::RigSetting;
-pub use triangulate::{CalibrationPart, Triangulated};
+pub use triangulate::{CalibrationCovariance, CalibrationPart, Triangulated};
 
 /// A calibrated rig: the file, each camera's calibration and run-time camera.
 #[derive(Debug, Clone)]

@@ -18,17 +18,35 @@
 //! Cov_calibration = sum_g A_g C_g A_g^T,   A_g = -(J^T J)^-1 J^T dr/dtheta_g
 //! ```
 //!
-//! over the groups g: each camera's calibration (covariance C_g from its file) and each
-//! pose (its 6 x 6 `covariance`). The groups are assumed independent of each other and of
-//! the pixel noise (each camera calibrated on its own views, the poses from a stereo fit
-//! that held them): cross-covariances are not in the files. The calibration's pose
-//! numbers (om, T of its board frame) do not enter a rig's projection (their columns are
-//! zero), nor does the thermal part's uncertainty (E_com is taken as exact).
+//! **With the rig file's `joint_covariance`** (a rig calibrated jointly: `etlcal
+//! calibrate-rig`), theta is every camera's model numbers together, each camera's pose
+//! (om, t) to the shared world among them, and the poses between the cameras follow from
+//! those (R_k = R(om_k) R(om_0)^T, T_k = t_k - R_k t_0, then Eq. R2 at the settings), so
+//! that a camera's pose enters through every extrinsic it makes:
+//!
+//! ```text
+//! Cov_calibration = A Sigma_joint A^T,   A = -(J^T J)^-1 J^T dr/dtheta   (3 x sum of layouts)
+//! ```
+//!
+//! the cross-covariances kept (a camera's focal polynomial with its pose to the stage,
+//! both cameras through the shared stage's corrections): they cancel much of the depth
+//! error. [`Triangulated::calibration_covariance`] is then
+//! [`CalibrationCovariance::Joint`].
+//!
+//! **Without it**, the sum runs over independent groups g: each camera's calibration
+//! (covariance C_g from its file) and each pose (its 6 x 6 `covariance`), assumed
+//! independent of each other and of the pixel noise (each camera calibrated on its own
+//! views, the poses from a stereo fit that held them); the calibration's pose numbers (om,
+//! T of its board frame) then do not enter a rig's projection (their columns are zero).
+//! For a rig calibrated jointly this over-states the depth sigma 2-3x (the
+//! cross-covariances are dropped): [`CalibrationCovariance::Independent`] says so. In
+//! both, the thermal part's uncertainty is not included (E_com is taken as exact).
 //!
 //! dr/dtheta: analytic for a pose (d pixel / d camera point, times I for T and
 //! d(R(om) p)/d om = -R [p]x J_r(om) for om, with p = X + s_0 e_z), central differences
-//! for the model's numbers: each number stepped by 1e-3 of its own standard deviation
-//! (sqrt of its variance in the file), small against the scale on which the projection
+//! for the model's numbers (the joint path's poses to the world among them): each number
+//! stepped by 1e-3 of its own standard deviation (sqrt of its variance in the file, the
+//! calibration's or the joint one), small against the scale on which the projection
 //! bends, large against rounding; a number with zero variance adds nothing and is skipped.
 
 use etl_core::calib::jacobian::{from_params, project_camera_point_jacobian, rotate_point_jacobian, to_params};
@@ -36,6 +54,7 @@ use etl_core::model::projection::project_camera_point;
 use etl_core::model::rotation::Mat3;
 use etl_core::model::CameraModel;
 use etl_core::runtime::rig::{centre_shift_mm, triangulate, RigPose, Triangulation, TriangulationView};
+use etl_formats::rig::{relative_pose, JointCovariance};
 use etl_formats::{Error, Result};
 
 use super::RigAt;
@@ -49,6 +68,26 @@ pub enum CalibrationPart {
     PixelOnly,
 }
 
+/// Which covariance of the calibration [`RigAt::triangulate`] propagated (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CalibrationCovariance {
+    /// The rig file's `joint_covariance`, cross-covariances kept.
+    Joint,
+    /// Each calibration and each pose as an independent group: for a rig calibrated
+    /// jointly this over-states the depth sigma.
+    Independent,
+}
+
+impl CalibrationCovariance {
+    /// `"joint"` or `"independent"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CalibrationCovariance::Joint => "joint",
+            CalibrationCovariance::Independent => "independent",
+        }
+    }
+}
+
 /// A triangulated point and its covariance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Triangulated {
@@ -60,6 +99,9 @@ pub struct Triangulated {
     pub from_pixels: Mat3,
     /// The calibration's part (module docs), mm^2; None when not asked for.
     pub from_calibration: Option<Mat3>,
+    /// Which covariance of the calibration `from_calibration` comes from; None when not
+    /// asked for.
+    pub calibration_covariance: Option<CalibrationCovariance>,
     /// The cameras whose pixels were used.
     pub cameras_used: Vec<usize>,
     /// RMS reprojection distance over them, px.
@@ -111,9 +153,12 @@ impl RigAt {
             })
             .collect();
         let t = triangulate(&views, sigma_px).map_err(|e| Error::from(e).within("triangulate", Some("pixels")))?;
-        let from_calibration = match part {
-            CalibrationPart::PixelOnly => None,
-            CalibrationPart::Include => Some(self.calibration_covariance(&views, &used, &t)?),
+        let (from_calibration, calibration_covariance) = match part {
+            CalibrationPart::PixelOnly => (None, None),
+            CalibrationPart::Include => {
+                let (c, source) = self.calibration_covariance(&views, &used, &t)?;
+                (Some(c), Some(source))
+            }
         };
         let mut covariance_mm2 = t.covariance_mm2;
         if let Some(c) = &from_calibration {
@@ -128,19 +173,21 @@ impl RigAt {
             covariance_mm2,
             from_pixels: t.covariance_mm2,
             from_calibration,
+            calibration_covariance,
             extrapolated: used.iter().any(|&k| self.cameras()[k].extrapolated()),
             cameras_used: used,
             rms_px: t.rms_px,
         })
     }
 
-    /// Cov_calibration (module docs) at the solution `t` of `views` (cameras `used`).
+    /// Cov_calibration (module docs) at the solution `t` of `views` (cameras `used`), and
+    /// which covariance it propagated.
     fn calibration_covariance(
         &self,
         views: &[TriangulationView<'_>],
         used: &[usize],
         t: &Triangulation,
-    ) -> Result<Mat3> {
+    ) -> Result<(Mat3, CalibrationCovariance)> {
         let x = t.point_mm;
         let jacobians: Vec<[[f64; 3]; 2]> =
             views.iter().map(|v| v.residual(x).map(|(_, j)| j)).collect::<etl_core::Result<_>>()?;
@@ -152,6 +199,36 @@ impl RigAt {
                 std::array::from_fn(|a| std::array::from_fn(|row| -(0..3).map(|b| ni[a][b] * j[row][b]).sum::<f64>()))
             })
             .collect();
+        if let Some(joint) = self.joint_covariance() {
+            return Ok((self.joint_part(&g, used, x, joint)?, CalibrationCovariance::Joint));
+        }
+        Ok((self.independent_part(&g, used, x)?, CalibrationCovariance::Independent))
+    }
+
+    /// A Sigma_joint A^T (module docs): every camera's numbers, camera 0's always (its
+    /// pose to the world moves every extrinsic), the poses between cameras from theirs.
+    fn joint_part(&self, g: &[[[f64; 2]; 3]], used: &[usize], x: [f64; 3], joint: &JointCovariance) -> Result<Mat3> {
+        let total = joint.matrix.len();
+        let mut d = vec![vec![0.0; total]; 2 * used.len()];
+        let mut offset = 0;
+        for c in 0..self.len() {
+            let n = self.calibration(c).ok_or_else(|| Error::invalid("pixels", "camera out of range"))?.layout()?.len();
+            if c == 0 || used.contains(&c) {
+                let sd: Vec<f64> = (0..n).map(|i| joint.matrix[offset + i][offset + i].max(0.0).sqrt()).collect();
+                let dc = self.model_derivatives(c, used, x, &sd, Poses::FromCalibrations)?;
+                for (row, drow) in d.iter_mut().zip(&dc) {
+                    row[offset..offset + n].copy_from_slice(drow);
+                }
+            }
+            offset += n;
+        }
+        let mut cov = [[0.0; 3]; 3];
+        add_group(&mut cov, g, &d, |i, j| joint.matrix[i][j], total);
+        Ok(cov)
+    }
+
+    /// The sum over independent groups (module docs).
+    fn independent_part(&self, g: &[[[f64; 2]; 3]], used: &[usize], x: [f64; 3]) -> Result<Mat3> {
         let mut cov = [[0.0; 3]; 3];
         let moving_0 = self.cameras()[0].model().centre.is_some();
         for c in (0..self.len()).filter(|&c| used.contains(&c) || (c == 0 && moving_0)) {
@@ -161,8 +238,9 @@ impl RigAt {
                 e.within(format!("camera {c} ({name}): pass pixel-only to leave the calibration's part out"), None)
             })?;
             let n = cal.layout()?.len();
-            let d = self.model_derivatives(c, used, x, &cc, n)?;
-            add_group(&mut cov, &g, &d, |i, j| cc[i][j], n);
+            let sd: Vec<f64> = (0..n).map(|i| cc[i][i].max(0.0).sqrt()).collect();
+            let d = self.model_derivatives(c, used, x, &sd, Poses::FromFile)?;
+            add_group(&mut cov, g, &d, |i, j| cc[i][j], n);
         }
         for (v, &k) in used.iter().enumerate().filter(|(_, k)| **k > 0) {
             let e = self.extrinsics_file(k).ok_or_else(|| Error::invalid("pixels", "camera has no pose"))?;
@@ -176,27 +254,27 @@ impl RigAt {
                 ));
             };
             let d = self.pose_derivatives(v, k, used.len(), x, e.rotation_rodrigues)?;
-            add_group(&mut cov, &g, &d, |i, j| ce[i][j], 6);
+            add_group(&mut cov, g, &d, |i, j| ce[i][j], 6);
         }
         Ok(cov)
     }
 
     /// d r / d theta (2K x n, rows view by view) for camera `c`'s model numbers at fixed
-    /// X, by central differences (module docs).
+    /// X, by central differences (module docs), number i stepped by 1e-3 `sd[i]` (skipped
+    /// when 0), the poses between cameras as `poses` says.
     fn model_derivatives(
         &self,
         c: usize,
         used: &[usize],
         x: [f64; 3],
-        cc: &[[f64; etl_core::calib::params::MAX_PARAMS]; etl_core::calib::params::MAX_PARAMS],
-        n: usize,
+        sd: &[f64],
+        poses: Poses,
     ) -> Result<Vec<Vec<f64>>> {
         let base = *self.cameras()[c].model();
         let layout = base.layout();
         let theta = to_params(&base);
-        let mut d = vec![vec![0.0; n]; 2 * used.len()];
-        for i in 0..n {
-            let sd = cc[i][i].max(0.0).sqrt();
+        let mut d = vec![vec![0.0; sd.len()]; 2 * used.len()];
+        for (i, &sd) in sd.iter().enumerate() {
             if sd == 0.0 {
                 continue;
             }
@@ -209,8 +287,8 @@ impl RigAt {
                 if k != c && c != 0 {
                     continue;
                 }
-                let qp = self.project_with(k, (c, &mp), x)?;
-                let qm = self.project_with(k, (c, &mm), x)?;
+                let qp = self.project_with(k, (c, &mp), x, poses)?;
+                let qm = self.project_with(k, (c, &mm), x, poses)?;
                 for row in 0..2 {
                     d[2 * v + row][i] = (qp[row] - qm[row]) / (2.0 * h);
                 }
@@ -220,15 +298,23 @@ impl RigAt {
     }
 
     /// Camera `k`'s pixel of X with camera `c`'s model replaced by `model` (its pose at the
-    /// settings recomputed: Eq. R2 through both centres).
-    fn project_with(&self, k: usize, (c, model): (usize, &CameraModel), x: [f64; 3]) -> Result<[f64; 2]> {
+    /// settings recomputed: Eq. R2 through both centres; with [`Poses::FromCalibrations`],
+    /// (R_k, T_k) the relative pose of the models' poses to the world).
+    fn project_with(&self, k: usize, (c, model): (usize, &CameraModel), x: [f64; 3], poses: Poses) -> Result<[f64; 2]> {
         let pick = |j: usize| if j == c { *model } else { *self.cameras()[j].model() };
         let (m0, mk) = (pick(0), pick(k));
         let ek = self.cameras()[k].setting_value();
         let pose = match self.extrinsics_file(k) {
             None => RigPose::IDENTITY,
             Some(e) => {
-                let p = RigPose::from_rodrigues(e.rotation_rodrigues, e.translation_mm);
+                let (om, t) = match poses {
+                    Poses::FromFile => (e.rotation_rodrigues, e.translation_mm),
+                    Poses::FromCalibrations => relative_pose(
+                        (m0.rotation_rodrigues, m0.translation_mm),
+                        (mk.rotation_rodrigues, mk.translation_mm),
+                    ),
+                };
+                let p = RigPose::from_rodrigues(om, t);
                 match e.reference_setting {
                     None => p,
                     Some([r0, rk]) => p.at_settings(
@@ -260,6 +346,16 @@ impl RigAt {
         }
         Ok(d)
     }
+}
+
+/// Where a projection's pose between cameras comes from.
+#[derive(Debug, Clone, Copy)]
+enum Poses {
+    /// The rig file's extrinsics (the models' poses to their boards do not enter).
+    FromFile,
+    /// The relative pose of the models' poses to the shared world (the joint covariance's
+    /// meaning).
+    FromCalibrations,
 }
 
 /// cov += A C A^T with A = G D (3 x n): `g` per view (3 x 2), `d` the 2K x n derivatives,

@@ -6,7 +6,7 @@ use etl_core::calib::jacobian::to_params;
 use etl_core::calib::params::MAX_PARAMS;
 use etl_core::model::CameraModel;
 use etl_formats::calibration::{Calibration, ModelStd};
-use etl_formats::rig::{RigCamera, RigExtrinsics, RigFile};
+use etl_formats::rig::{JointCovariance, RigCamera, RigExtrinsics, RigFile};
 use etl_formats::{Result, SettingKind};
 use nalgebra::DMatrix;
 
@@ -66,7 +66,9 @@ impl RigCalibration {
         Some(e.translation_mm.iter().map(|t| t * t).sum::<f64>().sqrt())
     }
 
-    /// The rig as `etlcal.rig/1`, each calibration inline.
+    /// The rig as `etlcal.rig/1`, each calibration inline, with [`Self::covariance`] as
+    /// its `joint_covariance` (the extrinsics are the relative poses of the calibrations'
+    /// poses to the stage, as the format asks).
     pub fn rig_file(&self) -> RigFile {
         let cameras = self
             .cameras
@@ -78,7 +80,14 @@ impl RigCalibration {
                 calibration_path: None,
             })
             .collect();
-        RigFile::new(cameras, self.extrinsics.clone())
+        let n = self.covariance.nrows();
+        let matrix = (0..n)
+            .map(|i| (0..n).map(|j| 0.5 * (self.covariance[(i, j)] + self.covariance[(j, i)])).collect())
+            .collect();
+        RigFile {
+            joint_covariance: Some(JointCovariance { cameras: (0..self.cameras.len()).collect(), matrix }),
+            ..RigFile::new(cameras, self.extrinsics.clone())
+        }
     }
 
     /// Writes [`Self::rig_file`] atomically after its checks (nothing written if they fail).

@@ -352,14 +352,19 @@ class ExportResult(_Result):
 class Triangulated(_Result):
     """`RigAt.triangulate`: `point_mm` (3,) in camera 0's frame at its setting, its
     `covariance_mm2` (3 x 3) = `from_pixels_mm2` (the pixel noise's) + `from_calibration_mm2`
-    (the calibrations' and poses', None when pixel-only), `std_mm` (the square roots of its
-    diagonal), `cameras_used`, `rms_px` (reprojection), `extrapolated`."""
+    (the calibrations' and poses', None when pixel-only), `calibration_covariance`
+    (`"joint"`: from the rig file's joint covariance, cross-covariances kept;
+    `"independent"`: each calibration and pose as an independent group, which over-states
+    the depth sigma of a rig calibrated jointly; None when pixel-only), `std_mm` (the
+    square roots of its diagonal), `cameras_used`, `rms_px` (reprojection),
+    `extrapolated`."""
 
     point_mm: _F64
     covariance_mm2: _F64
     std_mm: _F64
     from_pixels_mm2: _F64
     from_calibration_mm2: Optional[_F64]
+    calibration_covariance: Optional[str]
     cameras_used: List[int]
     rms_px: float
     extrapolated: bool

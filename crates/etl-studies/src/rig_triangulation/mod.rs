@@ -15,7 +15,8 @@
 //!   over the board, Z over the travel) that both true cameras see at those settings
 //!   (not necessarily in focus), its true pixels plus pixel noise of the simulation's
 //!   sigma, triangulated with the pixel and calibration parts of the covariance
-//!   ([`CalibrationPart::Include`]); per axis of camera 0's frame, whether
+//!   ([`CalibrationPart::Include`], the calibration's part from the rig file's joint
+//!   covariance; beside it, the same rig without it: independent groups); per axis of camera 0's frame, whether
 //!   |error| <= 1 sigma, and the Mahalanobis distance d^2 (chi-square with 3 dof: mean 3,
 //!   P(d^2 <= 1) = 19.9 %);
 //! - **a 2 mm move** ([`moves`]): the board at Z uniform in the travel and at Z + 2 mm,
@@ -26,7 +27,6 @@
 //! (no current error at run time): the calibration's current errors are in the
 //! calibration's covariance, a run-time current error is not in the triangulation's.
 
-pub mod joint;
 pub mod moves;
 pub mod point;
 
@@ -37,6 +37,7 @@ use etl_calib::rig::{Rig, RigSetting};
 use etl_calib::rig_calibration::{calibrate_rig, RigCalibrationOptions};
 use etl_core::model::CameraModel;
 use etl_core::thermal::ThermalSurface;
+use etl_formats::rig::RigFile;
 use etl_formats::{Result, ThermalRef};
 use etl_sim::multi_camera::{simulate_multi_camera, MultiCameraDesign, STAGE_TRAVEL_MM};
 use etl_sim::rig::PAPER_TEMPERATURE_C;
@@ -99,12 +100,14 @@ pub fn trial(design: &RigTriangulationDesign, seed: u64) -> Result<Trial> {
     let rig_design = MultiCameraDesign { moving_centre: design.moving_centre, ..MultiCameraDesign::new(2) };
     let sim = simulate_multi_camera(&rig_design, &design.noise, seed)?;
     let calibrated = calibrate_rig(&sim.dataset, &options(design))?;
-    let rig = Rig::from_file(calibrated.rig_file(), Path::new("."))?;
+    let file = calibrated.rig_file();
+    let rig = Rig::from_file(file.clone(), Path::new("."))?;
+    let independent = Rig::from_file(RigFile { joint_covariance: None, ..file }, Path::new("."))?;
     let ranges = [0, 1].map(|k| calibrated.cameras[k].calibration.e_com_range_ma);
     // The run-time draws from their own stream, apart from the simulation's.
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_ac0e);
     let t = PAPER_TEMPERATURE_C;
-    let point = point::point_error((&rig, &calibrated), &sim.truths, (ranges, t), design.noise.px, &mut rng)?;
+    let point = point::point_error((&rig, &independent), &sim.truths, (ranges, t), design.noise.px, &mut rng)?;
     let [z0, z1] = STAGE_TRAVEL_MM;
     // Half a millimetre inside the travel: the focus currents stay inside the ranges.
     let z = rng.random_range(z0 + 0.5..=z1 - MOVE_MM - 0.5);
@@ -152,13 +155,13 @@ pub struct RigTriangulation {
     pub d2: Stat,
     /// Fraction with d^2 <= 1 (19.9 % if right).
     pub within_ellipsoid: f64,
-    /// Coverage per axis with the calibration part from the joint covariance
-    /// ([`joint`]).
-    pub coverage_joint_per_axis: [f64; 3],
+    /// Coverage per axis with the calibration part from independent groups (the rig
+    /// file without its `joint_covariance`).
+    pub coverage_independent_per_axis: [f64; 3],
     /// The z-scores with that covariance.
-    pub z_scores_joint: [Stat; 3],
+    pub z_scores_independent: [Stat; 3],
     /// Mean d^2 with that covariance.
-    pub d2_joint: Stat,
+    pub d2_independent: Stat,
     /// Mean d^2 with the pixel part of the covariance alone.
     pub d2_pixels_only: Stat,
     /// Mean share of the calibration part in the covariance's trace.
@@ -196,7 +199,8 @@ fn summarise(
     let n = results.len().max(1) as f64;
     let covered = |i: usize| results.iter().filter(|t| t.point.z_scores[i].abs() <= 1.0).count() as f64 / n;
     let coverage_per_axis = [0, 1, 2].map(covered);
-    let covered_joint = |i: usize| results.iter().filter(|t| t.point.z_scores_joint[i].abs() <= 1.0).count() as f64 / n;
+    let covered_independent =
+        |i: usize| results.iter().filter(|t| t.point.z_scores_independent[i].abs() <= 1.0).count() as f64 / n;
     let column = |f: &dyn Fn(&Trial) -> f64| results.iter().map(f).collect::<Vec<f64>>();
     let m = |f: &dyn Fn(&MoveErrors) -> f64| move_stat(&column(&|t| f(&t.moves)));
     RigTriangulation {
@@ -206,9 +210,9 @@ fn summarise(
         coverage: coverage_per_axis.iter().sum::<f64>() / 3.0,
         z_scores: [0, 1, 2].map(|i| stat(&column(&|t| t.point.z_scores[i]))),
         d2: stat(&column(&|t| t.point.d2)),
-        coverage_joint_per_axis: [0, 1, 2].map(covered_joint),
-        z_scores_joint: [0, 1, 2].map(|i| stat(&column(&|t| t.point.z_scores_joint[i]))),
-        d2_joint: stat(&column(&|t| t.point.d2_joint)),
+        coverage_independent_per_axis: [0, 1, 2].map(covered_independent),
+        z_scores_independent: [0, 1, 2].map(|i| stat(&column(&|t| t.point.z_scores_independent[i]))),
+        d2_independent: stat(&column(&|t| t.point.d2_independent)),
         within_ellipsoid: results.iter().filter(|t| t.point.d2 <= 1.0).count() as f64 / n,
         d2_pixels_only: stat(&column(&|t| t.point.d2_pixels_only)),
         calibration_share: column(&|t| t.point.calibration_share).iter().sum::<f64>() / n,
@@ -229,14 +233,14 @@ impl RigTriangulation {
     pub fn markdown(&self) -> String {
         let centre = if self.moving_centre { "moving" } else { "fixed" };
         let mut s = format!(
-            "{} trials, {} centres ({} failed)\n\n| axis | coverage of 1 sigma | z-score mean | z-score std | mean sigma (um) | coverage, joint covariance | z-score std, joint |\n|---|---|---|---|---|---|---|\n",
+            "{} trials, {} centres ({} failed)\n\n| axis | coverage of 1 sigma | z-score mean | z-score std | mean sigma (um) | coverage, independent groups | z-score std, independent |\n|---|---|---|---|---|---|---|\n",
             self.trials,
             centre,
             self.failed.len()
         );
         for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
             let z = &self.z_scores[i];
-            let zj = &self.z_scores_joint[i];
+            let zi = &self.z_scores_independent[i];
             s += &format!(
                 "| {axis} | {:.1} % | {:+.3} | {:.3} ± {:.3} | {:.2} | {:.1} % | {:.3} ± {:.3} |\n",
                 100.0 * self.coverage_per_axis[i],
@@ -244,22 +248,22 @@ impl RigTriangulation {
                 z.std,
                 z.std_se,
                 self.mean_std_um[i],
-                100.0 * self.coverage_joint_per_axis[i],
-                zj.std,
-                zj.std_se
+                100.0 * self.coverage_independent_per_axis[i],
+                zi.std,
+                zi.std_se
             );
         }
         s += &format!(
-            "\nall axes: {:.1} % (target 68 ± 5 %); mean d^2 {:.2} ± {:.2} (3 if right); P(d^2 <= 1) {:.1} % (19.9 %); pixel part alone: mean d^2 {:.1}; calibration's share of the trace {:.1} %; joint covariance: all axes {:.1} %, mean d^2 {:.2} ± {:.2}\n",
+            "\nall axes: {:.1} % (target 68 ± 5 %); mean d^2 {:.2} ± {:.2} (3 if right); P(d^2 <= 1) {:.1} % (19.9 %); pixel part alone: mean d^2 {:.1}; calibration's share of the trace {:.1} %; independent groups instead of the joint covariance: all axes {:.1} %, mean d^2 {:.2} ± {:.2}\n",
             100.0 * self.coverage,
             self.d2.mean,
             self.d2.mean_se,
             100.0 * self.within_ellipsoid,
             self.d2_pixels_only.mean,
             100.0 * self.calibration_share,
-            100.0 * self.coverage_joint_per_axis.iter().sum::<f64>() / 3.0,
-            self.d2_joint.mean,
-            self.d2_joint.mean_se
+            100.0 * self.coverage_independent_per_axis.iter().sum::<f64>() / 3.0,
+            self.d2_independent.mean,
+            self.d2_independent.mean_se
         );
         s += "\n| 2 mm move | RMS (um) | max (um) | mean (um) |\n|---|---|---|---|\n";
         let names = [

@@ -3,7 +3,6 @@
 //! the estimated rig, and its error against the propagated covariance.
 
 use etl_calib::rig::{CalibrationPart, Rig};
-use etl_calib::rig_calibration::RigCalibration;
 use etl_core::model::rotation::Mat3;
 use etl_core::model::CameraModel;
 use etl_formats::{Error, Result, Trust};
@@ -33,11 +32,11 @@ pub struct PointError {
     pub calibration_share: f64,
     /// sqrt(Cov_ii) per axis, mm.
     pub std_mm: [f64; 3],
-    /// error_i / sigma_i with the calibration part from the joint covariance
-    /// ([`super::joint`]) instead of the rig file's independent groups.
-    pub z_scores_joint: [f64; 3],
+    /// error_i / sigma_i with the calibration part from independent groups (the rig file
+    /// without its joint covariance) instead of the joint covariance.
+    pub z_scores_independent: [f64; 3],
     /// d^2 with that covariance.
-    pub d2_joint: f64,
+    pub d2_independent: f64,
 }
 
 /// A point of the stage's volume (X, Y over the board, Z over the travel) that both true
@@ -64,11 +63,12 @@ fn mahalanobis2(c: &Mat3, e: [f64; 3]) -> Result<f64> {
     Ok(v.dot(&chol.solve(&v)))
 }
 
-/// One point (module docs) with the estimated `rig` against the simulation's `truths`,
+/// One point (module docs) with the estimated `rig` (and the same rig `independent`
+/// without its joint covariance) against the simulation's `truths`,
 /// pixel noise `sigma_px`, at the lens temperature `temperature_c`; `ranges` each
 /// camera's calibrated range of E_com.
 pub fn point_error(
-    (rig, calibrated): (&Rig, &RigCalibration),
+    (rig, independent): (&Rig, &Rig),
     truths: &[CameraModel],
     (ranges, temperature_c): ([[f64; 2]; 2], f64),
     sigma_px: f64,
@@ -83,10 +83,16 @@ pub fn point_error(
         let p = m.project(w, e)?;
         *o = [p[0] + gauss(sigma_px, rng), p[1] + gauss(sigma_px, rng)];
     }
-    let at = rig.at(&settings_of(&e_com_ma, temperature_c)?, &[temperature_c; 2], Trust::Refuse)?;
-    let t = at.triangulate(&observed.map(Some), sigma_px, CalibrationPart::Include)?;
-    let joint = super::joint::joint_calibration_part(calibrated, e_com_ma, observed)?;
-    let joint_cov: Mat3 = std::array::from_fn(|i| std::array::from_fn(|j| t.from_pixels[i][j] + joint[i][j]));
+    let settings = settings_of(&e_com_ma, temperature_c)?;
+    let triangulate = |r: &Rig| {
+        r.at(&settings, &[temperature_c; 2], Trust::Refuse)?.triangulate(
+            &observed.map(Some),
+            sigma_px,
+            CalibrationPart::Include,
+        )
+    };
+    let t = triangulate(rig)?;
+    let independent_cov = triangulate(independent)?.covariance_mm2;
     let e: [f64; 3] = std::array::from_fn(|i| t.point_mm[i] - truth_mm[i]);
     let std_mm = t.std_mm();
     let calibration = t.from_calibration.unwrap_or_default();
@@ -99,7 +105,7 @@ pub fn point_error(
         d2_pixels_only: mahalanobis2(&t.from_pixels, e)?,
         calibration_share: trace(&calibration) / trace(&t.covariance_mm2),
         std_mm,
-        z_scores_joint: std::array::from_fn(|i| e[i] / joint_cov[i][i].sqrt()),
-        d2_joint: mahalanobis2(&joint_cov, e)?,
+        z_scores_independent: std::array::from_fn(|i| e[i] / independent_cov[i][i].sqrt()),
+        d2_independent: mahalanobis2(&independent_cov, e)?,
     })
 }

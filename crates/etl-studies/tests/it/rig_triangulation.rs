@@ -4,12 +4,17 @@
 
 use std::path::Path;
 
-use etl_calib::rig::Rig;
+use etl_calib::rig::{CalibrationCovariance, CalibrationPart, Rig, RigSetting};
+use etl_core::calib::jacobian::{from_params, to_params};
+use etl_core::model::CameraModel;
+use etl_core::runtime::rig::{centre_shift_mm, triangulate, RigPose, TriangulationView};
+use etl_core::runtime::{Camera, Trust};
+use etl_core::thermal::ThermalSurface;
+use etl_formats::rig::{relative_pose, JointCovariance};
 use etl_formats::ThermalRef;
 use etl_sim::multi_camera::{simulate_multi_camera, truth_rig, MultiCameraDesign};
 use etl_sim::rig::PAPER_TEMPERATURE_C;
 use etl_sim::simulate::NoiseModel;
-use etl_studies::rig_triangulation::joint::triangulate_models;
 use etl_studies::rig_triangulation::moves::move_errors;
 use etl_studies::rig_triangulation::{rig_triangulation, trial, RigTriangulationDesign, NOISE};
 use rand::SeedableRng;
@@ -23,7 +28,7 @@ fn each_trial_lies_within_four_sigma_and_measures_the_move_within_microns() {
     for t in &r.results {
         let p = &t.point;
         for i in 0..3 {
-            assert!(p.z_scores[i].abs() < 4.0 && p.z_scores_joint[i].abs() < 4.0, "{p:?}");
+            assert!(p.z_scores[i].abs() < 4.0 && p.z_scores_independent[i].abs() < 4.0, "{p:?}");
             // The calibration's part dominates: tens to hundreds of um per axis.
             assert!(p.std_mm[i] > 1e-3 && p.std_mm[i] < 2.0, "{p:?}");
         }
@@ -62,15 +67,120 @@ fn the_noise_free_move_through_the_true_rig_is_exact() {
     }
 }
 
+/// The oracle: the point triangulated from `pixels` through `models` at `e_com_ma` (camera
+/// 1's pose from the models' poses to the world, at the settings by Eq. R2), in camera
+/// 0's frame at its setting.
+fn triangulate_models(models: &[CameraModel; 2], e_com_ma: [f64; 2], pixels: [[f64; 2]; 2]) -> [f64; 3] {
+    let at = |k: usize| {
+        let e = e_com_ma[k];
+        Camera::new(models[k], None, [e, e]).unwrap().at_e_com(e, Trust::Extrapolate).unwrap()
+    };
+    let (c0, c1) = (at(0), at(1));
+    let pose = |m: &CameraModel| (m.rotation_rodrigues, m.translation_mm);
+    let (om, t) = relative_pose(pose(&models[0]), pose(&models[1]));
+    let shift = |k: usize| centre_shift_mm(&models[k], e_com_ma[k], 0.0);
+    let pose1 = RigPose::from_rodrigues(om, t).at_settings(shift(0), shift(1));
+    let views = [
+        TriangulationView { camera: &c0, pose: RigPose::IDENTITY, pixel: pixels[0] },
+        TriangulationView { camera: &c1, pose: pose1, pixel: pixels[1] },
+    ];
+    triangulate(&views, 1.0).unwrap().point_mm
+}
+
 #[test]
-fn the_joint_diagnosis_triangulates_noise_free_pixels_exactly() {
+fn the_oracle_triangulates_noise_free_pixels_exactly() {
     for moving_centre in [false, true] {
         let (_, truths) = true_rig(moving_centre);
         let (w, e) = ([5.0, -3.0, 40.0], [110.0, 170.0]);
         let pixels = [0, 1].map(|k| truths[k].project(w, e[k]).unwrap());
-        let x = triangulate_models(&[truths[0], truths[1]], e, pixels).unwrap();
+        let x = triangulate_models(&[truths[0], truths[1]], e, pixels);
         let truth = truths[0].world_to_camera_at(w, e[0]);
         assert!((0..3).all(|i| (x[i] - truth[i]).abs() < 1e-6), "moving {moving_centre}: {x:?} {truth:?}");
+    }
+}
+
+/// A made-up joint covariance over both true cameras' numbers, cross terms within each
+/// camera and between the cameras.
+fn made_up_joint(truths: &[CameraModel]) -> Vec<Vec<f64>> {
+    let n: usize = truths.iter().map(|m| m.layout().len()).sum();
+    // Standard deviations: 1e-5 of each number (1e-6 for a zero).
+    let sd: Vec<f64> = truths
+        .iter()
+        .flat_map(|m| to_params(m)[..m.layout().len()].to_vec())
+        .map(|v| if v == 0.0 { 1e-6 } else { 1e-5 * v.abs() })
+        .collect();
+    // Correlation 0.5^|i - j| over the concatenation (the AR(1) matrix: positive
+    // definite), so neighbours across the cameras' boundary correlate too.
+    let mut m = vec![vec![0.0; n]; n];
+    for i in 0..n {
+        for j in 0..n {
+            let rho = 0.5f64.powi((i as i32 - j as i32).abs());
+            m[i][j] = rho * sd[i] * sd[j];
+        }
+    }
+    m
+}
+
+/// With the joint covariance, the library's calibration part is J Sigma J^T with J the
+/// derivative of the re-triangulated point through perturbed models (the oracle above),
+/// to the finite differences' accuracy.
+#[test]
+fn the_joint_path_equals_a_direct_propagation() {
+    for moving_centre in [false, true] {
+        let design = MultiCameraDesign { moving_centre, ..MultiCameraDesign::new(2) };
+        let sim = simulate_multi_camera(&design, &NoiseModel::NONE, 3).unwrap();
+        let truths = [sim.truths[0], sim.truths[1]];
+        let mut file = truth_rig(&sim);
+        for c in &mut file.cameras {
+            c.calibration.as_mut().unwrap().thermal = Some(ThermalRef::paper());
+        }
+        let matrix = made_up_joint(&truths);
+        file.joint_covariance = Some(JointCovariance { cameras: vec![0, 1], matrix: matrix.clone() });
+        let rig = Rig::from_file(file, Path::new(".")).unwrap();
+        let (w, e) = ([5.0, -3.0, 40.0], [110.0, 170.0]);
+        let pixels = [0, 1].map(|k| truths[k].project(w, e[k]).unwrap());
+        let t = PAPER_TEMPERATURE_C;
+        let settings: Vec<RigSetting> =
+            e.iter().map(|&e| RigSetting::of(ThermalSurface::PAPER.e_in_for_e_com(e, t).unwrap())).collect();
+        let at = rig.at(&settings, &[t; 2], Trust::Refuse).unwrap();
+        let got = at.triangulate(&pixels.map(Some), 0.2, CalibrationPart::Include).unwrap();
+        assert_eq!(got.calibration_covariance, Some(CalibrationCovariance::Joint));
+        let got = got.from_calibration.unwrap();
+        // The oracle's J by central differences over every number.
+        let mut jac = vec![];
+        for k in 0..2 {
+            let layout = truths[k].layout();
+            let theta = to_params(&truths[k]);
+            for i in 0..layout.len() {
+                let h = 1e-3 * matrix[jac.len()][jac.len()].sqrt();
+                let moved = |d: f64| {
+                    let mut x = theta;
+                    x[i] += d;
+                    let mut m = truths;
+                    m[k] = from_params(&layout, &x);
+                    triangulate_models(&m, e, pixels)
+                };
+                let (p, m) = (moved(h), moved(-h));
+                jac.push(std::array::from_fn::<f64, 3, _>(|a| (p[a] - m[a]) / (2.0 * h)));
+            }
+        }
+        let mut want = [[0.0; 3]; 3];
+        for (a, ja) in jac.iter().enumerate() {
+            for (b, jb) in jac.iter().enumerate() {
+                for p in 0..3 {
+                    for q in 0..3 {
+                        want[p][q] += ja[p] * matrix[a][b] * jb[q];
+                    }
+                }
+            }
+        }
+        let scale = (0..3).map(|i| want[i][i]).fold(0.0, f64::max);
+        assert!(scale > 1e-8, "moving {moving_centre}: {want:?}");
+        for p in 0..3 {
+            for q in 0..3 {
+                assert!((got[p][q] - want[p][q]).abs() < 1e-4 * scale, "moving {moving_centre}: {got:?} {want:?}");
+            }
+        }
     }
 }
 

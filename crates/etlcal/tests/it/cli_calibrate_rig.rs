@@ -44,6 +44,11 @@ fn calibrate_rig_recovers_the_simulated_extrinsics() {
         assert_eq!(v["format"], "etlcal.rig/1");
         let written: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
         assert_eq!(written["extrinsics"], v["extrinsics"]);
+        // The joint covariance over both cameras' numbers, square, for `triangulate`.
+        let joint = &written["joint_covariance"];
+        assert_eq!(joint["cameras"], serde_json::json!([0, 1]));
+        let m = joint["matrix"].as_array().unwrap();
+        assert!(m.len() > 12 && m.iter().all(|r| r.as_array().unwrap().len() == m.len()), "{}", m.len());
         let e = &v["extrinsics"][0];
         let t = &truth["extrinsics"][0];
         for (i, key) in ["rotation_rodrigues", "translation_mm"].iter().enumerate() {

@@ -60,6 +60,8 @@ fn triangulate_gives_the_point_of_noise_free_pixels_back() {
     }
     assert_eq!((j["sigma_px"].as_f64(), j["pixel_only"].as_bool()), (Some(0.2), Some(false)));
     assert_eq!(p["extrapolated"], false);
+    // The fixture's rig has no joint covariance: independent groups, said so.
+    assert_eq!(p["calibration_covariance"], "independent");
     // A file of two points, the second seen by camera 1 alone: refused naming it.
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("pixels.json");
@@ -77,6 +79,7 @@ fn triangulate_gives_the_point_of_noise_free_pixels_back() {
     let j = json(&etlcal(&args));
     assert_eq!(j["points"].as_array().unwrap().len(), 2);
     assert!(j["points"][1]["from_calibration_mm2"].is_null());
+    assert!(j["points"][1]["calibration_covariance"].is_null());
     std::fs::write(&file, serde_json::to_string(&[[None, Some(p1)]]).unwrap()).unwrap();
     refused(etlcal(&args), "too few cameras seeing the point");
 }
