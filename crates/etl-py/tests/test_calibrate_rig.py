@@ -63,7 +63,7 @@ def test_calibrate_rig_refuses_bad_input(tmp_path: pathlib.Path, etlcal_binary: 
     assert "views[0].cameras[0].camera: 7 is not a camera of the rig" in str(err.value)
     assert len(str(err.value).splitlines()) == 1
     with pytest.raises(etlcal.InputError) as err:
-        etlcal.calibrate_rig(sim / "rig_dataset.json", solver="fastest")
+        etlcal.calibrate_rig(sim / "rig_dataset.json", solver="fastest")  # type: ignore[arg-type]
     assert 'solver must be "auto", "dense" or "sparse", got "fastest"' in str(err.value)
     with pytest.raises(etlcal.InputError) as err:
         etlcal.calibrate_rig(sim / "rig_dataset.json", method="per-setting")

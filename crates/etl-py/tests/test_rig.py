@@ -78,7 +78,7 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     languages = [language for language, _ in blocks]
     # A new snippet must be added here with what the test gives it.
     assert languages == ["sh", "json", "sh", "python", "sh", "sh", "json", "sh", "python", "sh", "python", "sh",
-                         "json", "sh", "json", "sh"], languages
+                         "json", "sh", "python", "json", "sh", "json", "sh"], languages
     # The rig's data: images of the simulated rig (views/, offstate/, dataset.json) and the
     # lens-off board's file that the zhang snippet names.
     subprocess.run([etlcal_binary, "simulate", "--out", str(tmp_path), "--quiet"], check=True, capture_output=True)
@@ -87,6 +87,9 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     # The rig snippets' rig.json: the synthetic two-camera rig of fixtures/rig.
     for name in ["rig.json", "left.json", "right.json"]:
         shutil.copy(RIG_FIXTURE / name, tmp_path / name)
+    # The calibrate-rig snippets' rig/rig_dataset.json: a simulated 2-camera rig's points.
+    rig_sim = [etlcal_binary, "simulate", "--rig", "2", "--observations-only", "--out", str(tmp_path / "rig"), "--quiet"]
+    subprocess.run(rig_sim, check=True, capture_output=True)
     device = etlcal.VirtualLens()
     rig = Rig(device)
     namespace: Dict[str, Any] = {"camera": rig, "chamber": rig, "stage": rig}
@@ -99,6 +102,8 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
             exec(compile(code.replace(f'"{PORT}"', repr(device.port)), str(RIG), "exec"), namespace)
         elif '"etlcal.plan/1"' in code:
             (tmp_path / "plan.json").write_text(code)  # the text names it plan.json
+        elif '"etlcal.rig-dataset/1"' in code:
+            (tmp_path / "example-rig-dataset.json").write_text(code)
         elif '"etlcal.board/1"' in code:
             (tmp_path / "board.json").write_text(code)  # the text names it board.json
         else:
@@ -129,6 +134,14 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     assert 100.0 < point.point_mm[2] < 2000.0 and all(0.0 < s < 10.0 for s in point.std_mm)
     for name in ["stereo.yaml", "left.yaml", "right.yaml"]:
         assert (tmp_path / "rectified" / name).is_file(), name
+    # The rig calibrated from the simulated points, by the CLI and by Python alike; the
+    # example rig dataset reads, and is refused for its images that are not there.
+    assert len(etlcal.Rig.load(tmp_path / "rig.json").names) == 2
+    assert len(namespace["at"].cameras) == 2
+    example_rig = [etlcal_binary, "calibrate-rig", "--dataset", "example-rig-dataset.json", "--out", "x.json"]
+    refused = subprocess.run(example_rig, cwd=tmp_path, capture_output=True, text=True)
+    assert refused.returncode != 0 and "images/cam0/view00.png" in refused.stderr, refused.stderr
+    assert not (tmp_path / "x.json").exists()
     # The capture on the simulated rig: the plan's views, calibrated.
     captured = etlcal.Dataset.load(tmp_path / "capture" / "dataset.json")
     assert len(captured) == 15
