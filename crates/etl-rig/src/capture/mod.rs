@@ -101,6 +101,21 @@ impl CaptureOptions {
         }
         Ok(())
     }
+
+    /// Refuses a step (`during`: "the view", "the refocus") of view `key` whose lens
+    /// temperature moved from `t0_c` to `t1_c` by more than
+    /// [`CaptureOptions::max_temperature_change_c`]: the temperature compensation takes one
+    /// temperature per step.
+    pub fn check_temperature_drift(&self, t0_c: f64, t1_c: f64, key: &str, during: &str) -> Result<()> {
+        if (t1_c - t0_c).abs() > self.max_temperature_change_c {
+            let message = format!(
+                "the lens temperature moved from {t0_c:.2} to {t1_c:.2} degC during {during}, more than {} degC",
+                self.max_temperature_change_c
+            );
+            return Err(Error::view(key, message));
+        }
+        Ok(())
+    }
 }
 
 /// What a capture did.
@@ -262,13 +277,7 @@ fn take(rig: &mut Rig, board: &Board, frames: u32, options: &CaptureOptions, key
     let t0 = rig.lens.temperature_c()?;
     let grabbed = (0..frames).map(|_| rig.camera.grab()).collect::<Result<Vec<_>>>()?;
     let t1 = rig.lens.temperature_c()?;
-    if (t1 - t0).abs() > options.max_temperature_change_c {
-        let message = format!(
-            "the lens temperature moved from {t0:.2} to {t1:.2} degC during the view, more than {} degC",
-            options.max_temperature_change_c
-        );
-        return Err(Error::view(key, message));
-    }
+    options.check_temperature_drift(t0, t1, key, "the view")?;
     let pixels = average(&grabbed, &rig.camera.name())?;
     if let Err(e) = settle::detect(&pixels, board) {
         return Err(Error::view(key, format!("no board in the averaged image ({e})")));

@@ -230,13 +230,7 @@ fn thermal_step(
     let (sample, frames) =
         result.map_err(|e| Error::Formats(e.rename_input("search_half_width_ma", "thermal.search_half_width_ma")))?;
     let t1 = rig.lens.temperature_c()?;
-    if (t1 - t0).abs() > options.max_temperature_change_c {
-        let message = format!(
-            "the lens temperature moved from {t0:.2} to {t1:.2} degC during the refocus, more than {} degC",
-            options.max_temperature_change_c
-        );
-        return Err(Error::view(key, message));
-    }
+    options.check_temperature_drift(t0, t1, &key, "the refocus")?;
     Ok((sample, frames))
 }
 

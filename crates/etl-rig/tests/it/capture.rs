@@ -240,3 +240,15 @@ fn a_lens_with_dynamics_is_waited_for_and_the_view_taken() {
     let r = capture(&one, &mut rig, &dir.path().join("D")).unwrap();
     assert_eq!(r.views_taken, 1);
 }
+
+/// The drift check both a view and a refocus make: refused above the limit, naming the
+/// view and both temperatures; kept at or below it.
+#[test]
+fn a_temperature_drift_above_the_limit_is_refused_naming_the_view() {
+    let options = CaptureOptions { max_temperature_change_c: 0.5, ..CaptureOptions::default() };
+    assert!(options.check_temperature_drift(30.0, 30.5, "view 3", "the view").is_ok());
+    assert!(options.check_temperature_drift(30.0, 29.6, "view 3", "the view").is_ok());
+    let message = options.check_temperature_drift(30.0, 30.61, "view 3", "the refocus").unwrap_err().to_string();
+    assert!(message.contains("view 3"), "{message}");
+    assert!(message.contains("30.00 to 30.61 degC during the refocus, more than 0.5 degC"), "{message}");
+}
