@@ -15,9 +15,15 @@
 //!
 //! Every view is a stage position `z_w_mm` (the board's corner (X, Y) at world (X, Y,
 //! z_w_mm), as in `etlcal.dataset/1`): the stage's frame is the world frame all cameras
-//! share, which is what ties them together. Views without a stage (a board in a free pose)
-//! are not part of the format: the rig's calibration would need the board's pose per view
-//! as a further unknown, and the stage views determine the extrinsics already.
+//! share, which is what ties them together.
+//!
+//! `"free_views"` (optional) are views of the same board without the stage: the board in a
+//! free pose (e.g. held tilted in front of the cameras), seen at once by the cameras listed,
+//! each at its own setting; points in the board's frame (`[u, v, X, Y]`, Z = 0). The board's
+//! pose in the world is unknown (the rig's calibration estimates it, one pose per free view
+//! shared by its cameras): they add tilted views, which the stage's nearly fronto-parallel
+//! ones lack, to the extrinsics and intrinsics. The stage views stay required: they are
+//! the world frame and the ETL model's depth.
 //!
 //! A camera entry gives exactly one of `"image"` (relative to the file, as in
 //! `etlcal.dataset/1`) and `"points"`: the corners it saw as `[u, v, X, Y]` (the pixel, px,
@@ -42,7 +48,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{read_json, write_json};
 use crate::board::Board;
-use crate::dataset::{Dataset, DatasetView, OffstateImage};
+use crate::dataset::{Dataset, DatasetView, OffstateImage, SettingImage};
 use crate::lens_setting::{self, SettingKind};
 use crate::observations::{Observations, OffstateView, PointObs, ViewObs, PIXEL_MARGIN_IMAGES, WORLD_RANGE_MM};
 use crate::{Error, Result};
@@ -99,6 +105,15 @@ pub struct RigView {
     pub cameras: Vec<RigShot>,
 }
 
+/// A view of the board without the stage (module docs): one entry per camera that saw it,
+/// each with its own setting; points in the board's frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigFreeView {
+    /// One entry per camera that saw the board.
+    pub cameras: Vec<RigShot>,
+}
+
 /// One camera's lens-off view (E = 0, the board in a free pose): its image or points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -140,6 +155,9 @@ pub struct RigDataset {
     /// The lens-off views (optional: A0 may be given instead).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub offstate_views: Vec<RigOffstateView>,
+    /// Views of the board in free poses, without the stage (optional; module docs).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub free_views: Vec<RigFreeView>,
 }
 
 /// What a file's camera entries carry: images or points (one kind throughout).
@@ -212,6 +230,7 @@ impl RigDataset {
             views: vec![],
             offstate_board: None,
             offstate_views: vec![],
+            free_views: vec![],
         }
     }
 
@@ -326,6 +345,19 @@ impl RigDataset {
                 kinds.push((self.check_shot(s, &key, &mut seen)?, key));
             }
         }
+        for (i, v) in self.free_views.iter().enumerate() {
+            if v.cameras.is_empty() {
+                return Err(Error::invalid(
+                    format!("free_views[{i}].cameras"),
+                    format!("free_views[{i}].cameras: no camera saw free view {i}"),
+                ));
+            }
+            let mut seen = vec![];
+            for (c, s) in v.cameras.iter().enumerate() {
+                let key = format!("free_views[{i}].cameras[{c}]");
+                kinds.push((self.check_shot(s, &key, &mut seen)?, key));
+            }
+        }
         for (i, v) in self.offstate_views.iter().enumerate() {
             let mut seen = vec![];
             for (c, s) in v.cameras.iter().enumerate() {
@@ -355,13 +387,17 @@ impl RigDataset {
                 .iter()
                 .enumerate()
                 .filter_map(|(i, v)| v.cameras.iter().position(|s| s.camera == k).map(|c| (i, c, &v.cameras[c])));
-            let settings: Vec<(SettingKind, String)> = views
-                .map(|(i, c, s)| {
-                    let kind = if s.focal_power_dpt.is_some() { SettingKind::FocalPower } else { SettingKind::Current };
-                    (kind, format!("views[{i}].cameras[{c}]"))
-                })
-                .collect();
-            if settings.is_empty() {
+            let kind_of =
+                |s: &RigShot| if s.focal_power_dpt.is_some() { SettingKind::FocalPower } else { SettingKind::Current };
+            let mut settings: Vec<(SettingKind, String)> =
+                views.map(|(i, c, s)| (kind_of(s), format!("views[{i}].cameras[{c}]"))).collect();
+            let stage_settings = settings.len();
+            for (i, v) in self.free_views.iter().enumerate() {
+                if let Some(c) = v.cameras.iter().position(|s| s.camera == k) {
+                    settings.push((kind_of(&v.cameras[c]), format!("free_views[{i}].cameras[{c}]")));
+                }
+            }
+            if stage_settings == 0 {
                 let message = format!(
                     "cameras[{k}]: camera {:?} sees the board in none of the {} stage views: every camera must see it \
                      on the stage",
@@ -409,13 +445,48 @@ impl RigDataset {
         for image in off.filter_map(|s| s.image.clone()) {
             d.offstate_views.push(OffstateImage { image, board: None, first_corner: None });
         }
+        for s in self.free_views.iter().filter_map(|v| v.cameras.iter().find(|s| s.camera == k)) {
+            let Some(image) = &s.image else { continue };
+            d.setting_views.push(SettingImage {
+                image: image.clone(),
+                e_in_ma: s.e_in_ma,
+                focal_power_dpt: s.focal_power_dpt,
+                temperature_c: s.temperature_c,
+                e_com_ma: s.e_com_ma,
+                board: None,
+                first_corner: None,
+            });
+        }
         (d, view_index)
     }
 
-    /// Every image the file names, in the file's order (stage views, then lens-off views).
+    /// Camera `k`'s free views (module docs) as single-camera views (points with world
+    /// (X, Y, 0) in the board's frame, its settings), with the index in `free_views` of
+    /// each. Entries that give images contribute none.
+    pub fn camera_free_views(&self, k: usize) -> (Vec<ViewObs>, Vec<usize>) {
+        let mut views = vec![];
+        let mut index = vec![];
+        for (i, v) in self.free_views.iter().enumerate() {
+            let Some(s) = v.cameras.iter().find(|s| s.camera == k) else { continue };
+            let Some(points) = &s.points else { continue };
+            views.push(ViewObs {
+                e_in_ma: s.e_in_ma,
+                focal_power_dpt: s.focal_power_dpt,
+                temperature_c: s.temperature_c,
+                e_com_ma: s.e_com_ma,
+                points: points.iter().map(|p| PointObs { world_mm: [p[2], p[3], 0.0], pixel: [p[0], p[1]] }).collect(),
+            });
+            index.push(i);
+        }
+        (views, index)
+    }
+
+    /// Every image the file names, in the file's order (stage views, lens-off views, free
+    /// views).
     pub fn images(&self) -> impl Iterator<Item = &Path> + '_ {
         let views = self.views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.image.as_deref());
-        views.chain(self.offstate_views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.image.as_deref()))
+        let free = self.free_views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.image.as_deref());
+        views.chain(self.offstate_views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.image.as_deref())).chain(free)
     }
 
     /// Whether the camera entries give images or points (the file's one kind; points for a

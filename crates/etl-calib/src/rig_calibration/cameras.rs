@@ -3,6 +3,7 @@
 
 use etl_core::calib::{Estimator, Layout, ParamMask, Point};
 use etl_core::model::CameraModel;
+use etl_formats::observations::Observations;
 use etl_formats::rig_dataset::{RigDataset, ShotKind};
 use etl_formats::{Error, Result};
 use rayon::prelude::*;
@@ -57,6 +58,13 @@ fn check_supported(dataset: &RigDataset, options: &RigCalibrationOptions) -> Res
             "method: a rig is calibrated by the proposed method only, not per setting",
         ));
     }
+    if !dataset.free_views.is_empty() && matches!(options.request.estimator(), Estimator::Paper) {
+        return Err(Error::invalid(
+            "free_views",
+            "free_views: the paper's estimator calibrates each camera alone on the stage; views of the board in free \
+             poses tie the cameras through the board's pose: use the errors-in-variables estimator",
+        ));
+    }
     if options.request.robust.is_some() {
         return Err(Error::invalid(
             "robust",
@@ -98,7 +106,9 @@ fn camera_part(
                 .map(|(_, p)| Point { world_mm: p.world_mm, pixel: p.pixel })
                 .collect(),
         })
-        .collect();
+        .collect::<Vec<_>>();
+    let mut views = views;
+    views.extend(free_views(dataset, k, options).map_err(in_camera)?);
     let setting = obs.setting_kind()?;
     let calibrate_options = options.request.options().with_setting(setting, options.request.priors.sigma_p_dpt);
     let layout = own.report.model.layout();
@@ -109,6 +119,28 @@ fn camera_part(
     };
     let joint = JointCamera { views, start: own.report.model, layout, sigma_px: own.report.sigma_px, sigma_e, hold };
     Ok(CameraPart { own, joint })
+}
+
+/// Camera `k`'s free views as joint-problem views (rig view index: the stage views', then
+/// the free view's), each at its E_com (the request's temperature surface) and with every
+/// point (its own calibration has not seen them, so none is an outlier of it).
+fn free_views(dataset: &RigDataset, k: usize, options: &RigCalibrationOptions) -> Result<Vec<CameraView>> {
+    let (free, index) = dataset.camera_free_views(k);
+    let size = dataset.cameras[k].image_size;
+    free.into_iter()
+        .zip(index)
+        .map(|(v, f)| {
+            let points = v.points.iter().map(|p| Point { world_mm: p.world_mm, pixel: p.pixel }).collect();
+            let one = Observations { setting_views: vec![v], ..Observations::new(size) };
+            let e = one.setting_e_com_ma(options.request.thermal.as_ref()).map_err(|e| {
+                Error::invalid(
+                    format!("free_views[{f}]"),
+                    format!("free_views[{f}]: {}", e.to_string().replace("setting view 0", "its setting")),
+                )
+            })?;
+            Ok(CameraView { view: dataset.views.len() + f, e: e[0], points })
+        })
+        .collect()
 }
 
 /// Every camera calibrated on its own (in parallel: each is its own computation), in the

@@ -14,7 +14,10 @@ use std::path::Path;
 
 use etl_core::progress::Progress;
 use etl_formats::dataset::Dataset;
-use etl_formats::rig_dataset::{points_of, RigDataset, RigOffstateShot, RigOffstateView, RigShot, RigView, ShotKind};
+use etl_formats::observations::ViewObs;
+use etl_formats::rig_dataset::{
+    points_of, RigDataset, RigFreeView, RigOffstateShot, RigOffstateView, RigShot, RigView, ShotKind,
+};
 use etl_formats::{Error, Result};
 
 use crate::pipeline::dataset::{observations_from_dataset, CornerDetector, DetectionSummary};
@@ -50,12 +53,14 @@ pub fn detect_rig(
     }
     let mut points = RigDataset { views: vec![], offstate_views: vec![], offstate_board: None, ..dataset.clone() };
     points.views = dataset.views.iter().map(|v| RigView { z_w_mm: v.z_w_mm, cameras: vec![] }).collect();
+    points.free_views = dataset.free_views.iter().map(|_| RigFreeView { cameras: vec![] }).collect();
     let mut summaries = vec![];
     for (k, camera) in dataset.cameras.iter().enumerate() {
         let (single, view_index) = dataset.camera_dataset(k);
         let in_camera = |e: Error| e.within(format!("camera {k} ({})", camera.name), Some(&format!("cameras[{k}]")));
         let (obs, summary) = observations_from_dataset(&single, dataset_path, detector, progress).map_err(in_camera)?;
         let detected = detected_views(&single, dataset_path, &summary);
+        put_free_views(dataset, k, (&single, dataset_path, &summary), &obs.setting_views, &mut points);
         for (i, v) in detected.into_iter().zip(&obs.views) {
             let Some(shot) = dataset.views[view_index[i]].cameras.iter().find(|s| s.camera == k) else { continue };
             let rows = points_of(&v.points);
@@ -71,8 +76,37 @@ pub fn detect_rig(
         summaries.push((camera.name.clone(), summary));
     }
     points.views.retain(|v| !v.cameras.is_empty());
+    points.free_views.retain(|v| !v.cameras.is_empty());
     points.validate()?;
     Ok((points, RigDetectionSummary { cameras: summaries }))
+}
+
+/// Camera `k`'s detected free views (its single-camera dataset's setting views, in the
+/// order of the rig's free views where it has an image) written back into `points`.
+fn put_free_views(
+    dataset: &RigDataset,
+    k: usize,
+    (single, dataset_path, summary): (&Dataset, &Path, &DetectionSummary),
+    detected: &[ViewObs],
+    points: &mut RigDataset,
+) {
+    let with_image: Vec<(usize, &RigShot)> = dataset
+        .free_views
+        .iter()
+        .enumerate()
+        .filter_map(|(f, v)| v.cameras.iter().find(|s| s.camera == k && s.image.is_some()).map(|s| (f, s)))
+        .collect();
+    let mut skipped = summary.skipped.iter().filter(|s| s.kind == "setting").peekable();
+    let mut found = detected.iter();
+    for ((f, shot), image) in with_image.into_iter().zip(&single.setting_views) {
+        if skipped.peek().is_some_and(|s| s.image == Dataset::resolve(dataset_path, &image.image)) {
+            skipped.next();
+            continue;
+        }
+        let Some(v) = found.next() else { return };
+        let rows = points_of(&v.points);
+        points.free_views[f].cameras.push(RigShot { image: None, points: Some(rows), ..shot.clone() });
+    }
 }
 
 /// The index in `single.views` of each view whose board was found, in order: the views

@@ -42,9 +42,21 @@
 //! extrinsic pose (6 x 6, rad and mm) by the Jacobian of (R_k0, T_k0) with respect to
 //! (om_0, t_0, om_k, t_k), written into `etlcal.rig/1`'s `covariance`.
 //!
-//! Views without a stage (a board in a free pose) are not taken: the format has none
-//! (`etlcal.rig-dataset/1`'s views all stand on the stage), since the stage views alone
-//! tie every camera to the world frame.
+//! **Free views** (`etlcal.rig-dataset/1`'s `free_views`: the board in a free pose, no
+//! stage) add one unknown board pose (om_b, t_b) per view, board to world, shared by the
+//! cameras that saw it, without a prior; each camera keeps its own setting correction
+//! there. Their corner (X, Y) stands at world R(om_b) (X, Y, 0) + t_b:
+//!
+//! ```text
+//!   + sum_f sum_k in f [ sum_i |q_k(R_bf P_i + t_bf, E_kf + dE_kf) - u_kfi|^2 / sigma_px,k^2
+//!                        + dE_kf^2 / sigma_e^2 ]
+//! ```
+//!
+//! Each pose starts from relative PnP ([`free`]) and is eliminated with the view's other
+//! unknowns. They give the joint solve tilted views, which the stage's nearly
+//! fronto-parallel ones lack; the cameras' own calibrations (the start) do not see them.
+//! Errors-in-variables only: under the paper's estimator each camera is its own problem,
+//! and a free pose would tie them (refused, one line).
 //!
 //! **Images**: a rig dataset of images is first turned into one of points by
 //! [`detect_rig`] (each camera's images through the single-camera detection path, a view
@@ -57,6 +69,7 @@
 mod cameras;
 mod covariance;
 mod detect;
+mod free;
 mod lm;
 mod normal;
 mod options;
@@ -103,7 +116,8 @@ pub fn calibrate_rig_spelled(
         Estimator::Eiv { sigma_z_mm, .. } => (Some(sigma_z_mm), "eiv"),
         Estimator::Paper => (None, "paper"),
     };
-    let problem = JointProblem::new(&joint, dataset.views.len(), sigma_z);
+    let free_start = free::free_view_starts(&joint, dataset.views.len(), dataset.free_views.len())?;
+    let problem = JointProblem::new(&joint, dataset.views.len(), free_start, sigma_z);
     let sparse = options.solver.sparse_for(joint.len());
     let max_iterations = if options.max_iterations == 0 { DEFAULT_MAX_ITERATIONS } else { options.max_iterations };
     let solved = lm::solve(&problem, sparse, max_iterations)?;
@@ -148,7 +162,8 @@ pub fn calibrate_rig_spelled(
         extrinsics,
         covariance: cov,
         offsets,
-        dz_mm: solved.state.y.iter().map(|y| y.get(0).copied().unwrap_or(0.0)).collect(),
+        dz_mm: solved.state.y.iter().take(dataset.views.len()).map(|y| y.get(0).copied().unwrap_or(0.0)).collect(),
+        free_view_poses: problem.free_poses(&solved.state).iter().map(|p| pose_pair(*p)).collect(),
         estimator: estimator.into(),
         iterations: solved.iterations,
         cost: [solved.initial_cost, solved.cost],

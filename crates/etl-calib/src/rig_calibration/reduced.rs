@@ -15,10 +15,12 @@
 //! view j, so S has every block (k, l) of two cameras that share a view: dense.
 //!
 //! **Sparse**: only the setting corrections dE_kj eliminated (each touches camera k and
-//! dZ_j alone: V_j's setting block is diagonal), the stage corrections kept: unknowns
-//! (dx, dZ_1..dZ_J), camera blocks dense, each dZ_j bordered by the cameras of view j, a
-//! diagonal dZ block: an arrow, factored by faer's sparse Cholesky (its own fill-reducing
-//! ordering). For camera k at position c of view j (v the damped V_j):
+//! view j's shared unknowns alone: V_j's setting block is diagonal), the shared unknowns
+//! kept (a stage view's dZ_j; a free view's board pose, 6 numbers): unknowns
+//! (dx, y_1..y_J shared), camera blocks dense, each view's shared block bordered by the
+//! cameras of view j: an arrow, factored by faer's sparse Cholesky (its own fill-reducing
+//! ordering). For camera k at position c of view j (v the damped V_j; for a free view
+//! v_0c and B_kj have 6 rows or columns, D_jj is 6 x 6):
 //!
 //! ```text
 //! U_k  -= w_E w_E' / v_cc                 rhs_k  += w_E g_c / v_cc
@@ -137,7 +139,7 @@ fn back_substitute(
 }
 
 /// The bordered system of the sparse path: its lower triangle as triplets and its
-/// right-hand side (dx, then dZ per view).
+/// right-hand side (dx, then each view's shared unknowns: dZ_j, or a free view's pose).
 fn bordered(
     n: &Normal,
     sizes: &[usize],
@@ -146,32 +148,38 @@ fn bordered(
 ) -> (Vec<Triplet<usize, usize, f64>>, Vec<f64>) {
     let off = offsets(sizes);
     let total: usize = sizes.iter().sum();
-    let eiv = !n.w.is_empty();
     let mut blocks: Vec<DMatrix<f64>> = n.u.iter().map(|u| damped(u, lambda)).collect();
     let mut rhs: Vec<f64> = n.g.iter().flat_map(|g| g.iter().map(|x| -x)).collect();
-    rhs.resize(total + if eiv { present.len() } else { 0 }, 0.0);
     let mut triplets = vec![];
-    for (j, p) in present.iter().enumerate().filter(|_| eiv) {
+    for (j, p) in present.iter().enumerate().filter(|_| !n.w.is_empty()) {
         let v = damped(&n.v[j], lambda);
-        let (g, w) = (&n.gy[j], &n.w[j]);
-        let (mut d, mut rz) = (v[(0, 0)], -g[0]);
+        let (g, w, sh, at_z) = (&n.gy[j], &n.w[j], v.nrows() - p.len(), rhs.len());
+        let mut d: DMatrix<f64> = v.view((0, 0), (sh, sh)).into_owned();
+        let mut rz: DVector<f64> = -g.rows(0, sh);
         let mut at = 0;
         for (c, &(k, _)) in p.iter().enumerate() {
             let pk = sizes[k];
-            let (vcc, v0c, gc) = (v[(1 + c, 1 + c)], v[(0, 1 + c)], g[1 + c]);
-            let we: DVector<f64> = w.view((at, 1 + c), (pk, 1)).column(0).into_owned();
-            let b: DVector<f64> = w.view((at, 0), (pk, 1)).column(0) - &we * (v0c / vcc);
+            let (vcc, gc) = (v[(sh + c, sh + c)], g[sh + c]);
+            let v0c: DVector<f64> = v.view((0, sh + c), (sh, 1)).column(0).into_owned();
+            let we: DVector<f64> = w.view((at, sh + c), (pk, 1)).column(0).into_owned();
+            let b: DMatrix<f64> = w.view((at, 0), (pk, sh)) - &we * v0c.transpose() / vcc;
             blocks[k].ger(-1.0 / vcc, &we, &we, 1.0);
             for i in 0..pk {
                 rhs[off[k] + i] += we[i] * gc / vcc;
-                triplets.push(Triplet::new(total + j, off[k] + i, b[i]));
+                for a in 0..sh {
+                    triplets.push(Triplet::new(at_z + a, off[k] + i, b[(i, a)]));
+                }
             }
-            d -= v0c * v0c / vcc;
-            rz += v0c * gc / vcc;
+            d.ger(-1.0 / vcc, &v0c, &v0c, 1.0);
+            rz.axpy(gc / vcc, &v0c, 1.0);
             at += pk;
         }
-        triplets.push(Triplet::new(total + j, total + j, d));
-        rhs[total + j] = rz;
+        for a in 0..sh {
+            for c in 0..=a {
+                triplets.push(Triplet::new(at_z + a, at_z + c, d[(a, c)]));
+            }
+        }
+        rhs.extend(rz.iter());
     }
     for (k, b) in blocks.iter().enumerate() {
         for c in 0..sizes[k] {
@@ -180,6 +188,7 @@ fn bordered(
             }
         }
     }
+    debug_assert!(rhs.len() >= total);
     (triplets, rhs)
 }
 
@@ -203,19 +212,23 @@ pub(super) fn sparse_step(
         return Ok((dx, present.iter().map(|_| DVector::zeros(0)).collect()));
     }
     let off = offsets(sizes);
+    let mut at_z = total;
     let dy = present
         .iter()
         .enumerate()
         .map(|(j, p)| {
             let (v, g, w) = (damped(&n.v[j], lambda), &n.gy[j], &n.w[j]);
-            let dzj = b[(total + j, 0)];
-            let mut y = DVector::zeros(1 + p.len());
-            y[0] = dzj;
+            let sh = v.nrows() - p.len();
+            let dz = DVector::from_fn(sh, |a, _| b[(at_z + a, 0)]);
+            at_z += sh;
+            let mut y = DVector::zeros(sh + p.len());
+            y.rows_mut(0, sh).copy_from(&dz);
             let mut at = 0;
             for (c, &(k, _)) in p.iter().enumerate() {
-                let we = w.view((at, 1 + c), (sizes[k], 1));
+                let we = w.view((at, sh + c), (sizes[k], 1));
                 let wdx = we.dot(&dx.rows(off[k], sizes[k]));
-                y[1 + c] = (-g[1 + c] - wdx - v[(0, 1 + c)] * dzj) / v[(1 + c, 1 + c)];
+                let v0c = v.view((0, sh + c), (sh, 1));
+                y[sh + c] = (-g[sh + c] - wdx - v0c.dot(&dz)) / v[(sh + c, sh + c)];
                 at += sizes[k];
             }
             y

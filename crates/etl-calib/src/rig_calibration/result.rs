@@ -42,6 +42,9 @@ pub struct RigCalibration {
     /// The estimated stage correction of each rig view, mm (zeros with the paper's
     /// estimator).
     pub dz_mm: Vec<f64>,
+    /// Each free view's board pose (Rodrigues, translation mm), board to world (the
+    /// stage's frame), in the dataset's order.
+    pub free_view_poses: Vec<([f64; 3], [f64; 3])>,
     /// `"eiv"` or `"paper"`.
     pub estimator: String,
     /// Iterations of the joint solve.

@@ -62,7 +62,7 @@ impl JointSystem {
                 hold: ParamMask::NONE,
             });
         }
-        let problem = JointProblem::new(&cameras, dataset.views.len(), Some(sigma_z_mm));
+        let problem = JointProblem::new(&cameras, dataset.views.len(), vec![], Some(sigma_z_mm));
         let normal = problem.normal(&problem.start())?;
         let (present, sizes) = (problem.present.clone(), problem.sizes());
         Ok(JointSystem { cameras, views: dataset.views.len(), sigma_z_mm, present, sizes, normal })
@@ -73,7 +73,7 @@ impl JointSystem {
     /// marginalised out: at the true models and the simulation's noise, the Cramer-Rao
     /// bound of the joint problem (module docs of [`super`], [`super::covariance`]).
     pub fn covariance(&self) -> Result<DMatrix<f64>> {
-        let problem = JointProblem::new(&self.cameras, self.views, Some(self.sigma_z_mm));
+        let problem = JointProblem::new(&self.cameras, self.views, vec![], Some(self.sigma_z_mm));
         joint_covariance(&problem, &problem.start(), None)
     }
 

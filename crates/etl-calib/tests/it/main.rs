@@ -7,6 +7,7 @@ mod pipeline_baseline;
 mod request;
 mod rig;
 mod rig_calibration;
+mod rig_free_views;
 mod rig_images;
 mod robust;
 mod select;

@@ -24,6 +24,7 @@ fn rig() -> RigDataset {
     }
     let off = RigOffstateShot { camera: 0, image: None, points: Some(vec![[10.0, 20.0, 4.0, 8.0]]) };
     d.offstate_views.push(RigOffstateView { cameras: vec![off] });
+    d.free_views.push(RigFreeView { cameras: vec![shot(0, 120.0), shot(1, 127.5)] });
     d
 }
 
@@ -46,6 +47,12 @@ fn rig_dataset_round_trips_and_splits_into_cameras() {
     assert_eq!(c0.view_index, vec![0, 1, 2]);
     assert_eq!(c0.observations.offstate_views[0].points[0].world_mm, [4.0, 8.0, 0.0]);
     assert_eq!(points_of(&c0.observations.views[2].points), d.views[2].cameras[0].points.clone().unwrap());
+    // The free view stays out of each camera's stage observations and comes by itself.
+    assert!(c1.observations.setting_views.is_empty());
+    let (free, index) = back.camera_free_views(1);
+    assert_eq!(index, vec![0]);
+    assert_eq!(free[0].e_in_ma, 127.5);
+    assert_eq!(free[0].points[1].world_mm, [1.5, 0.0, 0.0]);
 }
 
 /// Each bad rig dataset gets one line naming the key, and nothing is written.
@@ -99,6 +106,29 @@ fn rig_dataset_refuses_bad_files_naming_the_key() {
         ),
         (Box::new(|d| d.views[1].cameras.clear()), "views[1].cameras: no camera saw view 1"),
         (Box::new(|d| d.views.clear()), "views: the rig dataset holds no stage views"),
+        (Box::new(|d| d.free_views[0].cameras.clear()), "free_views[0].cameras: no camera saw free view 0"),
+        (
+            Box::new(|d| d.free_views[0].cameras[1].camera = 3),
+            "free_views[0].cameras[1].camera: 3 is not a camera of the rig",
+        ),
+        (
+            Box::new(|d| d.free_views[0].cameras[0].temperature_c = f64::INFINITY),
+            "free_views[0].cameras[0].temperature_c is not finite",
+        ),
+        (
+            Box::new(|d| {
+                d.free_views[0].cameras[0].points = None;
+                d.free_views[0].cameras[0].image = Some("f.png".into());
+            }),
+            "free_views[0].cameras[0] gives an image but views[0].cameras[0] gives points",
+        ),
+        (
+            Box::new(|d| {
+                d.free_views[0].cameras[1].focal_power_dpt = Some(10.0);
+                d.free_views[0].cameras[1].e_in_ma = f64::NAN;
+            }),
+            "free_views[0].cameras[1]",
+        ),
     ];
     for (edit, expected) in cases {
         let mut d = rig();
@@ -137,14 +167,23 @@ fn an_images_file_splits_into_single_camera_datasets() {
     }
     d.offstate_views[0].cameras[0] = RigOffstateShot { camera: 0, image: Some("off.png".into()), points: None };
     d.offstate_board = Some(Board::checkerboard([11, 8], 4.0).unwrap());
+    for s in &mut d.free_views[0].cameras {
+        s.points = None;
+        s.image = Some(format!("images/cam{}/free00.png", s.camera).into());
+    }
     d.validate().unwrap();
     assert_eq!(d.shot_kind(), ShotKind::Images);
-    assert_eq!(d.images().count(), 6);
+    assert_eq!(d.images().count(), 8);
+    assert_eq!(d.images().last(), Some(Path::new("images/cam1/free00.png")));
     let (c1, index) = d.camera_dataset(1);
     assert_eq!(index, vec![0, 1]);
     assert_eq!(c1.views[1].image, PathBuf::from("images/cam1/view01.png"));
     assert_eq!((c1.views[1].z_w_mm, c1.views[1].e_in_ma, c1.views[1].e_com_ma), (48.0, 107.5, Some(106.5)));
     assert!(c1.offstate_views.is_empty());
+    // The free views go to the detection as views without a stage (setting views).
+    assert_eq!(c1.setting_views[0].image, PathBuf::from("images/cam1/free00.png"));
+    assert_eq!((c1.setting_views[0].e_in_ma, c1.setting_views[0].e_com_ma), (127.5, Some(126.5)));
+    assert!(d.camera_free_views(1).0.is_empty(), "images give no points");
     let (c0, index) = d.camera_dataset(0);
     assert_eq!(index, vec![0, 1, 2]);
     assert_eq!(c0.offstate_views[0].image, PathBuf::from("off.png"));
