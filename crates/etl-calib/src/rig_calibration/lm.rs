@@ -6,7 +6,7 @@ use etl_formats::Result;
 use nalgebra::DVector;
 
 use super::normal::{JointProblem, Normal, State};
-use super::reduced::{dense_step, sparse_step};
+use super::reduced::{dense_step, sparse_step, SparsePattern};
 
 /// What the loop gives: the state, the iterations and the cost before and after.
 pub(super) struct Solved {
@@ -65,10 +65,14 @@ pub(super) fn solve(problem: &JointProblem<'_>, sparse: bool, max_iterations: us
     let mut normal = problem.normal(&state)?;
     let initial_cost = normal.cost;
     let (mut lambda, mut nu, mut iterations) = (INITIAL_DAMPING, 2.0, 0);
+    let pattern = SparsePattern::new();
     while iterations < max_iterations && normal.cost > 0.0 && lambda < MAX_DAMPING {
         iterations += 1;
-        let step = if sparse { sparse_step } else { dense_step };
-        let (dx, dy) = step(&normal, &sizes, &problem.present, lambda)?;
+        let (dx, dy) = if sparse {
+            sparse_step(&normal, &sizes, &problem.present, lambda, &pattern)?
+        } else {
+            dense_step(&normal, &sizes, &problem.present, lambda)?
+        };
         let next = problem.moved(&state, &dx, &dy);
         let cost = problem.cost(&next).unwrap_or(f64::INFINITY);
         if !(cost < normal.cost) {

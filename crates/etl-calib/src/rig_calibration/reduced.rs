@@ -31,7 +31,10 @@
 //! Both give the same step (a test checks it to 1e-9).
 
 use etl_formats::{Error, Result};
+use std::sync::OnceLock;
+
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
 use nalgebra::{DMatrix, DVector};
@@ -192,18 +195,32 @@ fn bordered(
     (triplets, rhs)
 }
 
-/// The step (dx, dy) by the sparse path.
+/// The symbolic factorisation of the sparse path's system: its pattern (which cameras share
+/// which views) does not change between steps, so it is computed once per problem and the
+/// steps redo the numeric factorisation only.
+pub(super) type SparsePattern = OnceLock<SymbolicLlt<usize>>;
+
+/// The step (dx, dy) by the sparse path, the symbolic factorisation taken from `pattern`
+/// (computed there on the first step).
 pub(super) fn sparse_step(
     n: &Normal,
     sizes: &[usize],
     present: &[Vec<(usize, usize)>],
     lambda: f64,
+    pattern: &SparsePattern,
 ) -> Result<(DVector<f64>, Vec<DVector<f64>>)> {
     let (triplets, rhs) = bordered(n, sizes, present, lambda);
     let dim = rhs.len();
     let a = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &triplets)
         .map_err(|_| Error::invalid("rig", "the rig's reduced system could not be assembled"))?;
-    let llt = a.sp_cholesky(Side::Lower).map_err(|_| not_positive())?;
+    let symbolic = match pattern.get() {
+        Some(s) => s.clone(),
+        None => {
+            let s = SymbolicLlt::try_new(a.symbolic(), Side::Lower).map_err(|_| not_positive())?;
+            pattern.get_or_init(|| s).clone()
+        }
+    };
+    let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower).map_err(|_| not_positive())?;
     let mut b = Mat::<f64>::from_fn(dim, 1, |i, _| rhs[i]);
     llt.solve_in_place(b.as_mut());
     let total: usize = sizes.iter().sum();

@@ -11,7 +11,7 @@ use super::cameras::{CameraView, JointCamera};
 use super::covariance::{extrinsics_covariance, joint_covariance};
 use super::normal::{JointProblem, Normal};
 use super::options::LinearSolver;
-use super::reduced::{dense_step, sparse_step};
+use super::reduced::{dense_step, sparse_step, SparsePattern};
 use super::result::pose_of;
 use nalgebra::DMatrix;
 
@@ -24,6 +24,9 @@ pub struct JointSystem {
     present: Vec<Vec<(usize, usize)>>,
     sizes: Vec<usize>,
     normal: Normal,
+    /// The sparse path's symbolic factorisation, computed by the first sparse step (as the
+    /// calibration's loop does: its later steps reuse it).
+    pattern: SparsePattern,
 }
 
 impl JointSystem {
@@ -65,7 +68,7 @@ impl JointSystem {
         let problem = JointProblem::new(&cameras, dataset.views.len(), vec![], Some(sigma_z_mm));
         let normal = problem.normal(&problem.start())?;
         let (present, sizes) = (problem.present.clone(), problem.sizes());
-        Ok(JointSystem { cameras, views: dataset.views.len(), sigma_z_mm, present, sizes, normal })
+        Ok(JointSystem { cameras, views: dataset.views.len(), sigma_z_mm, present, sizes, normal, pattern: SparsePattern::new() })
     }
 
     /// The inverse of the Fisher information of every camera's numbers (the model's
@@ -110,8 +113,11 @@ impl JointSystem {
     /// One step with damping `lambda` by `solver`'s path: every camera's internal numbers'
     /// change (stacked), then each view's corrections (dZ_j, dE_kj...).
     pub fn step(&self, solver: LinearSolver, lambda: f64) -> Result<Vec<f64>> {
-        let step = if solver.sparse_for(self.cameras.len()) { sparse_step } else { dense_step };
-        let (dx, dy) = step(&self.normal, &self.sizes, &self.present, lambda)?;
+        let (dx, dy) = if solver.sparse_for(self.cameras.len()) {
+            sparse_step(&self.normal, &self.sizes, &self.present, lambda, &self.pattern)?
+        } else {
+            dense_step(&self.normal, &self.sizes, &self.present, lambda)?
+        };
         Ok(dx.iter().chain(dy.iter().flat_map(|d| d.iter())).copied().collect())
     }
 }
