@@ -68,7 +68,15 @@ impl JointSystem {
         let problem = JointProblem::new(&cameras, dataset.views.len(), vec![], Some(sigma_z_mm));
         let normal = problem.normal(&problem.start())?;
         let (present, sizes) = (problem.present.clone(), problem.sizes());
-        Ok(JointSystem { cameras, views: dataset.views.len(), sigma_z_mm, present, sizes, normal, pattern: SparsePattern::new() })
+        Ok(JointSystem {
+            cameras,
+            views: dataset.views.len(),
+            sigma_z_mm,
+            present,
+            sizes,
+            normal,
+            pattern: SparsePattern::new(),
+        })
     }
 
     /// The inverse of the Fisher information of every camera's numbers (the model's
