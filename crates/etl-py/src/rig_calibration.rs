@@ -94,7 +94,7 @@ pub fn calibrate_rig(
         (distortion, focal_degree, fix_k3, zero_tangent, accept_ill_conditioned, centre, model),
     )?;
     request.validate(&Keywords).py()?;
-    let options = RigCalibrationOptions { request, solver, max_iterations: 0 };
+    let options = RigCalibrationOptions { request, solver, ..Default::default() };
     let rig = crate::pool::detach(py, || {
         let points = load(&dataset)?;
         let calibrated = calibrate_rig_spelled(&points, &options, &Keywords)?;

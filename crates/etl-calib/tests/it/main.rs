@@ -8,6 +8,7 @@ mod request;
 mod rig;
 mod rig_calibration;
 mod rig_images;
+mod rig_requests;
 mod robust;
 mod select;
 mod stereo;
