@@ -45,8 +45,7 @@ pub struct JointCamera {
 }
 
 /// Refuses what the joint solve cannot honour: images (it takes points), then the
-/// per-camera requests that name no camera of the rig or one camera twice, then each
-/// camera's request ([`check_request`]).
+/// options ([`RigCalibrationOptions::check`]).
 fn check_supported(dataset: &RigDataset, options: &RigCalibrationOptions, spelling: &dyn Spelling) -> Result<()> {
     if dataset.shot_kind() == ShotKind::Images {
         return Err(Error::invalid(
@@ -55,27 +54,42 @@ fn check_supported(dataset: &RigDataset, options: &RigCalibrationOptions, spelli
              solve takes points",
         ));
     }
-    let names: Vec<&str> = dataset.cameras.iter().map(|c| c.name.as_str()).collect();
-    for (i, c) in options.per_camera.iter().enumerate() {
-        if !names.contains(&c.camera.as_str()) {
-            let message =
-                format!("per_camera[{i}]: the rig has no camera {:?} (its cameras: {})", c.camera, names.join(", "));
-            return Err(Error::invalid_value(format!("per_camera[{i}].camera"), c.camera.as_str(), message));
+    options.check(dataset, spelling)
+}
+
+impl RigCalibrationOptions {
+    /// Refuses, before any calibration (a front end calls it before detecting images),
+    /// what [`super::calibrate_rig`] cannot honour of these options for `dataset`'s
+    /// cameras: a per-camera request naming no camera of the rig, or one camera twice; a
+    /// request that is invalid, per setting or robust, or (a camera's own) with another
+    /// estimator or stage prior than the rig's, naming the camera; a camera whose views
+    /// record E_in without E_com and which has no temperature surface, named. Refusals
+    /// are spelt in `spelling`'s words.
+    pub fn check(&self, dataset: &RigDataset, spelling: &dyn Spelling) -> Result<()> {
+        let names: Vec<&str> = dataset.cameras.iter().map(|c| c.name.as_str()).collect();
+        for (i, c) in self.per_camera.iter().enumerate() {
+            if !names.contains(&c.camera.as_str()) {
+                let message = format!(
+                    "per_camera[{i}]: the rig has no camera {:?} (its cameras: {})",
+                    c.camera,
+                    names.join(", ")
+                );
+                return Err(Error::invalid_value(format!("per_camera[{i}].camera"), c.camera.as_str(), message));
+            }
+            if self.per_camera[..i].iter().any(|o| o.camera == c.camera) {
+                let message = format!("per_camera[{i}]: camera {:?} is given its own request twice", c.camera);
+                return Err(Error::invalid_value(format!("per_camera[{i}].camera"), c.camera.as_str(), message));
+            }
         }
-        if options.per_camera[..i].iter().any(|o| o.camera == c.camera) {
-            let message = format!("per_camera[{i}]: camera {:?} is given its own request twice", c.camera);
-            return Err(Error::invalid_value(format!("per_camera[{i}].camera"), c.camera.as_str(), message));
+        check_request(&self.request, None, spelling)?;
+        for (k, name) in names.iter().enumerate() {
+            if self.per_camera.iter().any(|c| c.camera == *name) {
+                let in_camera = |e: Error| e.within(format!("camera {k} ({name})"), Some(&format!("cameras[{k}]")));
+                check_request(self.request_for(name), Some(&self.request), spelling).map_err(in_camera)?;
+            }
         }
+        check_surfaces(dataset, self, spelling)
     }
-    check_request(&options.request, None, spelling)?;
-    for (k, name) in names.iter().enumerate() {
-        let own = options.request_for(name);
-        if options.per_camera.iter().any(|c| c.camera == *name) {
-            let in_camera = |e: Error| e.within(format!("camera {k} ({name})"), Some(&format!("cameras[{k}]")));
-            check_request(own, Some(&options.request), spelling).map_err(in_camera)?;
-        }
-    }
-    check_surfaces(dataset, options, spelling)
 }
 
 /// Refuses a camera's request the joint solve cannot honour: an invalid request, the
