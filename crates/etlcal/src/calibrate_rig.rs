@@ -7,7 +7,7 @@
 //! camera's image is dropped for that camera, with a warning), calibrated jointly
 //! ([`etl_calib::rig_calibration`]): each camera first by the flags of `calibrate` (the
 //! same request), then every camera's numbers together with the shared stage corrections.
-//! A camera may have its own request ([`per_camera`]): its lens's temperature surface
+//! A camera may have its own request (module `per_camera`): its lens's temperature surface
 //! (`--thermal CAM=FILE|paper`; `--thermal FILE|paper` is every other camera's) and its
 //! own method, model and bundle-adjustment flags on top of the shared ones
 //! (`--camera-flags CAM="--distortion opencv --centre moving"`).
