@@ -5,7 +5,7 @@ in one line naming it."""
 import json
 import pathlib
 import subprocess
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Tuple
 
 import pytest
 
@@ -70,3 +70,61 @@ def test_calibrate_rig_refuses_bad_input(tmp_path: pathlib.Path, etlcal_binary: 
     assert "a rig is calibrated by the proposed method only" in str(err.value)
     with pytest.raises(etlcal.FileError):
         etlcal.calibrate_rig(tmp_path / "nowhere.json")
+
+
+def _e_in_only(tmp_path: pathlib.Path, etlcal_binary: str) -> pathlib.Path:
+    """The simulated 2-camera rig's dataset with every view's e_com_ma removed (E_in only:
+    each lens's temperature surface is needed)."""
+    sim = tmp_path / "sim"
+    subprocess.run([etlcal_binary, "simulate", "--rig", "2", "--observations-only", "--seed", "4", "--out",
+                    str(sim)], check=True, capture_output=True)
+    d: Dict[str, Any] = json.loads((sim / "rig_dataset.json").read_text())
+    for v in d["views"]:
+        for s in v["cameras"]:
+            del s["e_com_ma"]
+    path = tmp_path / "e_in_only.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+def test_per_camera_keywords_equal_the_cli_per_camera_flags(tmp_path: pathlib.Path, etlcal_binary: str) -> None:
+    """`per_camera` gives camera 1 its own surface and OpenCV's family: the same numbers as
+    `--thermal cam1=FILE --camera-flags cam1="--distortion opencv"` (to 1e-12), each
+    camera's family in its calibration."""
+    dataset = _e_in_only(tmp_path, etlcal_binary)
+    surface = tmp_path / "cam1-thermal.json"
+    etlcal.ThermalCalibration.paper().save(surface)
+    cli = tmp_path / "cli.json"
+    subprocess.run([etlcal_binary, "calibrate-rig", "--dataset", str(dataset), "--out", str(cli), "--thermal",
+                    "paper", "--thermal", f"cam1={surface}", "--camera-flags", "cam1=--distortion opencv"],
+                   check=True, capture_output=True)
+    own = {"cam1": {"distortion": "opencv", "thermal": etlcal.ThermalCalibration.load(surface)}}
+    rig = etlcal.calibrate_rig(dataset, thermal="paper", per_camera=own)
+    assert [c.distortion_model for c in rig.calibrations] == ["paper", "opencv"]
+    py = tmp_path / "py.json"
+    rig.save(py)
+    a: Dict[str, Any] = json.loads(cli.read_text())
+    b: Dict[str, Any] = json.loads(py.read_text())
+    for key in ["extrinsics", "cameras"]:
+        x, y = _numbers(a[key]), _numbers(b[key])
+        assert len(x) == len(y) > 0
+        worst = max(abs(p - q) / max(abs(p), 1.0) for p, q in zip(x, y))
+        assert worst <= 1e-12, (key, worst)
+
+
+def test_per_camera_refuses_unknown_cameras_and_keywords(tmp_path: pathlib.Path, etlcal_binary: str) -> None:
+    dataset = _e_in_only(tmp_path, etlcal_binary)
+    cases: List[Tuple[Dict[str, Dict[str, Any]], str]] = [
+        ({"cam1": {"distortions": "opencv"}}, 'per_camera["cam1"]: "distortions" is not a keyword of calibrate'),
+        ({"cam9": {"distortion": "opencv"}}, 'the rig has no camera "cam9" (its cameras: cam0, cam1)'),
+        ({"cam1": {"distortion": "fisheye"}}, 'per_camera["cam1"]: '),
+        ({"cam1": {"estimator": "paper"}}, "camera 1 (cam1): invalid input: estimator: one estimator serves every"),
+    ]
+    for per_camera, expected in cases:
+        with pytest.raises(ValueError) as err:
+            etlcal.calibrate_rig(dataset, thermal="paper", per_camera=per_camera)
+        assert expected in str(err.value) and len(str(err.value).splitlines()) == 1, str(err.value)
+    # No silent default: camera 1's lens has no surface, shared or its own.
+    with pytest.raises(etlcal.InputError) as err:
+        etlcal.calibrate_rig(dataset, per_camera={"cam0": {"thermal": "paper"}})
+    assert "camera 1 (cam1): views[0].cameras[1] records e_in_ma without e_com_ma" in str(err.value)

@@ -95,6 +95,9 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     namespace: Dict[str, Any] = {"camera": rig, "chamber": rig, "stage": rig}
     monkeypatch.chdir(tmp_path)
     for language, code in blocks:
+        if "thermal-cam1.json" in code and not (tmp_path / "thermal-cam1.json").exists():
+            # The second lens's surface: the virtual lens's again (one virtual lens here).
+            shutil.copy(tmp_path / "thermal.json", tmp_path / "thermal-cam1.json")
         if language == "sh":
             run_shell(code, tmp_path, etlcal_binary)
         elif language == "python":
@@ -137,8 +140,13 @@ def test_every_rig_snippet_runs_on_the_virtual_lens(
     # The rig calibrated from the simulated points, by the CLI and by Python alike; the
     # example rig dataset reads, and is refused for its images that are not there.
     assert len(etlcal.Rig.load(tmp_path / "rig.json").names) == 2
+    # Camera 1's own flags: its calibration in OpenCV's family, camera 0's in the paper's.
+    families = [c.distortion_model for c in etlcal.Rig.load(tmp_path / "rig.json").calibrations]
+    assert families == ["paper", "opencv"], families
     assert len(namespace["at"].cameras) == 2
-    example_rig = [etlcal_binary, "calibrate-rig", "--dataset", "example-rig-dataset.json", "--out", "x.json"]
+    # (With its lenses' surface: a camera without one is refused first, before any image.)
+    example_rig = [etlcal_binary, "calibrate-rig", "--dataset", "example-rig-dataset.json", "--thermal",
+                   "thermal.json", "--out", "x.json"]
     refused = subprocess.run(example_rig, cwd=tmp_path, capture_output=True, text=True)
     assert refused.returncode != 0 and "images/cam0/view00.png" in refused.stderr, refused.stderr
     assert not (tmp_path / "x.json").exists()

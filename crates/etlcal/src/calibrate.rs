@@ -134,17 +134,24 @@ pub struct Args {
     /// Where to write etlcal.calibration/1 (its directory is created if missing).
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// The calibration's options (the model, the estimator, A0, the thermal calibration).
+    /// The calibration's options (the model, the estimator, A0).
     #[command(flatten)]
     pub request: RequestFlags,
+    /// Thermal calibration for views without e_com_ma: an etlcal.thermal/1 file, or
+    /// `paper` for the paper's surface. Required when a view has no e_com_ma (none is
+    /// assumed); kept whole in the calibration, which uses it at run time.
+    // Not one of the RequestFlags: calibrate-rig takes it per camera (`--thermal CAM=FILE`).
+    #[arg(long, value_name = "FILE|paper")]
+    pub thermal: Option<PathBuf>,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
 }
 
-/// The options of a calibration request, shared by `calibrate` and `calibrate-rig` (each
-/// camera of a rig is calibrated with them): they parse into an
-/// [`etl_calib::request::CalibrationRequest`].
+/// The options of a calibration request but its temperature surface, shared by
+/// `calibrate` and `calibrate-rig` (each camera of a rig is calibrated with them, and
+/// `--camera-flags` gives them per camera): with the surface (each verb's `--thermal`)
+/// they parse into an [`etl_calib::request::CalibrationRequest`].
 #[derive(clap::Args, Debug)]
 pub struct RequestFlags {
     /// The method: the paper's (one calibration over all currents) or the per-setting
@@ -225,11 +232,6 @@ pub struct RequestFlags {
     /// refused otherwise, naming the cause.
     #[arg(long)]
     pub accept_ill_conditioned: bool,
-    /// Thermal calibration for views without e_com_ma: an etlcal.thermal/1 file, or
-    /// `paper` for the paper's surface. Required when a view has no e_com_ma (none is
-    /// assumed); kept whole in the calibration, which uses it at run time.
-    #[arg(long, value_name = "FILE|paper")]
-    pub thermal: Option<PathBuf>,
 }
 
 /// The CLI's words for the options of a request ([`Spelling`]): `--hold-a0`,
@@ -265,9 +267,10 @@ impl RequestFlags {
         FlagSpelling { huber_alias: self.huber_px.is_some() }
     }
 
-    /// The request the flags ask for (reading the `--a0` and `--thermal` files, not the
-    /// input).
-    pub fn request(&self) -> Result<CalibrationRequest> {
+    /// The request the flags ask for with the temperature surface `thermal` (an
+    /// etlcal.thermal/1 file or `paper`), reading the `--a0` and thermal files, not the
+    /// input.
+    pub fn request(&self, thermal: Option<&Path>) -> Result<CalibrationRequest> {
         let robust = match (self.robust, self.huber_px) {
             (_, Some(k_px)) => Some(RobustLoss::Huber { k_px }),
             (Some(loss), None) => {
@@ -286,7 +289,7 @@ impl RequestFlags {
                 MethodArg::PerSetting => Method::PerSetting,
             },
             a0: self.a0.as_deref().map(|p| A0File::load(p).map(|f| f.a0())).transpose()?,
-            thermal: self.thermal.as_deref().map(ThermalRef::choose).transpose()?,
+            thermal: thermal.map(ThermalRef::choose).transpose()?,
             estimator: self.estimator.map(|e| match e {
                 EstimatorArg::Paper => EstimatorChoice::Paper,
                 EstimatorArg::Eiv => EstimatorChoice::Eiv,
@@ -352,13 +355,13 @@ pub fn run(args: Args) -> Result<()> {
     let mut outputs = vec![Output::File(&args.out)];
     outputs.extend(args.observations_out.as_deref().map(Output::File));
     let flags = &args.request;
-    let thermal_file = crate::output::thermal_file(flags.thermal.as_deref());
+    let thermal_file = crate::output::thermal_file(args.thermal.as_deref());
     crate::output::check(
         [args.observations.as_deref(), args.dataset.as_deref(), flags.a0.as_deref(), thermal_file],
         &outputs,
     )?;
     let spelling = flags.spelling();
-    let request = flags.request()?;
+    let request = flags.request(args.thermal.as_deref())?;
     request.validate(&spelling)?;
     let obs = load_input(args.observations.as_deref(), args.dataset.as_deref(), !args.json)?;
     let calibrated = request.run(&obs, &spelling)?;

@@ -1,4 +1,5 @@
 //! `etlcal calibrate-rig --dataset F --out rig.json [the model flags of calibrate]
+//! [--thermal [CAM=]FILE|paper ...] [--camera-flags CAM="FLAGS" ...]
 //! [--solver auto|dense|sparse] [--json]`: a multi-camera ETL rig from an
 //! `etlcal.rig-dataset/1` (points per camera and view, or images whose boards are first
 //! detected by the detection of `calibrate --dataset`,
@@ -6,6 +7,10 @@
 //! camera's image is dropped for that camera, with a warning), calibrated jointly
 //! ([`etl_calib::rig_calibration`]): each camera first by the flags of `calibrate` (the
 //! same request), then every camera's numbers together with the shared stage corrections.
+//! A camera may have its own request (module `per_camera`): its lens's temperature surface
+//! (`--thermal CAM=FILE|paper`; `--thermal FILE|paper` is every other camera's) and its
+//! own method, model and bundle-adjustment flags on top of the shared ones
+//! (`--camera-flags CAM="--distortion opencv --centre moving"`).
 //! Writes `etlcal.rig/1` with each camera's calibration inline and each camera's pose
 //! relative to camera 0 with its 6 x 6 covariance, and the joint covariance of every
 //! camera's numbers (`joint_covariance`: what `triangulate` propagates, the
@@ -13,6 +18,8 @@
 //! failure); prints per camera the RMS, and per pose the rotation and translation with
 //! their standard deviations and the baseline. `--json` prints the rig file's object with
 //! a `"summary"`.
+
+mod per_camera;
 
 use std::path::PathBuf;
 
@@ -54,6 +61,17 @@ pub struct Args {
     /// Every camera's calibration options (the flags of `calibrate`).
     #[command(flatten)]
     pub request: RequestFlags,
+    /// The lenses' temperature surfaces, for views without e_com_ma: `FILE|paper` (an
+    /// etlcal.thermal/1 file, or the paper's surface) for every camera without its own,
+    /// `CAM=FILE|paper` for camera CAM's lens (CAM its index or name); repeatable. Each
+    /// camera whose views record E_in needs one (none is assumed).
+    #[arg(long, value_name = "[CAM=]FILE|paper")]
+    pub thermal: Vec<String>,
+    /// One camera's own calibration flags, CAM="FLAGS" (CAM its index or name; FLAGS the
+    /// method, model and bundle-adjustment flags of calibrate, split at white space),
+    /// applied on top of the shared ones for that camera; repeatable, once per camera.
+    #[arg(long, value_name = "CAM=FLAGS")]
+    pub camera_flags: Vec<String>,
     /// Set from the global `--json` (one JSON object on stdout).
     #[arg(skip)]
     pub json: bool,
@@ -65,7 +83,10 @@ fn summary(rig: &RigCalibration) -> serde_json::Value {
     let cameras: Vec<_> = rig
         .cameras
         .iter()
-        .map(|c| json!({"name": c.name, "rms_px": c.rms_px, "own_rms_px": c.own.rms_reprojection_px}))
+        .map(|c| {
+            json!({"name": c.name, "rms_px": c.rms_px, "own_rms_px": c.own.rms_reprojection_px,
+                "request": per_camera::request_summary(&c.request)})
+        })
         .collect();
     let poses: Vec<_> = rig
         .extrinsics
@@ -91,6 +112,7 @@ fn print_summary(rig: &RigCalibration, out: &std::path::Path) {
     );
     for c in &rig.cameras {
         outln!("  {}: rms {:.4} px (alone {:.4} px)", c.name, c.rms_px, c.own.rms_reprojection_px);
+        outln!("    request: {}", per_camera::request_summary(&c.request));
     }
     for e in &rig.extrinsics {
         let c = e.covariance.unwrap_or([[0.0; 6]; 6]);
@@ -123,24 +145,45 @@ fn detected(dataset: &RigDataset, args: &Args) -> Result<RigDataset> {
     Ok(points)
 }
 
-/// Runs `etlcal calibrate-rig`.
-pub fn run(args: Args) -> Result<()> {
-    let flags = &args.request;
-    let thermal_file = crate::output::thermal_file(flags.thermal.as_deref());
-    crate::output::check(
-        [Some(args.dataset.as_path()), flags.a0.as_deref(), thermal_file],
-        &[Output::File(&args.out)],
-    )?;
-    let spelling = flags.spelling();
-    let request = flags.request()?;
-    request.validate(&spelling)?;
-    let dataset = detected(&RigDataset::load(&args.dataset)?, &args)?;
+/// The options of the command line for `dataset`'s cameras: the shared request (with
+/// `--thermal FILE`), each camera's own, the solver; checked against the dataset
+/// (etl-calib's [`RigCalibrationOptions::check`]) before any detection.
+fn rig_options(
+    args: &Args,
+    dataset: &RigDataset,
+    camera_flags: &[per_camera::CameraFlags],
+) -> Result<RigCalibrationOptions> {
+    let names: Vec<&str> = dataset.cameras.iter().map(|c| c.name.as_str()).collect();
+    let surfaces = per_camera::surfaces(&args.thermal, &names)?;
+    let request = args.request.request(surfaces.shared.as_deref())?;
+    let per_camera = per_camera::camera_requests(&request, camera_flags, &surfaces.per_camera, &names)?;
     let solver = match args.solver.unwrap_or(SolverArg::Auto) {
         SolverArg::Auto => LinearSolver::Auto,
         SolverArg::Dense => LinearSolver::Dense,
         SolverArg::Sparse => LinearSolver::Sparse,
     };
-    let options = RigCalibrationOptions { request, solver, max_iterations: 0 };
+    let options = RigCalibrationOptions { request, solver, max_iterations: 0, per_camera };
+    options.check(dataset, &args.request.spelling())?;
+    Ok(options)
+}
+
+/// Runs `etlcal calibrate-rig`.
+pub fn run(args: Args) -> Result<()> {
+    let flags = &args.request;
+    let camera_flags: Vec<per_camera::CameraFlags> =
+        args.camera_flags.iter().map(|v| per_camera::parse_camera_flags(v)).collect::<Result<_>>()?;
+    let thermal_files = per_camera::thermal_paths(&args.thermal);
+    let a0_files = camera_flags.iter().filter_map(|f| f.flags.a0.as_deref());
+    let inputs = [Some(args.dataset.as_path()), flags.a0.as_deref()]
+        .into_iter()
+        .chain(thermal_files.iter().map(|p| Some(p.as_path())))
+        .chain(a0_files.map(Some));
+    crate::output::check(inputs, &[Output::File(&args.out)])?;
+    let spelling = flags.spelling();
+    flags.request(None)?.validate(&spelling)?;
+    let dataset = RigDataset::load(&args.dataset)?;
+    let options = rig_options(&args, &dataset, &camera_flags)?;
+    let dataset = detected(&dataset, &args)?;
     let rig = calibrate_rig_spelled(&dataset, &options, &spelling)?;
     crate::output::create_parent(&args.out)?;
     rig.save(&args.out)?;

@@ -70,3 +70,9 @@ impl RigArgs {
         json!({"rig": self.rig.display().to_string(), "cameras": cameras, "extrapolated": at.extrapolated()})
     }
 }
+
+/// The camera `cam` names among a rig's cameras `names` (in the rig's order): an index, or
+/// a name (`triangulate --pixel CAM:U,V`, `calibrate-rig --thermal CAM=FILE`).
+pub fn camera_index<S: AsRef<str>>(names: &[S], cam: &str) -> Option<usize> {
+    cam.parse::<usize>().ok().filter(|&k| k < names.len()).or_else(|| names.iter().position(|n| n.as_ref() == cam))
+}

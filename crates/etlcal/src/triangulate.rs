@@ -63,7 +63,8 @@ pub struct Args {
 
 /// The camera `cam` names (an index or a name).
 fn camera_index(at: &RigAt, cam: &str) -> Option<usize> {
-    cam.parse::<usize>().ok().filter(|&k| k < at.len()).or_else(|| (0..at.len()).find(|&k| at.name(k) == cam))
+    let names: Vec<&str> = (0..at.len()).map(|k| at.name(k)).collect();
+    crate::rig_setting::camera_index(&names, cam)
 }
 
 /// One point from `--pixel CAM:U,V ...`.

@@ -253,6 +253,36 @@ impl Calibrated {
 }
 
 impl CalibrationRequest {
+    /// This request with the options `given` taken from `by`, the others kept: a front
+    /// end's per-camera options applied on top of the shared ones (`etlcal calibrate-rig
+    /// --camera-flags`, Python's `per_camera`). `sigma_z_mm` and `sigma_z_um` both set the
+    /// stage prior, `robust` and `robust_k_px` both the robust loss.
+    pub fn overridden(&self, by: &CalibrationRequest, given: &[RequestOption]) -> CalibrationRequest {
+        let mut r = self.clone();
+        for option in given {
+            match option {
+                RequestOption::Method => r.method = by.method,
+                RequestOption::A0 => r.a0 = by.a0,
+                RequestOption::Thermal => r.thermal.clone_from(&by.thermal),
+                RequestOption::Estimator => r.estimator = by.estimator,
+                RequestOption::SigmaZMm | RequestOption::SigmaZUm => r.priors.sigma_z = by.priors.sigma_z,
+                RequestOption::SigmaEMa => r.priors.sigma_e_ma = by.priors.sigma_e_ma,
+                RequestOption::SigmaPDpt => r.priors.sigma_p_dpt = by.priors.sigma_p_dpt,
+                RequestOption::SigmaPx => r.priors.sigma_px = by.priors.sigma_px,
+                RequestOption::HoldA0 => r.hold_a0 = by.hold_a0,
+                RequestOption::Robust | RequestOption::RobustKPx => r.robust = by.robust,
+                RequestOption::Distortion => r.distortion = by.distortion,
+                RequestOption::FocalDegree => r.focal_degree = by.focal_degree,
+                RequestOption::FixK3 => r.fix_k3 = by.fix_k3,
+                RequestOption::ZeroTangent => r.zero_tangent = by.zero_tangent,
+                RequestOption::Model => r.model_auto = by.model_auto,
+                RequestOption::AcceptIllConditioned => r.accept_ill_conditioned = by.accept_ill_conditioned,
+                RequestOption::Centre => r.centre = by.centre,
+            }
+        }
+        r
+    }
+
     /// The OpenCV flags asked for.
     pub fn flags(&self) -> OpenCvFlags {
         OpenCvFlags { fix_k3: self.fix_k3, zero_tangent: self.zero_tangent }

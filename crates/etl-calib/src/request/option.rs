@@ -50,6 +50,34 @@ pub enum RequestOption {
 }
 
 impl RequestOption {
+    /// Every option, in the order of the enum.
+    pub const ALL: [RequestOption; 19] = [
+        RequestOption::Method,
+        RequestOption::A0,
+        RequestOption::Thermal,
+        RequestOption::Estimator,
+        RequestOption::SigmaZMm,
+        RequestOption::SigmaZUm,
+        RequestOption::SigmaEMa,
+        RequestOption::SigmaPDpt,
+        RequestOption::SigmaPx,
+        RequestOption::HoldA0,
+        RequestOption::Robust,
+        RequestOption::RobustKPx,
+        RequestOption::Distortion,
+        RequestOption::FocalDegree,
+        RequestOption::FixK3,
+        RequestOption::ZeroTangent,
+        RequestOption::Model,
+        RequestOption::AcceptIllConditioned,
+        RequestOption::Centre,
+    ];
+
+    /// The option whose [`Self::key`] is `key`, or `None`.
+    pub fn from_key(key: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|o| o.key() == key)
+    }
+
     /// The stable key: the option's name in snake case (`"hold_a0"`), which is Python's
     /// argument and, with dashes, the CLI's flag.
     pub const fn key(self) -> &'static str {

@@ -13,7 +13,11 @@
 //!
 //! **Start**: each camera calibrated alone by the single-camera pipeline, with the request
 //! of `etlcal calibrate` ([`crate::request::CalibrationRequest`]: model, estimator, priors,
-//! A0 from its lens-off views or given), its outliers left out of the joint solve.
+//! A0 from its lens-off views or given, its lens's temperature surface), the rig's or its
+//! own ([`RigCalibrationOptions::per_camera`]), its outliers left out of the joint solve.
+//! Cameras may so differ in layout (distortion family, focal degree, fixed or moving
+//! centre, held numbers): each camera's numbers x_k keep their own layout in the joint
+//! problem, p_k per camera. The estimator and the stage's prior are the rig's.
 //!
 //! **Joint solve** (errors-in-variables): view j's stage really stood at Z_j + dZ_j for
 //! every camera that saw it (one physical stage), while each camera's lens ran at its own
@@ -79,7 +83,7 @@ mod step;
 
 pub use cameras::JointCamera;
 pub use detect::{detect_rig, RigDetectionSummary};
-pub use options::{LinearSolver, RigCalibrationOptions, DEFAULT_MAX_ITERATIONS, SPARSE_FROM_CAMERAS};
+pub use options::{CameraRequest, LinearSolver, RigCalibrationOptions, DEFAULT_MAX_ITERATIONS, SPARSE_FROM_CAMERAS};
 pub use result::{RigCalibration, RigCameraResult};
 pub use step::JointSystem;
 
@@ -103,8 +107,12 @@ pub fn calibrate_rig(dataset: &RigDataset, options: &RigCalibrationOptions) -> R
 /// [`calibrate_rig`] with the front end's `spelling` of the request's options.
 ///
 /// Errors (one line, naming the input): the dataset's own ([`RigDataset::validate`]);
-/// images instead of points; the per-setting method or a robust loss; a camera's own
-/// calibration failing (naming the camera); a joint system that is not positive definite.
+/// images instead of points; a per-camera request naming no camera of the dataset, or one
+/// camera twice; the per-setting method or a robust loss (a camera's own request: naming
+/// the camera); a camera's own estimator or stage prior other than the rig's (named); a
+/// camera whose views record E_in without E_com and which has no temperature surface
+/// (named); a camera's own calibration failing (naming the camera); a joint system that is
+/// not positive definite.
 pub fn calibrate_rig_spelled(
     dataset: &RigDataset,
     options: &RigCalibrationOptions,
@@ -139,6 +147,7 @@ pub fn calibrate_rig_spelled(
             calibration,
             own: part.own.calibration.clone(),
             rms_px,
+            request: part.request.clone(),
         });
     }
     let (p0, i0) = pose_of(&problem.model(0, &solved.state));

@@ -34,16 +34,48 @@ impl LinearSolver {
 }
 
 /// The options of [`super::calibrate_rig`]: the per-camera calibration's (the same request
-/// `etlcal calibrate` takes, applied to every camera: model, estimator, priors, A0 source)
-/// and the joint solve's.
+/// `etlcal calibrate` takes: model, estimator, priors, A0 source, temperature surface),
+/// shared by every camera or given per camera, and the joint solve's.
+///
+/// Each camera is calibrated alone with its own request ([`Self::request_for`]): the one
+/// of [`Self::per_camera`] that names it, else [`Self::request`]. What cannot differ per
+/// camera is refused by the calibration, naming the camera: the estimator and the stage's
+/// prior (one joint solve, one stage), the per-setting method and a robust loss (as for
+/// the shared request), a camera the dataset does not have, a camera given twice.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RigCalibrationOptions {
-    /// Every camera's calibration request (the proposed method only).
+    /// The request of every camera without its own (the proposed method only).
     pub request: CalibrationRequest,
     /// The linear solver of the joint steps.
     pub solver: LinearSolver,
     /// The most Levenberg-Marquardt iterations of the joint solve (0: the default, 100).
     pub max_iterations: usize,
+    /// Cameras calibrated with their own request (each whole: a front end applies its
+    /// per-camera options on top of the shared ones, [`CalibrationRequest::overridden`]).
+    pub per_camera: Vec<CameraRequest>,
+}
+
+/// One camera's own request: its lens's temperature surface, its model choices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraRequest {
+    /// The camera's name in the rig dataset.
+    pub camera: String,
+    /// Its whole request (not a difference to the shared one).
+    pub request: CalibrationRequest,
+}
+
+impl RigCalibrationOptions {
+    /// These options with `camera` calibrated by `request` (added to [`Self::per_camera`]).
+    pub fn with_camera(mut self, camera: impl Into<String>, request: CalibrationRequest) -> Self {
+        self.per_camera.push(CameraRequest { camera: camera.into(), request });
+        self
+    }
+
+    /// The request camera `name` is calibrated with: its own (the first that names it),
+    /// else the shared one.
+    pub fn request_for(&self, name: &str) -> &CalibrationRequest {
+        self.per_camera.iter().find(|c| c.camera == name).map_or(&self.request, |c| &c.request)
+    }
 }
 
 /// The joint solve's default iteration limit.

@@ -10,6 +10,8 @@ use etl_formats::rig::{JointCovariance, RigCamera, RigExtrinsics, RigFile};
 use etl_formats::{Result, SettingKind};
 use nalgebra::DMatrix;
 
+use crate::request::CalibrationRequest;
+
 /// One camera of a calibrated rig.
 #[derive(Debug, Clone)]
 pub struct RigCameraResult {
@@ -24,6 +26,8 @@ pub struct RigCameraResult {
     pub own: Calibration,
     /// Its RMS reprojection distance in the joint solve, px.
     pub rms_px: f64,
+    /// The request it was calibrated with alone (the rig's or its own).
+    pub request: CalibrationRequest,
 }
 
 /// A calibrated rig (module docs of [`super`]).

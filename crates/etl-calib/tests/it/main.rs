@@ -9,6 +9,7 @@ mod rig;
 mod rig_calibration;
 mod rig_free_views;
 mod rig_images;
+mod rig_requests;
 mod robust;
 mod select;
 mod stereo;

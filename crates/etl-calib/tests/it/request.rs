@@ -206,3 +206,34 @@ fn a_run_is_the_pipelines_result_and_refuses_missing_data_by_name() {
     assert_eq!(e.input_what(), Some("setting_views"));
     assert!(e.to_string().contains("<method>='per-setting' needs setting_views"), "{e}");
 }
+
+/// A per-camera request on top of a shared one takes exactly the options given from the
+/// camera's (both units of the stage prior and both words of the robust loss included),
+/// and every key names its option.
+#[test]
+fn overridden_takes_the_given_options_only() {
+    use etl_calib::request::{CentreChoice, DistortionChoice, EivPriors, RequestOption, StageSigma};
+    for option in RequestOption::ALL {
+        assert_eq!(RequestOption::from_key(option.key()), Some(option));
+    }
+    assert_eq!(RequestOption::from_key("out"), None);
+    let shared = CalibrationRequest {
+        thermal: Some(ThermalRef::paper()),
+        hold_a0: true,
+        priors: EivPriors { sigma_px: Some(0.3), ..EivPriors::default() },
+        ..CalibrationRequest::default()
+    };
+    let camera = CalibrationRequest {
+        distortion: Some(DistortionChoice::Family(DistortionModel::OpenCv)),
+        centre: Some(CentreChoice::Moving),
+        priors: EivPriors { sigma_z: Some(StageSigma::Um(20.0)), ..EivPriors::default() },
+        ..CalibrationRequest::default()
+    };
+    let merged = shared.overridden(&camera, &[RequestOption::Distortion, RequestOption::HoldA0]);
+    assert_eq!(merged.distortion, camera.distortion);
+    assert!(!merged.hold_a0, "hold_a0 given (off) by the camera");
+    assert_eq!((merged.centre, merged.thermal.clone(), merged.priors), (None, shared.thermal.clone(), shared.priors));
+    let stage = shared.overridden(&camera, &[RequestOption::SigmaZUm, RequestOption::Thermal]);
+    assert_eq!((stage.priors.sigma_z, stage.priors.sigma_px, stage.thermal), (camera.priors.sigma_z, Some(0.3), None));
+    assert_eq!(shared.overridden(&camera, &[]), shared);
+}

@@ -12,7 +12,7 @@ use etl_sim::simulate::NoiseModel;
 fn noise_free_options(estimator: EstimatorChoice, solver: LinearSolver) -> RigCalibrationOptions {
     let priors = EivPriors { sigma_px: Some(0.2), ..EivPriors::default() };
     let request = CalibrationRequest { estimator: Some(estimator), priors, ..CalibrationRequest::default() };
-    RigCalibrationOptions { request, solver, max_iterations: 0 }
+    RigCalibrationOptions { request, solver, ..Default::default() }
 }
 
 /// Every number of `m` against `truth`, relative to the number: `rtol`, but 100 `rtol`

@@ -75,7 +75,7 @@ fn with_free_views(
 fn options(sigma_px: Option<f64>, solver: LinearSolver) -> RigCalibrationOptions {
     let priors = EivPriors { sigma_px, ..EivPriors::default() };
     let request = CalibrationRequest { estimator: Some(EstimatorChoice::Eiv), priors, ..CalibrationRequest::default() };
-    RigCalibrationOptions { request, solver, max_iterations: 0 }
+    RigCalibrationOptions { request, solver, ..Default::default() }
 }
 
 fn extrinsics_error(rig: &RigCalibration, sim: &MultiCameraSimulation) -> [f64; 6] {

@@ -723,10 +723,15 @@ def calibrate_rig(
     centre: Optional[Literal["fixed", "moving", "auto"]] = None,
     sigma_p_dpt: Optional[float] = None,
     model: Optional[Literal["auto"]] = None,
+    per_camera: Optional[Mapping[str, Mapping[str, Any]]] = None,
 ) -> "Rig":
     """A multi-camera rig calibrated jointly from an etlcal.rig-dataset/1 file (points or
     images, detected first), as `etlcal calibrate-rig --dataset`: the keywords are
-    calibrate's (one request for every camera) and --solver's; returns the run-time Rig."""
+    calibrate's (every camera's) and --solver's; `per_camera` gives a camera (by name)
+    its own keywords of calibrate on top of those, e.g. its lens's surface
+    `{"cam1": {"thermal": ThermalCalibration.load(...), "distortion": "opencv"}}`
+    (`--thermal CAM=FILE`, `--camera-flags CAM="FLAGS"`); an unknown camera or keyword
+    raises InputError (a ValueError) naming it. Returns the run-time Rig."""
     ...
 def cramer_rao_std(
     observations: Observations,

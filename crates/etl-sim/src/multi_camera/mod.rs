@@ -26,6 +26,14 @@
 //! rig's range of currents (within [`E_MARGIN_MA`]). Each camera has the 10 lens-off views of the paper rig
 //! ([`crate::simulate::lens_off_views_of`]) for its A0.
 //!
+//! Every lens has the paper's temperature surface at 27 degC by default (each view's E_in
+//! its E_com through it). With [`LensThermal`] each lens has its own: camera k's E_T is
+//! the paper's with every coefficient times 1 + `spread` s_k
+//! ([`lens_thermal_surface`]), and the lenses warm over the session, view j at the
+//! temperature linear in j between `temperatures_c`; view j's E_in is then camera k's
+//! E_com through its own surface at that temperature, so that a calibration that takes
+//! one lens's surface for another's reads wrong currents.
+//!
 //! The extrinsics of camera k relative to camera 0 (X_k = R X_0 + T) are
 //! R = R_k R_0^T, T = t_k - R t_0 with (R_k, t_k) each camera's pose to the stage's world
 //! frame, at E = 0 (where a moving-centre model's pose holds).
@@ -75,12 +83,33 @@ pub struct MultiCameraDesign {
     pub baseline_mm: f64,
     /// Whether each camera's centre moves with the setting.
     pub moving_centre: bool,
+    /// Each lens's own temperature surface and the session's temperatures (module docs);
+    /// `None`: the paper's surface for every lens, at 27 degC.
+    pub lens_thermal: Option<LensThermal>,
+}
+
+/// Lenses whose temperature surfaces differ, warming over the session (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LensThermal {
+    /// How far camera k's surface is from the paper's: its coefficients times
+    /// 1 + `spread` s_k (s_k the camera's factor: 0 for camera 0), in [0, 1].
+    pub spread: f64,
+    /// The lenses' temperature at the first and the last stage view, degC (linear in
+    /// between), inside the paper surface's 27..37 degC.
+    pub temperatures_c: [f64; 2],
+}
+
+/// Camera k's (of n) lens's temperature surface under `thermal` (module docs): the
+/// paper's with every coefficient times 1 + spread s_k.
+pub fn lens_thermal_surface(k: usize, n: usize, thermal: &LensThermal) -> ThermalSurface {
+    let f = 1.0 + thermal.spread * spread(k, n);
+    ThermalSurface { coefficients: ThermalSurface::PAPER.coefficients.map(|c| c * f) }
 }
 
 impl MultiCameraDesign {
     /// `cameras` cameras at a 60 mm baseline over the paper rig's 15 views, fixed centres.
     pub const fn new(cameras: usize) -> Self {
-        MultiCameraDesign { cameras, views: 15, baseline_mm: 60.0, moving_centre: false }
+        MultiCameraDesign { cameras, views: 15, baseline_mm: 60.0, moving_centre: false, lens_thermal: None }
     }
 
     /// Refuses a design outside the documented ranges, naming the field.
@@ -94,6 +123,12 @@ impl MultiCameraDesign {
             return Err(Error::invalid_value("views", self.views as f64, message));
         }
         etl_formats::check_range("baseline_mm", self.baseline_mm, [60.0, 150.0], "mm")?;
+        if let Some(t) = &self.lens_thermal {
+            etl_formats::check_range("lens_thermal.spread", t.spread, [0.0, 1.0], "")?;
+            for (i, &tc) in t.temperatures_c.iter().enumerate() {
+                etl_formats::check_range(&format!("lens_thermal.temperatures_c[{i}]"), tc, [27.0, 37.0], "degC")?;
+            }
+        }
         Ok(())
     }
 }
@@ -258,6 +293,7 @@ pub fn stage_position_mm(j: usize, views: usize) -> f64 {
 fn shoot(
     (k, n, cam, zero): (usize, usize, &CameraModel, &CameraModel),
     (z, dz): (f64, f64),
+    (surface, t_c): (&ThermalSurface, f64),
     corner_noise: &[[f64; 2]],
     noise: &NoiseModel,
     rng: &mut ChaCha8Rng,
@@ -280,14 +316,14 @@ fn shoot(
     if points.len() < MIN_POINTS {
         return None;
     }
-    let e_in = ThermalSurface::PAPER.e_in_for_e_com(e, PAPER_TEMPERATURE_C).unwrap_or(e);
+    let e_in = surface.e_in_for_e_com(e, t_c).unwrap_or(e);
     let shot = RigShot {
         camera: k,
         image: None,
         points: Some(points),
         e_in_ma: e_in,
         focal_power_dpt: None,
-        temperature_c: PAPER_TEMPERATURE_C,
+        temperature_c: t_c,
         e_com_ma: Some(e),
     };
     Some((shot, de))
@@ -315,14 +351,21 @@ pub fn simulate_multi_camera(
     let mut dataset = RigDataset::new(multi_camera_board()?, cameras);
     let (mut true_dz_mm, mut true_de_ma) = (vec![], vec![vec![None; design.views]; n]);
     let corners = MULTI_CAMERA_BOARD.inner_corners[0] * MULTI_CAMERA_BOARD.inner_corners[1];
+    let surfaces: Vec<ThermalSurface> =
+        (0..n).map(|k| design.lens_thermal.map_or(ThermalSurface::PAPER, |t| lens_thermal_surface(k, n, &t))).collect();
     for j in 0..design.views {
         let z = stage_position_mm(j, design.views);
+        let t_c = design.lens_thermal.map_or(PAPER_TEMPERATURE_C, |t| {
+            let [t0, t1] = t.temperatures_c;
+            t0 + (t1 - t0) * j as f64 / (design.views - 1) as f64
+        });
         let dz = gauss(noise.z_mm, &mut rng);
         let corner_noise: Vec<[f64; 2]> =
             (0..corners).map(|_| [gauss(noise.xy_mm, &mut rng), gauss(noise.xy_mm, &mut rng)]).collect();
         let mut view = RigView { z_w_mm: z, cameras: vec![] };
         for (k, cam) in truths.iter().enumerate() {
-            if let Some((shot, de)) = shoot((k, n, cam, &truths[0]), (z, dz), &corner_noise, noise, &mut rng) {
+            let lens = (&surfaces[k], t_c);
+            if let Some((shot, de)) = shoot((k, n, cam, &truths[0]), (z, dz), lens, &corner_noise, noise, &mut rng) {
                 view.cameras.push(shot);
                 true_de_ma[k][j] = Some(de);
             }

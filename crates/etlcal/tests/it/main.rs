@@ -9,6 +9,7 @@ mod architecture;
 mod cli_board;
 mod cli_calibrate;
 mod cli_calibrate_rig;
+mod cli_calibrate_rig_cameras;
 mod cli_capture;
 mod cli_capture_thermal;
 mod cli_conventions;
