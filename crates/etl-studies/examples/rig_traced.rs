@@ -52,7 +52,9 @@ fn parse() -> Result<Args> {
                         "default" => Ok(RigRequest::Default),
                         "hold-a0" => Ok(RigRequest::HoldA0),
                         "moving" => Ok(RigRequest::MovingCentre),
-                        other => Err(bad("--requests", format!("--requests: {other} is not default, hold-a0 or moving"))),
+                        other => {
+                            Err(bad("--requests", format!("--requests: {other} is not default, hold-a0 or moving")))
+                        }
                     })
                     .collect::<Result<_>>()?;
             }
@@ -79,9 +81,8 @@ fn main() -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let started = std::time::Instant::now();
     let rig = trace(&optics, &TracedRigDesign { corner: args.corner, ..TracedRigDesign::new() })?;
-    let views: Vec<usize> = (0..2)
-        .map(|k| rig.dataset.views.iter().filter(|v| v.cameras.iter().any(|s| s.camera == k)).count())
-        .collect();
+    let views: Vec<usize> =
+        (0..2).map(|k| rig.dataset.views.iter().filter(|v| v.cameras.iter().any(|s| s.camera == k)).count()).collect();
     println!(
         "{} + {} ({:?} corners), stage travel {:.2}..{:.2} mm, views per camera {views:?}; traced in {:.1} s\n",
         optics[0].file.name,

@@ -227,8 +227,7 @@ fn point_fits(
     let mut truth = rig.cameras[0].world_to_camera(w);
     truth[2] += at[0].pupil.z_mm;
     let from_calibration = t.from_calibration.unwrap_or_default();
-    let camera_fit =
-        fit(std::array::from_fn(|i| t.point_mm[i] - truth[i]), &t.from_pixels, &from_calibration)?;
+    let camera_fit = fit(std::array::from_fn(|i| t.point_mm[i] - truth[i]), &t.from_pixels, &from_calibration)?;
     Ok((e, world_fit, camera_fit))
 }
 

@@ -22,7 +22,11 @@ pub fn settings(rig: &TracedMultiCamera, e_com_ma: [f64; 2]) -> Result<[Setting;
 
 /// A point uniform in the stage's volume (X, Y over the board, Z over the travel) that
 /// both cameras see at `at`, and its noise-free traced pixels; None after [`MAX_DRAWS`].
-pub fn draw_point(rig: &TracedMultiCamera, at: &[Setting; 2], rng: &mut ChaCha8Rng) -> Option<([f64; 3], [[f64; 2]; 2])> {
+pub fn draw_point(
+    rig: &TracedMultiCamera,
+    at: &[Setting; 2],
+    rng: &mut ChaCha8Rng,
+) -> Option<([f64; 3], [[f64; 2]; 2])> {
     let b = &rig.board;
     let span = |n: usize| b.square_mm * (n - 1) as f64;
     let [z0, z1] = rig.stage_travel_mm;
