@@ -1,10 +1,12 @@
 //! The acceptance of a calibrated 2-camera rig on ray-traced optics (docs/RESULTS.md):
 //! `cargo run --release -p etl-studies --example rig_traced -- [TRIALS] [SEED]
-//! [--chief] [--stop-scale S] [--requests default,hold-a0,moving] [OPTICS_FILE [OPTICS_FILE]]`
+//! [--chief] [--stop-scale S] [--sigma-px S] [--requests default,hold-a0,moving]
+//! [OPTICS_FILE [OPTICS_FILE]]`
 //! (default 200 trials from seed 1, spot centroids, every request, two Cooke cameras of
 //! fixtures/optics; one file: both cameras; `--chief`: the corners as chief rays' hits;
-//! `--stop-scale S`: every camera's stop scaled by S in (0, 1]); a markdown summary per
-//! request on stdout.
+//! `--stop-scale S`: every camera's stop scaled by S in (0, 1]; `--sigma-px S`: the
+//! pixel noise instead of camera 0's procedure's, 0 for the bias alone); a markdown
+//! summary per request on stdout.
 
 use std::path::PathBuf;
 
@@ -21,6 +23,7 @@ struct Args {
     seed: u64,
     corner: CornerAs,
     stop_scale: f64,
+    sigma_px: Option<f64>,
     requests: Vec<RigRequest>,
     files: Vec<PathBuf>,
 }
@@ -32,6 +35,7 @@ fn parse() -> Result<Args> {
         seed: 1,
         corner: CornerAs::Centroid,
         stop_scale: 1.0,
+        sigma_px: None,
         requests: RigRequest::ALL.to_vec(),
         files: vec![],
     };
@@ -43,6 +47,10 @@ fn parse() -> Result<Args> {
             "--stop-scale" => {
                 let v = it.next().and_then(|s| s.parse().ok());
                 a.stop_scale = v.ok_or_else(|| bad("--stop-scale", "--stop-scale takes a number in (0, 1]".into()))?;
+            }
+            "--sigma-px" => {
+                let v = it.next().and_then(|s| s.parse().ok()).filter(|s: &f64| *s >= 0.0);
+                a.sigma_px = Some(v.ok_or_else(|| bad("--sigma-px", "--sigma-px takes a number >= 0".into()))?);
             }
             "--requests" => {
                 let list = it.next().unwrap_or_default();
@@ -92,7 +100,8 @@ fn main() -> Result<()> {
         rig.stage_travel_mm[1],
         started.elapsed().as_secs_f64()
     );
-    let sigma_px = optics[0].file.procedure.pixel_noise_px;
+    let sigma_px = args.sigma_px.unwrap_or(optics[0].file.procedure.pixel_noise_px);
+    println!("pixel noise {sigma_px} px\n");
     for request in &args.requests {
         let r = rig_traced(&rig, &RigTracedDesign { request: *request, sigma_px }, args.trials, args.seed)?;
         println!("{}\n", r.markdown());

@@ -55,6 +55,9 @@ use super::OpticalRig;
 use crate::multi_camera::{position_in_travel_mm, verging_poses, MAX_CAMERAS, MIN_POINTS};
 use crate::simulate::gauss;
 
+/// The format key of the traced rig's truth file (`etlcal simulate --rig N --optics`).
+pub const RIG_TRUTH_FORMAT: &str = "etlcal.optics-rig-truth/1";
+
 /// The shortest travel the cameras must share in focus, mm (a 2 mm move and room about it).
 pub const MIN_TRAVEL_MM: f64 = 4.0;
 /// The range of `baseline_mm`, mm.
