@@ -369,7 +369,8 @@ pub fn trace(optics: &[etl_sim::optics::OpticalRig], design: &TracedRigDesign) -
 }
 
 impl RigTraced {
-    /// The result as markdown: the coverage table (both measures), the move, the baseline.
+    /// The result as markdown: the coverage table (both measures), the move, the baseline;
+    /// the first failures (alone when every trial failed).
     pub fn markdown(&self) -> String {
         let mut s = format!(
             "{}: {} trials ({} failed); RMS reprojection {:.4} / {:.4} px; baseline {:+.3} ± {:.3} mm off the entrance pupils' {:.3} mm\n\n",
@@ -382,6 +383,9 @@ impl RigTraced {
             self.baseline_error_mm.std,
             self.pupil_baseline_mm
         );
+        if self.results.is_empty() {
+            return s + &self.failures();
+        }
         s += "| measure | axis | coverage of 1 sigma | z-score mean | z-score std | mean sigma (um) | RMS error (um) |\n|---|---|---|---|---|---|---|\n";
         for (name, c) in [("world", &self.world), ("camera 0, truth at the pupil", &self.camera0)] {
             for (i, axis) in ["X", "Y", "Z"].iter().enumerate() {
@@ -411,9 +415,11 @@ impl RigTraced {
         for (name, m) in ["triangulated", "camera 0 PnP"].iter().zip(&self.moves) {
             s += &format!("| {name} | {:.3} | {:.3} | {:+.3} |\n", m.rms_um, m.max_um, m.mean_um);
         }
-        for (seed, e) in self.failed.iter().take(5) {
-            s += &format!("\nfailed: seed {seed}: {e}");
-        }
-        s
+        s + &self.failures()
+    }
+
+    /// The first five failures, one line each.
+    fn failures(&self) -> String {
+        self.failed.iter().take(5).map(|(seed, e)| format!("\nfailed: seed {seed}: {e}")).collect()
     }
 }

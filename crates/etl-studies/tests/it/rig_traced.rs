@@ -13,7 +13,9 @@ use etl_sim::optics::OpticalRig;
 use etl_sim::simulate::NoiseModel;
 use etl_studies::optics::stopped_down;
 use etl_studies::rig_traced::world::world_point;
-use etl_studies::rig_traced::{pupil_baseline_mm, trace, trial, RigRequest, RigTracedDesign, TracedRigDesign};
+use etl_studies::rig_traced::{
+    pupil_baseline_mm, rig_traced, trace, trial, RigRequest, RigTracedDesign, TracedRigDesign,
+};
 
 /// The Cooke fixture with 2 rings of fan rays (19 rays a spot: a debug test's budget).
 fn cooke() -> OpticalRig {
@@ -37,7 +39,13 @@ fn a_trial_on_a_small_traced_rig_calibrates_and_measures_the_move() {
     let pupils = pupil_baseline_mm(&rig).unwrap();
     assert!((30.0..40.0).contains(&pupils), "{pupils}");
     let design = RigTracedDesign { request: RigRequest::HoldA0, sigma_px: 0.05 };
-    let t = trial(&rig, &design, pupils, 3).unwrap();
+    let r = rig_traced(&rig, &design, 1, 3).unwrap();
+    assert!(r.failed.is_empty(), "{:?}", r.failed);
+    assert_eq!(r.pupil_baseline_mm, pupils);
+    let table = r.markdown();
+    assert!(table.contains("| world | Z |") && table.contains("| triangulated |"), "{table}");
+    let t = r.results[0];
+    assert_eq!(t, trial(&rig, &design, pupils, 3).unwrap(), "the run is the trial of its seed");
     assert!(t.baseline_error_mm.abs() < 0.5, "{t:?}");
     assert!(t.move_um.abs() < 5.0 && t.corners >= 12, "{t:?}");
     for f in [t.world, t.camera0] {

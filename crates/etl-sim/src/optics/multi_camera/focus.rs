@@ -12,10 +12,10 @@
 //! ```
 //!
 //! Its error is that of a straight line through a curve that is straight to first order:
-//! on the fixtures' rigs with the grid 5 mA apart, the distance the traced search finds
-//! at the interpolated current differs from the asked one by at most
-//! [`FOCUS_TOLERANCE_MM`] (a test checks it at the middle of grid intervals, where the
-//! error peaks). It only defocuses the board that little: the recorded current is the one
+//! on the Cooke fixture's rig with the grid 5 mA apart, the distance the traced search
+//! finds at the interpolated current differs from the asked one by less than
+//! [`FOCUS_TOLERANCE_MM`] (a test checks it at the ends and the middle of the travel and
+//! half-way between grid currents, where the error peaks). It only defocuses the board that little: the recorded current is the one
 //! the lens runs at, so the interpolation adds no error to the data.
 
 use etl_formats::{Error, Result};
