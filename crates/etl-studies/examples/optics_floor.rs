@@ -11,6 +11,7 @@ use etl_formats::optics::OpticsFile;
 use etl_formats::{Error, Result};
 use etl_sim::optics::OpticalRig;
 use etl_studies::optics::floor::central_floor;
+use etl_studies::optics::stopped_down;
 
 /// The rigs run when no file is given.
 const FIXTURES: [&str; 2] = ["cooke-16mm-centred.json", "double-gauss-25mm-toleranced.json"];
@@ -20,7 +21,7 @@ fn main() -> Result<()> {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let mut scale = 1.0;
     if args.first().map(String::as_str) == Some("--stop-scale") {
-        let value = args.get(1).and_then(|s| s.parse::<f64>().ok()).filter(|s| *s > 0.0 && *s <= 1.0);
+        let value = args.get(1).and_then(|s| s.parse::<f64>().ok());
         scale = value.ok_or_else(|| Error::invalid("--stop-scale", "--stop-scale takes a number in (0, 1]"))?;
         args.drain(..2);
     }
@@ -30,15 +31,7 @@ fn main() -> Result<()> {
         args.iter().map(Into::into).collect()
     };
     for path in files {
-        let mut file = OpticsFile::load(&path)?;
-        if scale != 1.0 {
-            let stop = file.prime.stop;
-            if let Some(s) = file.prime.surfaces.get_mut(stop) {
-                s.semi_diameter_mm *= scale;
-            }
-            file.name = format!("{} with its stop scaled by {scale}", file.name);
-        }
-        let rig = OpticalRig::new(file)?;
+        let rig = OpticalRig::new(stopped_down(OpticsFile::load(&path)?, scale)?)?;
         println!("{}", central_floor(&rig, &[80.0, 150.0, 225.0])?.markdown());
     }
     Ok(())

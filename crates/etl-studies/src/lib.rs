@@ -18,6 +18,8 @@
 //!   Cramer-Rao bound of the joint problem (extrinsics and each camera's fx(E));
 //! - [`rig_triangulation`]: the acceptance of a calibrated 2-camera rig: triangulated
 //!   points at random settings against their propagated covariance, and a 2 mm move;
+//! - [`rig_traced`]: the same acceptance on a ray-traced two-camera rig, the coverage
+//!   measured in the stage's world frame;
 //! - [`optics`]: a 2 mm move by PnP on the ray-traced rigs, the ETL model against a
 //!   per-current calibration, and ([`optics::floor`]) what any central model can reach there.
 //!
@@ -33,6 +35,7 @@ pub mod fig6;
 pub mod model;
 pub mod optics;
 pub mod rig_efficiency;
+pub mod rig_traced;
 pub mod rig_triangulation;
 mod run;
 pub mod strong;

@@ -37,6 +37,15 @@
 //! truth_rig.json's) the ChArUco board's; with it, points per camera and view. `--views`
 //! sets how many stage positions (and so images) there are.
 //!
+//! `--rig N --optics FILE [--optics FILE ...]` traces a rig of N physical cameras on one
+//! stage instead (`etl_sim::optics::multi_camera`: one optics file for every camera, or
+//! one each, camera 0 first; camera 0 where its file puts it, the others `--baseline-mm`
+//! away (5..150, default 30) verging on the board, each refocused per view; `--views`
+//! stage positions over the travel every camera can focus): `rig_dataset.json` (points,
+//! camera 0's file's pixel noise or `--pixel-noise-px`, seeded) and truth.json
+//! (`etlcal.optics-rig-truth/1`: each camera's pose and its optics' truth per current).
+//! Points only; `--moving-centre` and the stage and current noises are refused.
+//!
 //! DIR is created if missing (with its missing parents) and replaced as one set: a kill
 //! or an error leaves the earlier set whole (docs/RELIABILITY.md).
 
@@ -53,6 +62,7 @@ use etl_formats::{Error, Result};
 const SIMULATION_FILES: &[&str] = &["observations.json", "a0.json", "truth.json", "dataset.json", "views", "offstate"];
 use etl_sim::multi_camera::images::{dataset_truths, render_multi_camera};
 use etl_sim::multi_camera::{simulate_multi_camera, truth_rig, MultiCameraDesign, MultiCameraSimulation};
+use etl_sim::optics::multi_camera::{trace_multi_camera, TracedRigDesign, RIG_TRUTH_FORMAT};
 use etl_sim::optics::truth::{setting_truths, TRUTH_FORMAT};
 use etl_sim::optics::{procedure, OpticalRig};
 use etl_sim::simulate::focal_power::{focal_power_rig, FOCAL_POWER_TEMPERATURES_C};
@@ -73,10 +83,12 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Trace the procedure through a physical rig (etlcal.optics/1) instead of the camera
-    /// model: corners only, with the file's pixel noise unless --pixel-noise-px.
+    /// model: corners only, with the file's pixel noise unless --pixel-noise-px. With
+    /// --rig N: the cameras' optics (one file for every camera, or N files, camera 0
+    /// first; repeat the flag).
     #[arg(long, value_name = "FILE",
         conflicts_with_all = ["config", "stage_noise_um", "current_noise_ma", "setting_views"])]
-    pub optics: Option<PathBuf>,
+    pub optics: Vec<PathBuf>,
     /// Random seed [default: 1].
     #[arg(long)]
     pub seed: Option<u64>,
@@ -102,9 +114,10 @@ pub struct Args {
     /// rig_dataset.json (etlcal.rig-dataset/1: rendered images under images/, or points
     /// with --observations-only) and truth_rig.json (etlcal.rig/1).
     #[arg(long, value_name = "N",
-        conflicts_with_all = ["optics", "config", "setting_views", "focal_power"])]
+        conflicts_with_all = ["config", "setting_views", "focal_power"])]
     pub rig: Option<usize>,
-    /// With --rig: the distance of cameras 1.. from camera 0, mm (60..150) [default: 60].
+    /// With --rig: the distance of cameras 1.. from camera 0, mm (60..150) [default: 60;
+    /// with --optics 5..150, default 30].
     #[arg(long, value_name = "MM", requires = "rig")]
     pub baseline_mm: Option<f64>,
     /// With --rig: the number of stage positions (3..10000) [default: 15].
@@ -221,8 +234,17 @@ pub fn config_from(args: &Args) -> Result<SimConfig> {
 
 /// Runs `etlcal simulate`.
 pub fn run(args: Args) -> Result<()> {
-    if let Some(optics) = &args.optics {
+    if let (Some(cameras), false) = (args.rig, args.optics.is_empty()) {
+        return run_rig_optics(&args, cameras);
+    }
+    if let [optics] = args.optics.as_slice() {
         return run_optics(&args, optics);
+    }
+    if args.optics.len() > 1 {
+        return Err(Error::invalid(
+            "--optics",
+            format!("--optics: {} files given; one traces one camera (several need --rig N)", args.optics.len()),
+        ));
     }
     if let Some(cameras) = args.rig {
         return run_rig(&args, cameras);
@@ -274,6 +296,92 @@ pub fn run(args: Args) -> Result<()> {
             "wrote {rendered}observations.json, a0.json, truth.json ({} views, {points} points, {} setting views) to {}",
             sim.observations.views.len(),
             sim.observations.setting_views.len(),
+            args.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// The names `simulate --rig N --optics FILE` writes into its directory.
+const RIG_OPTICS_FILES: &[&str] = &["rig_dataset.json", "truth.json"];
+
+/// The cameras' optics of `simulate --rig N --optics FILE...`: one file for every camera
+/// or one per camera, each with `--pixel-noise-px` when given.
+fn rig_optics(args: &Args, cameras: usize) -> Result<Vec<OpticalRig>> {
+    if args.optics.len() != 1 && args.optics.len() != cameras {
+        let message = format!(
+            "--optics: {} files for {cameras} cameras (give one for every camera, or one each)",
+            args.optics.len()
+        );
+        return Err(Error::invalid("--optics", message));
+    }
+    if args.moving_centre {
+        return Err(Error::invalid("--moving-centre", "--moving-centre: a traced rig's centre is its optics'"));
+    }
+    let mut rigs = vec![];
+    for k in 0..cameras {
+        let mut file = etl_formats::optics::OpticsFile::load(&args.optics[k.min(args.optics.len() - 1)])?;
+        if let Some(px) = args.pixel_noise_px {
+            etl_formats::check_range("--pixel-noise-px", px, [0.0, 100.0], "px")?;
+            file.procedure.pixel_noise_px = px;
+        }
+        rigs.push(OpticalRig::new(file)?);
+    }
+    Ok(rigs)
+}
+
+/// `etlcal simulate --rig N --optics FILE...`: the traced N-camera rig's points (camera
+/// 0's pixel noise, seeded) and its truth (`etlcal.optics-rig-truth/1`).
+fn run_rig_optics(args: &Args, cameras: usize) -> Result<()> {
+    crate::output::check(args.optics.iter().map(|p| Some(p.as_path())), &[Output::Dir(&args.out)])?;
+    let optics = rig_optics(args, cameras)?;
+    let base = TracedRigDesign::new();
+    let design = TracedRigDesign {
+        baseline_mm: args.baseline_mm.unwrap_or(base.baseline_mm),
+        views: args.views.unwrap_or(base.views),
+        ..base
+    };
+    let rig = trace_multi_camera(&optics, &design).map_err(|e| {
+        let what = e.input_what().unwrap_or("").to_owned();
+        match what.as_str() {
+            "cameras" => e.rename_input("cameras", "--rig"),
+            "views" => e.rename_input("views", "--views"),
+            "baseline_mm" => e.rename_input("baseline_mm", "--baseline-mm"),
+            _ => e,
+        }
+    })?;
+    let (seed, sigma_px) = (args.seed.unwrap_or(1), optics[0].file.procedure.pixel_noise_px);
+    let dataset = rig.with_pixel_noise(sigma_px, seed);
+    let truths = rig.truths()?;
+    let cams: Vec<serde_json::Value> = truths
+        .iter()
+        .zip(&rig.cameras)
+        .enumerate()
+        .map(|(k, (t, c))| {
+            json!({"name": format!("cam{k}"), "optics": c.optics.file.name,
+            "rotation_rodrigues": t.pose.0, "translation_mm": t.pose.1, "settings": t.settings})
+        })
+        .collect();
+    let truth = json!({"format": RIG_TRUTH_FORMAT, "seed": seed, "pixel_noise_px": sigma_px,
+        "baseline_mm": design.baseline_mm, "stage_travel_mm": rig.stage_travel_mm, "cameras": cams});
+    write_dir_set(&args.out, RIG_OPTICS_FILES, |staging| {
+        dataset.save(&staging.join("rig_dataset.json"))?;
+        etl_formats::write_json(&staging.join("truth.json"), &truth)?;
+        Ok(())
+    })?;
+    let points: usize =
+        dataset.views.iter().flat_map(|v| &v.cameras).map(|s| s.points.as_ref().map_or(0, Vec::len)).sum();
+    if args.json {
+        print_json(&json!({"cameras": cameras, "views": dataset.views.len(), "points": points, "images": 0,
+            "baseline_mm": design.baseline_mm, "stage_travel_mm": rig.stage_travel_mm, "pixel_noise_px": sigma_px,
+            "out": args.out}));
+    } else {
+        outln!(
+            "wrote rig_dataset.json, truth.json ({cameras} traced cameras {} mm apart, {} views over {:.2}..{:.2} mm, {points} points, {sigma_px} px of noise) to {}",
+            design.baseline_mm,
+            dataset.views.len(),
+            rig.stage_travel_mm[0],
+            rig.stage_travel_mm[1],
             args.out.display()
         );
     }

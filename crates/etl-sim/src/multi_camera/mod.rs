@@ -204,21 +204,43 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-/// Each camera's pose to the stage's world frame (om, t), camera 0's the paper rig's.
+/// Each camera's pose to the stage's world frame (om, t), camera 0's the paper rig's
+/// ([`verging_poses`] about the board's centre at the middle of [`STAGE_TRAVEL_MM`]).
 pub fn camera_poses(design: &MultiCameraDesign) -> Vec<([f64; 3], [f64; 3])> {
     let paper = CameraModel::paper_rig();
-    let r0 = rodrigues_to_matrix(paper.rotation_rodrigues);
-    let t0 = paper.translation_mm;
+    let z_mid = 0.5 * (STAGE_TRAVEL_MM[0] + STAGE_TRAVEL_MM[1]);
+    verging_poses(
+        (paper.rotation_rodrigues, paper.translation_mm),
+        [0.0, 0.0, z_mid],
+        design.baseline_mm,
+        design.cameras,
+    )
+}
+
+/// The poses (world to camera: X_c = R X_w + t, Rodrigues and mm) of `cameras` cameras
+/// around camera 0's `pose0`: camera k >= 1 stands `baseline_mm` from camera 0's centre
+/// C_0 = -R_0' t_0, in camera 0's image plane at the angle phi_k = 2 pi (k - 1) / (N - 1)
+/// from its x axis (C_k = C_0 + b (cos phi_k x_0 + sin phi_k y_0), x_0, y_0 the rows of
+/// R_0), and verges on `target_world_mm`: its z axis z_k = (target - C_k) / |.|, its y
+/// axis y_k = z_k x x_0 / |.|, x_k = y_k x z_k (its x axis as near camera 0's as that
+/// allows); t_k = -R_k C_k. Camera 0's pose is the first. Precondition: the target is not
+/// on camera 0's x axis line through C_k.
+pub fn verging_poses(
+    pose0: ([f64; 3], [f64; 3]),
+    target_world_mm: [f64; 3],
+    baseline_mm: f64,
+    cameras: usize,
+) -> Vec<([f64; 3], [f64; 3])> {
+    let r0 = rodrigues_to_matrix(pose0.0);
+    let t0 = pose0.1;
     // Camera 0's centre, and its x and y axes, in the world: C = -R^T t, axes the rows of R.
     let c0: [f64; 3] = core::array::from_fn(|i| -(0..3).map(|k| r0[k][i] * t0[k]).sum::<f64>());
-    let z_mid = 0.5 * (STAGE_TRAVEL_MM[0] + STAGE_TRAVEL_MM[1]);
-    let target = [0.0, 0.0, z_mid];
-    let mut poses = vec![(paper.rotation_rodrigues, t0)];
-    for k in 1..design.cameras {
-        let phi = 2.0 * std::f64::consts::PI * (k - 1) as f64 / (design.cameras - 1) as f64;
-        let b = design.baseline_mm;
+    let mut poses = vec![pose0];
+    for k in 1..cameras {
+        let phi = 2.0 * std::f64::consts::PI * (k - 1) as f64 / (cameras - 1) as f64;
+        let b = baseline_mm;
         let c: [f64; 3] = core::array::from_fn(|i| c0[i] + b * (phi.cos() * r0[0][i] + phi.sin() * r0[1][i]));
-        let z = unit(sub(target, c));
+        let z = unit(sub(target_world_mm, c));
         let y = unit(cross(z, r0[0]));
         let x = cross(y, z);
         let r: Mat3 = [x, y, z];
@@ -283,7 +305,13 @@ pub fn focus_depth_mm(cam: &CameraModel, zero: &CameraModel, (k, n): (usize, usi
 /// The stage position of view j of `views` (evenly over [`STAGE_TRAVEL_MM`], the far end
 /// first), mm.
 pub fn stage_position_mm(j: usize, views: usize) -> f64 {
-    let [z0, z1] = STAGE_TRAVEL_MM;
+    position_in_travel_mm(STAGE_TRAVEL_MM, j, views)
+}
+
+/// The stage position of view j of `views` evenly over `travel_mm` [z0, z1], the far end
+/// first: z1 - (z1 - z0) j / (views - 1), mm.
+pub fn position_in_travel_mm(travel_mm: [f64; 2], j: usize, views: usize) -> f64 {
+    let [z0, z1] = travel_mm;
     z1 - (z1 - z0) * j as f64 / (views.max(2) - 1) as f64
 }
 

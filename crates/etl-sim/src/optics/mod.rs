@@ -19,12 +19,14 @@
 //! - [`rig`]: the camera on its stage: world points to pixels, the distance in focus per
 //!   current;
 //! - [`procedure`]: the paper's procedure traced, as `etlcal.observations/1`;
-//! - [`truth`]: what the rig is at each current (focal length, entrance pupil, focus).
+//! - [`truth`]: what the rig is at each current (focal length, entrance pupil, focus);
+//! - [`multi_camera`]: N traced cameras on one stage, as an `etlcal.rig-dataset/1`.
 //!
 //! All numbers are f64, lengths in mm.
 
 pub mod aim;
 pub mod etl;
+pub mod multi_camera;
 pub mod paraxial;
 pub mod prime;
 pub mod procedure;

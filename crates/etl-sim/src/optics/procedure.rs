@@ -100,8 +100,20 @@ pub fn with_pixel_noise(obs: &Observations, sigma_px: f64, seed: u64) -> Observa
 /// E_in that gives it through the paper's thermal surface commanded (as the simulated
 /// paper rig does).
 fn view_obs(e_ma: f64, temperature_c: f64, points: Vec<PointObs>) -> ViewObs {
-    let e_in = ThermalSurface::PAPER.e_in_for_e_com(e_ma, temperature_c).unwrap_or(e_ma);
-    ViewObs { e_in_ma: e_in, focal_power_dpt: None, temperature_c, e_com_ma: Some(e_ma), points }
+    ViewObs {
+        e_in_ma: commanded_e_in_ma(e_ma, temperature_c),
+        focal_power_dpt: None,
+        temperature_c,
+        e_com_ma: Some(e_ma),
+        points,
+    }
+}
+
+/// The E_in (mA) the traced procedure records for compensated current `e_com_ma` at
+/// `temperature_c`: the one that gives it through the paper's thermal surface (E_com
+/// itself where the surface has none).
+pub fn commanded_e_in_ma(e_com_ma: f64, temperature_c: f64) -> f64 {
+    ThermalSurface::PAPER.e_in_for_e_com(e_com_ma, temperature_c).unwrap_or(e_com_ma)
 }
 
 /// The stage board at stage position `z_mm` (world frame) at `setting`, noise-free.
@@ -132,6 +144,27 @@ pub fn observations(rig: &OpticalRig, seed: u64) -> Result<Observations> {
     Ok(with_pixel_noise(&traced(rig)?, rig.file.procedure.pixel_noise_px, seed))
 }
 
+/// The procedure's 10 lens-off views traced, noise-free: the ETL at 0 mA, the lens-off
+/// board in the poses of [`lens_off_poses_of`] about the distance in focus at 0 mA (board
+/// frame to camera frame), each view's corners as [`board_view_as`] sees them with the
+/// corners as `corner` says. Errors: no focus at 0 mA.
+pub fn lens_off_views(rig: &OpticalRig, corner: CornerAs) -> Result<Vec<Vec<PointObs>>> {
+    let p = &rig.file.procedure;
+    let off = rig.at(0.0)?;
+    let design = LensOff {
+        board: (p.lens_off_board.inner_corners, p.lens_off_board.square_mm),
+        distance_mm: rig.focus_distance_mm(0.0)?,
+    };
+    // Only the poses of the lens-off cameras are used (the traced optics are the camera).
+    Ok(lens_off_poses_of(&CameraModel::paper_rig(), &design)
+        .iter()
+        .map(|cam| {
+            let pose = (cam.rotation_rodrigues, cam.translation_mm);
+            board_view_as(rig, &off, &p.lens_off_board, &pose, 0.0, corner)
+        })
+        .collect())
+}
+
 /// The procedure's views traced, noise-free: the ETL views, the lens-off views (the 10
 /// poses of [`lens_off_poses_of`] about the distance in focus at 0 mA) and the tilted
 /// views per current. Errors: a current at which the focus cannot be found.
@@ -146,17 +179,8 @@ pub fn traced(rig: &OpticalRig) -> Result<Observations> {
     for (e, setting, d) in &settings {
         obs.views.push(view_obs(*e, p.temperature_c, stage_view(rig, setting, rig.stage_z_at_distance_mm(*d))));
     }
-    let off = rig.at(0.0)?;
-    let design = LensOff {
-        board: (p.lens_off_board.inner_corners, p.lens_off_board.square_mm),
-        distance_mm: rig.focus_distance_mm(0.0)?,
-    };
-    // Only the poses of the lens-off cameras are used (the traced optics are the camera).
-    for cam in lens_off_poses_of(&CameraModel::paper_rig(), &design) {
-        let pose = (cam.rotation_rodrigues, cam.translation_mm);
-        let points = board_view(rig, &off, &p.lens_off_board, &pose, 0.0);
-        obs.offstate_views.push(OffstateView { points });
-    }
+    obs.offstate_views =
+        lens_off_views(rig, CornerAs::Centroid)?.into_iter().map(|points| OffstateView { points }).collect();
     for (e, setting, d) in &settings {
         for pose in setting_poses(&p.board, *d, p.setting_views_per_current, p.setting_tilt_deg) {
             let points = board_view(rig, setting, &p.board, &pose, 0.0);

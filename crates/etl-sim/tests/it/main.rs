@@ -7,6 +7,7 @@ mod focus_law;
 mod lens_dynamics;
 mod multi_camera;
 mod optics;
+mod optics_multi_camera;
 mod render;
 mod rig_images;
 mod simconfig_prop;

@@ -68,6 +68,22 @@ pub struct OpticsPnp {
     pub rows: Vec<MoveErrors>,
 }
 
+/// `file` with its aperture stop's semi-diameter scaled by `scale` (the same rig stopped
+/// down) and its name saying so. Errors: a scale outside (0, 1] (`--stop-scale`).
+pub fn stopped_down(mut file: etl_formats::optics::OpticsFile, scale: f64) -> Result<etl_formats::optics::OpticsFile> {
+    if !(scale > 0.0 && scale <= 1.0) {
+        return Err(Error::invalid_value("--stop-scale", scale, format!("--stop-scale: {scale} is outside (0, 1]")));
+    }
+    if scale != 1.0 {
+        let stop = file.prime.stop;
+        if let Some(s) = file.prime.surfaces.get_mut(stop) {
+            s.semi_diameter_mm *= scale;
+        }
+        file.name = format!("{} with its stop scaled by {scale}", file.name);
+    }
+    Ok(file)
+}
+
 /// The camera of a Zhang calibration in OpenCV's family as a model with a constant focal
 /// length and constant coefficients (each a_i's w^0 term), for [`solve_pnp`] at any current.
 pub(crate) fn monofocal(z: &etl_calib::zhang::ZhangResult) -> Result<CameraModel> {

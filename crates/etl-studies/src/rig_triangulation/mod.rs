@@ -126,7 +126,7 @@ pub struct MoveStat {
     pub mean_um: f64,
 }
 
-fn move_stat(x: &[f64]) -> MoveStat {
+pub(crate) fn move_stat(x: &[f64]) -> MoveStat {
     let n = x.len().max(1) as f64;
     MoveStat {
         rms_um: (x.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),

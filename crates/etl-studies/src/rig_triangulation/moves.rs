@@ -83,26 +83,52 @@ fn mean_point(
 }
 
 /// Camera 0's PnP of the move: the board's origin at both positions by [`solve_pnp`]
-/// (`etl_core`'s `CameraAt::solve_pnp`, every corner camera 0 sees), the length of its
-/// displacement.
+/// (`etl_core`'s `CameraAt::solve_pnp`, every corner camera 0 sees, board corner i at
+/// `corners_mm[i]`), the length of its displacement.
 ///
 /// [`solve_pnp`]: etl_core::runtime::CameraAt::solve_pnp
 fn pnp_move_mm(
     rig: &Rig,
-    temperature_c: f64,
+    (temperature_c, corners_mm): (f64, &[[f64; 2]]),
     [(ea, obs_a), (eb, obs_b)]: [([f64; 2], &BoardPixels); 2],
 ) -> Result<f64> {
     let pose = |e: [f64; 2], obs: &[[Option<[f64; 2]>; 2]]| -> Result<_> {
         let at = rig.at(&settings_of(&e, temperature_c)?, &[temperature_c; 2], Trust::Refuse)?;
-        let (board, px): (Vec<[f64; 3]>, Vec<[f64; 2]>) = obs
-            .iter()
-            .enumerate()
-            .filter_map(|(i, o)| o[0].map(|p| ([corner_mm(i)[0], corner_mm(i)[1], 0.0], p)))
-            .unzip();
+        let (board, px): (Vec<[f64; 3]>, Vec<[f64; 2]>) =
+            obs.iter().zip(corners_mm).filter_map(|(o, c)| o[0].map(|p| ([c[0], c[1], 0.0], p))).unzip();
         Ok(at.cameras()[0].solve_pnp(&board, &px)?)
     };
     let d = displacement_mm(&pose(ea, obs_a)?, &pose(eb, obs_b)?);
     Ok(d.iter().map(|x| x * x).sum::<f64>().sqrt())
+}
+
+/// The move between two records of the board (module docs), the first at stage position
+/// Z with settings `ea`, the second at Z + [`MOVE_MM`] with `eb`; board corner i at
+/// `corners_mm[i]`: the triangulated and camera 0's PnP length minus [`MOVE_MM`], um,
+/// and the corners both cameras see at both positions (at least [`MIN_COMMON_CORNERS`],
+/// else refused, `corners`).
+pub fn measure_move(
+    rig: &Rig,
+    (temperature_c, corners_mm): (f64, &[[f64; 2]]),
+    [(ea, a), (eb, b)]: [([f64; 2], &BoardPixels); 2],
+    sigma_px: f64,
+) -> Result<(f64, f64, usize)> {
+    let both = |o: &[Option<[f64; 2]>; 2]| o.iter().all(Option::is_some);
+    let corners: Vec<usize> = (0..a.len()).filter(|&i| both(&a[i]) && both(&b[i])).collect();
+    if corners.len() < MIN_COMMON_CORNERS {
+        return Err(Error::invalid(
+            "corners",
+            format!(
+                "corners: {} seen by both cameras at both positions, fewer than {MIN_COMMON_CORNERS}",
+                corners.len()
+            ),
+        ));
+    }
+    let pa = mean_point(rig, (ea, temperature_c), a, &corners, sigma_px)?;
+    let pb = mean_point(rig, (eb, temperature_c), b, &corners, sigma_px)?;
+    let tri = (0..3).map(|i| (pb[i] - pa[i]).powi(2)).sum::<f64>().sqrt();
+    let pnp = pnp_move_mm(rig, (temperature_c, corners_mm), [(ea, a), (eb, b)])?;
+    Ok((1000.0 * (tri - MOVE_MM), 1000.0 * (pnp - MOVE_MM), corners.len()))
 }
 
 /// One case of the move: the triangulated and the PnP length minus [`MOVE_MM`], um, and
@@ -116,22 +142,9 @@ fn one_case(
 ) -> Result<(f64, f64, usize)> {
     let a = observe(truths, z_mm, ea, sigma_px, rng);
     let b = observe(truths, z_mm + MOVE_MM, eb, sigma_px, rng);
-    let both = |o: &[Option<[f64; 2]>; 2]| o.iter().all(Option::is_some);
-    let corners: Vec<usize> = (0..a.len()).filter(|&i| both(&a[i]) && both(&b[i])).collect();
-    if corners.len() < MIN_COMMON_CORNERS {
-        return Err(Error::invalid(
-            "corners",
-            format!(
-                "corners: {} seen by both cameras at both positions, fewer than {MIN_COMMON_CORNERS}",
-                corners.len()
-            ),
-        ));
-    }
-    let pa = mean_point(rig, (ea, temperature_c), &a, &corners, sigma_px)?;
-    let pb = mean_point(rig, (eb, temperature_c), &b, &corners, sigma_px)?;
-    let tri = (0..3).map(|i| (pb[i] - pa[i]).powi(2)).sum::<f64>().sqrt();
-    let pnp = pnp_move_mm(rig, temperature_c, [(ea, &a), (eb, &b)])?;
-    Ok((1000.0 * (tri - MOVE_MM), 1000.0 * (pnp - MOVE_MM), corners.len()))
+    let [cols, rows] = MULTI_CAMERA_BOARD.inner_corners;
+    let corners_mm: Vec<[f64; 2]> = (0..cols * rows).map(corner_mm).collect();
+    measure_move(rig, (temperature_c, &corners_mm), [(ea, &a), (eb, &b)], sigma_px)
 }
 
 /// The move from stage position `z_mm` (module docs), the estimated `rig` against the

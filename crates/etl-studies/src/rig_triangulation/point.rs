@@ -56,7 +56,7 @@ fn draw_point(truths: &[CameraModel], e_com_ma: [f64; 2], rng: &mut ChaCha8Rng) 
 }
 
 /// e' C^-1 e for a symmetric positive definite 3 x 3 C.
-fn mahalanobis2(c: &Mat3, e: [f64; 3]) -> Result<f64> {
+pub(crate) fn mahalanobis2(c: &Mat3, e: [f64; 3]) -> Result<f64> {
     let m = nalgebra::Matrix3::from_fn(|i, j| c[i][j]);
     let chol = m.cholesky().ok_or_else(|| Error::invalid("covariance", "covariance: not positive definite"))?;
     let v = nalgebra::Vector3::from(e);

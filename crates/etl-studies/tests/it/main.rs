@@ -3,5 +3,6 @@
 
 mod optics;
 mod rig_efficiency;
+mod rig_traced;
 mod rig_triangulation;
 mod study;

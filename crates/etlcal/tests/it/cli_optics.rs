@@ -142,3 +142,66 @@ fn bad_optics_are_refused_naming_the_field_and_nothing_is_written() {
     assert!(err.contains("--pixel-noise-px -1 px is outside [0, 100] px"), "{err}");
     assert!(!out.exists());
 }
+
+/// `simulate --rig 2 --optics FILE`: two traced Cooke cameras on one stage, the record as
+/// an `etlcal.rig-dataset/1` of points, the truth as each camera's pose and optics.
+#[test]
+fn a_traced_rig_of_two_cameras_gives_a_rig_dataset_and_its_truth() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("rig");
+    let cooke = fixture("cooke-16mm-centred.json");
+    let (code, stdout, err) =
+        simulate(&cooke, &out, &["--rig", "2", "--views", "3", "--baseline-mm", "25", "--seed", "4", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let summary: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!((summary["cameras"].as_u64(), summary["views"].as_u64()), (Some(2), Some(3)));
+    let dataset = etl_formats::rig_dataset::RigDataset::load(&out.join("rig_dataset.json")).unwrap();
+    assert_eq!((dataset.cameras.len(), dataset.views.len(), dataset.offstate_views.len()), (2, 3, 10));
+    assert!(dataset.views.iter().all(|v| v.cameras.len() == 2 && v.cameras.iter().all(|s| s.e_com_ma.is_some())));
+    let truth = read(&out.join("truth.json"));
+    assert_eq!(truth["format"], "etlcal.optics-rig-truth/1");
+    assert_eq!((truth["baseline_mm"].as_f64(), truth["pixel_noise_px"].as_f64()), (Some(25.0), Some(0.05)));
+    let cams = truth["cameras"].as_array().unwrap();
+    // Camera 0 where its file puts it; camera 1 25 mm from its origin.
+    assert_eq!(cams[0]["rotation_rodrigues"], serde_json::json!([0.004, -0.003, 0.002]));
+    let centre = |c: &Value| {
+        let om: Vec<f64> = c["rotation_rodrigues"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        let t: Vec<f64> = c["translation_mm"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        let r = etl_core::model::rotation::rodrigues_to_matrix([om[0], om[1], om[2]]);
+        etl_core::model::rotation::mat_t_vec(&r, [-t[0], -t[1], -t[2]])
+    };
+    let (c0, c1) = (centre(&cams[0]), centre(&cams[1]));
+    let b = (0..3).map(|i| (c1[i] - c0[i]).powi(2)).sum::<f64>().sqrt();
+    assert!((b - 25.0).abs() < 1e-9, "{b}");
+    assert_eq!(cams[1]["settings"].as_array().unwrap().len(), 15);
+    // The recorded currents lie inside the procedure's 80..225 mA.
+    let e: Vec<f64> = dataset.views.iter().flat_map(|v| &v.cameras).filter_map(|s| s.e_com_ma).collect();
+    assert!(e.iter().all(|e| (80.0..=225.0).contains(e)), "{e:?}");
+}
+
+#[test]
+fn a_bad_traced_rig_is_refused_naming_the_flag_and_nothing_is_written() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let cooke = fixture("cooke-16mm-centred.json");
+    let cases: [(&[&str], &str); 5] = [
+        (&["--rig", "3", "--optics", &cooke], "--optics: 2 files for 3 cameras"),
+        (&["--rig", "2", "--moving-centre"], "--moving-centre"),
+        (&["--rig", "2", "--views", "2"], "--views"),
+        (&["--rig", "2", "--baseline-mm", "2"], "--baseline-mm"),
+        // 150 mm off, camera 1 stands farther than its lens can focus.
+        (&["--rig", "2", "--baseline-mm", "150"], "--baseline-mm: at 150 mm the cameras share"),
+    ];
+    for (args, want) in cases {
+        let (code, stdout, err) = simulate(&cooke, &out, args);
+        assert_eq!(code, 1, "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {want}: {err}");
+        assert!(stdout.is_empty() && !out.exists(), "{args:?}: nothing written");
+    }
+    // Two files without --rig.
+    let (code, _, err) = simulate(&cooke, &out, &["--optics", &cooke]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--optics: 2 files given"), "{err}");
+    assert!(!out.exists());
+}
