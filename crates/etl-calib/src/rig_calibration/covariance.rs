@@ -20,7 +20,7 @@ use etl_formats::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
 use super::normal::{JointProblem, State};
-use super::reduced::{not_positive, schur_complement};
+use super::reduced::schur_complement;
 
 /// The covariance of all numbers in the model's parameters (cameras stacked in the
 /// order of the problem, each in its layout's order).
@@ -33,7 +33,8 @@ pub(super) fn joint_covariance(
     let total: usize = sizes.iter().sum();
     let n = problem.normal(state)?;
     let schur = schur_complement(&n, &sizes, &problem.present, 0.0)?.s;
-    let mut cz = schur.cholesky().ok_or_else(not_positive)?.inverse();
+    let Some(factor) = schur.clone().cholesky() else { return Err(undetermined(&schur, problem)) };
+    let mut cz = factor.inverse();
     if let (false, Some(sz)) = (problem.eiv(), input_noise_sigma_z_mm) {
         let with_corrections = JointProblem { sigma_z_mm: Some(sz), ..problem.clone() };
         let s0 = State { z: state.z.clone(), y: with_corrections.start().y };
@@ -107,4 +108,37 @@ pub(super) fn extrinsics_covariance(
 /// A pose's six numbers (om, t) as the pair etl-formats' `relative_pose` takes.
 pub(super) fn pose_pair(p: [f64; 6]) -> ([f64; 3], [f64; 3]) {
     ([p[0], p[1], p[2]], [p[3], p[4], p[5]])
+}
+
+/// The refusal of a rig whose numbers its views do not determine: the undamped Schur
+/// complement S is singular. It names the numbers of S's weakest direction (the
+/// eigenvector of the smallest eigenvalue of S scaled to a unit diagonal, its two largest
+/// components), so that the user knows what to hold or which views to add.
+fn undetermined(s: &DMatrix<f64>, problem: &JointProblem<'_>) -> Error {
+    let n = s.nrows();
+    let d = DVector::from_fn(n, |i, _| 1.0 / s[(i, i)].abs().max(1e-300).sqrt());
+    let eig = DMatrix::from_fn(n, n, |i, j| s[(i, j)] * d[i] * d[j]).symmetric_eigen();
+    let weakest = (0..n).min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b])).unwrap_or(0);
+    let v = eig.eigenvectors.column(weakest);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| v[b].abs().total_cmp(&v[a].abs()));
+    let sizes = problem.sizes();
+    let name = |i: usize| {
+        let (mut k, mut at) = (0, i);
+        while k + 1 < sizes.len() && at >= sizes[k] {
+            at -= sizes[k];
+            k += 1;
+        }
+        let number = problem.cameras[k].layout.names().nth(at).unwrap_or("?");
+        format!("camera {k}'s {number}")
+    };
+    let along: Vec<String> = order.iter().take(2).map(|&i| name(i)).collect();
+    Error::invalid(
+        "rig",
+        format!(
+            "the rig's numbers are not determined by its views: the joint system is singular along {} (hold them, or add \
+             views that fix them: lens-off views for A0, free views of the board tilted)",
+            along.join(" and ")
+        ),
+    )
 }

@@ -1,12 +1,13 @@
 //! The joint Levenberg-Marquardt loop: etl-core's damping logic (Marquardt's diagonal
 //! scaling, Nielsen's update of lambda from the gain ratio) over the reduced steps of
-//! [`super::reduced`].
+//! [`super::reduced`]. A step whose damped system cannot be factored is rejected like a
+//! step that raises the cost (more damping), not an error.
 
 use etl_formats::Result;
 use nalgebra::DVector;
 
 use super::normal::{JointProblem, Normal, State};
-use super::reduced::{dense_step, sparse_step, SparsePattern};
+use super::reduced::{dense_step, is_not_positive, sparse_step, SparsePattern};
 
 /// What the loop gives: the state, the iterations and the cost before and after.
 pub(super) struct Solved {
@@ -68,10 +69,22 @@ pub(super) fn solve(problem: &JointProblem<'_>, sparse: bool, max_iterations: us
     let pattern = SparsePattern::new();
     while iterations < max_iterations && normal.cost > 0.0 && lambda < MAX_DAMPING {
         iterations += 1;
-        let (dx, dy) = if sparse {
-            sparse_step(&normal, &sizes, &problem.present, lambda, &pattern)?
+        let step = if sparse {
+            sparse_step(&normal, &sizes, &problem.present, lambda, &pattern)
         } else {
-            dense_step(&normal, &sizes, &problem.present, lambda)?
+            dense_step(&normal, &sizes, &problem.present, lambda)
+        };
+        // A damped system that rounding leaves indefinite (a direction the data barely
+        // fix, such as a centre sliding along the axis) is a rejected step: more damping
+        // makes it definite, as any other failed step.
+        let (dx, dy) = match step {
+            Ok(d) => d,
+            Err(e) if is_not_positive(&e) => {
+                lambda *= nu;
+                nu *= 2.0;
+                continue;
+            }
+            Err(e) => return Err(e),
         };
         let next = problem.moved(&state, &dx, &dy);
         let cost = problem.cost(&next).unwrap_or(f64::INFINITY);

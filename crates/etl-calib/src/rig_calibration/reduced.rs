@@ -56,8 +56,16 @@ fn offsets(sizes: &[usize]) -> Vec<usize> {
     sizes.iter().scan(0, |at, p| Some(std::mem::replace(at, *at + p))).collect()
 }
 
+/// What [`not_positive`] says.
+const NOT_POSITIVE: &str = "the rig's reduced system is not positive definite";
+
 pub(super) fn not_positive() -> Error {
-    Error::Core(etl_core::Error::Degenerate { what: "the rig's reduced system is not positive definite" })
+    Error::Core(etl_core::Error::Degenerate { what: NOT_POSITIVE })
+}
+
+/// Whether `e` is [`not_positive`]'s error (a damped system rounding left indefinite).
+pub(super) fn is_not_positive(e: &Error) -> bool {
+    matches!(e, Error::Core(etl_core::Error::Degenerate { what }) if *what == NOT_POSITIVE)
 }
 
 /// The dense path's system: the damped Schur complement S, its right-hand side and each

@@ -185,3 +185,28 @@ fn a_noise_free_rig_with_moving_centres_is_recovered() {
     assert!(e[..3].iter().all(|x| x.abs() < 1e-8) && e[3..].iter().all(|x| x.abs() < 1e-6), "{e:?}");
     assert_eq!(rig.extrinsics[0].reference_setting, Some([0.0, 0.0]));
 }
+
+/// A rig whose numbers its views do not fix is refused naming them: fx(E) of degree 5
+/// for a camera seen at 3 settings (6 coefficients, 3 values) leaves the joint system
+/// singular along that camera's focal coefficients.
+#[test]
+fn an_undetermined_rig_is_refused_naming_its_weakest_numbers() {
+    let design = MultiCameraDesign { views: 3, ..MultiCameraDesign::new(2) };
+    let sim = simulate_multi_camera(&design, &NoiseModel::NONE, 5).unwrap();
+    let mut models = sim.truths.clone();
+    let pad = |p: &etl_core::model::FocalPoly| {
+        let mut c = p.coefficients().to_vec();
+        c.resize(6, 0.0);
+        etl_core::model::FocalPoly::new(&c).unwrap()
+    };
+    (models[1].kf_x, models[1].kf_y) = (pad(&models[1].kf_x), pad(&models[1].kf_y));
+    let system = JointSystem::new(&sim.dataset, &models, 0.2, (0.01, 0.4)).unwrap();
+    let e = system.covariance().unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "the rig's numbers are not determined by its views: the joint system is singular along camera 1's kf"
+        ),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1);
+}
