@@ -47,6 +47,8 @@ pub enum RequestOption {
     AcceptIllConditioned,
     /// The projection centre: fixed, moving with the setting, or `auto`.
     Centre,
+    /// What the bundle adjustment does with the setting views (`ignored`, `joint`).
+    SettingViews,
 }
 
 impl RequestOption {
@@ -73,6 +75,7 @@ impl RequestOption {
             RequestOption::Model => "model",
             RequestOption::AcceptIllConditioned => "accept_ill_conditioned",
             RequestOption::Centre => "centre",
+            RequestOption::SettingViews => "setting_views",
         }
     }
 }

@@ -10,6 +10,7 @@ mod rig_calibration;
 mod rig_images;
 mod robust;
 mod select;
+mod setting_views;
 mod stereo;
 mod uncertainty;
 mod zhang;
