@@ -3,6 +3,7 @@
 //! parse into etl-calib's `CalibrationRequest` (its defaults, refusals and run), which
 //! `etlcal calibrate` parses its flags into too: the same names, the same file.
 
+use etl_calib::pipeline::SettingViews;
 use etl_calib::request::{
     CalibrationRequest, CentreChoice, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method,
     RequestOption, Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
@@ -89,6 +90,13 @@ impl Spelling for Keywords {
 ///         centre moves along the axis by dz(E) = dz1 E + dz2 E^2 and the principal
 ///         point by (u1 E, v1 E): the entrance pupil behind an ETL moves with its power;
 ///         the result's `centre`) or "auto" (as distortion="auto").
+///     setting_views: what the bundle adjustment does with the observations'
+///         setting views (tilted boards, each in its own pose): None or "ignored" (the
+///         default, the paper's method: the stage views alone) or "joint" (solved with
+///         the stage views, each board's pose a free unknown started by PnP, so that
+///         tilted views tell fx(E) from a moving centre's dz(E)); "joint" needs setting
+///         views of >= 4 points each and is refused with method="per-setting", a robust
+///         loss or an "auto" model choice.
 ///     accept_ill_conditioned: keep a calibration the data do not determine (a focal
 ///         length not positive over the range, a principal point std above 5 % of the
 ///         image), its symptom the first of its `warnings`; False (the default): refused
@@ -107,7 +115,7 @@ impl Spelling for Keywords {
 #[pyo3(signature = (observations, a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
     distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None,
-    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None, model=None))]
+    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None, model=None, setting_views=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -133,12 +141,14 @@ pub fn calibrate(
     centre: Option<&str>,
     sigma_p_dpt: Option<f64>,
     model: Option<&str>,
+    setting_views: Option<&str>,
 ) -> PyResult<Calibration> {
-    let request = request_of(
+    let mut request = request_of(
         (method, a0, thermal, estimator, hold_a0, robust, robust_k_px),
         (sigma_z_mm, sigma_e_ma, sigma_px, sigma_z_um, sigma_p_dpt),
         (distortion, focal_degree, fix_k3, zero_tangent, accept_ill_conditioned, centre, model),
     )?;
+    request.setting_views = setting_views.map(parse_setting_views).transpose()?;
     request.validate(&Keywords).py()?;
     let obs = observations.file;
     let calibrated = crate::pool::detach(py, || request.run(&obs, &Keywords)).py()?;
@@ -201,6 +211,19 @@ pub(crate) fn request_of(
         accept_ill_conditioned,
         centre: centre.map(parse_centre).transpose()?,
         model_auto,
+        // `calibrate` sets it from its own keyword; `calibrate_rig` has no setting views.
+        setting_views: None,
+    })
+}
+
+/// `setting_views=`: "ignored" or "joint".
+fn parse_setting_views(word: &str) -> PyResult<SettingViews> {
+    SettingViews::from_word(word).ok_or_else(|| {
+        invalid_value(
+            "setting_views",
+            word,
+            format!("setting_views must be \"ignored\", \"joint\" or None, got {word:?}"),
+        )
     })
 }
 

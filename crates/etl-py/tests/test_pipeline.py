@@ -560,3 +560,36 @@ def test_a_calibration_the_data_do_not_determine_is_refused_unless_accepted(tmp_
     with pytest.warns(UserWarning, match="ill-conditioned, kept by accept_ill_conditioned=True"):
         cal = etlcal.calibrate(obs, accept_ill_conditioned=True)
     assert cal.warnings[0].startswith("ill-conditioned, kept by accept_ill_conditioned=True: the principal point")
+
+
+def test_setting_views_joint_is_the_cli_s_and_refused_without_setting_views(
+    etlcal_binary: str, tmp_path: pathlib.Path
+) -> None:
+    # setting_views="joint": the simulated setting views solved with the stage views,
+    # the same calibration as `etlcal calibrate --setting-views joint`; "ignored" is the
+    # default; refused naming setting_views without setting views or beside a robust loss.
+    import subprocess
+
+    sim_dir = tmp_path / "sim"
+    subprocess.run([etlcal_binary, "simulate", "--out", str(sim_dir), "--observations-only", "--setting-views",
+                    "--seed", "7"], check=True, capture_output=True)
+    obs = etlcal.Observations.load(sim_dir / "observations.json")
+    a0 = etlcal.A0.load(sim_dir / "a0.json")
+    out = tmp_path / "joint.json"
+    subprocess.run([etlcal_binary, "calibrate", "--observations", str(sim_dir / "observations.json"), "--a0",
+                    str(sim_dir / "a0.json"), "--out", str(out), "--setting-views", "joint", "--centre", "moving"],
+                   check=True, capture_output=True)
+    with pytest.warns(UserWarning):
+        joint = etlcal.calibrate(obs, a0, setting_views="joint", centre="moving")
+    assert joint == etlcal.Calibration.load(out)
+    with pytest.warns(UserWarning):
+        stage = etlcal.calibrate(obs, a0, centre="moving")
+        ignored = etlcal.calibrate(obs, a0, centre="moving", setting_views="ignored")
+    assert stage == ignored and stage != joint
+    with pytest.raises(etlcal.InputError, match='setting_views="joint" does not go with robust'):
+        etlcal.calibrate(obs, a0, setting_views="joint", robust="huber")
+    with pytest.raises(etlcal.InputError, match="setting_views must be"):
+        etlcal.calibrate(obs, a0, setting_views="tilted")  # type: ignore[arg-type]  # the run-time check under test
+    stage_only = etlcal.simulate.paper_rig(seed=1)
+    with pytest.raises(etlcal.InputError, match='setting_views="joint" needs setting_views'):
+        etlcal.calibrate(stage_only.observations, stage_only.a0, setting_views="joint")

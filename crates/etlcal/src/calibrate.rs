@@ -36,6 +36,7 @@ use etl_core::model::DistortionModel;
 
 use super::print_json;
 use etl_calib::pipeline::dataset::{default_detector, observations_from_dataset};
+use etl_calib::pipeline::SettingViews;
 use etl_calib::request::{
     CalibrationRequest, CentreChoice, DistortionChoice, EivPriors, EstimatorChoice, FocalDegreeChoice, Method,
     RequestOption, Spelling, StageSigma, DEFAULT_ROBUST_K_PX,
@@ -76,6 +77,15 @@ pub enum CentreArg {
     Moving,
     /// Chosen by the prediction error of held-out views.
     Auto,
+}
+
+/// What `--setting-views` does with the observations' setting views.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SettingViewsArg {
+    /// Not used (the paper's method; only `--method per-setting` reads them).
+    Ignored,
+    /// Solved together with the stage views, each board in a pose of its own.
+    Joint,
 }
 
 /// The distortion family of `--distortion`.
@@ -216,6 +226,12 @@ pub struct RequestFlags {
     /// chooses by held-out views.
     #[arg(long, value_enum)]
     pub centre: Option<CentreArg>,
+    /// The observations' setting views in the bundle adjustment [default: ignored, the
+    /// paper's method]: `joint` solves them with the stage views, each board in a free
+    /// pose (started by PnP), so that tilted views tell fx(E) from a moving centre's
+    /// dz(E); not with --method per-setting, --robust or an `auto` model choice.
+    #[arg(long, value_enum)]
+    pub setting_views: Option<SettingViewsArg>,
     /// `auto`: choose the distortion family, the focal degree and the centre together by
     /// the error of held-out views (all 20 candidates, in the file's "model_selection");
     /// not with --distortion, --focal-degree or --centre.
@@ -320,6 +336,10 @@ impl RequestFlags {
                 CentreArg::Auto => CentreChoice::Auto,
             }),
             model_auto: self.model.is_some(),
+            setting_views: self.setting_views.map(|s| match s {
+                SettingViewsArg::Ignored => SettingViews::Ignored,
+                SettingViewsArg::Joint => SettingViews::Joint,
+            }),
         })
     }
 }

@@ -228,6 +228,50 @@ pub extern "C" fn etl_gate_calibrate_family(noise_px: f64, degree: usize, opencv
     r.model.kf_x.padded()[0] + c[layout.u0()][layout.u0()]
 }
 
+/// The bundle adjustment with free-pose views (a moving centre, plain or
+/// errors-in-variables): three stage views and two tilted boards started by PnP. Returns
+/// the refined dz1 + the first board's tz (or NaN on error).
+#[unsafe(no_mangle)]
+pub extern "C" fn etl_gate_calibrate_free_views(noise_px: f64, eiv: bool) -> f64 {
+    use etl_core::calib::{bundle_adjust_free_views, BundleAdjustOptions, Estimator, FreeView, JointScratch, Point, View};
+    use etl_core::model::MovingCentre;
+    let mut cam = CameraModel::paper_rig();
+    cam.centre = Some(MovingCentre { dz_mm: [0.01, -2e-5], principal_point_slope_px: [0.02, -0.01] });
+    let currents = [90.0, 130.0, 200.0];
+    let mut pts = [[Point { world_mm: [0.0; 3], pixel: [0.0; 2] }; 12]; 5];
+    for (k, view) in pts.iter_mut().enumerate() {
+        let mut m = cam;
+        if k >= 3 {
+            m.rotation_rodrigues = [0.2 * (k as f64 - 3.5), 0.1, 0.0];
+            m.translation_mm = [-2.0, -2.0, 70.0];
+        }
+        for (i, p) in view.iter_mut().enumerate() {
+            let w = if k < 3 { [1.5 * (i % 4) as f64, 1.5 * (i / 4) as f64, 60.0 - 25.0 * k as f64] } else { [1.5 * (i % 4) as f64, 1.5 * (i / 4) as f64, 0.0] };
+            let Ok(px) = m.project(w, currents[k % 3]) else { return f64::NAN };
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            *p = Point { world_mm: w, pixel: [px[0] + sign * noise_px, px[1] - sign * noise_px] };
+        }
+    }
+    let stage: [View; 3] = core::array::from_fn(|k| View { e_com_ma: currents[k], points: &pts[k] });
+    let mut board = [[0.0; 3]; 12];
+    let mut px = [[0.0; 2]; 12];
+    let mut free = [FreeView { e_com_ma: 0.0, points: &pts[3], rotation_rodrigues: [0.0; 3], translation_mm: [0.0; 3] }; 2];
+    for (f, fv) in free.iter_mut().enumerate() {
+        for i in 0..12 {
+            board[i] = pts[3 + f][i].world_mm;
+            px[i] = pts[3 + f][i].pixel;
+        }
+        let Ok(pose) = etl_core::pnp::solve_pnp(&cam, currents[f], &board, &px) else { return f64::NAN };
+        *fv = FreeView { e_com_ma: currents[f], points: &pts[3 + f], rotation_rodrigues: pose.rotation_rodrigues, translation_mm: pose.translation_mm };
+    }
+    let estimator = if eiv { Estimator::EIV_PAPER } else { Estimator::Paper };
+    let opts = BundleAdjustOptions { estimator, ..BundleAdjustOptions::default() };
+    let mut scratch = [JointScratch::ZERO; 5];
+    let Ok(r) = bundle_adjust_free_views(&stage, &free, &cam, &opts, &mut scratch) else { return f64::NAN };
+    let dz1 = r.model.centre.map_or(f64::NAN, |c| c.dz_mm[0]);
+    dz1 + scratch[3].board_pose().1[2]
+}
+
 /// The strong-distortion camera (opencv family): a projection, its undistortion, the
 /// exact OpenCV export and a band of undistortion maps; their sum, or NaN on error.
 #[unsafe(no_mangle)]

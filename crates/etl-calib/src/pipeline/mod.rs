@@ -13,10 +13,12 @@ pub mod focus_law;
 pub mod measure;
 mod planar_views;
 pub mod select;
+mod setting_views;
 mod solve;
 mod view_focal;
 
 pub use planar_views::{detect_views, PlanarViews};
+pub use setting_views::SettingViews;
 pub use view_focal::view_focal;
 
 use etl_core::calib::{
@@ -55,6 +57,11 @@ pub struct CalibrateOptions {
     /// observations. A focal power fits kf0 ([`etl_core::calib::Kf0::Solved`]) and puts
     /// [`FOCAL_POWER_SIGMA_DPT`] in place of the current's prior.
     pub setting: SettingKind,
+    /// What the bundle adjustment does with the observations' `setting_views` (default
+    /// [`SettingViews::Ignored`], the paper's method: the stage views alone);
+    /// [`SettingViews::Joint`] solves them with the stage views, each in a free pose
+    /// (module `setting_views`).
+    pub setting_views: SettingViews,
 }
 
 /// The prior on a focal-power view's setting, dpt (the errors-in-variables prior, and
@@ -75,6 +82,7 @@ impl Default for CalibrateOptions {
             flags: OpenCvFlags::NONE,
             input_noise: Some(InputNoise::PAPER),
             setting: SettingKind::Current,
+            setting_views: SettingViews::Ignored,
         }
     }
 }
@@ -229,10 +237,16 @@ pub fn calibrate(
         ));
     }
     let options = &options.with_setting(obs.setting_kind()?, None);
+    if options.setting_views == SettingViews::Joint {
+        setting_views::check_setting_views(obs)?;
+    }
     let e_com = obs.e_com_ma(thermal)?;
     let pts = obs.core_points();
     let views: Vec<View<'_>> = pts.iter().zip(&e_com).map(|(p, &e)| View { e_com_ma: e, points: p }).collect();
-    let solved = solve::solve_without_outliers(&views, a0, options)?;
+    let mut solved = solve::solve_without_outliers(&views, a0, options)?;
+    if options.setting_views == SettingViews::Joint {
+        solved = setting_views::solve_with_setting_views(obs, thermal, &views, solved, options)?;
+    }
     calibration_of(obs, &views, solved, thermal, options)
 }
 

@@ -65,7 +65,7 @@ pub(super) fn subset(views: &[View<'_>], used: &[Vec<bool>]) -> Vec<Vec<Point>> 
 
 /// Each point's reprojection distance, px, under `model` with its view's correction
 /// (infinite where the point does not project).
-fn distances(model: &CameraModel, views: &[View<'_>], corrections: &[ViewCorrection]) -> Vec<Vec<f64>> {
+pub(super) fn distances(model: &CameraModel, views: &[View<'_>], corrections: &[ViewCorrection]) -> Vec<Vec<f64>> {
     views
         .iter()
         .zip(corrections)

@@ -11,7 +11,7 @@ use super::option::{RequestOption, Spelling};
 use super::refusal::{positive, Refusal};
 use crate::baseline::{per_setting, BaselineResult};
 use crate::pipeline::select::{select, A0Source, Candidates};
-use crate::pipeline::{a0_from_offstate_with, calibrate, CalibrateOptions, CalibrationResult};
+use crate::pipeline::{a0_from_offstate_with, calibrate, CalibrateOptions, CalibrationResult, SettingViews};
 use crate::zhang::ZhangOptions;
 
 /// The threshold / scale of the robust loss when the front end is given the loss without
@@ -206,6 +206,12 @@ pub struct CalibrationRequest {
     /// held-out views ([`crate::pipeline::select`], all 20 candidates), reported in the
     /// file's `"model_selection"`. Refused beside any of the three.
     pub model_auto: bool,
+    /// What the bundle adjustment does with the observations' `setting_views`; `None`:
+    /// [`SettingViews::Ignored`], the paper's method (stage views only).
+    /// [`SettingViews::Joint`] solves them with the stage views, each board in a pose of
+    /// its own; refused without setting views, with the per-setting baseline, a robust
+    /// loss or any model choice by the data (`auto`: its held-out views are stage views).
+    pub setting_views: Option<SettingViews>,
 }
 
 /// What a run gives: the proposed method's result or the baseline's.
@@ -278,6 +284,7 @@ impl CalibrationRequest {
                 RequestOption::Model => r.model_auto = by.model_auto,
                 RequestOption::AcceptIllConditioned => r.accept_ill_conditioned = by.accept_ill_conditioned,
                 RequestOption::Centre => r.centre = by.centre,
+                RequestOption::SettingViews => r.setting_views = by.setting_views,
             }
         }
         r
@@ -359,6 +366,7 @@ impl CalibrationRequest {
             layout: Layout::PAPER,
             flags: self.flags(),
             setting: etl_formats::SettingKind::Current,
+            setting_views: self.setting_views.unwrap_or_default(),
         }
     }
 
@@ -389,6 +397,7 @@ impl CalibrationRequest {
                 return Err(Refusal::PerSettingTakesNoModelOption { given });
             }
         }
+        self.check_setting_views()?;
         let choices = [
             (RequestOption::Distortion, self.distortion.is_some()),
             (RequestOption::FocalDegree, self.focal_degree.is_some()),
@@ -413,6 +422,26 @@ impl CalibrationRequest {
             }
         }
         self.check_numbers()
+    }
+
+    /// The setting views in the joint solve: not with the per-setting baseline, a robust
+    /// loss or a model choice by the data ([`Refusal::JointNotWith`]).
+    fn check_setting_views(&self) -> std::result::Result<(), Refusal> {
+        if self.setting_views != Some(SettingViews::Joint) {
+            return Ok(());
+        }
+        let conflicts = [
+            (RequestOption::Method, self.method == Method::PerSetting),
+            (RequestOption::Robust, self.robust.is_some()),
+            (RequestOption::Model, self.model_auto),
+            (RequestOption::Distortion, self.distortion == Some(DistortionChoice::Auto)),
+            (RequestOption::FocalDegree, self.focal_degree == Some(FocalDegreeChoice::Auto)),
+            (RequestOption::Centre, self.centre == Some(CentreChoice::Auto)),
+        ];
+        match conflicts.iter().find(|(_, given)| *given) {
+            Some(&(given, _)) => Err(Refusal::JointNotWith { given }),
+            None => Ok(()),
+        }
     }
 
     /// The standard deviations and the robust threshold given: finite numbers > 0.
@@ -503,6 +532,9 @@ impl CalibrationRequest {
                 return Err(Refusal::NoSettingViews.to_error(spelling));
             }
             return per_setting(obs, thermal).map(|r| Calibrated::PerSetting(Box::new(r)));
+        }
+        if self.setting_views == Some(SettingViews::Joint) && obs.setting_views.is_empty() {
+            return Err(Refusal::JointNeedsSettingViews.to_error(spelling));
         }
         if self.a0.is_none() && obs.offstate_views.is_empty() {
             return Err(Refusal::NoLensOffViews.to_error(spelling));

@@ -47,11 +47,13 @@ pub enum RequestOption {
     AcceptIllConditioned,
     /// The projection centre: fixed, moving with the setting, or `auto`.
     Centre,
+    /// What the bundle adjustment does with the setting views (`ignored`, `joint`).
+    SettingViews,
 }
 
 impl RequestOption {
     /// Every option, in the order of the enum.
-    pub const ALL: [RequestOption; 19] = [
+    pub const ALL: [RequestOption; 20] = [
         RequestOption::Method,
         RequestOption::A0,
         RequestOption::Thermal,
@@ -71,6 +73,7 @@ impl RequestOption {
         RequestOption::Model,
         RequestOption::AcceptIllConditioned,
         RequestOption::Centre,
+        RequestOption::SettingViews,
     ];
 
     /// The option whose [`Self::key`] is `key`, or `None`.
@@ -101,6 +104,7 @@ impl RequestOption {
             RequestOption::Model => "model",
             RequestOption::AcceptIllConditioned => "accept_ill_conditioned",
             RequestOption::Centre => "centre",
+            RequestOption::SettingViews => "setting_views",
         }
     }
 }

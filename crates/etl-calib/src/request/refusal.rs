@@ -78,6 +78,18 @@ pub enum Refusal {
         /// The option given beside it.
         given: RequestOption,
     },
+    /// The setting views in the joint solve, and the observations have none.
+    JointNeedsSettingViews,
+    /// The setting views in the joint solve with an option it does not go with: the
+    /// per-setting baseline (no bundle adjustment), a robust loss (its weights would need
+    /// a reference pose per setting view) or a model choice by the data (its held-out
+    /// views are stage views: [`RequestOption::Model`], or `auto` of
+    /// [`RequestOption::Distortion`], [`RequestOption::FocalDegree`],
+    /// [`RequestOption::Centre`]).
+    JointNotWith {
+        /// The option given.
+        given: RequestOption,
+    },
     /// A calibration the data do not determine (module `conditioning`), not accepted.
     IllConditioned {
         /// The symptom.
@@ -101,6 +113,8 @@ impl Refusal {
             Refusal::NotForFocalPower { given } => given,
             Refusal::OnlyForFocalPower => RequestOption::SigmaPDpt,
             Refusal::ModelAutoAlone { given } => given,
+            Refusal::JointNeedsSettingViews => RequestOption::SettingViews,
+            Refusal::JointNotWith { given } => given,
             Refusal::IllConditioned { .. } => RequestOption::AcceptIllConditioned,
         }
     }
@@ -178,6 +192,23 @@ impl Refusal {
                 s.name(RequestOption::Thermal),
                 s.with_word(RequestOption::Thermal, "paper")
             ),
+            Refusal::JointNeedsSettingViews => format!(
+                "{} needs setting_views (tilted board views at each current) in the observations",
+                s.with_word(RequestOption::SettingViews, "joint")
+            ),
+            Refusal::JointNotWith { given } => {
+                let (option, why) = match given {
+                    RequestOption::Method => (per_setting(), "the baseline has no bundle adjustment"),
+                    RequestOption::Robust => {
+                        (s.name(given), "a robust loss would need a reference pose of each setting view")
+                    }
+                    _ => (
+                        s.with_word(given, "auto"),
+                        "the held-out model selection scores the stage views alone; choose the model",
+                    ),
+                };
+                format!("{} does not go with {option}: {why}", s.with_word(RequestOption::SettingViews, "joint"))
+            }
             Refusal::IllConditioned { condition } => format!(
                 "refused: the calibration means nothing, {} ({} keeps it, marked in its warnings)",
                 condition.describe(),
@@ -197,7 +228,7 @@ impl Refusal {
                 Error::invalid_value(spelling.name(RequestOption::FocalDegree), degree, message)
             }
             Refusal::NoLensOffViews => Error::invalid("offstate_views", message),
-            Refusal::NoSettingViews => Error::invalid("setting_views", message),
+            Refusal::NoSettingViews | Refusal::JointNeedsSettingViews => Error::invalid("setting_views", message),
             Refusal::NoThermal { setting, view } => {
                 let key = if setting { "setting_views" } else { "views" };
                 Error::invalid(format!("{key}[{view}].e_com_ma"), message)

@@ -11,7 +11,7 @@ use etl_formats::{Error, Result};
 use rayon::prelude::*;
 
 use super::options::RigCalibrationOptions;
-use crate::pipeline::CalibrationResult;
+use crate::pipeline::{CalibrationResult, SettingViews};
 use crate::request::{Calibrated, CalibrationRequest, Method, RequestOption, Spelling};
 
 /// One camera's view in the joint problem: the rig view it belongs to, its setting (E_com
@@ -176,10 +176,15 @@ fn camera_part(
     spelling: &dyn Spelling,
 ) -> Result<CameraPart> {
     let name = dataset.cameras[k].name.clone();
-    let split = dataset.camera_observations(k);
+    let request = options.request_for(&name);
+    let mut split = dataset.camera_observations(k);
+    if request.setting_views == Some(SettingViews::Joint) {
+        // The rig's free views are this camera's tilted views: its own calibration, the
+        // joint solve's start, then sees a moving centre the stage views alone cannot.
+        split.observations.setting_views = dataset.camera_free_views(k).0;
+    }
     let obs = &split.observations;
     let in_camera = |e: Error| e.within(format!("camera {k} ({name})"), Some(&format!("cameras[{k}]")));
-    let request = options.request_for(&name);
     let own = match request.run(obs, spelling).map_err(in_camera)? {
         Calibrated::Proposed(r) => *r,
         Calibrated::PerSetting(_) => return Err(Error::invalid("method", "method: per-setting is not a rig method")),

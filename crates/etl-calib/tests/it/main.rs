@@ -12,6 +12,7 @@ mod rig_images;
 mod rig_requests;
 mod robust;
 mod select;
+mod setting_views;
 mod stereo;
 mod uncertainty;
 mod zhang;

@@ -75,6 +75,21 @@ pub fn from_params(layout: &Layout, x: &[f64]) -> CameraModel {
     }
 }
 
+/// C dx/dz for a chain matrix C (per-view variables x N).
+fn chain_times<const N: usize>(c: &[[f64; N]; MAX_REDUCED], dxdz: &[[f64; N]; N]) -> [[f64; N]; MAX_REDUCED] {
+    let mut out = [[0.0; N]; MAX_REDUCED];
+    for (orow, crow) in out.iter_mut().zip(c.iter()) {
+        for (&cik, drow) in crow.iter().zip(dxdz.iter()) {
+            if cik != 0.0 {
+                for (o, &d) in orow.iter_mut().zip(drow.iter()) {
+                    *o += cik * d;
+                }
+            }
+        }
+    }
+    out
+}
+
 fn copy_into(dst: &mut [f64], src: &[f64]) {
     for (d, &s) in dst.iter_mut().zip(src) {
         *d = s;
@@ -249,18 +264,22 @@ impl Projector {
     /// [`super::basis::Basis::params_jacobian`] at the internal parameters of this
     /// projector.
     pub fn chain_in<const N: usize>(&self, e_ma: f64, dxdz: &[[f64; N]; N]) -> Result<[[f64; N]; MAX_REDUCED]> {
-        let c = self.chain::<N>(e_ma)?;
-        let mut out = [[0.0; N]; MAX_REDUCED];
-        for (orow, crow) in out.iter_mut().zip(c.iter()) {
-            for (&cik, drow) in crow.iter().zip(dxdz.iter()) {
-                if cik != 0.0 {
-                    for (o, &d) in orow.iter_mut().zip(drow.iter()) {
-                        *o += cik * d;
-                    }
-                }
+        Ok(chain_times(&self.chain::<N>(e_ma)?, dxdz))
+    }
+
+    /// The chain matrix of a board in its own pose (a free-pose view of the bundle
+    /// adjustment, whose projector holds that pose as its R, T): [`Projector::chain_in`]
+    /// without the pose's identity entries, since the pose is not among the model's
+    /// numbers. What stays of the pose rows is the moving centre's T_z(E) = T_z - dz1 E -
+    /// dz2 E^2 (Eq. C2): its -E, -E^2 on dz1, dz2.
+    pub fn board_chain_in<const N: usize>(&self, e_ma: f64, dxdz: &[[f64; N]; N]) -> Result<[[f64; N]; MAX_REDUCED]> {
+        let mut c = self.chain::<N>(e_ma)?;
+        for k in 0..R_POSE.len {
+            if let Some(slot) = c.get_mut(R_POSE.at(k)).and_then(|r| r.get_mut(R_POSE.at(k))) {
+                *slot = 0.0;
             }
         }
-        Ok(out)
+        Ok(chain_times(&c, dxdz))
     }
 
     /// Projects `world_mm` at current `e_ma`, with derivatives with respect to the

@@ -27,8 +27,9 @@ pub mod rac;
 pub mod uncertainty;
 
 pub use bundle_adjust::{
-    bundle_adjust, bundle_adjust_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator, InputNoise, RobustLoss,
-    ViewCorrection, ViewScratch,
+    bundle_adjust, bundle_adjust_free_views, bundle_adjust_free_views_scratch, bundle_adjust_scratch,
+    BundleAdjustOptions, BundleAdjustReport, Estimator, FreeView, InputNoise, JointScratch, RobustLoss, ViewCorrection,
+    ViewScratch, MIN_FREE_VIEW_POINTS,
 };
 pub use focal_poly::Kf0;
 pub use initialise::{initialise, initialise_model, initialise_model_with, A0};

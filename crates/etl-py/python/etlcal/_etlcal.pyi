@@ -695,6 +695,7 @@ def calibrate(
     centre: Optional[Literal["fixed", "moving", "auto"]] = None,
     sigma_p_dpt: Optional[float] = None,
     model: Optional[Literal["auto"]] = None,
+    setting_views: Optional[Literal["ignored", "joint"]] = None,
 ) -> Calibration:
     """The paper's calibration (or the per-setting baseline) from observations; every
     keyword is the `etlcal calibrate` flag of the same name (hold_a0: --hold-a0). None

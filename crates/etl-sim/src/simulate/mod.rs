@@ -417,7 +417,19 @@ impl SettingRig {
 /// current error per setting from `noise`; no stage). Board points are in the board's
 /// frame (Z = 0); only corners inside the image are kept.
 pub fn add_setting_views(obs: &mut Observations, rig: &SettingRig, noise: &NoiseModel, seed: u64) {
-    let truth = CameraModel::paper_rig();
+    add_setting_views_of(obs, &CameraModel::paper_rig(), rig, noise, seed);
+}
+
+/// [`add_setting_views`] through the camera `truth` (e.g. one with a moving centre: each
+/// board's camera point then shifts by -dz(E) along the axis, Eq. C2).
+pub fn add_setting_views_of(
+    obs: &mut Observations,
+    truth: &CameraModel,
+    rig: &SettingRig,
+    noise: &NoiseModel,
+    seed: u64,
+) {
+    let truth = *truth;
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xba5e_11fe);
     let ([cols, rows], sq) = PAPER_BOARD;
     let centre = [sq * (cols - 1) as f64 / 2.0, sq * (rows - 1) as f64 / 2.0, 0.0];

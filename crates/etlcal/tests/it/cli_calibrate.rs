@@ -507,3 +507,52 @@ fn the_centre_flag_fixed_moving_auto() {
         ["calibrate", "--observations", &obs, "--method", "per-setting", "--out", &bad_out, "--centre", "moving"];
     fails_without_writing(&args, Path::new(&bad_out), "takes no --centre");
 }
+
+/// `--setting-views joint`: the simulated setting views solved with the stage views (the
+/// paper rig's centre is fixed: a moving centre's move comes back within its uncertainty,
+/// now determined); the default is the stage views alone, file for file; refused without
+/// setting views, with a setting view of 3 points (named), and beside the per-setting
+/// baseline, a robust loss or an `auto` model choice, each in one line, nothing written.
+#[test]
+fn the_setting_views_flag_joint_and_its_refusals() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let (code, _, err) = etlcal(&["simulate", "--out", d, "--observations-only", "--setting-views", "--seed", "7"]);
+    assert_eq!(code, 0, "{err}");
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    let joint = calibrate_simulated(dir.path(), &p("joint.json"), &["--setting-views", "joint", "--centre", "moving"]);
+    let stage = calibrate_simulated(dir.path(), &p("stage.json"), &["--centre", "moving"]);
+    let ignored =
+        calibrate_simulated(dir.path(), &p("ignored.json"), &["--centre", "moving", "--setting-views", "ignored"]);
+    assert_eq!(stage, ignored);
+    let dz = |c: &Value, k: usize| c["centre"]["dz_mm"][k].as_f64().unwrap();
+    let dz_std = |c: &Value, k: usize| c["std"]["centre"]["dz_mm"][k].as_f64().unwrap();
+    // The move over 80..225 mA against the fixed truth (0), and its standard deviation
+    // from the two dz numbers' (an upper bound: their correlation left out).
+    // The file's dz_mm is (dz0 = 0, dz1, dz2).
+    let mv = |c: &Value| dz(c, 1) * 145.0 + dz(c, 2) * (225.0f64.powi(2) - 80.0f64.powi(2));
+    let mv_std = |c: &Value| dz_std(c, 1) * 145.0 + dz_std(c, 2) * (225.0f64.powi(2) - 80.0f64.powi(2));
+    assert!(mv(&joint).abs() < 4.0 * mv_std(&joint), "move {} std {}", mv(&joint), mv_std(&joint));
+    assert!(dz_std(&joint, 1) < 0.6 * dz_std(&stage, 1), "{} vs {}", dz_std(&joint, 1), dz_std(&stage, 1));
+    let (obs, a0, out) = (p("observations.json"), p("a0.json"), p("refused.json"));
+    let base = ["calibrate", "--observations", obs.as_str(), "--a0", a0.as_str(), "--out", out.as_str()];
+    let with = |extra: &[&'static str]| [&base[..], &["--setting-views", "joint"], extra].concat();
+    let out_path = Path::new(&out);
+    fails_without_writing(&with(&["--robust", "huber"]), out_path, "--setting-views joint does not go with --robust");
+    fails_without_writing(&with(&["--centre", "auto"]), out_path, "does not go with --centre auto");
+    fails_without_writing(&with(&["--model", "auto"]), out_path, "does not go with --model auto");
+    let per_setting =
+        ["calibrate", "--observations", &obs, "--method", "per-setting", "--out", &out, "--setting-views", "joint"];
+    fails_without_writing(&per_setting, out_path, "does not go with --method per-setting");
+    // A setting view of 3 points, named.
+    let mut o: Value = serde_json::from_str(&std::fs::read_to_string(&obs).unwrap()).unwrap();
+    o["setting_views"][2]["points"].as_array_mut().unwrap().truncate(3);
+    let small = p("small.json");
+    std::fs::write(&small, serde_json::to_string(&o).unwrap()).unwrap();
+    let args = ["calibrate", "--observations", &small, "--a0", &a0, "--out", &out, "--setting-views", "joint"];
+    fails_without_writing(&args, out_path, "setting view 2 has 3 points");
+    // No setting views at all.
+    o["setting_views"] = Value::Array(vec![]);
+    std::fs::write(&small, serde_json::to_string(&o).unwrap()).unwrap();
+    fails_without_writing(&args, out_path, "--setting-views joint needs setting_views");
+}

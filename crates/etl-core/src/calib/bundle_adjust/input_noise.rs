@@ -90,9 +90,9 @@ fn view_terms(proj: &Projector, view: &View<'_>, robust: Option<RobustLoss>, rss
     Ok(t)
 }
 
-/// a b for two squares at capacity.
-fn product(a: &Square, b: &Square) -> Square {
-    let mut out = [[0.0; MAX_PARAMS]; MAX_PARAMS];
+/// a b for two squares (at capacity, or of a solver's `N`).
+pub(super) fn product<const N: usize>(a: &[[f64; N]; N], b: &[[f64; N]; N]) -> [[f64; N]; N] {
+    let mut out = [[0.0; N]; N];
     for (oi, ai) in out.iter_mut().zip(a.iter()) {
         for (&aik, bk) in ai.iter().zip(b.iter()) {
             if aik != 0.0 {
@@ -107,7 +107,7 @@ fn product(a: &Square, b: &Square) -> Square {
 
 /// `c` made exactly symmetric, the mean of it and its transpose (products of the same
 /// symmetric factors differ by rounding).
-fn symmetric(c: Square) -> Square {
+pub(super) fn symmetric<const N: usize>(c: [[f64; N]; N]) -> [[f64; N]; N] {
     let mut out = c;
     for (i, row) in out.iter_mut().enumerate() {
         for (o, c_col) in row.iter_mut().zip(c.iter()) {

@@ -45,13 +45,17 @@
 //! storage) and the loop stops when the estimate no longer moves (at most
 //! [`IRLS_MAX_ROUNDS`] rounds).
 
+pub mod free_views;
 pub mod input_noise;
+mod joint;
 mod normal;
 mod problems;
 mod scratch;
 
+pub use free_views::{FreeView, MIN_FREE_VIEW_POINTS};
 pub use input_noise::{covariance_with_input_noise, InputNoise, InputNoiseCovariance};
-pub use scratch::ViewScratch;
+pub use joint::{bundle_adjust_free_views, bundle_adjust_free_views_scratch};
+pub use scratch::{JointScratch, ViewScratch, JOINT_BLOCK};
 
 use self::problems::{projector, Eiv, Plain};
 use self::scratch::Prepare;

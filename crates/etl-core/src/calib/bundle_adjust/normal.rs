@@ -156,6 +156,45 @@ pub(super) fn fold_view<const N: usize>(
     }
 }
 
+/// A block's own columns folded in: out_w += C^T a C_y, out_v += C_y^T a C_y, out_gy +=
+/// C_y^T g, for a view's reduced normal equations (a, g), its chain matrix C (per-view
+/// variables x N) and its block's chain C_y (per-view variables x M: d(per-view
+/// variables)/d(block parameters)).
+pub(super) fn fold_block<const N: usize, const M: usize>(
+    a: &[[f64; MAX_REDUCED]; MAX_REDUCED],
+    g: &[f64; MAX_REDUCED],
+    c: &[[f64; N]; MAX_REDUCED],
+    cy: &[[f64; M]; MAX_REDUCED],
+    out_w: &mut [[f64; M]; N],
+    out_v: &mut [[f64; M]; M],
+    out_gy: &mut [f64; M],
+) {
+    let mut acy = [[0.0; M]; MAX_REDUCED];
+    for (ar, acyr) in a.iter().zip(acy.iter_mut()) {
+        for (&ars, cys) in ar.iter().zip(cy.iter()) {
+            for (o, &cysk) in acyr.iter_mut().zip(cys.iter()) {
+                *o += ars * cysk;
+            }
+        }
+    }
+    for (cr, acyr) in c.iter().zip(acy.iter()) {
+        for (&crp, wp) in cr.iter().zip(out_w.iter_mut()) {
+            for (o, &acyk) in wp.iter_mut().zip(acyr.iter()) {
+                *o += crp * acyk;
+            }
+        }
+    }
+    for (cyr, (acyr, &gr)) in cy.iter().zip(acy.iter().zip(g.iter())) {
+        for (k, (gyk, vk)) in out_gy.iter_mut().zip(out_v.iter_mut()).enumerate() {
+            let cyrk = cyr.get(k).copied().unwrap_or(0.0);
+            *gyk += cyrk * gr;
+            for (o, &acyl) in vk.iter_mut().zip(acyr.iter()) {
+                *o += cyrk * acyl;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

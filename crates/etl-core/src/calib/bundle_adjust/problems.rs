@@ -3,12 +3,12 @@
 //! ([`Eiv`], block LM with a view's correction as its block), each with its rows streamed
 //! and, faster, folded through the per-view variables ([`super::normal`]).
 
-use super::normal::{fold_view, ViewNormal};
+use super::normal::{fold_block, fold_view, ViewNormal};
 use super::{BundleAdjustOptions, RobustLoss};
 use crate::calib::basis::Basis;
 use crate::calib::jacobian::{from_params, Projector};
 use crate::calib::observations::View;
-use crate::calib::params::{Layout, ParamMask, MAX_REDUCED};
+use crate::calib::params::{Layout, ParamMask};
 use crate::error::{Error, Result};
 use crate::lm::{BlockNormal, BlockProblem, BlockRowSink, NormalEquations, Problem, RowSink};
 
@@ -146,20 +146,20 @@ impl<const N: usize, const O: usize, const P: usize> Problem<N> for Plain<'_, '_
 #[derive(Debug, Clone, Copy)]
 pub(super) struct AtZ<const N: usize> {
     z: [f64; N],
-    dxdz: [[f64; N]; N],
-    x: [f64; N],
-    proj: Projector,
+    pub dxdz: [[f64; N]; N],
+    pub x: [f64; N],
+    pub proj: Projector,
 }
 
 impl<const N: usize> AtZ<N> {
     /// dx/dz, x and the projector of `basis` at `z`.
-    fn new(basis: &Basis, z: &[f64; N]) -> Self {
+    pub(super) fn new(basis: &Basis, z: &[f64; N]) -> Self {
         let x = basis.to_params(z);
         AtZ { z: *z, dxdz: basis.params_jacobian(z), x, proj: projector(&basis.layout(), &x) }
     }
 
     /// Whether these are the quantities at `z` (bit for bit: -0.0 is not 0.0 here).
-    fn is_at(&self, z: &[f64; N]) -> bool {
+    pub(super) fn is_at(&self, z: &[f64; N]) -> bool {
         self.z.iter().zip(z).all(|(a, b)| a.to_bits() == b.to_bits())
     }
 }
@@ -251,28 +251,7 @@ impl<const N: usize, const O: usize, const P: usize> BlockProblem<N, 2> for Eiv<
         let c = proj.chain_in(e_ma, dxdz)?;
         fold_view(O + 2, &a, &g, &c, out.u, out.gx);
         // W = C^T a C_y, V = C_y^T a C_y, g_y = C_y^T g.
-        let cy = proj.shift_chain(e_ma);
-        let mut acy = [[0.0; 2]; MAX_REDUCED];
-        for (ar, acyr) in a.iter().zip(acy.iter_mut()) {
-            for (&ars, cys) in ar.iter().zip(cy.iter()) {
-                acyr[0] += ars * cys[0];
-                acyr[1] += ars * cys[1];
-            }
-        }
-        for (cr, acyr) in c.iter().zip(acy.iter()) {
-            for (&crp, wp) in cr.iter().zip(out.w.iter_mut()) {
-                wp[0] += crp * acyr[0];
-                wp[1] += crp * acyr[1];
-            }
-        }
-        for (cyr, (acyr, &gr)) in cy.iter().zip(acy.iter().zip(g.iter())) {
-            for k in 0..2 {
-                out.gy[k] += cyr[k] * gr;
-                for l in 0..2 {
-                    out.v[k][l] += cyr[k] * acyr[l];
-                }
-            }
-        }
+        fold_block(&a, &g, &c, &proj.shift_chain(e_ma), out.w, out.v, out.gy);
         self.prior_rows(block, &at.x, dxdz, y, out);
         Ok(true)
     }

@@ -23,45 +23,47 @@ pub(crate) trait Prepare<const N: usize> {
 }
 
 /// The storage of every layout of [`layout_table!`], one variant each, sized by the layout
-/// itself. Two layouts of one length (paper degree 4 and opencv degree 1: 27) hold the
+/// itself, for blocks of `$m` parameters: `$blocks` the enum, `$storage` the public
+/// newtype. Two layouts of one length (paper degree 4 and opencv degree 1: 27) hold the
 /// same type; the solver finds its size by type ([`Any`]), whichever variant holds it.
 macro_rules! view_scratch {
-    ($($family:ident: [$(($degree:literal, $centre:literal) => $name:ident),*],)*) => {
+    ($blocks:ident, $storage:ident, $m:literal;
+     $($family:ident: [$(($degree:literal, $centre:literal) => $name:ident),*],)*) => {
         #[derive(Debug, Clone, Copy, PartialEq)]
-        enum Blocks {
-            $($($name(BlockScratch<{ Layout::of_table(DistortionModel::$family, $degree, $centre).len() }, 2>),)*)*
+        enum $blocks {
+            $($($name(BlockScratch<{ Layout::of_table(DistortionModel::$family, $degree, $centre).len() }, $m>),)*)*
         }
 
-        impl Blocks {
-            fn y(&self) -> [f64; 2] {
+        impl $blocks {
+            fn y(&self) -> [f64; $m] {
                 match self {
-                    $($(Blocks::$name(b) => *b.y(),)*)*
+                    $($($blocks::$name(b) => *b.y(),)*)*
                 }
             }
         }
 
         // The block of size `N`, if the storage holds one (else `None`, which the block
         // solver refuses with an error).
-        impl<const N: usize> BlockStorage<N, 2> for ViewScratch {
-            fn block(&self) -> Option<&BlockScratch<N, 2>> {
+        impl<const N: usize> BlockStorage<N, $m> for $storage {
+            fn block(&self) -> Option<&BlockScratch<N, $m>> {
                 match &self.0 {
-                    $($(Blocks::$name(b) => (b as &dyn Any).downcast_ref(),)*)*
+                    $($($blocks::$name(b) => (b as &dyn Any).downcast_ref(),)*)*
                 }
             }
-            fn block_mut(&mut self) -> Option<&mut BlockScratch<N, 2>> {
+            fn block_mut(&mut self) -> Option<&mut BlockScratch<N, $m>> {
                 match &mut self.0 {
-                    $($(Blocks::$name(b) => (b as &mut dyn Any).downcast_mut(),)*)*
+                    $($($blocks::$name(b) => (b as &mut dyn Any).downcast_mut(),)*)*
                 }
             }
         }
 
         // Storage of size `N` if a layout of the table has that length (else left as it
         // is, and the solver refuses it).
-        impl<const N: usize> Prepare<N> for ViewScratch {
+        impl<const N: usize> Prepare<N> for $storage {
             fn prepare(&mut self) {
                 $($(
                     if N == Layout::of_table(DistortionModel::$family, $degree, $centre).len() {
-                        self.0 = Blocks::$name(BlockScratch::ZERO);
+                        self.0 = $blocks::$name(BlockScratch::ZERO);
                         return;
                     }
                 )*)*
@@ -70,7 +72,8 @@ macro_rules! view_scratch {
     };
 }
 
-layout_table!([view_scratch]);
+layout_table!([view_scratch] Blocks, ViewScratch, 2;);
+layout_table!([view_scratch] JointBlocks, JointScratch, 7;);
 
 /// One view's storage of [`super::bundle_adjust`]: the view's correction (dZ_j mm, dE_j mA:
 /// the block parameters of the errors-in-variables solve, zeros for the paper's estimator)
@@ -86,6 +89,49 @@ impl ViewScratch {
     /// The view's correction (dZ_j mm, dE_j mA).
     pub fn y(&self) -> [f64; 2] {
         self.0.y()
+    }
+}
+
+/// Block parameters of a view in [`super::bundle_adjust_free_views`]: a stage view's
+/// (dZ_j mm, dE_j mA, then 5 unused), a free-pose view's (Rodrigues 3, translation 3 mm,
+/// dE_f mA).
+pub const JOINT_BLOCK: usize = 7;
+
+/// One view's storage of [`super::bundle_adjust_free_views`]: the stage views' first, then
+/// the free-pose views'. A stage view's block holds its correction (dZ_j mm, dE_j mA, the
+/// rest unused), a free view's its board pose (Rodrigues, translation mm: board ->
+/// camera, as [`crate::pnp::BoardPose`]) and its current correction dE_f mA (zero for the
+/// paper's estimator). Read them with [`JointScratch::correction`] and
+/// [`JointScratch::board_pose`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointScratch(JointBlocks);
+
+impl JointScratch {
+    /// Zeroed storage (sized by the bundle adjustment on entry).
+    pub const ZERO: JointScratch = JointScratch(JointBlocks::Paper3(BlockScratch::ZERO));
+
+    /// The block's parameters (module docs of [`super::free_views`]).
+    pub fn y(&self) -> [f64; JOINT_BLOCK] {
+        self.0.y()
+    }
+
+    /// A stage view's correction (dZ_j mm, dE_j mA).
+    pub fn correction(&self) -> ViewCorrection {
+        let y = self.y();
+        ViewCorrection { dz_mm: y[0], de_ma: y[1] }
+    }
+
+    /// A free-pose view's board pose: (Rodrigues, translation mm) and its current
+    /// correction dE_f, mA.
+    pub fn board_pose(&self) -> ([f64; 3], [f64; 3], f64) {
+        let y = self.y();
+        ([y[0], y[1], y[2]], [y[3], y[4], y[5]], y[6])
+    }
+}
+
+impl Default for JointScratch {
+    fn default() -> Self {
+        Self::ZERO
     }
 }
 
