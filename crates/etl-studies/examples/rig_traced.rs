@@ -1,11 +1,13 @@
 //! The acceptance of a calibrated 2-camera rig on ray-traced optics (docs/RESULTS.md):
 //! `cargo run --release -p etl-studies --example rig_traced -- [TRIALS] [SEED]
-//! [--chief] [--stop-scale S] [--sigma-px S] [--requests default,hold-a0,moving]
-//! [OPTICS_FILE [OPTICS_FILE]]`
+//! [--chief] [--stop-scale S] [--sigma-px S] [--free-views N]
+//! [--requests default,hold-a0,moving,moving-tilted] [OPTICS_FILE [OPTICS_FILE]]`
 //! (default 200 trials from seed 1, spot centroids, every request, two Cooke cameras of
 //! fixtures/optics; one file: both cameras; `--chief`: the corners as chief rays' hits;
 //! `--stop-scale S`: every camera's stop scaled by S in (0, 1]; `--sigma-px S`: the
-//! pixel noise instead of camera 0's procedure's, 0 for the bias alone); a markdown
+//! pixel noise instead of camera 0's procedure's, 0 for the bias alone; `--free-views N`:
+//! N free views of the board tilted, which `moving-tilted` gives each camera's own
+//! calibration as tilted views); a markdown
 //! summary per request on stdout.
 
 use std::path::PathBuf;
@@ -25,6 +27,7 @@ struct Args {
     stop_scale: f64,
     sigma_px: Option<f64>,
     requests: Vec<RigRequest>,
+    free_views: usize,
     files: Vec<PathBuf>,
 }
 
@@ -37,6 +40,7 @@ fn parse() -> Result<Args> {
         stop_scale: 1.0,
         sigma_px: None,
         requests: RigRequest::ALL.to_vec(),
+        free_views: 0,
         files: vec![],
     };
     let mut numbers = vec![];
@@ -52,6 +56,10 @@ fn parse() -> Result<Args> {
                 let v = it.next().and_then(|s| s.parse().ok()).filter(|s: &f64| *s >= 0.0);
                 a.sigma_px = Some(v.ok_or_else(|| bad("--sigma-px", "--sigma-px takes a number >= 0".into()))?);
             }
+            "--free-views" => {
+                let v = it.next().and_then(|s| s.parse().ok());
+                a.free_views = v.ok_or_else(|| bad("--free-views", "--free-views takes a whole number".into()))?;
+            }
             "--requests" => {
                 let list = it.next().unwrap_or_default();
                 a.requests = list
@@ -60,9 +68,11 @@ fn parse() -> Result<Args> {
                         "default" => Ok(RigRequest::Default),
                         "hold-a0" => Ok(RigRequest::HoldA0),
                         "moving" => Ok(RigRequest::MovingCentre),
-                        other => {
-                            Err(bad("--requests", format!("--requests: {other} is not default, hold-a0 or moving")))
-                        }
+                        "moving-tilted" => Ok(RigRequest::MovingTilted),
+                        other => Err(bad(
+                            "--requests",
+                            format!("--requests: {other} is not default, hold-a0, moving or moving-tilted"),
+                        )),
                     })
                     .collect::<Result<_>>()?;
             }
@@ -88,7 +98,8 @@ fn main() -> Result<()> {
         .map(|f| OpticalRig::new(stopped_down(OpticsFile::load(f)?, args.stop_scale)?))
         .collect::<Result<Vec<_>>>()?;
     let started = std::time::Instant::now();
-    let rig = trace(&optics, &TracedRigDesign { corner: args.corner, ..TracedRigDesign::new() })?;
+    let design = TracedRigDesign { corner: args.corner, free_views: args.free_views, ..TracedRigDesign::new() };
+    let rig = trace(&optics, &design)?;
     let views: Vec<usize> =
         (0..2).map(|k| rig.dataset.views.iter().filter(|v| v.cameras.iter().any(|s| s.camera == k)).count()).collect();
     println!(

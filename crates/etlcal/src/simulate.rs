@@ -160,15 +160,7 @@ fn run_rig(args: &Args, cameras: usize) -> Result<()> {
         moving_centre: args.moving_centre,
         ..base
     };
-    let sim = simulate_multi_camera(&design, &noise, args.seed.unwrap_or(1)).map_err(|e| {
-        let what = e.input_what().unwrap_or("").to_owned();
-        match what.as_str() {
-            "cameras" => e.rename_input("cameras", "--rig"),
-            "views" => e.rename_input("views", "--views"),
-            "baseline_mm" => e.rename_input("baseline_mm", "--baseline-mm"),
-            _ => e,
-        }
-    })?;
+    let sim = simulate_multi_camera(&design, &noise, args.seed.unwrap_or(1)).map_err(rig_flag_names)?;
     let images = write_dir_set(&args.out, RIG_FILES, |staging| {
         if args.observations_only {
             sim.dataset.save(&staging.join("rig_dataset.json"))?;
@@ -341,15 +333,7 @@ fn run_rig_optics(args: &Args, cameras: usize) -> Result<()> {
         views: args.views.unwrap_or(base.views),
         ..base
     };
-    let rig = trace_multi_camera(&optics, &design).map_err(|e| {
-        let what = e.input_what().unwrap_or("").to_owned();
-        match what.as_str() {
-            "cameras" => e.rename_input("cameras", "--rig"),
-            "views" => e.rename_input("views", "--views"),
-            "baseline_mm" => e.rename_input("baseline_mm", "--baseline-mm"),
-            _ => e,
-        }
-    })?;
+    let rig = trace_multi_camera(&optics, &design).map_err(rig_flag_names)?;
     let (seed, sigma_px) = (args.seed.unwrap_or(1), optics[0].file.procedure.pixel_noise_px);
     let dataset = rig.with_pixel_noise(sigma_px, seed);
     let truths = rig.truths()?;
@@ -424,4 +408,16 @@ fn run_optics(args: &Args, optics: &std::path::Path) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// A rig design's refusal spelt with the flags that set its fields (`cameras` is `--rig`,
+/// `views` `--views`, `baseline_mm` `--baseline-mm`).
+fn rig_flag_names(e: etl_formats::Error) -> etl_formats::Error {
+    let what = e.input_what().unwrap_or("").to_owned();
+    match what.as_str() {
+        "cameras" => e.rename_input("cameras", "--rig"),
+        "views" => e.rename_input("views", "--views"),
+        "baseline_mm" => e.rename_input("baseline_mm", "--baseline-mm"),
+        _ => e,
+    }
 }

@@ -50,10 +50,9 @@ use etl_formats::rig_dataset::{
 use etl_formats::{Error, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 
 use crate::rig::{focus_law_current_ma, focus_law_depth_mm, PAPER_E_COM_MA, PAPER_TEMPERATURE_C};
-use crate::simulate::{lens_off_views_of, LensOff, NoiseModel, StageBoard};
+use crate::simulate::{gauss, lens_off_views_of, LensOff, NoiseModel, StageBoard};
 
 pub mod images;
 
@@ -145,13 +144,6 @@ pub struct MultiCameraSimulation {
     /// The true current error of each camera in each view, mA (`None` where it took no
     /// part).
     pub true_de_ma: Vec<Vec<Option<f64>>>,
-}
-
-fn gauss(s: f64, rng: &mut ChaCha8Rng) -> f64 {
-    match Normal::new(0.0, s) {
-        Ok(n) if s > 0.0 => n.sample(rng),
-        _ => 0.0,
-    }
 }
 
 /// The per-camera factor s_k of camera k of n: 0 for camera 0, then alternating signs

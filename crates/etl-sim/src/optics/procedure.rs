@@ -13,22 +13,14 @@ use etl_formats::optics::BoardSpec;
 use etl_formats::Result;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 
 use super::ray::V3;
 use super::rig::{board_centre_mm, OpticalRig, Setting};
-use crate::simulate::{lens_off_poses_of, LensOff};
+use crate::simulate::{gauss, lens_off_poses_of, LensOff};
 
 /// A board pose, board frame to camera frame: (Rodrigues, translation mm).
 pub type Pose = ([f64; 3], [f64; 3]);
-
-fn gauss(sigma: f64, rng: &mut ChaCha8Rng) -> f64 {
-    match Normal::new(0.0, sigma) {
-        Ok(n) if sigma > 0.0 => n.sample(rng),
-        _ => 0.0,
-    }
-}
 
 /// Which point of a traced spot stands for the corner.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

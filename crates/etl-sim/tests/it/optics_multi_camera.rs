@@ -114,3 +114,42 @@ fn bad_designs_are_refused_naming_the_field() {
     // 150 mm off, camera 1 stands farther than its lens can focus: no shared travel.
     refused(&[cooke(), cooke()], TracedRigDesign { baseline_mm: 150.0, focus_step_ma: 5.0, ..d }, "baseline_mm");
 }
+
+/// Free views: the board turned about its centre (10 and 25 degrees), each camera focused
+/// on the centre as on the stage board there; each corner's record is the traced pixel of
+/// its world point through the free pose, and the noise reaches them after the others.
+#[test]
+fn free_views_are_the_tilted_boards_traced_pixels() {
+    use etl_core::model::rotation::{mat_vec, rodrigues_to_matrix};
+    use etl_sim::optics::multi_camera::free_pose;
+    let design = TracedRigDesign { views: 3, free_views: 2, ..TracedRigDesign::new() };
+    let rig = trace_multi_camera(&[cooke(), cooke()], &design).unwrap();
+    assert_eq!(rig.dataset.free_views.len(), 2);
+    for (f, v) in rig.dataset.free_views.iter().enumerate() {
+        assert_eq!(v.cameras.len(), 2, "free view {f}: both cameras");
+        let (pose, z) = free_pose(&rig.board, rig.stage_travel_mm, f, 2);
+        let tilt = (pose.0[0].powi(2) + pose.0[1].powi(2)).sqrt().to_degrees();
+        assert!((tilt - [10.0, 25.0][f]).abs() < 1e-9, "{tilt}");
+        for s in &v.cameras {
+            let cam = &rig.cameras[s.camera];
+            let e = s.e_com_ma.unwrap();
+            assert_eq!(Some(e), cam.focus_current_ma(&rig.board, z));
+            let p = s.points.as_ref().unwrap()[3];
+            let w = mat_vec(&rodrigues_to_matrix(pose.0), [p[2], p[3], 0.0]);
+            let w = [w[0] + pose.1[0], w[1] + pose.1[1], w[2] + pose.1[2]];
+            let px = cam.pixel(&cam.optics.at(e).unwrap(), w, rig.corner).unwrap();
+            assert_eq!([p[0], p[1]], px);
+        }
+    }
+    let noisy = rig.with_pixel_noise(0.05, 3);
+    let (a, b) = (&rig.dataset.free_views[0].cameras[0].points, &noisy.free_views[0].cameras[0].points);
+    let d = a.as_ref().unwrap()[0][0] - b.as_ref().unwrap()[0][0];
+    assert!(d != 0.0 && d.abs() < 0.5, "{d}");
+    // The stage views' noise is unchanged by the free views (drawn after them).
+    let plain =
+        trace_multi_camera(&[cooke(), cooke()], &TracedRigDesign { views: 3, ..TracedRigDesign::new() }).unwrap();
+    assert_eq!(plain.with_pixel_noise(0.05, 3).views, noisy.views);
+    let bad = TracedRigDesign { free_views: 101, ..TracedRigDesign::new() };
+    let e = trace_multi_camera(&[cooke(), cooke()], &bad).unwrap_err().to_string();
+    assert!(e.contains("free_views: 101 is outside 0..=100"), "{e}");
+}

@@ -80,6 +80,10 @@ pub enum RigRequest {
     /// `--centre moving` (kept when ill-conditioned: on the stage's fronto-parallel
     /// views the centre's move is barely observable).
     MovingCentre,
+    /// `--centre moving --setting-views joint`: each camera's own calibration takes the
+    /// rig's free views as tilted views (a traced rig with `free_views`), which make the
+    /// centre's move observable.
+    MovingTilted,
 }
 
 impl RigRequest {
@@ -92,6 +96,7 @@ impl RigRequest {
             RigRequest::Default => "default",
             RigRequest::HoldA0 => "--hold-a0",
             RigRequest::MovingCentre => "--centre moving",
+            RigRequest::MovingTilted => "--centre moving --setting-views joint",
         }
     }
 
@@ -105,6 +110,12 @@ impl RigRequest {
             RigRequest::MovingCentre => {
                 CalibrationRequest { centre: Some(CentreChoice::Moving), accept_ill_conditioned: true, ..base }
             }
+            RigRequest::MovingTilted => CalibrationRequest {
+                centre: Some(CentreChoice::Moving),
+                setting_views: Some(etl_calib::pipeline::SettingViews::Joint),
+                accept_ill_conditioned: true,
+                ..base
+            },
         };
         RigCalibrationOptions { request, ..Default::default() }
     }

@@ -7,10 +7,9 @@ use std::path::Path;
 use etl_calib::rig::{CalibrationCovariance, CalibrationPart, Rig, RigSetting};
 use etl_core::calib::jacobian::{from_params, to_params};
 use etl_core::model::CameraModel;
-use etl_core::runtime::rig::{centre_shift_mm, triangulate, RigPose, TriangulationView};
-use etl_core::runtime::{Camera, Trust};
+use etl_core::runtime::Trust;
 use etl_core::thermal::ThermalSurface;
-use etl_formats::rig::{relative_pose, JointCovariance};
+use etl_formats::rig::JointCovariance;
 use etl_formats::ThermalRef;
 use etl_sim::multi_camera::{simulate_multi_camera, truth_rig, MultiCameraDesign};
 use etl_sim::rig::PAPER_TEMPERATURE_C;
@@ -69,22 +68,10 @@ fn the_noise_free_move_through_the_true_rig_is_exact() {
 
 /// The oracle: the point triangulated from `pixels` through `models` at `e_com_ma` (camera
 /// 1's pose from the models' poses to the world, at the settings by Eq. R2), in camera
-/// 0's frame at its setting.
+/// 0's frame at its setting: etl-core's triangulation on the models directly, not through
+/// the rig files the study reads.
 fn triangulate_models(models: &[CameraModel; 2], e_com_ma: [f64; 2], pixels: [[f64; 2]; 2]) -> [f64; 3] {
-    let at = |k: usize| {
-        let e = e_com_ma[k];
-        Camera::new(models[k], None, [e, e]).unwrap().at_e_com(e, Trust::Extrapolate).unwrap()
-    };
-    let (c0, c1) = (at(0), at(1));
-    let pose = |m: &CameraModel| (m.rotation_rodrigues, m.translation_mm);
-    let (om, t) = relative_pose(pose(&models[0]), pose(&models[1]));
-    let shift = |k: usize| centre_shift_mm(&models[k], e_com_ma[k], 0.0);
-    let pose1 = RigPose::from_rodrigues(om, t).at_settings(shift(0), shift(1));
-    let views = [
-        TriangulationView { camera: &c0, pose: RigPose::IDENTITY, pixel: pixels[0] },
-        TriangulationView { camera: &c1, pose: pose1, pixel: pixels[1] },
-    ];
-    triangulate(&views, 1.0).unwrap().point_mm
+    etl_studies::rig_traced::world::triangulate_models(models, e_com_ma, pixels).unwrap()
 }
 
 #[test]

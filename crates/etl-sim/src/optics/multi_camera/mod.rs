@@ -40,7 +40,7 @@ use etl_core::model::rotation::{mat_t_vec, mat_vec, rodrigues_to_matrix};
 use etl_formats::observations::PointObs;
 use etl_formats::optics::BoardSpec;
 use etl_formats::rig_dataset::{
-    points_of, RigDataset, RigDatasetCamera, RigOffstateShot, RigOffstateView, RigShot, RigView,
+    points_of, RigDataset, RigDatasetCamera, RigFreeView, RigOffstateShot, RigOffstateView, RigShot, RigView,
 };
 use etl_formats::{Error, Result};
 use rand::SeedableRng;
@@ -76,12 +76,16 @@ pub struct TracedRigDesign {
     /// Which point of a traced spot stands for a corner (stage and lens-off views):
     /// the centroid (what a detector sees) or, to compare, the chief ray's hit.
     pub corner: CornerAs,
+    /// Free views (the board tilted, no stage: `etlcal.rig-dataset/1`'s `free_views`),
+    /// 0..=100 ([`free_pose`]).
+    pub free_views: usize,
 }
 
 impl TracedRigDesign {
-    /// 15 views (the paper's), a 30 mm baseline, the focus table every 5 mA, centroids.
+    /// 15 views (the paper's), a 30 mm baseline, the focus table every 5 mA, centroids, no
+    /// free views.
     pub const fn new() -> Self {
-        TracedRigDesign { views: 15, baseline_mm: 30.0, focus_step_ma: 5.0, corner: CornerAs::Centroid }
+        TracedRigDesign { views: 15, baseline_mm: 30.0, focus_step_ma: 5.0, corner: CornerAs::Centroid, free_views: 0 }
     }
 
     /// Refuses a design outside its ranges, or `cameras` optics outside 2..=[`MAX_CAMERAS`],
@@ -97,6 +101,10 @@ impl TracedRigDesign {
         }
         etl_formats::check_range("baseline_mm", self.baseline_mm, BASELINE_RANGE_MM, "mm")?;
         etl_formats::check_range("focus_step_ma", self.focus_step_ma, [1e-3, 5.0], "mA")?;
+        if self.free_views > 100 {
+            let message = format!("free_views: {} is outside 0..=100", self.free_views);
+            return Err(Error::invalid_value("free_views", self.free_views as f64, message));
+        }
         Ok(())
     }
 }
@@ -291,8 +299,72 @@ pub fn trace_multi_camera(optics: &[OpticalRig], design: &TracedRigDesign) -> Re
             dataset.offstate_views[i].cameras.push(shot);
         }
     }
+    for f in 0..design.free_views {
+        let (pose, z) = free_pose(&board, travel, f, design.free_views);
+        let mut view = RigFreeView { cameras: vec![] };
+        for (k, cam) in cameras.iter().enumerate() {
+            if let Some(shot) = shoot_free(k, cam, (&board, z), &pose, design.corner)? {
+                view.cameras.push(shot);
+            }
+        }
+        if !view.cameras.is_empty() {
+            dataset.free_views.push(view);
+        }
+    }
     dataset.validate()?;
     Ok(TracedMultiCamera { cameras, board, stage_travel_mm: travel, dataset, corner: design.corner })
+}
+
+/// Free view `f` of `n`: the board turned about its centre by 10 to 25 degrees (about axes
+/// spread around the stage axis, alternately 10 and 25), its centre where the stage would
+/// put it at a position spread over `travel`; the pose board to world, and that position.
+pub fn free_pose(board: &BoardSpec, travel: [f64; 2], f: usize, n: usize) -> (Pose, f64) {
+    let z = position_in_travel_mm(travel, f, n.max(2));
+    let phi = 2.0 * std::f64::consts::PI * f as f64 / n.max(1) as f64;
+    let tilt = if f % 2 == 0 { 10f64 } else { 25.0 }.to_radians();
+    let om = [tilt * phi.cos(), tilt * phi.sin(), 0.05];
+    let c = board_centre_mm(board);
+    let rc = mat_vec(&rodrigues_to_matrix(om), c);
+    ((om, [c[0] - rc[0], c[1] - rc[1], z + c[2] - rc[2]]), z)
+}
+
+/// Camera `k`'s record of the board in free pose `pose` (board to world), focused on its
+/// centre (the stage board's at `z_mm`); None when it cannot focus there or sees fewer
+/// than [`MIN_POINTS`] corners.
+fn shoot_free(
+    k: usize,
+    cam: &TracedCamera,
+    (board, z_mm): (&BoardSpec, f64),
+    pose: &Pose,
+    corner: CornerAs,
+) -> Result<Option<RigShot>> {
+    let Some(e) = cam.focus_current_ma(board, z_mm) else {
+        return Ok(None);
+    };
+    let setting = cam.optics.at(e)?;
+    let r = rodrigues_to_matrix(pose.0);
+    let [cols, rows] = board.inner_corners;
+    let mut points = vec![];
+    for (i, j) in (0..rows).flat_map(|j| (0..cols).map(move |i| (i, j))) {
+        let b = [i as f64 * board.square_mm, j as f64 * board.square_mm, 0.0];
+        let w = mat_vec(&r, b);
+        if let Some(px) = cam.pixel(&setting, [w[0] + pose.1[0], w[1] + pose.1[1], w[2] + pose.1[2]], corner) {
+            points.push([px[0], px[1], b[0], b[1]]);
+        }
+    }
+    if points.len() < MIN_POINTS {
+        return Ok(None);
+    }
+    let t = cam.optics.file.procedure.temperature_c;
+    Ok(Some(RigShot {
+        camera: k,
+        image: None,
+        points: Some(points),
+        e_in_ma: commanded_e_in_ma(e, t),
+        focal_power_dpt: None,
+        temperature_c: t,
+        e_com_ma: Some(e),
+    }))
 }
 
 /// Camera `k`'s record of the board at stage position `z_mm`, in focus; None when it
@@ -318,13 +390,14 @@ fn shoot(k: usize, cam: &TracedCamera, (board, z_mm): (&BoardSpec, f64), corner:
 }
 
 /// `dataset` with Gaussian noise of `sigma_px` on every pixel (stage views camera by
-/// camera, then lens-off views), seeded: the traced pixels do not depend on the seed.
+/// camera, then lens-off views, then free views), seeded: the traced pixels do not depend on the seed.
 pub fn rig_with_pixel_noise(dataset: &RigDataset, sigma_px: f64, seed: u64) -> RigDataset {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = dataset.clone();
     let stage = out.views.iter_mut().flat_map(|v| v.cameras.iter_mut().map(|s| &mut s.points));
     let off = out.offstate_views.iter_mut().flat_map(|v| v.cameras.iter_mut().map(|s| &mut s.points));
-    for points in stage.chain(off).flatten() {
+    let free = out.free_views.iter_mut().flat_map(|v| v.cameras.iter_mut().map(|s| &mut s.points));
+    for points in stage.chain(off).chain(free).flatten() {
         for p in points.iter_mut() {
             p[0] += gauss(sigma_px, &mut rng);
             p[1] += gauss(sigma_px, &mut rng);
