@@ -352,19 +352,26 @@ fn shoot_free(
             points.push([px[0], px[1], b[0], b[1]]);
         }
     }
+    Ok(shot_of(k, cam, e, points))
+}
+
+/// Camera `k`'s entry at current `e_ma` with `points` (`[u, v, X, Y]` rows): E_com, the
+/// commanded E_in and the procedure's temperature, as the traced procedure records them;
+/// None with fewer than [`MIN_POINTS`] points.
+fn shot_of(k: usize, cam: &TracedCamera, e_ma: f64, points: Vec<[f64; 4]>) -> Option<RigShot> {
     if points.len() < MIN_POINTS {
-        return Ok(None);
+        return None;
     }
     let t = cam.optics.file.procedure.temperature_c;
-    Ok(Some(RigShot {
+    Some(RigShot {
         camera: k,
         image: None,
         points: Some(points),
-        e_in_ma: commanded_e_in_ma(e, t),
+        e_in_ma: commanded_e_in_ma(e_ma, t),
         focal_power_dpt: None,
         temperature_c: t,
-        e_com_ma: Some(e),
-    }))
+        e_com_ma: Some(e_ma),
+    })
 }
 
 /// Camera `k`'s record of the board at stage position `z_mm`, in focus; None when it
@@ -374,19 +381,7 @@ fn shoot(k: usize, cam: &TracedCamera, (board, z_mm): (&BoardSpec, f64), corner:
         return Ok(None);
     };
     let points = cam.stage_view(&cam.optics.at(e)?, board, z_mm, corner);
-    if points.len() < MIN_POINTS {
-        return Ok(None);
-    }
-    let t = cam.optics.file.procedure.temperature_c;
-    Ok(Some(RigShot {
-        camera: k,
-        image: None,
-        points: Some(points_of(&points)),
-        e_in_ma: commanded_e_in_ma(e, t),
-        focal_power_dpt: None,
-        temperature_c: t,
-        e_com_ma: Some(e),
-    }))
+    Ok(shot_of(k, cam, e, points_of(&points)))
 }
 
 /// `dataset` with Gaussian noise of `sigma_px` on every pixel (stage views camera by
