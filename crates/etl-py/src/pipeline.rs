@@ -211,13 +211,13 @@ pub(crate) fn request_of(
         accept_ill_conditioned,
         centre: centre.map(parse_centre).transpose()?,
         model_auto,
-        // `calibrate` sets it from its own keyword; `calibrate_rig` has no setting views.
+        // Set by the callers that take it: `calibrate`'s keyword, a `per_camera` entry's.
         setting_views: None,
     })
 }
 
 /// `setting_views=`: "ignored" or "joint".
-fn parse_setting_views(word: &str) -> PyResult<SettingViews> {
+pub(crate) fn parse_setting_views(word: &str) -> PyResult<SettingViews> {
     SettingViews::from_word(word).ok_or_else(|| {
         invalid_value(
             "setting_views",

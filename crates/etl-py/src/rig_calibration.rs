@@ -85,7 +85,7 @@ fn camera_request(
     let focal_degree = keywords.get_item("focal_degree")?.filter(|v| !v.is_none());
     let (method, estimator, robust) = (k("method")?, k("estimator")?, k("robust")?);
     let (distortion, centre, model) = (k("distortion")?, k("centre")?, k("model")?);
-    let own = request_of(
+    let mut own = request_of(
         (
             method.as_deref().unwrap_or("proposed"),
             a0.as_deref(),
@@ -107,6 +107,9 @@ fn camera_request(
         ),
     )
     .map_err(|e| input_error(format!("per_camera[{camera:?}]: {}", Python::attach(|py| e.value(py).to_string()))))?;
+    // `setting_views` is a keyword of `calibrate` outside `request_of`'s groups: read here
+    // too, or a camera's "setting_views" would be accepted and dropped.
+    own.setting_views = k("setting_views")?.as_deref().map(crate::pipeline::parse_setting_views).transpose()?;
     Ok(shared.overridden(&own, &given))
 }
 

@@ -128,3 +128,15 @@ def test_per_camera_refuses_unknown_cameras_and_keywords(tmp_path: pathlib.Path,
     with pytest.raises(etlcal.InputError) as err:
         etlcal.calibrate_rig(dataset, per_camera={"cam0": {"thermal": "paper"}})
     assert "camera 1 (cam1): views[0].cameras[1] records e_in_ma without e_com_ma" in str(err.value)
+
+
+def test_per_camera_setting_views_is_honoured(tmp_path: pathlib.Path, etlcal_binary: str) -> None:
+    """A camera's `setting_views="joint"` reaches its calibration: the simulated rig has no
+    free views, so that camera's own calibration refuses it, named."""
+    sim = tmp_path / "sim"
+    subprocess.run([etlcal_binary, "simulate", "--rig", "2", "--observations-only", "--seed", "4", "--out",
+                    str(sim)], check=True, capture_output=True)
+    with pytest.raises(etlcal.InputError) as e:
+        etlcal.calibrate_rig(sim / "rig_dataset.json", per_camera={"cam1": {"setting_views": "joint"}})
+    assert "camera 1" in str(e.value) and "setting_views" in str(e.value), str(e.value)
+    assert len(str(e.value).splitlines()) == 1
