@@ -190,8 +190,8 @@ impl<'a> JointProblem<'a> {
                     return DVector::zeros(0);
                 }
                 let mut y = DVector::zeros(self.shared_len(j) + p.len());
-                if let Some(pose) = self.free_start.get(j.wrapping_sub(self.stage_views)).filter(|_| self.is_free(j)) {
-                    y.rows_mut(0, FREE_POSE_LEN).copy_from_slice(pose);
+                if self.is_free(j) {
+                    y.rows_mut(0, FREE_POSE_LEN).copy_from_slice(&self.free_start[j - self.stage_views]);
                 }
                 y
             })
@@ -340,8 +340,9 @@ impl<'a> JointProblem<'a> {
         if !self.eiv() {
             return Ok(n);
         }
+        let sizes = self.sizes();
         for j in 0..self.present.len() {
-            let (w, v, gy) = self.view_block(j, s, &parts, &d);
+            let (w, v, gy) = self.view_block(j, s, (&parts, &d), &sizes);
             n.w.push(w);
             n.v.push(v);
             n.gy.push(gy);
@@ -350,16 +351,15 @@ impl<'a> JointProblem<'a> {
     }
 
     /// View j's W_j (the present cameras' numbers in z stacked, by its unknowns), V_j with
-    /// the priors, and g_y,j, from the cameras' parts.
+    /// the priors, and g_y,j, from the cameras' parts and their D_k; `sizes` the p_k.
     fn view_block(
         &self,
         j: usize,
         s: &State,
-        parts: &[CameraNormal],
-        d: &[DMatrix<f64>],
+        (parts, d): (&[CameraNormal], &[DMatrix<f64>]),
+        sizes: &[usize],
     ) -> (DMatrix<f64>, DMatrix<f64>, DVector<f64>) {
         let p = &self.present[j];
-        let sizes = self.sizes();
         let sh = self.shared_len(j);
         let rows: usize = p.iter().map(|&(k, _)| sizes[k]).sum();
         let m = sh + p.len();
