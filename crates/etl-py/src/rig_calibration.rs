@@ -141,7 +141,9 @@ fn camera_requests(shared: &CalibrationRequest, per_camera: &Bound<'_, PyDict>) 
 ///     solver: the joint steps' linear solver: "auto" (dense below 12 cameras), "dense"
 ///         or "sparse".
 ///     the other keywords: those of `calibrate(...)` (method "proposed" only, no robust
-///         loss: the joint solve is least squares), every camera's.
+///         loss: the joint solve is least squares), every camera's; `setting_views="joint"`
+///         gives each camera's own calibration the rig's free views as tilted views
+///         (`calibrate-rig --setting-views joint`).
 ///     per_camera: each camera's own keywords, {camera name: {keyword: value}} with the
 ///         keywords of `calibrate(...)`, applied on top of the shared ones for that camera:
 ///         its lens's temperature surface (`"thermal"`: a `ThermalCalibration` or
@@ -161,7 +163,7 @@ fn camera_requests(shared: &CalibrationRequest, per_camera: &Bound<'_, PyDict>) 
 #[pyo3(signature = (dataset, solver="auto", a0=None, thermal=None, estimator=None, hold_a0=false, robust=None,
     robust_k_px=None, sigma_z_mm=None, sigma_e_ma=None, sigma_px=None, method="proposed",
     distortion=None, focal_degree=None, fix_k3=false, zero_tangent=false, sigma_z_um=None,
-    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None, model=None, per_camera=None))]
+    accept_ill_conditioned=false, centre=None, sigma_p_dpt=None, model=None, setting_views=None, per_camera=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate_rig(
     py: Python<'_>,
@@ -186,14 +188,16 @@ pub fn calibrate_rig(
     centre: Option<&str>,
     sigma_p_dpt: Option<f64>,
     model: Option<&str>,
+    setting_views: Option<&str>,
     per_camera: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Rig> {
     let solver = parse_solver(solver)?;
-    let request = request_of(
+    let mut request = request_of(
         (method, a0, thermal, estimator, hold_a0, robust, robust_k_px),
         (sigma_z_mm, sigma_e_ma, sigma_px, sigma_z_um, sigma_p_dpt),
         (distortion, focal_degree, fix_k3, zero_tangent, accept_ill_conditioned, centre, model),
     )?;
+    request.setting_views = setting_views.map(crate::pipeline::parse_setting_views).transpose()?;
     request.validate(&Keywords).py()?;
     let per_camera = per_camera.map(|p| camera_requests(&request, p)).transpose()?.unwrap_or_default();
     let options = RigCalibrationOptions { request, solver, max_iterations: 0, per_camera };

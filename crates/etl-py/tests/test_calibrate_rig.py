@@ -140,3 +140,23 @@ def test_per_camera_setting_views_is_honoured(tmp_path: pathlib.Path, etlcal_bin
         etlcal.calibrate_rig(sim / "rig_dataset.json", per_camera={"cam1": {"setting_views": "joint"}})
     assert "camera 1" in str(e.value) and "setting_views" in str(e.value), str(e.value)
     assert len(str(e.value).splitlines()) == 1
+
+
+def test_shared_setting_views_reaches_every_camera(tmp_path: pathlib.Path, etlcal_binary: str) -> None:
+    """The shared `setting_views=` is `calibrate-rig --setting-views`: "ignored" gives the
+    default's numbers exactly; "joint" reaches each camera's own calibration, which refuses
+    it, named, on a rig without free views (camera 0 is the first to be calibrated)."""
+    sim = tmp_path / "sim"
+    subprocess.run([etlcal_binary, "simulate", "--rig", "2", "--observations-only", "--seed", "4", "--out",
+                    str(sim)], check=True, capture_output=True)
+    dataset = sim / "rig_dataset.json"
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    etlcal.calibrate_rig(dataset, solver="dense").save(a)
+    etlcal.calibrate_rig(dataset, solver="dense", setting_views="ignored").save(b)
+    assert _numbers(json.loads(a.read_text())) == _numbers(json.loads(b.read_text()))
+    with pytest.raises(etlcal.InputError) as e:
+        etlcal.calibrate_rig(dataset, setting_views="joint")
+    assert "camera 0" in str(e.value) and "setting_views" in str(e.value), str(e.value)
+    assert len(str(e.value).splitlines()) == 1
+    with pytest.raises(etlcal.InputError, match="setting_views must be"):
+        etlcal.calibrate_rig(dataset, setting_views="both")

@@ -1,9 +1,10 @@
 //! The acceptance of a calibrated 2-camera rig on ray-traced optics (docs/RESULTS.md):
 //! `cargo run --release -p etl-studies --example rig_traced -- [TRIALS] [SEED]
-//! [--chief] [--stop-scale S] [--sigma-px S] [--free-views N]
+//! [--chief] [--in-focus] [--stop-scale S] [--sigma-px S] [--free-views N]
 //! [--requests default,hold-a0,moving,moving-tilted] [OPTICS_FILE [OPTICS_FILE]]`
 //! (default 200 trials from seed 1, spot centroids, every request, two Cooke cameras of
-//! fixtures/optics; one file: both cameras; `--chief`: the corners as chief rays' hits;
+//! fixtures/optics; one file: both cameras; `--chief`: the corners as chief rays' hits; `--in-focus`: the random point
+//! drawn first and each camera focused on it, instead of random settings;
 //! `--stop-scale S`: every camera's stop scaled by S in (0, 1]; `--sigma-px S`: the
 //! pixel noise instead of camera 0's procedure's, 0 for the bias alone; `--free-views N`:
 //! N free views of the board tilted, which `moving-tilted` gives each camera's own
@@ -17,7 +18,7 @@ use etl_formats::{Error, Result};
 use etl_sim::optics::procedure::CornerAs;
 use etl_sim::optics::OpticalRig;
 use etl_studies::optics::stopped_down;
-use etl_studies::rig_traced::{rig_traced, trace, RigRequest, RigTracedDesign, TracedRigDesign};
+use etl_studies::rig_traced::{rig_traced, trace, PointDraw, RigRequest, RigTracedDesign, TracedRigDesign};
 
 /// What the command line asks.
 struct Args {
@@ -28,6 +29,7 @@ struct Args {
     sigma_px: Option<f64>,
     requests: Vec<RigRequest>,
     free_views: usize,
+    point: PointDraw,
     files: Vec<PathBuf>,
 }
 
@@ -41,6 +43,7 @@ fn parse() -> Result<Args> {
         sigma_px: None,
         requests: RigRequest::ALL.to_vec(),
         free_views: 0,
+        point: PointDraw::RandomSettings,
         files: vec![],
     };
     let mut numbers = vec![];
@@ -48,6 +51,7 @@ fn parse() -> Result<Args> {
     while let Some(arg) = it.next() {
         match arg.as_str() {
             "--chief" => a.corner = CornerAs::Chief,
+            "--in-focus" => a.point = PointDraw::InFocus,
             "--stop-scale" => {
                 let v = it.next().and_then(|s| s.parse().ok());
                 a.stop_scale = v.ok_or_else(|| bad("--stop-scale", "--stop-scale takes a number in (0, 1]".into()))?;
@@ -114,7 +118,12 @@ fn main() -> Result<()> {
     let sigma_px = args.sigma_px.unwrap_or(optics[0].file.procedure.pixel_noise_px);
     println!("pixel noise {sigma_px} px\n");
     for request in &args.requests {
-        let r = rig_traced(&rig, &RigTracedDesign { request: *request, sigma_px }, args.trials, args.seed)?;
+        let r = rig_traced(
+            &rig,
+            &RigTracedDesign { request: *request, sigma_px, point: args.point },
+            args.trials,
+            args.seed,
+        )?;
         println!("{}\n", r.markdown());
     }
     Ok(())

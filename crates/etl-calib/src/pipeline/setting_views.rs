@@ -8,12 +8,16 @@
 //! them apart. The stage views are solved first as without the option (screen, outliers,
 //! re-solves); that solution is the start of the joint solve, and each setting view's
 //! pose starts at planar PnP ([`etl_core::pnp::solve_pnp`]) through it at the view's
-//! current. The setting views keep all their points (no outlier screen of their own).
+//! current. With a moving centre a second joint solve starts with the move held at zero,
+//! then released, and the lower objective wins (docs/METHOD.md, "Free-pose views"). The
+//! setting views keep all their points (no outlier screen of their own).
 
+use etl_core::calib::jacobian::{from_params, to_params};
 use etl_core::calib::{
-    bundle_adjust_free_views, bundle_adjust_free_views_scratch, FreeView, JointScratch, Point, View,
-    MIN_FREE_VIEW_POINTS,
+    bundle_adjust_free_views, bundle_adjust_free_views_scratch, BundleAdjustOptions, BundleAdjustReport, Estimator,
+    FreeView, JointScratch, Layout, ParamMask, Point, View, ViewCorrection, MIN_FREE_VIEW_POINTS,
 };
+use etl_core::model::CameraModel;
 use etl_core::pnp::solve_pnp;
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result, ThermalRef};
@@ -95,12 +99,100 @@ pub(super) fn solve_with_setting_views(
 ) -> Result<Solved> {
     let pts = setting_points(obs)?;
     let e_com = obs.setting_e_com_ma(thermal)?;
+    let stage_pts = subset(views, &solved.used);
+    let stage: Vec<View<'_>> =
+        views.iter().zip(&stage_pts).map(|(v, p)| View { e_com_ma: v.e_com_ma, points: p }).collect();
+    let ba = options.bundle_adjust()?;
     let start = solved.report.model;
+    let mut best = joint(&stage, &free_views(&pts, &e_com, &start)?, &start, &ba)?;
+    if start.centre.is_some() {
+        // The stage solve's moving centre lies anywhere along the fx(E) ~ dz(E) valley,
+        // and a joint solve started there can settle in another minimum. A second start:
+        // the centre held still while the tilted views fix fx(E), the move released from
+        // there. The lower objective wins (both at the first solve's pixel sigma); a
+        // second start that fails (PnP or the solve) leaves the first solve's result.
+        let sigma_px = best.0.sigma_px;
+        if let Ok(other) = released_centre(&stage, (&pts, &e_com), &start, &ba) {
+            if other.objective(&ba.estimator, sigma_px) < best.objective(&ba.estimator, sigma_px) {
+                best = other;
+            }
+        }
+    }
+    let JointSolve(report, corrections, _) = best;
+    let distances_px = distances(&report.model, views, &corrections);
+    Ok(Solved { report, corrections, distances_px, ..solved })
+}
+
+/// The joint solve from `start`'s centre held still (its move zero) while the tilted
+/// views fix fx(E), then released ([`solve_with_setting_views`]).
+fn released_centre(
+    stage: &[View<'_>],
+    (pts, e_com): (&[Vec<Point>], &[f64]),
+    start: &CameraModel,
+    ba: &BundleAdjustOptions,
+) -> Result<JointSolve> {
+    let (fixed, hold) = centre_held_still(start);
+    let still = BundleAdjustOptions { hold: ba.hold | hold, ..*ba };
+    let released = joint(stage, &free_views(pts, e_com, &fixed)?, &fixed, &still)?.0.model;
+    joint(stage, &free_views(pts, e_com, &released)?, &released, ba)
+}
+
+/// `model` with its centre's move (dz1, dz2, u1, v1) set to zero, and the mask that holds
+/// those numbers there.
+fn centre_held_still(model: &CameraModel) -> (CameraModel, ParamMask) {
+    let layout = Layout::of(model);
+    let mut x = to_params(model);
+    let mut hold = ParamMask::NONE;
+    for span in [layout.centre_dz(), layout.centre_principal_point()] {
+        for i in span.start..span.end() {
+            x[i] = 0.0;
+            hold = hold.with(i);
+        }
+    }
+    (from_params(&layout, &x), hold)
+}
+
+/// A joint solve: its report, the stage views' corrections (dZ, dE), the free views'
+/// current corrections dE_f and the number of points.
+struct JointSolve(BundleAdjustReport, Vec<ViewCorrection>, (Vec<f64>, usize));
+
+impl JointSolve {
+    /// The objective the solve minimised, at pixel sigma `sigma_px`: the squared
+    /// reprojection errors over sigma_px^2 plus, errors-in-variables, each correction's
+    /// squared prior z-score (docs/METHOD.md, Eq. 24b-24e).
+    fn objective(&self, estimator: &Estimator, sigma_px: f64) -> f64 {
+        let JointSolve(report, corrections, (free_de, points)) = self;
+        let pixels = report.rms_px.powi(2) * *points as f64 / sigma_px.powi(2);
+        let Estimator::Eiv { sigma_z_mm, sigma_e_ma, .. } = *estimator else { return pixels };
+        let stage: f64 =
+            corrections.iter().map(|c| (c.dz_mm / sigma_z_mm).powi(2) + (c.de_ma / sigma_e_ma).powi(2)).sum();
+        pixels + stage + free_de.iter().map(|de| (de / sigma_e_ma).powi(2)).sum::<f64>()
+    }
+}
+
+/// The joint solve of `stage` and `free` from `start`.
+fn joint(
+    stage: &[View<'_>],
+    free: &[FreeView<'_>],
+    start: &CameraModel,
+    options: &BundleAdjustOptions,
+) -> Result<JointSolve> {
+    let mut scratch = vec![JointScratch::ZERO; bundle_adjust_free_views_scratch(stage.len(), free.len())];
+    let report = bundle_adjust_free_views(stage, free, start, options, &mut scratch)?;
+    let corrections = scratch.iter().take(stage.len()).map(JointScratch::correction).collect();
+    let free_de = scratch.iter().skip(stage.len()).take(free.len()).map(|b| b.board_pose().2).collect();
+    let points = stage.iter().map(|v| v.points.len()).chain(free.iter().map(|f| f.points.len())).sum();
+    Ok(JointSolve(report, corrections, (free_de, points)))
+}
+
+/// The setting views as free views, each pose started by planar PnP through `start` at
+/// its current. Errors: a view PnP cannot place (naming it).
+fn free_views<'a>(pts: &'a [Vec<Point>], e_com: &[f64], start: &CameraModel) -> Result<Vec<FreeView<'a>>> {
     let mut free = Vec::with_capacity(pts.len());
-    for (i, (p, &e)) in pts.iter().zip(&e_com).enumerate() {
+    for (i, (p, &e)) in pts.iter().zip(e_com).enumerate() {
         let board: Vec<[f64; 3]> = p.iter().map(|q| q.world_mm).collect();
         let pixels: Vec<[f64; 2]> = p.iter().map(|q| q.pixel).collect();
-        let pose = solve_pnp(&start, e, &board, &pixels).map_err(|err| {
+        let pose = solve_pnp(start, e, &board, &pixels).map_err(|err| {
             Error::invalid(format!("setting_views[{i}]"), format!("setting view {i}: its start pose by PnP: {err}"))
         })?;
         free.push(FreeView {
@@ -110,12 +202,5 @@ pub(super) fn solve_with_setting_views(
             translation_mm: pose.translation_mm,
         });
     }
-    let stage_pts = subset(views, &solved.used);
-    let stage: Vec<View<'_>> =
-        views.iter().zip(&stage_pts).map(|(v, p)| View { e_com_ma: v.e_com_ma, points: p }).collect();
-    let mut scratch = vec![JointScratch::ZERO; bundle_adjust_free_views_scratch(stage.len(), free.len())];
-    let report = bundle_adjust_free_views(&stage, &free, &start, &options.bundle_adjust()?, &mut scratch)?;
-    let corrections: Vec<_> = scratch.iter().take(stage.len()).map(JointScratch::correction).collect();
-    let distances_px = distances(&report.model, views, &corrections);
-    Ok(Solved { report, corrections, distances_px, ..solved })
+    Ok(free)
 }

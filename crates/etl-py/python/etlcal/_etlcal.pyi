@@ -724,6 +724,7 @@ def calibrate_rig(
     centre: Optional[Literal["fixed", "moving", "auto"]] = None,
     sigma_p_dpt: Optional[float] = None,
     model: Optional[Literal["auto"]] = None,
+    setting_views: Optional[Literal["ignored", "joint"]] = None,
     per_camera: Optional[Mapping[str, Mapping[str, Any]]] = None,
 ) -> "Rig":
     """A multi-camera rig calibrated jointly from an etlcal.rig-dataset/1 file (points or

@@ -17,6 +17,9 @@
 //!   uniform in the stage's volume (X, Y over the board, Z over the travel) that both
 //!   traced cameras see there (not necessarily in focus), its traced pixels plus noise,
 //!   triangulated by `RigAt::triangulate` with the pixel and joint calibration parts.
+//!   Or, [`PointDraw::InFocus`], as an autofocusing rig measures: the point first, each
+//!   camera focused on it. Each trial records the point's defocus per camera, and the
+//!   result bins both measures by it ([`RigTraced::by_defocus`]).
 //! - **a 2 mm move**: the board at Z uniform in the travel (0.5 mm inside either end) and
 //!   at Z + 2 mm, both cameras refocused at each position (each at its focus current,
 //!   [`TracedMultiCamera::focus_currents_ma`]), every corner both see at both positions
@@ -159,6 +162,9 @@ pub struct Trial {
     pub seed: u64,
     /// The random point's currents, mA.
     pub e_com_ma: [f64; 2],
+    /// The random point's defocus in each camera, dioptres: 1000 / depth - 1000 / the
+    /// distance in focus at its current (camera z, mm).
+    pub defocus_dpt: [f64; 2],
     /// The random point in the world frame (the acceptance's measure).
     pub world: PointFit,
     /// The same point in camera 0's frame, the truth's origin at the entrance pupil.
@@ -175,6 +181,18 @@ pub struct Trial {
     pub rms_px: [f64; 2],
 }
 
+/// How the random point of a trial is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub enum PointDraw {
+    /// The acceptance's: each camera's E_com uniform in its calibrated range, the point
+    /// uniform in the volume both see there, in focus or not.
+    #[default]
+    RandomSettings,
+    /// The point uniform in the volume, each camera focused on it (an autofocusing rig):
+    /// [`observe::draw_focused_point`].
+    InFocus,
+}
+
 /// What a run asks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RigTracedDesign {
@@ -182,6 +200,8 @@ pub struct RigTracedDesign {
     pub request: RigRequest,
     /// The pixel noise, px (the calibration's data and the run time's).
     pub sigma_px: f64,
+    /// How the random point is drawn.
+    pub point: PointDraw,
 }
 
 /// The distance between the cameras' paraxial entrance pupils at their focus currents at
@@ -217,13 +237,22 @@ impl Calibrated {
 fn point_fits(
     rig: &TracedMultiCamera,
     cal: &Calibrated,
-    (temperature_c, sigma_px): (f64, f64),
+    (temperature_c, sigma_px, point): (f64, f64, PointDraw),
     rng: &mut ChaCha8Rng,
-) -> Result<([f64; 2], PointFit, PointFit)> {
-    let e = cal.ranges.map(|[lo, hi]| rng.random_range(lo..=hi));
+) -> Result<([f64; 2], PointFit, PointFit, [f64; 2])> {
+    let none = || Error::invalid("point", "point: no point seen by both cameras at these settings");
+    let (e, w, clean) = match point {
+        PointDraw::RandomSettings => {
+            let e = cal.ranges.map(|[lo, hi]| rng.random_range(lo..=hi));
+            let (w, clean) = observe::draw_point(rig, &observe::settings(rig, e)?, rng).ok_or_else(none)?;
+            (e, w, clean)
+        }
+        PointDraw::InFocus => {
+            let d = observe::draw_focused_point(rig, cal.ranges, rng).ok_or_else(none)?;
+            (d.e_com_ma, d.world_mm, d.pixels)
+        }
+    };
     let at = observe::settings(rig, e)?;
-    let (w, clean) = observe::draw_point(rig, &at, rng)
-        .ok_or_else(|| Error::invalid("point", "point: no point seen by both cameras at these settings"))?;
     let px = clean.map(|p| observe::noisy(p, sigma_px, rng));
     let t = cal.rig.at(&settings_of(&e, temperature_c)?, &[temperature_c; 2], Trust::Refuse)?.triangulate(
         &px.map(Some),
@@ -239,7 +268,7 @@ fn point_fits(
     truth[2] += at[0].pupil.z_mm;
     let from_calibration = t.from_calibration.unwrap_or_default();
     let camera_fit = fit(std::array::from_fn(|i| t.point_mm[i] - truth[i]), &t.from_pixels, &from_calibration)?;
-    Ok((e, world_fit, camera_fit))
+    Ok((e, world_fit, camera_fit, observe::defocus_dpt(rig, e, w)?))
 }
 
 /// One trial (module docs) of seed `seed` on the traced `rig`; `pupil_baseline_mm` its
@@ -250,7 +279,8 @@ pub fn trial(rig: &TracedMultiCamera, design: &RigTracedDesign, pupil_baseline: 
     // The run-time draws from their own stream, apart from the record's noise.
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_ac0e);
     let temperature_c = rig.cameras[0].optics.file.procedure.temperature_c;
-    let (e_com_ma, world, camera0) = point_fits(rig, &cal, (temperature_c, design.sigma_px), &mut rng)?;
+    let (e_com_ma, world, camera0, defocus_dpt) =
+        point_fits(rig, &cal, (temperature_c, design.sigma_px, design.point), &mut rng)?;
     let [z0, z1] = rig.stage_travel_mm;
     let z = rng.random_range(z0 + 0.5..=z1 - MOVE_MM - 0.5);
     let focus = |z: f64| -> Result<[f64; 2]> {
@@ -267,6 +297,7 @@ pub fn trial(rig: &TracedMultiCamera, design: &RigTracedDesign, pupil_baseline: 
     Ok(Trial {
         seed,
         e_com_ma,
+        defocus_dpt,
         world,
         camera0,
         move_um,
@@ -315,11 +346,50 @@ fn coverage(fits: &[PointFit]) -> Coverage {
     }
 }
 
+/// The upper ends of the defocus bins of [`RigTraced::by_defocus`], dioptres (the last
+/// bin is open).
+pub const DEFOCUS_BINS_DPT: [f64; 4] = [0.25, 0.5, 1.0, 2.0];
+
+/// The coverage of the trials whose larger defocus (of the two cameras) falls in one bin.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct DefocusBin {
+    /// The bin, [lo, hi) of max |defocus| over the cameras, dioptres (hi infinite: open).
+    pub range_dpt: [f64; 2],
+    /// The trials in it.
+    pub trials: usize,
+    /// The world measure over them.
+    pub world: Coverage,
+    /// The camera-0 measure over them.
+    pub camera0: Coverage,
+}
+
+/// The trials binned by their larger defocus ([`DEFOCUS_BINS_DPT`]); empty bins left out.
+fn by_defocus(results: &[Trial]) -> Vec<DefocusBin> {
+    let edges: Vec<f64> = std::iter::once(0.0).chain(DEFOCUS_BINS_DPT).chain(std::iter::once(f64::INFINITY)).collect();
+    edges
+        .windows(2)
+        .filter_map(|w| {
+            let inside: Vec<&Trial> = results
+                .iter()
+                .filter(|t| (w[0]..w[1]).contains(&t.defocus_dpt[0].abs().max(t.defocus_dpt[1].abs())))
+                .collect();
+            (!inside.is_empty()).then(|| DefocusBin {
+                range_dpt: [w[0], w[1]],
+                trials: inside.len(),
+                world: coverage(&inside.iter().map(|t| t.world).collect::<Vec<_>>()),
+                camera0: coverage(&inside.iter().map(|t| t.camera0).collect::<Vec<_>>()),
+            })
+        })
+        .collect()
+}
+
 /// The study's result on one rig and request.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct RigTraced {
     /// The request.
     pub request: RigRequest,
+    /// How the random point was drawn.
+    pub point: PointDraw,
     /// Trials run.
     pub trials: usize,
     /// Trials that failed (left out), with their seed and error.
@@ -328,6 +398,8 @@ pub struct RigTraced {
     pub world: Coverage,
     /// The point in camera 0's frame, the truth at the entrance pupil.
     pub camera0: Coverage,
+    /// Both measures by the point's defocus.
+    pub by_defocus: Vec<DefocusBin>,
     /// The triangulated move and camera 0's PnP of it, refocused.
     pub moves: [MoveStat; 2],
     /// The baseline's error against the entrance pupils' distance, mean and std, mm.
@@ -357,10 +429,12 @@ pub fn rig_traced(rig: &TracedMultiCamera, design: &RigTracedDesign, trials: usi
     let col = |f: &dyn Fn(&Trial) -> f64| results.iter().map(f).collect::<Vec<f64>>();
     Ok(RigTraced {
         request: design.request,
+        point: design.point,
         trials,
         failed,
         world: coverage(&results.iter().map(|t| t.world).collect::<Vec<_>>()),
         camera0: coverage(&results.iter().map(|t| t.camera0).collect::<Vec<_>>()),
+        by_defocus: by_defocus(&results),
         moves: [move_stat(&col(&|t| t.move_um)), move_stat(&col(&|t| t.pnp_um))],
         baseline_error_mm: stat(&col(&|t| t.baseline_error_mm)),
         pupil_baseline_mm: pupil,
@@ -384,8 +458,9 @@ impl RigTraced {
     /// the first failures (alone when every trial failed).
     pub fn markdown(&self) -> String {
         let mut s = format!(
-            "{}: {} trials ({} failed); RMS reprojection {:.4} / {:.4} px; baseline {:+.3} ± {:.3} mm off the entrance pupils' {:.3} mm\n\n",
+            "{}{}: {} trials ({} failed); RMS reprojection {:.4} / {:.4} px; baseline {:+.3} ± {:.3} mm off the entrance pupils' {:.3} mm\n\n",
             self.request.name(),
+            if self.point == PointDraw::InFocus { ", each camera focused on the point" } else { "" },
             self.trials,
             self.failed.len(),
             self.rms_px[0],
@@ -422,7 +497,20 @@ impl RigTraced {
                 100.0 * c.calibration_share
             );
         }
-        s += "\n\n| 2 mm move, refocused | RMS (um) | max (um) | mean (um) |\n|---|---|---|---|\n";
+        s += "\n\n| larger defocus of the two cameras (dpt) | trials | world: coverage, mean d^2 | camera 0: coverage, mean d^2 |\n|---|---|---|---|\n";
+        for b in &self.by_defocus {
+            s += &format!(
+                "| {:.2}..{} | {} | {:.1} %, {:.2} | {:.1} %, {:.2} |\n",
+                b.range_dpt[0],
+                if b.range_dpt[1].is_finite() { format!("{:.2}", b.range_dpt[1]) } else { "".into() },
+                b.trials,
+                100.0 * b.world.all,
+                b.world.d2.mean,
+                100.0 * b.camera0.all,
+                b.camera0.d2.mean
+            );
+        }
+        s += "\n| 2 mm move, refocused | RMS (um) | max (um) | mean (um) |\n|---|---|---|---|\n";
         for (name, m) in ["triangulated", "camera 0 PnP"].iter().zip(&self.moves) {
             s += &format!("| {name} | {:.3} | {:.3} | {:+.3} |\n", m.rms_um, m.max_um, m.mean_um);
         }

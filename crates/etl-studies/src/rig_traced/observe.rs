@@ -42,6 +42,64 @@ pub fn draw_point(
     })
 }
 
+/// A random point of a trial: both cameras' currents, the world point, its noise-free
+/// traced pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drawn {
+    /// Each camera's E_com, mA.
+    pub e_com_ma: [f64; 2],
+    /// The point, world frame, mm.
+    pub world_mm: [f64; 3],
+    /// Its traced pixel in each camera.
+    pub pixels: [[f64; 2]; 2],
+}
+
+/// A point uniform in the stage's volume, each camera focused on it (its current the one
+/// that puts its depth in focus: [`etl_sim::optics::multi_camera::FocusTable`]), with both
+/// currents inside `ranges_ma` and the point seen by both: its currents, the point and
+/// its noise-free traced pixels; None after [`MAX_DRAWS`]. What an autofocusing rig
+/// measures: no run-time point is out of focus.
+pub fn draw_focused_point(rig: &TracedMultiCamera, ranges_ma: [[f64; 2]; 2], rng: &mut ChaCha8Rng) -> Option<Drawn> {
+    let b = &rig.board;
+    let span = |n: usize| b.square_mm * (n - 1) as f64;
+    let [z0, z1] = rig.stage_travel_mm;
+    (0..MAX_DRAWS).find_map(|_| {
+        let w = [
+            rng.random_range(0.0..=span(b.inner_corners[0])),
+            rng.random_range(0.0..=span(b.inner_corners[1])),
+            rng.random_range(z0..=z1),
+        ];
+        let focus = |k: usize| {
+            let c = &rig.cameras[k];
+            let e = c.focus.current_ma(c.world_to_camera(w)[2])?;
+            (ranges_ma[k][0]..=ranges_ma[k][1]).contains(&e).then_some(e)
+        };
+        let e = [focus(0)?, focus(1)?];
+        let at = settings(rig, e).ok()?;
+        let p0 = rig.cameras[0].pixel(&at[0], w, rig.corner)?;
+        let p1 = rig.cameras[1].pixel(&at[1], w, rig.corner)?;
+        Some(Drawn { e_com_ma: e, world_mm: w, pixels: [p0, p1] })
+    })
+}
+
+/// The defocus of world point `w_mm` in each camera at `e_com_ma`, dioptres: 1000 / its
+/// depth - 1000 / the camera's distance in focus there (both camera z, mm: the focus
+/// table's). Errors: a current outside a camera's focus table.
+pub fn defocus_dpt(rig: &TracedMultiCamera, e_com_ma: [f64; 2], w_mm: [f64; 3]) -> Result<[f64; 2]> {
+    let one = |k: usize| -> Result<f64> {
+        let c = &rig.cameras[k];
+        let focus = c.focus.distance_at_mm(e_com_ma[k]).ok_or_else(|| {
+            Error::invalid_value(
+                "e_com_ma",
+                e_com_ma[k],
+                format!("e_com_ma: camera {k}'s focus table has no {} mA", e_com_ma[k]),
+            )
+        })?;
+        Ok(1000.0 / c.world_to_camera(w_mm)[2] - 1000.0 / focus)
+    };
+    Ok([one(0)?, one(1)?])
+}
+
 /// `px` plus Gaussian noise of `sigma_px` per coordinate.
 pub fn noisy(px: [f64; 2], sigma_px: f64, rng: &mut ChaCha8Rng) -> [f64; 2] {
     [px[0] + gauss(sigma_px, rng), px[1] + gauss(sigma_px, rng)]

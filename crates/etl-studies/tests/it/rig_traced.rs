@@ -14,7 +14,7 @@ use etl_sim::simulate::NoiseModel;
 use etl_studies::optics::stopped_down;
 use etl_studies::rig_traced::world::world_point;
 use etl_studies::rig_traced::{
-    pupil_baseline_mm, rig_traced, trace, trial, RigRequest, RigTracedDesign, TracedRigDesign,
+    pupil_baseline_mm, rig_traced, trace, trial, PointDraw, RigRequest, RigTracedDesign, TracedRigDesign,
 };
 
 /// The Cooke fixture with 2 rings of fan rays (19 rays a spot: a debug test's budget).
@@ -38,7 +38,7 @@ fn a_trial_on_a_small_traced_rig_calibrates_and_measures_the_move() {
     let rig = small_rig();
     let pupils = pupil_baseline_mm(&rig).unwrap();
     assert!((30.0..40.0).contains(&pupils), "{pupils}");
-    let design = RigTracedDesign { request: RigRequest::HoldA0, sigma_px: 0.05 };
+    let design = RigTracedDesign { request: RigRequest::HoldA0, sigma_px: 0.05, point: PointDraw::RandomSettings };
     let r = rig_traced(&rig, &design, 1, 3).unwrap();
     assert!(r.failed.is_empty(), "{:?}", r.failed);
     assert_eq!(r.pupil_baseline_mm, pupils);
@@ -57,6 +57,25 @@ fn a_trial_on_a_small_traced_rig_calibrates_and_measures_the_move() {
     // The model does not fit the traced centroids to the noise: 0.05 px of noise, 0.2-0.3
     // px RMS with this coarse fan (0.11-0.15 px with the fixture's 4 rings).
     assert!(t.rms_px.iter().all(|r| (0.1..0.5).contains(r)), "{t:?}");
+}
+
+/// The in-focus draw focuses each camera on its point: the recorded defocus is the focus
+/// table's interpolation error (under 0.01 dpt), the currents inside the calibrated
+/// ranges; the random settings' point is out of focus, and its defocus is the traced
+/// one (the same draw recomputed). The bins hold every trial once.
+#[test]
+fn the_in_focus_draw_focuses_both_cameras_on_the_point() {
+    let rig = small_rig();
+    let pupils = pupil_baseline_mm(&rig).unwrap();
+    let in_focus = RigTracedDesign { request: RigRequest::HoldA0, sigma_px: 0.05, point: PointDraw::InFocus };
+    let t = trial(&rig, &in_focus, pupils, 3).unwrap();
+    assert!(t.defocus_dpt.iter().all(|d| d.abs() < 0.01), "{t:?}");
+    assert!(t.world.error_mm.iter().all(|e| e.abs() < 0.05), "{t:?}");
+    let random = RigTracedDesign { point: PointDraw::RandomSettings, ..in_focus };
+    let r = rig_traced(&rig, &random, 2, 3).unwrap();
+    assert!(r.results.iter().all(|t| t.defocus_dpt.iter().any(|d| d.abs() > 0.05)), "{:?}", r.results);
+    assert_eq!(r.by_defocus.iter().map(|b| b.trials).sum::<usize>(), r.results.len());
+    assert!(r.markdown().contains("| larger defocus of the two cameras (dpt) |"));
 }
 
 /// With A0 free the fixed centres slide along their axes: the calibrated baseline comes
