@@ -49,7 +49,7 @@ pub const OUTLIER_SIGMAS: f64 = 5.0;
 pub const OUTLIER_FLOOR_PX: f64 = 2.0;
 
 /// The distance, px, beyond which a point is an outlier given all points' distances
-/// `d_px`: max([`OUTLIER_SIGMAS`] [`robust_sigma_px`](d_px), [`OUTLIER_FLOOR_PX`]).
+/// `d_px`: max([`OUTLIER_SIGMAS`] [`robust_sigma_px`]`(d_px)`, [`OUTLIER_FLOOR_PX`]).
 pub fn outlier_limit_px(d_px: &[f64]) -> f64 {
     (OUTLIER_SIGMAS * robust_sigma_px(d_px)).max(OUTLIER_FLOOR_PX)
 }
@@ -164,7 +164,7 @@ const SAMPLE_POINTS: usize = 6;
 /// [`INIT_FLOOR_PX`]), sigma from [`robust_sigma_px`] of the current fit's distances.
 ///
 /// Deterministic (the samples come from a fixed-seed generator). Views with fewer than
-/// 2 [`SAMPLE_POINTS`] points, with board and pixel counts that differ, or where no
+/// 2 `SAMPLE_POINTS` points, with board and pixel counts that differ, or where no
 /// homography can be fitted (collinear points) are returned all `true`: the solvers
 /// after it then report their own precondition.
 pub fn homography_inliers(board: &[[f64; 2]], pixels: &[[f64; 2]]) -> Vec<bool> {

@@ -237,7 +237,7 @@ fn check_distinct_settings(obs: &Observations, summary: &DetectionSummary, views
 }
 
 /// The detector of the `etlcal` command line: reads the image file and finds the board
-/// with [`crate::detect`].
+/// with [`etl_image::board::detect_board_dynamic`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ImageDetector;
 

@@ -40,7 +40,7 @@
 //! cameras of each camera's own cost, each term depending on that camera's numbers only,
 //! so the joint minimum is each camera's own (the joint result equals the per-camera
 //! calibrations to solver precision; a test checks it). Its joint covariance still
-//! couples the cameras through the shared stage errors ([`covariance`]).
+//! couples the cameras through the shared stage errors (`covariance.rs`).
 //!
 //! **Covariance**: of all numbers jointly ([`RigCalibration::covariance`]), and of each
 //! extrinsic pose (6 x 6, rad and mm) by the Jacobian of (R_k0, T_k0) with respect to
@@ -56,7 +56,7 @@
 //!                        + dE_kf^2 / sigma_e^2 ]
 //! ```
 //!
-//! Each pose starts from relative PnP ([`free`]) and is eliminated with the view's other
+//! Each pose starts from relative PnP (`free.rs`) and is eliminated with the view's other
 //! unknowns. They give the joint solve tilted views, which the stage's nearly
 //! fronto-parallel ones lack; the cameras' own calibrations (the start) do not see them.
 //! Errors-in-variables only: under the paper's estimator each camera is its own problem,

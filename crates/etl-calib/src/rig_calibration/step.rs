@@ -82,7 +82,7 @@ impl JointSystem {
     /// The inverse of the Fisher information of every camera's numbers (the model's
     /// parameters, cameras stacked, each in its layout's order) with the corrections
     /// marginalised out: at the true models and the simulation's noise, the Cramer-Rao
-    /// bound of the joint problem (module docs of [`super`], [`super::covariance`]).
+    /// bound of the joint problem (module docs of [`super`] and of `covariance.rs`).
     pub fn covariance(&self) -> Result<DMatrix<f64>> {
         let problem = JointProblem::new(&self.cameras, self.views, vec![], Some(self.sigma_z_mm));
         joint_covariance(&problem, &problem.start(), None)

@@ -36,7 +36,7 @@
 //! dq_r/d(om_j, t_j) = dq_r/dX_r R [d(R_j X)/d om_j | I]
 //! ```
 //!
-//! with d(R(om) p)/d om = -R [p]x J_r(om) ([`etl_core::calib::jacobian::rotate_point_jacobian`]).
+//! with `d(R(om) p)/d om = -R [p]x J_r(om)` ([`etl_core::calib::jacobian::rotate_point_jacobian`]).
 //! The covariance of the free numbers is OpenCV's scaling of (J^T J)^-1 marginalised over
 //! the poses: sigma^2 = cost / (2 points - free numbers - 6 pairs), points of both cameras.
 //! With the intrinsics held, that of R, T also carries the held intrinsics' own

@@ -5,7 +5,7 @@
 //! the cubic surface E_T(T, E_in) (Eq. 7).
 //!
 //! The procedure talks to hardware through three traits, so that the real rig and the
-//! virtual one ([`virtual_rig`]) run the same code: a [`Lens`] (set the current, read the
+//! virtual one (`etl_sim::virtual_rig`) run the same code: a [`Lens`] (set the current, read the
 //! temperature), a [`Camera`] (grab a frame; place the board in focus for a grid current),
 //! and a [`Climate`] (bring the lens to a temperature and wait until it is there).
 //!
