@@ -45,7 +45,8 @@ fn bad_flags(value: &str, why: impl std::fmt::Display) -> Error {
     Error::invalid_value("--camera-flags", value, format!("--camera-flags {value:?}: {why}"))
 }
 
-/// Parses one `--camera-flags CAM="FLAGS"` (FLAGS split at white space). Refused in one
+/// Parses one `--camera-flags CAM="FLAGS"` (FLAGS split as a POSIX shell splits words:
+/// quotes keep a value with spaces whole). Refused in one
 /// line: no `CAM=`, a flag that is not per camera (`--out`, `--solver`, `--dataset`,
 /// `--json`, and `--thermal`, which has its own `CAM=FILE` form), what the parser of
 /// `calibrate`'s flags refuses.
@@ -54,11 +55,13 @@ pub fn parse_camera_flags(value: &str) -> Result<CameraFlags> {
     if cam.trim().is_empty() {
         return Err(bad_flags(value, "give CAM=\"FLAGS\" (CAM a camera's index or name)"));
     }
-    let words: Vec<&str> = words.split_whitespace().collect();
+    // Split as a POSIX shell would, so that a value with spaces can be quoted in FLAGS.
+    let words = shlex::split(words)
+        .ok_or_else(|| bad_flags(value, "FLAGS has an unclosed quote or ends in a backslash"))?;
     let command = CameraFlagsParser::command();
     let longs: Vec<String> = command.get_arguments().filter_map(|a| a.get_long()).map(|l| format!("--{l}")).collect();
     for word in words.iter().filter(|w| w.starts_with("--")) {
-        let name = word.split('=').next().unwrap_or(word);
+        let name = word.split('=').next().unwrap_or(word.as_str());
         if name == "--thermal" {
             return Err(bad_flags(value, "a camera's lens surface is --thermal CAM=FILE|paper, not one of its flags"));
         }

@@ -52,7 +52,8 @@ fn each_camera_its_own_surface_and_distortion_family() {
         "--distortion",
         "paper",
         "--camera-flags",
-        "cam1=--distortion opencv --fix-k3",
+        // Quoted as a shell quotes (a value with spaces would need it).
+        "cam1=--distortion 'opencv' --fix-k3",
         "--json",
     ];
     let (code, stdout, stderr) = etlcal_run(&args);
@@ -133,7 +134,7 @@ fn bad_per_camera_flags_are_refused_in_one_line() {
     simulate_e_in_only(dir.path());
     let dataset = dir.path().join("noecom.json");
     let out = dir.path().join("out/rig.json");
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 13] = [
         (&["--thermal", "paper", "--camera-flags", "cam1=--out x.json"], "--camera-flags \"cam1=--out x.json\": --out is not a per-camera flag"),
         (&["--thermal", "paper", "--camera-flags", "cam1=--solver dense"], "--solver is not a per-camera flag"),
         (&["--thermal", "paper", "--camera-flags", "cam1=--dataset d.json"], "--dataset is not a per-camera flag"),
@@ -141,6 +142,7 @@ fn bad_per_camera_flags_are_refused_in_one_line() {
         (&["--thermal", "paper", "--camera-flags", "cam9=--hold-a0"], "--camera-flags \"cam9=--hold-a0\": \"cam9\" is not a camera of the rig"),
         (&["--thermal", "paper", "--camera-flags", "1=--hold-a0", "--camera-flags", "cam1=--fix-k3"], "camera 1 (cam1) is given its flags twice"),
         (&["--thermal", "paper", "--camera-flags", "cam1=--distortion weird"], "invalid value 'weird' for '--distortion"),
+        (&["--thermal", "paper", "--camera-flags", "cam1=--distortion \"opencv"], "--camera-flags \"cam1=--distortion \\\"opencv\": FLAGS has an unclosed quote"),
         (&["--thermal", "paper", "--camera-flags", "cam1=--estimator paper"], "camera 1 (cam1): invalid input: --estimator: one estimator serves every camera"),
         (&["--thermal", "paper", "--camera-flags", "cam1=--method per-setting"], "camera 1 (cam1): invalid input: method: a rig is calibrated by the proposed method only"),
         (&["--thermal", "cam0=paper"], "camera 1 (cam1): views[0].cameras[1] records e_in_ma without e_com_ma, and no temperature surface was given"),
