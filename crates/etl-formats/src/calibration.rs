@@ -294,6 +294,27 @@ impl ThermalRef {
     }
 }
 
+/// One of the observations' setting views as the bundle adjustment solved it
+/// (`calibrate --setting-views joint`): its pose and current correction, and how well the
+/// calibrated model reprojects it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingViewSummary {
+    /// Its E_com, mA.
+    pub e_com_ma: f64,
+    /// Points used (all of the view's: setting views have no outlier screen).
+    pub points: usize,
+    /// RMS reprojection error of the view, px.
+    pub rms_px: f64,
+    /// Estimated current correction, mA (errors-in-variables; 0 otherwise).
+    pub de_ma: f64,
+    /// The board's pose, board to camera: Rodrigues vector, rad. With a moving centre a
+    /// board point P is at R P + t - dz(E) e_z in the camera (docs/METHOD.md, Eq. 24b).
+    pub rotation_rodrigues: [f64; 3],
+    /// The board's pose, board to camera: translation, mm.
+    pub translation_mm: [f64; 3],
+}
+
 /// Per-view summary.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -569,6 +590,11 @@ pub struct Calibration {
     /// and in files of the other estimators).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub setting_outliers: Vec<Outlier>,
+    /// The observations' setting views in the order of the observations, as the bundle
+    /// adjustment solved them with the stage views (`calibrate --setting-views joint`:
+    /// [`SettingViewSummary`]; optional: absent when they were not in the solve).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub setting_views: Vec<SettingViewSummary>,
     /// Why the result may be implausible (e.g. current corrections far beyond their prior,
     /// an RMS far above the detector's noise), one sentence each (optional: absent when
     /// there are none).
@@ -669,6 +695,7 @@ impl Calibration {
             estimator: String::new(),
             outliers: Vec::new(),
             setting_outliers: Vec::new(),
+            setting_views: Vec::new(),
             warnings: Vec::new(),
             iterations: 0,
             initial_rms_px: 0.0,

@@ -310,6 +310,30 @@ impl Calibration {
         self.file.setting_outliers.iter().map(|o| (o.view, o.point, o.residual_px)).collect()
     }
 
+    /// The observations' setting views as the bundle adjustment solved them with the stage
+    /// views (`setting_views="joint"`), in their order: a list of SettingViewSummary
+    /// (attributes, also dict keys) e_com_ma (mA), points, rms_px (px), de_ma (mA; its
+    /// current correction, 0 for the paper's estimator), and the board's pose, board to
+    /// camera, rotation_rodrigues (rad) and translation_mm (mm) as float64 arrays. Empty
+    /// when they were not in the solve.
+    #[getter]
+    fn setting_views<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyAny>>> {
+        self.file
+            .setting_views
+            .iter()
+            .map(|v| {
+                let d = PyDict::new(py);
+                d.set_item("e_com_ma", v.e_com_ma)?;
+                d.set_item("points", v.points)?;
+                d.set_item("rms_px", v.rms_px)?;
+                d.set_item("de_ma", v.de_ma)?;
+                d.set_item("rotation_rodrigues", vec_out(py, &v.rotation_rodrigues))?;
+                d.set_item("translation_mm", vec_out(py, &v.translation_mm))?;
+                crate::results::make(py, "SettingViewSummary", &d)
+            })
+            .collect()
+    }
+
     /// Why the calibration may be implausible (outliers left out, an RMS far above the
     /// corner noise, view corrections far beyond their priors), one sentence each; empty
     /// when none. `calibrate` also issues each as a UserWarning.

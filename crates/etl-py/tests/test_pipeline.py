@@ -582,10 +582,17 @@ def test_setting_views_joint_is_the_cli_s_and_refused_without_setting_views(
     with pytest.warns(UserWarning):
         joint = etlcal.calibrate(obs, a0, setting_views="joint", centre="moving")
     assert joint == etlcal.Calibration.load(out)
+    # Each setting view's solved pose, as the file records it.
+    recorded = json.loads(out.read_text())["setting_views"]
+    assert len(joint.setting_views) == len(recorded) == obs.setting_count > 0
+    for got, want in zip(joint.setting_views, recorded):
+        assert isinstance(got, etlcal.SettingViewSummary) and got.points == want["points"]
+        assert np.array_equal(got.translation_mm, want["translation_mm"])
+        assert got.rms_px < 1.0 and got.translation_mm[2] > 0  # in front of the camera
     with pytest.warns(UserWarning):
         stage = etlcal.calibrate(obs, a0, centre="moving")
         ignored = etlcal.calibrate(obs, a0, centre="moving", setting_views="ignored")
-    assert stage == ignored and stage != joint
+    assert stage == ignored and stage != joint and stage.setting_views == []
     with pytest.raises(etlcal.InputError, match='setting_views="joint" does not go with robust'):
         etlcal.calibrate(obs, a0, setting_views="joint", robust="huber")
     with pytest.raises(etlcal.InputError, match="setting_views must be"):

@@ -270,6 +270,9 @@ fn calibration_of(
         // corners of setting views, not of the observations' ETL views that `outliers` names.
         outliers: vec![],
         setting_outliers: setting_outliers(settings),
+        // Each setting is its own camera here, not a setting view posed beside the stage
+        // views of one model.
+        setting_views: vec![],
         warnings: vec![],
         // No joint covariance: kf_x, kf_y, (u0, v0) and each a-triple come from separate
         // fits whose cross-covariances are not computed; a block-diagonal matrix would

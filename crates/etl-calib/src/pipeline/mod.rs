@@ -319,6 +319,7 @@ fn calibration_of(
         ..Calibration::from_model(&m, obs.image_size, [lo, hi])
     };
     calibration.outliers = solved.outliers;
+    calibration.setting_views = solved.setting_views;
     calibration.warnings = solve::plausibility_warnings(&calibration, &solved.rounds, options);
     // The covariance of the 25 shared numbers (for errors-in-variables, with the view
     // corrections marginalised out by the solver's Schur complement); std is its diagonal.

@@ -19,6 +19,7 @@ use etl_core::calib::{
 };
 use etl_core::model::CameraModel;
 use etl_core::pnp::solve_pnp;
+use etl_formats::calibration::SettingViewSummary;
 use etl_formats::observations::Observations;
 use etl_formats::{Error, Result, ThermalRef};
 
@@ -118,9 +119,37 @@ pub(super) fn solve_with_setting_views(
             }
         }
     }
-    let JointSolve(report, corrections, _) = best;
+    let JointSolve(report, corrections, (free_poses, _)) = best;
     let distances_px = distances(&report.model, views, &corrections);
-    Ok(Solved { report, corrections, distances_px, ..solved })
+    let setting_views = summaries(&report.model, (&pts, &e_com), &free_poses);
+    Ok(Solved { report, corrections, distances_px, setting_views, ..solved })
+}
+
+/// Each setting view's summary under the calibrated `model`: its pose and correction
+/// `poses`, and the RMS distance of its points `pts` reprojected at E_com `e_com` + dE
+/// through the model posed by the board (Eq. 24b: the model's own pose replaced by the
+/// board's).
+fn summaries(
+    model: &CameraModel,
+    (pts, e_com): (&[Vec<Point>], &[f64]),
+    poses: &[FreePose],
+) -> Vec<SettingViewSummary> {
+    pts.iter()
+        .zip(e_com)
+        .zip(poses)
+        .map(|((p, &e), &(rotation_rodrigues, translation_mm, de_ma))| {
+            let posed = CameraModel { rotation_rodrigues, translation_mm, ..*model };
+            let squares: Vec<f64> = p
+                .iter()
+                .map(|q| match posed.project(q.world_mm, e + de_ma) {
+                    Ok(r) => (r[0] - q.pixel[0]).powi(2) + (r[1] - q.pixel[1]).powi(2),
+                    Err(_) => f64::INFINITY,
+                })
+                .collect();
+            let rms_px = (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt();
+            SettingViewSummary { e_com_ma: e, points: p.len(), rms_px, de_ma, rotation_rodrigues, translation_mm }
+        })
+        .collect()
 }
 
 /// The joint solve from `start`'s centre held still (its move zero) while the tilted
@@ -152,21 +181,25 @@ fn centre_held_still(model: &CameraModel) -> (CameraModel, ParamMask) {
     (from_params(&layout, &x), hold)
 }
 
+/// A free view's board pose (Rodrigues, translation mm: board to camera) and its current
+/// correction dE_f, mA.
+type FreePose = ([f64; 3], [f64; 3], f64);
+
 /// A joint solve: its report, the stage views' corrections (dZ, dE), the free views'
-/// current corrections dE_f and the number of points.
-struct JointSolve(BundleAdjustReport, Vec<ViewCorrection>, (Vec<f64>, usize));
+/// poses and current corrections, and the number of points.
+struct JointSolve(BundleAdjustReport, Vec<ViewCorrection>, (Vec<FreePose>, usize));
 
 impl JointSolve {
     /// The objective the solve minimised, at pixel sigma `sigma_px`: the squared
     /// reprojection errors over sigma_px^2 plus, errors-in-variables, each correction's
     /// squared prior z-score (docs/METHOD.md, Eq. 24b-24e).
     fn objective(&self, estimator: &Estimator, sigma_px: f64) -> f64 {
-        let JointSolve(report, corrections, (free_de, points)) = self;
+        let JointSolve(report, corrections, (free, points)) = self;
         let pixels = report.rms_px.powi(2) * *points as f64 / sigma_px.powi(2);
         let Estimator::Eiv { sigma_z_mm, sigma_e_ma, .. } = *estimator else { return pixels };
         let stage: f64 =
             corrections.iter().map(|c| (c.dz_mm / sigma_z_mm).powi(2) + (c.de_ma / sigma_e_ma).powi(2)).sum();
-        pixels + stage + free_de.iter().map(|de| (de / sigma_e_ma).powi(2)).sum::<f64>()
+        pixels + stage + free.iter().map(|(_, _, de)| (de / sigma_e_ma).powi(2)).sum::<f64>()
     }
 }
 
@@ -180,9 +213,9 @@ fn joint(
     let mut scratch = vec![JointScratch::ZERO; bundle_adjust_free_views_scratch(stage.len(), free.len())];
     let report = bundle_adjust_free_views(stage, free, start, options, &mut scratch)?;
     let corrections = scratch.iter().take(stage.len()).map(JointScratch::correction).collect();
-    let free_de = scratch.iter().skip(stage.len()).take(free.len()).map(|b| b.board_pose().2).collect();
+    let poses = scratch.iter().skip(stage.len()).take(free.len()).map(JointScratch::board_pose).collect();
     let points = stage.iter().map(|v| v.points.len()).chain(free.iter().map(|f| f.points.len())).sum();
-    Ok(JointSolve(report, corrections, (free_de, points)))
+    Ok(JointSolve(report, corrections, (poses, points)))
 }
 
 /// The setting views as free views, each pose started by planar PnP through `start` at

@@ -7,7 +7,7 @@ use etl_core::calib::{
     Kf0, Point, View, ViewCorrection, ViewScratch, A0,
 };
 use etl_core::model::CameraModel;
-use etl_formats::calibration::{Calibration, Outlier};
+use etl_formats::calibration::{Calibration, Outlier, SettingViewSummary};
 use etl_formats::{Result, SettingKind};
 
 use rayon::prelude::*;
@@ -44,6 +44,9 @@ pub(super) struct Solved {
     pub distances_px: Vec<Vec<f64>>,
     pub outliers: Vec<Outlier>,
     pub rounds: Rounds,
+    /// The setting views as the joint solve left them (`--setting-views joint`; empty
+    /// otherwise).
+    pub setting_views: Vec<SettingViewSummary>,
 }
 
 /// How the outlier iteration went.
@@ -162,7 +165,7 @@ pub(super) fn solve_without_outliers(views: &[View<'_>], a0: &A0, options: &Cali
     }
     let points = d.iter().map(Vec::len).sum();
     let rounds = Rounds { converged, points };
-    Ok(Solved { report, initial, corrections, used, distances_px: d, outliers, rounds })
+    Ok(Solved { report, initial, corrections, used, distances_px: d, outliers, rounds, setting_views: vec![] })
 }
 
 /// Sentences saying why `cal` may be implausible (none when it looks sound): outliers

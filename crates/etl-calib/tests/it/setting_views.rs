@@ -166,3 +166,31 @@ fn the_joint_solve_refuses_missing_and_too_small_setting_views() {
     let err = calibrate(&sim.observations, &sim.a0, Some(&ThermalRef::paper()), &o).unwrap_err().to_string();
     assert!(err.contains("needs setting_views"), "{err}");
 }
+
+/// The calibration records each setting view the joint solve took: noise-free, every
+/// board pose it recorded reprojects its view's points to 1e-6 px through the calibrated
+/// model, its current correction is zero, and the JSON round trip keeps them; a
+/// calibration without the option records none.
+#[test]
+fn the_calibration_records_the_setting_views_poses() {
+    let sim = simulation(&NoiseModel::NONE, 2);
+    let joint = run(&sim, &options(SettingViews::Joint, Estimator::EIV_PAPER, false));
+    let c = &joint.calibration;
+    assert_eq!(c.setting_views.len(), sim.observations.setting_views.len());
+    let model = joint.report.model;
+    for (s, v) in c.setting_views.iter().zip(&sim.observations.setting_views) {
+        assert_eq!((s.points, s.e_com_ma), (v.points.len(), v.e_com_ma.unwrap()));
+        assert!(s.rms_px < 1e-6 && s.de_ma.abs() < 1e-6, "{s:?}");
+        let posed = CameraModel { rotation_rodrigues: s.rotation_rodrigues, translation_mm: s.translation_mm, ..model };
+        for p in &v.points {
+            let q = posed.project(p.world_mm, s.e_com_ma + s.de_ma).unwrap();
+            assert!((q[0] - p.pixel[0]).hypot(q[1] - p.pixel[1]) < 1e-6, "{q:?} against {:?}", p.pixel);
+        }
+    }
+    let text = serde_json::to_string(c).unwrap();
+    let back: etl_formats::calibration::Calibration = serde_json::from_str(&text).unwrap();
+    assert_eq!(back.setting_views, c.setting_views);
+    let ignored = run(&sim, &options(SettingViews::Ignored, Estimator::EIV_PAPER, false));
+    assert!(ignored.calibration.setting_views.is_empty());
+    assert!(!serde_json::to_string(&ignored.calibration).unwrap().contains("\"setting_views\""));
+}

@@ -35,6 +35,7 @@ from etlcal.results import (
     OffstateView,
     OpenCvCamera,
     ProjectionDiff,
+    SettingViewSummary,
     StereoRectifyMaps,
     StereoResult,
     StudyResult,
@@ -383,6 +384,8 @@ class Calibration:
     def outliers(self) -> List[Tuple[int, int, float]]: ...
     @property
     def setting_outliers(self) -> List[Tuple[int, int, float]]: ...
+    @property
+    def setting_views(self) -> List[SettingViewSummary]: ...
     @property
     def warnings(self) -> List[str]: ...
     @property

@@ -37,6 +37,7 @@ __all__ = [
     "OpenCvDistortion",
     "ProjectionDiff",
     "PaperDistortion",
+    "SettingViewSummary",
     "StereoRectifyMaps",
     "StereoResult",
     "StudyResult",
@@ -304,6 +305,22 @@ class ViewSummary(_Result):
     de_ma: float
     fx_px: float
     fy_px: float
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class SettingViewSummary(_Result):
+    """One entry of `Calibration.setting_views` (`setting_views="joint"`): `e_com_ma` (mA),
+    `points`, `rms_px` (px), `de_ma` (mA: its current correction, 0 for the paper's
+    estimator), and the board's pose, board to camera: `rotation_rodrigues` (3, rad) and
+    `translation_mm` (3, mm); with a moving centre a board point P is at
+    R P + t - dz(E) e_z in the camera."""
+
+    e_com_ma: float
+    points: int
+    rms_px: float
+    de_ma: float
+    rotation_rodrigues: _F64
+    translation_mm: _F64
 
 
 @dataclass(frozen=True, eq=False, repr=False)

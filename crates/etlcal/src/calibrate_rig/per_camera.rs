@@ -56,8 +56,8 @@ pub fn parse_camera_flags(value: &str) -> Result<CameraFlags> {
         return Err(bad_flags(value, "give CAM=\"FLAGS\" (CAM a camera's index or name)"));
     }
     // Split as a POSIX shell would, so that a value with spaces can be quoted in FLAGS.
-    let words = shlex::split(words)
-        .ok_or_else(|| bad_flags(value, "FLAGS has an unclosed quote or ends in a backslash"))?;
+    let words =
+        shlex::split(words).ok_or_else(|| bad_flags(value, "FLAGS has an unclosed quote or ends in a backslash"))?;
     let command = CameraFlagsParser::command();
     let longs: Vec<String> = command.get_arguments().filter_map(|a| a.get_long()).map(|l| format!("--{l}")).collect();
     for word in words.iter().filter(|w| w.starts_with("--")) {
