@@ -20,25 +20,34 @@ pub fn settings(rig: &TracedMultiCamera, e_com_ma: [f64; 2]) -> Result<[Setting;
     Ok([rig.cameras[0].optics.at(e_com_ma[0])?, rig.cameras[1].optics.at(e_com_ma[1])?])
 }
 
-/// A point uniform in the stage's volume (X, Y over the board, Z over the travel) that
-/// both cameras see at `at`, and its noise-free traced pixels; None after [`MAX_DRAWS`].
+/// A point uniform in the stage's volume: X, Y over the board, Z over the travel.
+fn volume_point(rig: &TracedMultiCamera, rng: &mut ChaCha8Rng) -> [f64; 3] {
+    let b = &rig.board;
+    let span = |n: usize| b.square_mm * (n - 1) as f64;
+    let [z0, z1] = rig.stage_travel_mm;
+    [
+        rng.random_range(0.0..=span(b.inner_corners[0])),
+        rng.random_range(0.0..=span(b.inner_corners[1])),
+        rng.random_range(z0..=z1),
+    ]
+}
+
+/// The noise-free traced pixels of world point `w` in both cameras at `at`; None where a
+/// camera does not see it.
+fn both_pixels(rig: &TracedMultiCamera, at: &[Setting; 2], w: [f64; 3]) -> Option<[[f64; 2]; 2]> {
+    Some([rig.cameras[0].pixel(&at[0], w, rig.corner)?, rig.cameras[1].pixel(&at[1], w, rig.corner)?])
+}
+
+/// A point uniform in the stage's volume ([`volume_point`]) that both cameras see at
+/// `at`, and its noise-free traced pixels; None after [`MAX_DRAWS`].
 pub fn draw_point(
     rig: &TracedMultiCamera,
     at: &[Setting; 2],
     rng: &mut ChaCha8Rng,
 ) -> Option<([f64; 3], [[f64; 2]; 2])> {
-    let b = &rig.board;
-    let span = |n: usize| b.square_mm * (n - 1) as f64;
-    let [z0, z1] = rig.stage_travel_mm;
     (0..MAX_DRAWS).find_map(|_| {
-        let w = [
-            rng.random_range(0.0..=span(b.inner_corners[0])),
-            rng.random_range(0.0..=span(b.inner_corners[1])),
-            rng.random_range(z0..=z1),
-        ];
-        let p0 = rig.cameras[0].pixel(&at[0], w, rig.corner)?;
-        let p1 = rig.cameras[1].pixel(&at[1], w, rig.corner)?;
-        Some((w, [p0, p1]))
+        let w = volume_point(rig, rng);
+        Some((w, both_pixels(rig, at, w)?))
     })
 }
 
@@ -54,31 +63,22 @@ pub struct Drawn {
     pub pixels: [[f64; 2]; 2],
 }
 
-/// A point uniform in the stage's volume, each camera focused on it (its current the one
+/// A point uniform in the stage's volume ([`volume_point`]), each camera focused on it (its current the one
 /// that puts its depth in focus: [`etl_sim::optics::multi_camera::FocusTable`]), with both
 /// currents inside `ranges_ma` and the point seen by both: its currents, the point and
 /// its noise-free traced pixels; None after [`MAX_DRAWS`]. What an autofocusing rig
 /// measures: no run-time point is out of focus.
 pub fn draw_focused_point(rig: &TracedMultiCamera, ranges_ma: [[f64; 2]; 2], rng: &mut ChaCha8Rng) -> Option<Drawn> {
-    let b = &rig.board;
-    let span = |n: usize| b.square_mm * (n - 1) as f64;
-    let [z0, z1] = rig.stage_travel_mm;
     (0..MAX_DRAWS).find_map(|_| {
-        let w = [
-            rng.random_range(0.0..=span(b.inner_corners[0])),
-            rng.random_range(0.0..=span(b.inner_corners[1])),
-            rng.random_range(z0..=z1),
-        ];
+        let w = volume_point(rig, rng);
         let focus = |k: usize| {
             let c = &rig.cameras[k];
             let e = c.focus.current_ma(c.world_to_camera(w)[2])?;
             (ranges_ma[k][0]..=ranges_ma[k][1]).contains(&e).then_some(e)
         };
         let e = [focus(0)?, focus(1)?];
-        let at = settings(rig, e).ok()?;
-        let p0 = rig.cameras[0].pixel(&at[0], w, rig.corner)?;
-        let p1 = rig.cameras[1].pixel(&at[1], w, rig.corner)?;
-        Some(Drawn { e_com_ma: e, world_mm: w, pixels: [p0, p1] })
+        let pixels = both_pixels(rig, &settings(rig, e).ok()?, w)?;
+        Some(Drawn { e_com_ma: e, world_mm: w, pixels })
     })
 }
 
