@@ -21,7 +21,7 @@ pub fn settings(rig: &TracedMultiCamera, e_com_ma: [f64; 2]) -> Result<[Setting;
 }
 
 /// A point uniform in the stage's volume (X, Y over the board, Z over the travel) that
-/// both cameras see at `at`, and its noise-free traced pixels; None after [`MAX_DRAWS`].
+/// both cameras see at `at`, and its noise-free traced pixels; None after `MAX_DRAWS` draws.
 pub fn draw_point(
     rig: &TracedMultiCamera,
     at: &[Setting; 2],
@@ -55,9 +55,9 @@ pub struct Drawn {
 }
 
 /// A point uniform in the stage's volume, each camera focused on it (its current the one
-/// that puts its depth in focus: [`etl_sim::optics::multi_camera::FocusTable`]), with both
+/// that puts its depth in focus: [`etl_sim::optics::multi_camera::focus::FocusTable::current_ma`]), with both
 /// currents inside `ranges_ma` and the point seen by both: its currents, the point and
-/// its noise-free traced pixels; None after [`MAX_DRAWS`]. What an autofocusing rig
+/// its noise-free traced pixels; None after `MAX_DRAWS` draws. What an autofocusing rig
 /// measures: no run-time point is out of focus.
 pub fn draw_focused_point(rig: &TracedMultiCamera, ranges_ma: [[f64; 2]; 2], rng: &mut ChaCha8Rng) -> Option<Drawn> {
     let b = &rig.board;
