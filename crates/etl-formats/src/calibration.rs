@@ -572,7 +572,7 @@ pub struct Calibration {
     /// centre) against E_com, fitted to the views (optional; absent when the views did not
     /// allow one, and in files written before it existed).
     /// A focal-power calibration's law is in dpt, and so are its keys
-    /// ([`focus_law_keys`]).
+    /// (`coefficients_dpt`, `focal_power_range_dpt`, `rms_dpt`).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",

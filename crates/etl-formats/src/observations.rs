@@ -224,13 +224,13 @@ impl Observations {
         Ok(())
     }
 
-    /// E_com of every setting view: as recorded, or compensated ([`view_e_com_ma`]).
+    /// E_com of every setting view: as recorded, or compensated through `thermal` (`view_e_com_ma`).
     pub fn setting_e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
         let view = |i| ViewRef { name: "setting view", key: "setting_views", i };
         self.setting_views.iter().enumerate().map(|(i, v)| view_e_com_ma(v, view(i), thermal)).collect()
     }
 
-    /// E_com of every view: as recorded, or compensated ([`view_e_com_ma`]); the focal
+    /// E_com of every view: as recorded, or compensated through `thermal` (`view_e_com_ma`); the focal
     /// power (dpt) of focal-power views, the setting their calibration is in.
     pub fn e_com_ma(&self, thermal: Option<&ThermalRef>) -> Result<Vec<f64>> {
         let view = |i| ViewRef { name: "view", key: "views", i };

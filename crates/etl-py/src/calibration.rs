@@ -32,7 +32,7 @@ fn parse_file(text: &str, path: &Path) -> PyResult<CalFile> {
 /// Args:
 ///     rotation_rodrigues: Rodrigues vector of R (world -> camera), rad (3 numbers).
 ///     translation_mm: T (world -> camera), mm (3 numbers).
-///     kf_x: fx(E) = kf_x[0] + kf_x[1] E + kf_x[2] E^2 + kf_x[3] E^3, px with E in mA.
+///     kf_x: `fx(E) = kf_x[0] + kf_x[1] E + kf_x[2] E^2 + kf_x[3] E^3`, px with E in mA.
 ///     kf_y: fy(E), as kf_x.
 ///     principal_point: (u0, v0), px.
 ///     distortion_a: a1..a9 of Eq. 18 (9 numbers).

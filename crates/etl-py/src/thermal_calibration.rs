@@ -1,6 +1,6 @@
 //! `thermal_calibration(...)`: the paper's temperature-calibration procedure (section 4.1,
 //! Fig. 4) on a real rig, with the camera and the climate chamber as Python callables and
-//! the lens a [`Lens`](crate::lens::Lens).
+//! the lens a [`Lens`].
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

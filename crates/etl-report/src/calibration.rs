@@ -102,7 +102,7 @@ fn finish_plot(
 }
 
 /// Writes the report of `cal` into the existing directory `dir`: the figures of
-/// [`REPORT_FIGURES`] as SVG and PNG (those of the views only when `obs` is given; E_com
+/// [`crate::REPORT_FIGURES`] as SVG and PNG (those of the views only when `obs` is given; E_com
 /// of views without one through `thermal`) and `index.html`, which shows them with the
 /// parameter table (value, std, a flag where |value| < 2 std), the strongly correlated
 /// pairs (|r| > 0.9) and `provenance`.

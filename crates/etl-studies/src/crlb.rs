@@ -14,7 +14,7 @@
 //! Every trial is a full calibration from the linear initialisation, with the A0 error of the
 //! noise model (it moves the start, not the optimum). The observed std is uncertain by
 //! about 1 / sqrt(2 (trials - 1)) relative (4 % at 300 trials) for Gaussian estimates; each
-//! is given with its own standard error ([`Stat::std_se`], from the estimates' fourth
+//! is given with its own standard error ([`crate::common::Stat::std_se`], from the estimates' fourth
 //! moment), and each efficiency with the one that implies.
 
 use etl_core::calib::crlb::{crlb_covariance, crlb_covariance_eiv};

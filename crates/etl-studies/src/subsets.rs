@@ -278,7 +278,7 @@ impl Subsets {
         m.distortion(e_ma).map_or(f64::NAN, |d| d.padded()[k]) * BAND_SCALE[k]
     }
 
-    /// The six-view subsets' band of coefficient `k` ([`Self::coefficient`]) at each of
+    /// The six-view subsets' band of coefficient `k` (0: k1, 1: p1, 2: p2, in the figure's units) at each of
     /// [`band_currents`]: (mean over the data sets of each data set's subset mean, its
     /// standard error over the data sets (NaN below 2 data sets), the root mean square over
     /// the data sets of the std over a data set's subsets).

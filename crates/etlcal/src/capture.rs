@@ -62,10 +62,10 @@ pub struct CaptureArgs {
     #[arg(long, value_name = "SPEC")]
     pub camera: String,
     /// The lens: virtual (the paper rig's lens at 27 degC ambient), ld4:PORT (or a port path),
-    /// genicam:NAME[,feature=F][,unit=dpt|ma][,temperature=F] (feature aravis).
+    /// `genicam:NAME[,feature=F][,unit=dpt|ma][,temperature=F]` (feature aravis).
     #[arg(long, value_name = "SPEC")]
     pub lens: String,
-    /// The stage: sim, manual, zaber:PORT,microstep_um=UM[,device=N][,axis=N].
+    /// The stage: sim, manual, `zaber:PORT,microstep_um=UM[,device=N][,axis=N]`.
     #[arg(long, value_name = "SPEC")]
     pub stage: String,
     /// The output folder (dataset.json, views/, offstate/); created if missing.

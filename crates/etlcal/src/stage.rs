@@ -13,7 +13,7 @@ use super::print_json;
 /// Arguments of `etlcal stage`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The stage: sim, manual, zaber:PORT,microstep_um=UM[,device=N][,axis=N].
+    /// The stage: sim, manual, `zaber:PORT,microstep_um=UM[,device=N][,axis=N]`.
     #[arg(long, value_name = "SPEC", global = true)]
     pub stage: Option<String>,
     /// What to do.

@@ -20,7 +20,7 @@
 //! With a moving centre (Eq. C1-C3) the per-view T_z(E) = T_z - dz1 E - dz2 E^2 and
 //! u0(E) = u0 + u1 E (likewise v0) are polynomials in E too, and take the same map:
 //! (T_z, -dz1, -dz2) and (u0, u1) as monomial coefficients, Chebyshev coefficients in t
-//! inside ([`CentreGroup`]). Without it, T_z and dz would be as collinear as kf0 and kf1.
+//! inside (`CentreGroup`). Without it, T_z and dz would be as collinear as kf0 and kf1.
 //!
 //! The w range moves with the focal lengths: w_lo and w_hi are 2 / (fx + fy) at the ends
 //! of the current range *under the parameters being evaluated*, not under the start. Why:
@@ -302,7 +302,7 @@ impl Basis {
     /// changes with the range as dk/dmid = -k'(s) / half and dk/dhalf = -s k'(s) / half,
     /// whose Chebyshev coefficients are -(d_1, 4 d_2, 0) / half and
     /// -(2 d_2, d_1, 2 d_2) / half (k' = d_1 + 4 d_2 s, s k' = 2 d_2 T_0 + d_1 T_1 +
-    /// 2 d_2 T_2); the range moves with the kf coefficients ([`Basis::w_range`]).
+    /// 2 d_2 T_2); the range moves with the kf coefficients (`Basis::w_range`).
     pub fn params_jacobian<const N: usize>(&self, z: &[f64; N]) -> [[f64; N]; N] {
         let nk = self.nk();
         let mut j = [[0.0; N]; N];

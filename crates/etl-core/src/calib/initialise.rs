@@ -35,7 +35,7 @@ pub fn initialise(views: &[View<'_>], a0: &A0) -> Result<CameraModel> {
 /// then the family's a_i, those held by OpenCV's `flags` at zero (hold them in the bundle
 /// adjustment with [`Layout::opencv_mask`]).
 ///
-/// Errors: those of [`rac`], [`focal_poly_of_degree`] and [`distortion_a`]; flags with
+/// Errors: those of [`rac`], [`super::focal_poly::focal_poly_of_degree`] and [`distortion_a`]; flags with
 /// the paper family.
 pub fn initialise_model(views: &[View<'_>], a0: &A0, layout: Layout, flags: OpenCvFlags) -> Result<CameraModel> {
     initialise_model_with(views, a0, Kf0::Known([a0.kf0x, a0.kf0y]), layout, flags)

@@ -111,8 +111,8 @@ fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
 }
 
 /// The right Jacobian of SO(3) at `om`:
-/// J_r = I - (1 - cos t)/t^2 [om]x + (t - sin t)/t^3 [om]x^2 (series below t = 1e-6), so
-/// that d(R(om) p)/d(om) = -R [p]x J_r = R [J_r e_k]x p column by column.
+/// `J_r = I - (1 - cos t)/t^2 [om]x + (t - sin t)/t^3 [om]x^2` (series below t = 1e-6), so
+/// that `d(R(om) p)/d(om) = -R [p]x J_r = R [J_r e_k]x p` column by column.
 pub fn right_jacobian(om: [f64; 3]) -> Mat3 {
     let t2 = om[0] * om[0] + om[1] * om[1] + om[2] * om[2];
     let t = libm::sqrt(t2);
@@ -132,7 +132,7 @@ pub fn right_jacobian(om: [f64; 3]) -> Mat3 {
     jr
 }
 
-/// d(R(om) p)/d(om) = -R [p]x J_r(om) (see [`right_jacobian`]).
+/// `d(R(om) p)/d(om) = -R [p]x J_r(om)` (see [`right_jacobian`]).
 pub fn rotate_point_jacobian(r: &Mat3, om: [f64; 3], p: [f64; 3]) -> Mat3 {
     let m = mat_mul(&mat_mul(r, &skew(p)), &right_jacobian(om));
     core::array::from_fn(|i| core::array::from_fn(|j| -m[i][j]))

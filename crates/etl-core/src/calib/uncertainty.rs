@@ -2,7 +2,7 @@
 //! pixel due to the uncertainty of the calibrated numbers (any layout).
 //!
 //! The covariance C is that of the parameter vector of [`super::params`] (order of
-//! [`super::params::PARAM_NAMES`], each number in its own unit), as the bundle adjustment
+//! [`super::params::Layout::names`], each number in its own unit), as the bundle adjustment
 //! reports it ([`super::BundleAdjustReport::covariance`]). A quantity q(x) of the numbers
 //! has, to first order, the covariance J_q C J_q^T with J_q = dq/dx at the estimate.
 

@@ -1,18 +1,18 @@
 //! Sharpness measures and autofocus, without allocation, over a borrowed grayscale view;
 //! and the focus law of a calibrated camera ([`FocusLaw`]: distance in focus <-> current).
 //!
-//! The measures ([`tenengrad`], [`laplacian_variance`], [`brenner`],
+//! The measures ([`tenengrad()`], [`laplacian_variance`], [`brenner()`],
 //! [`normalised_variance`]) take an [`ImageView`] of 8- or 16-bit pixels with any row
 //! stride (a region of interest of a camera frame is measured in place) and return a
 //! number that is larger when the image is sharper, in the image's own grey-level scale.
-//! [`autofocus`] finds the lens current that maximises any such measure with a small,
+//! [`autofocus()`] finds the lens current that maximises any such measure with a small,
 //! fixed number of frames. CPBD, the perceptual measure the paper's temperature procedure
 //! maximises, needs buffers and lives in `etl-calib` (`sharpness::cpbd`).
 //!
 //! Which measure to focus with (measured on the synthetic camera over noise realisations,
-//! docs/RESULTS.md, "Sharpness and autofocus"): [`tenengrad`]. It falls as 1/blur, so it
+//! docs/RESULTS.md, "Sharpness and autofocus"): [`tenengrad()`]. It falls as 1/blur, so it
 //! still ranks images several pixels out of focus, and its peak was found within 0.3 mA
-//! of the true best focus in every search, at read noise 2 and 8 grey levels. [`brenner`]
+//! of the true best focus in every search, at read noise 2 and 8 grey levels. [`brenner()`]
 //! does as well; [`normalised_variance`] is as accurate with the flattest peak;
 //! [`laplacian_variance`] falls as blur^-3 into the noise floor and misled one noisy
 //! search in eight. CPBD cannot drive a search: far from focus it sees only noise edges,

@@ -23,7 +23,7 @@ impl<const N: usize> Svd<N> {
     /// SVD of the matrix whose j-th *column* is `cols[j]`.
     ///
     /// Non-finite input gives non-finite singular values (the caller checks); it never
-    /// loops forever (at most [`MAX_SWEEPS`] sweeps).
+    /// loops forever (at most `MAX_SWEEPS` sweeps).
     pub fn of_columns(mut cols: [[f64; N]; N]) -> Self {
         let mut v = [[0.0; N]; N];
         for (j, vj) in v.iter_mut().enumerate() {

@@ -31,7 +31,7 @@ pub struct CameraModel {
     pub rotation_rodrigues: [f64; 3],
     /// T (world -> camera), mm.
     pub translation_mm: [f64; 3],
-    /// fx(E) = kf_x[0] + kf_x[1] E + ... + kf_x[d] E^d (px; E in mA), Eq. 16 (the paper: d = 3).
+    /// `fx(E) = kf_x[0] + kf_x[1] E + ... + kf_x[d] E^d` (px; E in mA), Eq. 16 (the paper: d = 3).
     pub kf_x: FocalPoly,
     /// fy(E), as `kf_x` (same degree).
     pub kf_y: FocalPoly,

@@ -31,8 +31,8 @@ pub fn from_matrix3(m: &Matrix3<f64>) -> Mat3 {
 
 /// Rotation matrix of the Rodrigues vector `om` (axis times angle in radians).
 ///
-/// R = I + sin(t)/t [om]x + (1 - cos(t))/t^2 [om]x^2, t = |om|; for t below 1e-8 the
-/// series I + [om]x + [om]x^2 / 2 is used (exact to double precision there).
+/// `R = I + sin(t)/t [om]x + (1 - cos(t))/t^2 [om]x^2`, `t = |om|`; for t below 1e-8 the
+/// series `I + [om]x + [om]x^2 / 2` is used (exact to double precision there).
 ///
 /// Hand-written, not nalgebra's `Rotation3::from_scaled_axis` (which normalises the axis
 /// first): that changes the last bits of R, and the PnP refinement of `etlcal demo`

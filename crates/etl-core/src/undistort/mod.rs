@@ -1,5 +1,5 @@
 //! Whole-image undistortion over caller buffers: undistortion maps in `cv2.remap`'s
-//! convention ([`undistort_maps`]) and bilinear resampling ([`remap`]), each over a band of
+//! convention ([`undistort_maps`]) and bilinear resampling ([`remap()`]), each over a band of
 //! output rows so that std crates run the bands in parallel.
 //!
 //! Conventions (those of OpenCV's `initUndistortRectifyMap` + `remap`): an output pixel

@@ -24,7 +24,7 @@ use crate::model::{Distortion, Intrinsics};
 /// what `cv2.initUndistortRectifyMap(K, D, R, P, size, CV_32FC1)` computes for OpenCV's
 /// model, and the same construction for the paper's. `cv2.remap(image, map_x, map_y)`
 /// then gives the rectified image. A ray at or behind the camera's plane (p_z <= 0) gets
-/// NaN, which [`super::remap`] fills with its border value. Rounded once to f32.
+/// NaN, which [`super::remap()`] fills with its border value. Rounded once to f32.
 ///
 /// Preconditions and errors as [`super::undistort_maps`], and a non-finite `rotation`
 /// ([`crate::Error::NotFinite`]); on error nothing is written.

@@ -1,7 +1,7 @@
 //! Exports of a calibrated, rectified camera pair at one setting of each camera: OpenCV's
 //! stereo FileStorage YAML (what `etlcal stereo --opencv-yaml` writes: `cv2.FileStorage`
 //! readable), a ROS stereo `camera_info` pair (left and right, R = R1 / R2, P = P1 / P2 as
-//! stereo_image_proc reads them: P2[0][3] = -fx' B for a horizontal baseline B) and mrcal
+//! stereo_image_proc reads them: `P2[0][3] = -fx' B` for a horizontal baseline B) and mrcal
 //! `.cameramodel`s with the rig's extrinsics ([`super::mrcal_cameramodel`]).
 //!
 //! Each camera is written with OpenCV's five coefficients: exact for a calibration of the

@@ -3,7 +3,7 @@
 //! Named `checkerboard` for the board it finds (ChArUco boards are [`crate::charuco`]'s);
 //! the primitives both detectors share are modules of their own, as OpenCV shares
 //! `cornerSubPix`: grey images ([`crate::grey`]) and sub-pixel refinement
-//! ([`crate::subpixel`]).
+//! (`crate::subpixel`).
 //!
 //! [`detect_corners`] finds a board of `cols` x `rows` inner corners ([`Pattern`]) in a grey
 //! image (8- or 16-bit) and returns every corner in a stable order (see below), refined to

@@ -15,7 +15,7 @@
 //! as the pooling needs it, with the same floating-point operations where floats are
 //! involved, so the counts and hence the result are the same:
 //! * the Sobel threshold needs the mean strength of the whole image, an exact integer
-//!   sum ([`strength_threshold`](super::marziliano::strength_threshold));
+//!   sum (`strength_threshold`, `marziliano.rs`);
 //! * the edge-block test stops classifying a block's Canny pixels as soon as it has 9
 //!   strong ones (`hysteresis.rs`, `canny.rs`), usually within the block's first rows;
 //! * widths are measured only in edge blocks, and each side of a width only as far as

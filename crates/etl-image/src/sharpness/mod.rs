@@ -30,11 +30,11 @@ pub type Gray16Image = ImageBuffer<Luma<u16>, Vec<u16>>;
 pub enum Metric {
     /// CPBD in [0, 1] ([`cpbd::cpbd`]); CLI name `cpbd`.
     Cpbd,
-    /// Mean squared Sobel magnitude ([`etl_core::focus::tenengrad`]); `tenengrad`.
+    /// Mean squared Sobel magnitude ([`etl_core::focus::tenengrad()`]); `tenengrad`.
     Tenengrad,
     /// Variance of the Laplacian ([`etl_core::focus::laplacian_variance`]); `laplacian`.
     Laplacian,
-    /// Brenner gradient, both directions ([`etl_core::focus::brenner`]); `brenner`.
+    /// Brenner gradient, both directions ([`etl_core::focus::brenner()`]); `brenner`.
     Brenner,
     /// Normalised variance ([`etl_core::focus::normalised_variance`]); `normvar`.
     Normvar,

@@ -113,7 +113,7 @@ pub fn undistort_maps_into(k: &Intrinsics, d: &Distortion, out: &OutputCamera, m
 }
 
 /// Resamples `src` through `maps` (bilinear, border constant `border`, NaN map entries give
-/// `border`; see [`etl_core::undistort::remap`]) over bands of rows in parallel: the
+/// `border`; see [`etl_core::undistort::remap()`]) over bands of rows in parallel: the
 /// `maps.width_px() x maps.height_px()` output image, `src.channels()` interleaved samples
 /// per pixel.
 pub fn remap<T: Sample + Send + Sync>(src: &SourceImage<'_, T>, maps: &UndistortMaps, border: T) -> Result<Vec<T>> {

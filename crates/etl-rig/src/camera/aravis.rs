@@ -51,7 +51,7 @@ static OPENING: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 impl AravisCamera {
     /// Opens the camera `id` and queues its stream's buffers (one opening at a time in the
-    /// process, [`OPENING`]).
+    /// process, `OPENING`).
     pub fn open(id: &str) -> Result<AravisCamera> {
         let _one_at_a_time = OPENING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let name = format!("camera aravis:{id}");
@@ -164,7 +164,7 @@ impl Drop for AravisCamera {
     }
 }
 
-/// Opens the aravis camera `id` alone (no stream; one opening at a time, [`OPENING`]):
+/// Opens the aravis camera `id` alone (no stream; one opening at a time, `OPENING`):
 /// for a GenICam lens on a camera that grabs no frames here.
 pub fn open_arv_camera(id: &str) -> Result<ArvCamera> {
     let _one_at_a_time = OPENING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);

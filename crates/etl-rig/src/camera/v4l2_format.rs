@@ -1,5 +1,5 @@
 //! The V4L2 camera's formats and their conversion to mono pixels, as pure functions (the
-//! device itself is [`super::v4l2`], behind the cargo feature `v4l2`).
+//! device itself is `camera::v4l2`, behind the cargo feature `v4l2`).
 //!
 //! Negotiation: of the pixel formats the device offers, the first of [`PREFERENCE`] is
 //! taken: `Y16 ` (16-bit grey, little-endian: a 10- or 12-bit sensor's samples as the

@@ -1,7 +1,7 @@
 //! The lens of a rig: etl-core's [`Lens`] trait over the Optotune Lens Driver 4 client
 //! (`ld4:PORT`), the virtual lens (`virtual`: served on a pseudo-terminal and driven
 //! through the same serial client, as `etlcal lens --virtual` does), a GenICam camera's
-//! lens features (`genicam:NAME`, [`genicam`], cargo feature `aravis`) or any driver
+//! lens features (`genicam:NAME`, module `genicam`, cargo feature `aravis`) or any driver
 //! ([`RigLens::from_driver`]), named for errors.
 //!
 //! A current is always approached from below ([`RigLens::approach_ma`]): the lens first

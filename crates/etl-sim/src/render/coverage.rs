@@ -4,10 +4,10 @@
 //! Most pixels of a checkerboard image see a single square: their footprint lies wholly
 //! inside one region of the board, their mean is that region's grey level, and mapping
 //! their corners or clipping polygons would be wasted. So the padded image is cut into
-//! tiles of [`TILE_PX`] x [`TILE_PX`] pixels and only the tiles' corners (the nodes,
-//! [`Nodes`]) are first mapped to the board, exactly. A tile whose nodes' bounding box on
+//! tiles of `TILE_PX` x `TILE_PX` pixels and only the tiles' corners (the nodes,
+//! `Nodes`) are first mapped to the board, exactly. A tile whose nodes' bounding box on
 //! the board, widened by the size of one pixel there, lies inside one square, or in the
-//! background, or in the white margin ([`BoardLayout::level_over`]) is filled with that
+//! background, or in the white margin (`BoardLayout::level_over`) is filled with that
 //! grey level. The widening covers the bending of the tile's edges on the
 //! board: the pixel -> board map is a homography (straight lines stay straight) composed
 //! with the undistortion, whose curvature moves the middle of an 8 px edge by about
@@ -18,7 +18,7 @@
 //! The other tiles (near an edge of a square, or where the board plane is not seen) are
 //! done pixel by pixel as before the tiling: every pixel corner is mapped, a pixel whose
 //! four corners lie in one region gets its level, the others the exact polygon mean of
-//! [`BoardLayout::mean_over`].
+//! `BoardLayout::mean_over`.
 
 use rayon::prelude::*;
 

@@ -20,8 +20,8 @@
 //! true corner (tests/render.rs). Blurring a 2 x 2 supersampled coverage image would cut
 //! that at four times the cost.
 //!
-//! The blur is applied only where it changes the image ([`Blur`]), with the sigma of each
-//! pixel from the depths at the tile corners ([`BlurField`]).
+//! The blur is applied only where it changes the image (`Blur`), with the sigma of each
+//! pixel from the depths at the tile corners (`BlurField`).
 
 use rayon::prelude::*;
 

@@ -21,9 +21,9 @@ pub struct Photometry {
     /// 1 - vignetting * r^2 with r the distance from the image centre over the half
     /// diagonal. 0 = none; below 1.
     pub vignetting: f64,
-    /// Illumination gradient: the shading is multiplied by 1 + g[0] (x - cx) / width +
-    /// g[1] (y - cy) / height, (cx, cy) the image centre; so g[0] = 0.2 is 20 % more
-    /// light at the right edge than at the left one.
+    /// Illumination gradient (`g` below): the shading is multiplied by
+    /// `1 + g[0] (x - cx) / width + g[1] (y - cy) / height`, (cx, cy) the image centre; so
+    /// `g[0] = 0.2` is 20 % more light at the right edge than at the left one.
     pub gradient: [f64; 2],
     /// Gaussian read noise, standard deviation in grey levels.
     pub read_noise: f64,

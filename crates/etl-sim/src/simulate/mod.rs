@@ -249,7 +249,7 @@ pub fn lens_off_poses(truth: &CameraModel) -> Vec<CameraModel> {
 }
 
 /// The camera of each lens-off view of `design` (the paper's: [`lens_off_poses`]): the
-/// tilts of [`LENS_OFF_TILTS_DEG`], the board's centre about `distance_mm` away, the
+/// tilts of `LENS_OFF_TILTS_DEG`, the board's centre about `distance_mm` away, the
 /// sideways spread scaled with the distance.
 pub fn lens_off_poses_of(truth: &CameraModel, design: &LensOff) -> Vec<CameraModel> {
     let ([cols, rows], sq) = design.board;

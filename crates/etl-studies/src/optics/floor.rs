@@ -6,7 +6,7 @@
 //! which is the best a central model with a per-current centre, principal point and
 //! distortion can do. The board is then traced on the stage 1 mm before and 1 mm behind
 //! the position in focus, and the 2.000 mm move solved by planar PnP with that camera
-//! ([`super::measured_mm`]). Everything runs twice, with the corners as:
+//! (`super::measured_mm`). Everything runs twice, with the corners as:
 //! - the spot's centroid ([`CornerAs::Centroid`], what the procedure records and a
 //!   detector sees of a defocused, aberrated spot), and
 //! - the chief ray's hit ([`CornerAs::Chief`], a central projection but for the pupil's

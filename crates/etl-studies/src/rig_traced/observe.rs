@@ -38,8 +38,9 @@ fn both_pixels(rig: &TracedMultiCamera, at: &[Setting; 2], w: [f64; 3]) -> Optio
     Some([rig.cameras[0].pixel(&at[0], w, rig.corner)?, rig.cameras[1].pixel(&at[1], w, rig.corner)?])
 }
 
-/// A point uniform in the stage's volume ([`volume_point`]) that both cameras see at
-/// `at`, and its noise-free traced pixels; None after [`MAX_DRAWS`].
+/// A point uniform in the stage's volume (X, Y over the board, Z over the travel) that
+/// both cameras see at `at`, and its noise-free traced pixels; None after `MAX_DRAWS`
+/// draws.
 pub fn draw_point(
     rig: &TracedMultiCamera,
     at: &[Setting; 2],
@@ -63,10 +64,10 @@ pub struct Drawn {
     pub pixels: [[f64; 2]; 2],
 }
 
-/// A point uniform in the stage's volume ([`volume_point`]), each camera focused on it (its current the one
-/// that puts its depth in focus: [`etl_sim::optics::multi_camera::FocusTable`]), with both
+/// A point uniform in the stage's volume, each camera focused on it (its current the one
+/// that puts its depth in focus: [`etl_sim::optics::multi_camera::focus::FocusTable::current_ma`]), with both
 /// currents inside `ranges_ma` and the point seen by both: its currents, the point and
-/// its noise-free traced pixels; None after [`MAX_DRAWS`]. What an autofocusing rig
+/// its noise-free traced pixels; None after `MAX_DRAWS` draws. What an autofocusing rig
 /// measures: no run-time point is out of focus.
 pub fn draw_focused_point(rig: &TracedMultiCamera, ranges_ma: [[f64; 2]; 2], rng: &mut ChaCha8Rng) -> Option<Drawn> {
     (0..MAX_DRAWS).find_map(|_| {

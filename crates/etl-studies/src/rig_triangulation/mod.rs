@@ -15,7 +15,7 @@
 //!   over the board, Z over the travel) that both true cameras see at those settings
 //!   (not necessarily in focus), its true pixels plus pixel noise of the simulation's
 //!   sigma, triangulated with the pixel and calibration parts of the covariance
-//!   ([`CalibrationPart::Include`], the calibration's part from the rig file's joint
+//!   ([`etl_calib::rig::CalibrationPart::Include`], the calibration's part from the rig file's joint
 //!   covariance; beside it, the same rig without it: independent groups); per axis of camera 0's frame, whether
 //!   |error| <= 1 sigma, and the Mahalanobis distance d^2 (chi-square with 3 dof: mean 3,
 //!   P(d^2 <= 1) = 19.9 %);
