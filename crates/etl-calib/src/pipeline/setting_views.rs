@@ -8,8 +8,8 @@
 //! them apart. The stage views are solved first as without the option (screen, outliers,
 //! re-solves); that solution is the start of the joint solve, and each setting view's
 //! pose starts at planar PnP ([`etl_core::pnp::solve_pnp`]) through it at the view's
-//! current. With a moving centre a second joint solve starts with the move held at zero,
-//! then released, and the lower objective wins (docs/METHOD.md, "Free-pose views"). The
+//! current. With a moving centre a second joint solve starts from the linear
+//! initialisation with the move held at zero, then released, and the lower objective wins (docs/METHOD.md, "Free-pose views"). The
 //! setting views keep all their points (no outlier screen of their own).
 
 use etl_core::calib::jacobian::{from_params, to_params};
@@ -105,20 +105,31 @@ pub(super) fn solve_with_setting_views(
         views.iter().zip(&stage_pts).map(|(v, p)| View { e_com_ma: v.e_com_ma, points: p }).collect();
     let ba = options.bundle_adjust()?;
     let start = solved.report.model;
-    let mut best = joint(&stage, &free_views(&pts, &e_com, &start)?, &start, &ba)?;
-    if start.centre.is_some() {
-        // The stage solve's moving centre lies anywhere along the fx(E) ~ dz(E) valley,
-        // and a joint solve started there can settle in another minimum. A second start:
+    let direct = free_views(&pts, &e_com, &start).and_then(|free| joint(&stage, &free, &start, &ba));
+    let best = if start.centre.is_none() {
+        direct?
+    } else {
+        // The stage solve's moving centre lies anywhere along the fx(E) ~ dz(E) valley:
+        // a joint solve started there can settle in another minimum, and far enough
+        // along it a tilted view's PnP puts the board behind the camera. A second start,
+        // off the valley: the linear initialisation (the stage solve's own start) with
         // the centre held still while the tilted views fix fx(E), the move released from
-        // there. The lower objective wins (both at the first solve's pixel sigma); a
-        // second start that fails (PnP or the solve) leaves the first solve's result.
-        let sigma_px = best.0.sigma_px;
-        if let Ok(other) = released_centre(&stage, (&pts, &e_com), &start, &ba) {
-            if other.objective(&ba.estimator, sigma_px) < best.objective(&ba.estimator, sigma_px) {
-                best = other;
+        // there. Of the starts that succeed, the lower objective wins (both at the first
+        // solve's pixel sigma); the first start's error when neither does.
+        match (direct, released_centre(&stage, (&pts, &e_com), &solved.initial, &ba)) {
+            (Ok(a), Ok(b)) => {
+                let sigma_px = a.0.sigma_px;
+                if b.objective(&ba.estimator, sigma_px) < a.objective(&ba.estimator, sigma_px) {
+                    b
+                } else {
+                    a
+                }
             }
+            (Ok(a), Err(_)) => a,
+            (Err(_), Ok(b)) => b,
+            (Err(e), Err(_)) => return Err(e),
         }
-    }
+    };
     let JointSolve(report, corrections, (free_poses, _)) = best;
     let distances_px = distances(&report.model, views, &corrections);
     let setting_views = summaries(&report.model, (&pts, &e_com), &free_poses);
@@ -152,7 +163,7 @@ fn summaries(
         .collect()
 }
 
-/// The joint solve from `start`'s centre held still (its move zero) while the tilted
+/// The joint solve from `start` with its centre held still (its move zero) while the tilted
 /// views fix fx(E), then released ([`solve_with_setting_views`]).
 fn released_centre(
     stage: &[View<'_>],

@@ -58,8 +58,12 @@ pub const JOINT_MOVING: [(usize, &str); 2] = [(7, CAMERAS[7]), (8, CAMERAS[8])];
 pub struct MoveErrors {
     /// The current, mA.
     pub e_com_ma: f64,
-    /// For each of [`CAMERAS`]: the mean error over seeds (the bias) and its RMS, um.
+    /// For each of [`CAMERAS`]: the mean error over seeds (the bias) and its RMS, um, over
+    /// the seeds whose PnP placed both views.
     pub bias_rms_um: [(f64, f64); CAMERAS.len()],
+    /// For each of [`CAMERAS`]: the seeds whose PnP could not place a view with that
+    /// camera (a model far enough off puts the board behind it).
+    pub failed: [usize; CAMERAS.len()],
 }
 
 /// The study on one rig.
@@ -177,7 +181,8 @@ fn bias_rms(errors: &[f64]) -> (f64, f64) {
 }
 
 /// The study on `rig` over noise seeds 1..=`seeds`, at `currents` (each one of the
-/// procedure's, which has tilted views there). Errors: a failed trace, calibration or PnP.
+/// procedure's, which has tilted views there). Errors: a failed trace or calibration; a
+/// PnP that cannot place a view is counted in [`MoveErrors::failed`].
 pub fn optics_pnp(rig: &OpticalRig, seeds: u64, currents: &[f64]) -> Result<OpticsPnp> {
     let clean = traced(rig)?;
     let moves = move_views(rig, currents)?;
@@ -237,7 +242,7 @@ pub fn optics_pnp(rig: &OpticalRig, seeds: u64, currents: &[f64]) -> Result<Opti
             let direct = monofocal(&zhang_with(&views_at(&obs, e), size, &options)?)?;
             let views = noisy(&moves[k], sigma, 1_000_000 + 1000 * seed + k as u64, size);
             for (c, model) in fixed.iter().chain([&direct]).enumerate() {
-                errors[k][c].push((measured_mm(model, e, &views)? - MOVE_MM) * 1000.0);
+                errors[k][c].push(measured_mm(model, e, &views).ok().map(|d| (d - MOVE_MM) * 1000.0));
             }
         }
     }
@@ -247,7 +252,13 @@ pub fn optics_pnp(rig: &OpticalRig, seeds: u64, currents: &[f64]) -> Result<Opti
     let rows = currents
         .iter()
         .enumerate()
-        .map(|(k, &e)| MoveErrors { e_com_ma: e, bias_rms_um: core::array::from_fn(|c| bias_rms(&errors[k][c])) })
+        .map(|(k, &e)| MoveErrors {
+            e_com_ma: e,
+            bias_rms_um: core::array::from_fn(|c| {
+                bias_rms(&errors[k][c].iter().flatten().copied().collect::<Vec<_>>())
+            }),
+            failed: core::array::from_fn(|c| errors[k][c].iter().filter(|x| x.is_none()).count()),
+        })
         .collect();
     Ok(OpticsPnp {
         rig: rig.file.name.clone(),
@@ -290,7 +301,15 @@ impl OpticsPnp {
             "---|".repeat(CAMERAS.len())
         );
         for r in &self.rows {
-            let cells: Vec<String> = r.bias_rms_um.iter().map(|(b, rms)| format!("{b:+.2} ({rms:.2})")).collect();
+            let cells: Vec<String> = r
+                .bias_rms_um
+                .iter()
+                .zip(r.failed)
+                .map(|((b, rms), failed)| match failed {
+                    0 => format!("{b:+.2} ({rms:.2})"),
+                    n => format!("{b:+.2} ({rms:.2}), PnP failed on {n}"),
+                })
+                .collect();
             s += &format!("| {:.0} | {} |\n", r.e_com_ma, cells.join(" | "));
         }
         s += &format!("\nTraced entrance pupil move (lowest to highest current): {:+.3} mm\n", self.pupil_move_mm);
