@@ -118,7 +118,7 @@ pub(super) fn solve_with_setting_views(
         // solve's pixel sigma); the first start's error when neither does.
         match (direct, released_centre(&stage, (&pts, &e_com), &solved.initial, &ba)) {
             (Ok(a), Ok(b)) => {
-                let sigma_px = a.0.sigma_px;
+                let sigma_px = a.report.sigma_px;
                 if b.objective(&ba.estimator, sigma_px) < a.objective(&ba.estimator, sigma_px) {
                     b
                 } else {
@@ -130,7 +130,7 @@ pub(super) fn solve_with_setting_views(
             (Err(e), Err(_)) => return Err(e),
         }
     };
-    let JointSolve(report, corrections, (free_poses, _)) = best;
+    let JointSolve { report, corrections, free_poses, .. } = best;
     let distances_px = distances(&report.model, views, &corrections);
     let setting_views = summaries(&report.model, (&pts, &e_com), &free_poses);
     Ok(Solved { report, corrections, distances_px, setting_views, ..solved })
@@ -150,14 +150,9 @@ fn summaries(
         .zip(poses)
         .map(|((p, &e), &(rotation_rodrigues, translation_mm, de_ma))| {
             let posed = CameraModel { rotation_rodrigues, translation_mm, ..*model };
-            let squares: Vec<f64> = p
-                .iter()
-                .map(|q| match posed.project(q.world_mm, e + de_ma) {
-                    Ok(r) => (r[0] - q.pixel[0]).powi(2) + (r[1] - q.pixel[1]).powi(2),
-                    Err(_) => f64::INFINITY,
-                })
-                .collect();
-            let rms_px = (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt();
+            let view = View { e_com_ma: e, points: p };
+            let d = distances(&posed, &[view], &[ViewCorrection { dz_mm: 0.0, de_ma }]).remove(0);
+            let rms_px = (d.iter().map(|x| x * x).sum::<f64>() / d.len().max(1) as f64).sqrt();
             SettingViewSummary { e_com_ma: e, points: p.len(), rms_px, de_ma, rotation_rodrigues, translation_mm }
         })
         .collect()
@@ -173,7 +168,7 @@ fn released_centre(
 ) -> Result<JointSolve> {
     let (fixed, hold) = centre_held_still(start);
     let still = BundleAdjustOptions { hold: ba.hold | hold, ..*ba };
-    let released = joint(stage, &free_views(pts, e_com, &fixed)?, &fixed, &still)?.0.model;
+    let released = joint(stage, &free_views(pts, e_com, &fixed)?, &fixed, &still)?.report.model;
     joint(stage, &free_views(pts, e_com, &released)?, &released, ba)
 }
 
@@ -196,21 +191,28 @@ fn centre_held_still(model: &CameraModel) -> (CameraModel, ParamMask) {
 /// correction dE_f, mA.
 type FreePose = ([f64; 3], [f64; 3], f64);
 
-/// A joint solve: its report, the stage views' corrections (dZ, dE), the free views'
-/// poses and current corrections, and the number of points.
-struct JointSolve(BundleAdjustReport, Vec<ViewCorrection>, (Vec<FreePose>, usize));
+/// A joint solve's result.
+struct JointSolve {
+    report: BundleAdjustReport,
+    /// The stage views' corrections (dZ, dE).
+    corrections: Vec<ViewCorrection>,
+    /// The free views' poses and current corrections.
+    free_poses: Vec<FreePose>,
+    /// The points of all views.
+    points: usize,
+}
 
 impl JointSolve {
     /// The objective the solve minimised, at pixel sigma `sigma_px`: the squared
     /// reprojection errors over sigma_px^2 plus, errors-in-variables, each correction's
     /// squared prior z-score (docs/METHOD.md, Eq. 24b-24e).
     fn objective(&self, estimator: &Estimator, sigma_px: f64) -> f64 {
-        let JointSolve(report, corrections, (free, points)) = self;
+        let JointSolve { report, corrections, free_poses, points } = self;
         let pixels = report.rms_px.powi(2) * *points as f64 / sigma_px.powi(2);
         let Estimator::Eiv { sigma_z_mm, sigma_e_ma, .. } = *estimator else { return pixels };
         let stage: f64 =
             corrections.iter().map(|c| (c.dz_mm / sigma_z_mm).powi(2) + (c.de_ma / sigma_e_ma).powi(2)).sum();
-        pixels + stage + free.iter().map(|(_, _, de)| (de / sigma_e_ma).powi(2)).sum::<f64>()
+        pixels + stage + free_poses.iter().map(|(_, _, de)| (de / sigma_e_ma).powi(2)).sum::<f64>()
     }
 }
 
@@ -224,9 +226,9 @@ fn joint(
     let mut scratch = vec![JointScratch::ZERO; bundle_adjust_free_views_scratch(stage.len(), free.len())];
     let report = bundle_adjust_free_views(stage, free, start, options, &mut scratch)?;
     let corrections = scratch.iter().take(stage.len()).map(JointScratch::correction).collect();
-    let poses = scratch.iter().skip(stage.len()).take(free.len()).map(JointScratch::board_pose).collect();
+    let free_poses = scratch.iter().skip(stage.len()).take(free.len()).map(JointScratch::board_pose).collect();
     let points = stage.iter().map(|v| v.points.len()).chain(free.iter().map(|f| f.points.len())).sum();
-    Ok(JointSolve(report, corrections, (poses, points)))
+    Ok(JointSolve { report, corrections, free_poses, points })
 }
 
 /// The setting views as free views, each pose started by planar PnP through `start` at
